@@ -1,0 +1,74 @@
+// Plugins by name: every resolver, derived set and interaction the runtime can
+// create. Native plugins register from resolvers/ (explicitly, no static-init
+// tricks); Lua mods register through lua/. A world instantiates only the
+// plugins its objects need.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/stage.hpp"
+
+namespace alloy {
+
+class World;
+
+/// What a factory gets: the world, its settings, and typed access to the
+/// stages it depends on (the target of an interaction, the derived sets read).
+class PluginContext {
+ public:
+  PluginContext(World& world, const StageInfo& info, const PluginSettings& settings)
+      : world_(world), info_(info), settings_(settings) {}
+
+  World& world() { return world_; }
+  const StageInfo& info() const { return info_; }
+  const PluginSettings& settings() const { return settings_; }
+  PropertyId property(std::string_view name) const;
+
+  /// The interaction's target resolver, as its concrete type.
+  template <class T> T& target() { return cast<T>(stage(info_.target), info_.target); }
+  /// A derived set or resolver this stage declared it reads, as its concrete type.
+  template <class T> T& dependency(std::string_view name) { return cast<T>(stage(name), name); }
+
+ private:
+  Stage& stage(std::string_view name);
+  template <class T> static T& cast(Stage& s, std::string_view name) {
+    if (T* t = dynamic_cast<T*>(&s)) return *t;
+    throw AccessError("stage '" + std::string(name) + "' is not of the expected type");
+  }
+  World& world_;
+  const StageInfo& info_;
+  const PluginSettings& settings_;
+};
+
+struct PluginDef {
+  StageInfo info;
+  /// Property types this plugin defines (registered with the plugin).
+  std::vector<PropertyDef> properties;
+  std::function<std::unique_ptr<Stage>(PluginContext&)> create;
+};
+
+class PluginRegistry {
+ public:
+  /// Registers a plugin and its property types. A second plugin of the same
+  /// name replaces the first (hot reload); its kind must match.
+  void add(PluginDef def);
+  /// Removes a plugin by name (mod unload). Its property types stay: objects
+  /// may still carry them.
+  void remove(std::string_view name);
+  const PluginDef* find(std::string_view name) const;
+  /// In registration order: the order stages run in when nothing else decides.
+  const std::vector<std::string>& order() const { return order_; }
+  PropertyRegistry& properties() { return properties_; }
+  const PropertyRegistry& properties() const { return properties_; }
+
+ private:
+  PropertyRegistry properties_;
+  std::map<std::string, PluginDef, std::less<>> plugins_;
+  std::vector<std::string> order_;
+};
+
+}  // namespace alloy

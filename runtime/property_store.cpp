@@ -1,0 +1,191 @@
+#include "runtime/property_store.hpp"
+
+#include <cmath>
+
+namespace alloy {
+
+namespace {
+
+template <class Fn>
+decltype(auto) dispatch(PropertyKind kind, Fn&& fn) {
+  switch (kind) {
+    case PropertyKind::Number: return fn(std::type_identity<double>{});
+    case PropertyKind::Integer: return fn(std::type_identity<std::int64_t>{});
+    case PropertyKind::Bool: return fn(std::type_identity<std::uint8_t>{});
+    case PropertyKind::Vec3: return fn(std::type_identity<Vec3>{});
+    case PropertyKind::Quat: return fn(std::type_identity<Quat>{});
+    case PropertyKind::String: return fn(std::type_identity<std::string>{});
+    case PropertyKind::Ref: return fn(std::type_identity<ObjectId>{});
+    case PropertyKind::RefList: return fn(std::type_identity<RefList>{});
+    case PropertyKind::Enum: return fn(std::type_identity<EnumValue>{});
+  }
+  return fn(std::type_identity<double>{});
+}
+
+std::string value_kind_name(const PropertyValue& v) {
+  static constexpr const char* names[] = {"number", "integer", "bool", "vec3", "quat",
+                                          "string", "ref",     "reflist", "enum"};
+  return names[v.index()];
+}
+
+bool finite_value(const PropertyValue& v) {
+  if (const double* d = std::get_if<double>(&v)) return std::isfinite(*d);
+  if (const Vec3* p = std::get_if<Vec3>(&v)) return is_finite(*p);
+  if (const Quat* q = std::get_if<Quat>(&v)) return is_finite(*q);
+  return true;
+}
+
+}  // namespace
+
+void ColumnBase::refresh_members() {
+  if (!members_dirty_) return;
+  members_.clear();
+  for (std::uint32_t s = 0; s < present_.size(); ++s)
+    if (present_[s]) members_.push_back(s);
+  members_dirty_ = false;
+}
+
+ObjectId PropertyStore::create() {
+  std::uint32_t slot;
+  if (!free_slots_.empty()) {
+    // Reuse the oldest freed slot first, so that recent stale ids stay stale
+    // for as long as possible.
+    slot = free_slots_.front();
+    free_slots_.erase(free_slots_.begin());
+  } else {
+    slot = std::uint32_t(generations_.size());
+    generations_.push_back(1);
+    alive_.push_back(0);
+    names_.emplace_back();
+    for (auto& c : columns_)
+      if (c) c->resize(generations_.size());
+  }
+  alive_[slot] = 1;
+  ++live_count_;
+  ++structure_version_;
+  return ObjectId{slot, generations_[slot]};
+}
+
+void PropertyStore::destroy(ObjectId id) {
+  check_alive(id);
+  for (auto& c : columns_)
+    if (c && c->has(id.index)) c->reset(id.index);
+  if (!names_[id.index].empty()) by_name_.erase(names_[id.index]);
+  names_[id.index].clear();
+  alive_[id.index] = 0;
+  if (++generations_[id.index] == 0) generations_[id.index] = 1;
+  free_slots_.push_back(id.index);
+  --live_count_;
+  ++structure_version_;
+}
+
+void PropertyStore::check_alive(ObjectId id) const {
+  if (id.is_null()) throw AccessError("null object id");
+  if (id.index >= generations_.size()) throw AccessError("object #" + std::to_string(id.index) + " never existed");
+  if (!alive(id))
+    throw AccessError("object #" + std::to_string(id.index) + " (generation " +
+                      std::to_string(id.generation) + ") was destroyed");
+}
+
+ObjectId PropertyStore::id_at(std::uint32_t slot) const {
+  if (slot >= generations_.size() || !alive_[slot]) return ObjectId{};
+  return ObjectId{slot, generations_[slot]};
+}
+
+void PropertyStore::set_name(ObjectId id, const std::string& name) {
+  check_alive(id);
+  if (name == names_[id.index]) return;
+  if (!name.empty()) {
+    if (auto it = by_name_.find(name); it != by_name_.end())
+      throw InputError(ErrorLocation{"", 0, name}, "duplicate name: another object is already called '" + name + "'");
+  }
+  if (!names_[id.index].empty()) by_name_.erase(names_[id.index]);
+  names_[id.index] = name;
+  if (!name.empty()) by_name_.emplace(name, id);
+}
+
+ObjectId PropertyStore::find(std::string_view name) const {
+  auto it = by_name_.find(name);
+  return it == by_name_.end() ? ObjectId{} : it->second;
+}
+
+std::string PropertyStore::describe(ObjectId id) const {
+  if (id.index < names_.size() && alive(id) && !names_[id.index].empty()) return names_[id.index];
+  return "#" + std::to_string(id.index);
+}
+
+ColumnBase& PropertyStore::column(PropertyId id) const {
+  if (id >= registry_.size()) throw AccessError("no property with id " + std::to_string(id));
+  if (columns_.size() <= id) columns_.resize(registry_.size());
+  auto& c = columns_[id];
+  if (!c) {
+    c = dispatch(registry_.def(id).kind, [&]<class T>(std::type_identity<T>) -> std::unique_ptr<ColumnBase> {
+      return std::make_unique<Column<T>>(id, &structure_version_);
+    });
+    c->resize(generations_.size());
+  }
+  return *c;
+}
+
+void PropertyStore::set(ObjectId id, PropertyId prop, const PropertyValue& value) {
+  check_alive(id);
+  const PropertyDef& def = registry_.def(prop);
+  const ErrorLocation where{"", 0, describe(id)};
+  // Enum values may be given by name.
+  if (def.kind == PropertyKind::Enum) {
+    if (const std::string* s = std::get_if<std::string>(&value)) {
+      auto e = registry_.enum_value(prop, *s);
+      if (!e) {
+        std::string allowed;
+        for (const auto& v : def.enum_values) allowed += (allowed.empty() ? "" : ", ") + v;
+        throw InputError(where, "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")");
+      }
+      set(id, prop, PropertyValue(*e));
+      return;
+    }
+  }
+  if (def.kind == PropertyKind::Integer) {
+    // A whole double from a script is an integer; anything else is a type error.
+    if (const double* d = std::get_if<double>(&value); d && std::floor(*d) == *d && std::isfinite(*d)) {
+      set(id, prop, PropertyValue(std::int64_t(*d)));
+      return;
+    }
+  }
+  if (!finite_value(value))
+    throw InputError(where, "'" + def.name + "' must be finite, got NaN or infinity");
+  if (def.min) {
+    if (const double* d = std::get_if<double>(&value); d && *d < *def.min)
+      throw InputError(where, "'" + def.name + "' must be at least " + std::to_string(*def.min) +
+                                  ", got " + std::to_string(*d));
+  }
+  if (const ObjectId* ref = std::get_if<ObjectId>(&value); ref && !ref->is_null() && !alive(*ref))
+    throw InputError(where, "'" + def.name + "' refers to an object that does not exist");
+  ColumnBase& c = column(prop);
+  if (!c.set_value(id.index, value))
+    throw InputError(where, "'" + def.name + "' expects " + std::string(to_string(def.kind)) +
+                                ", got " + value_kind_name(value));
+  if (def.name == "name")
+    if (const std::string* s = std::get_if<std::string>(&value)) set_name(id, *s);
+}
+
+void PropertyStore::remove(ObjectId id, PropertyId prop) {
+  check_alive(id);
+  ColumnBase& c = column(prop);
+  if (!c.has(id.index)) return;
+  c.reset(id.index);
+}
+
+PropertyValue PropertyStore::get(ObjectId id, PropertyId prop) const {
+  check_alive(id);
+  const ColumnBase* c = find_column(prop);
+  if (!c || !c->has(id.index))
+    throw AccessError(describe(id) + " does not carry '" + registry_.def(prop).name + "'");
+  return c->get_value(id.index);
+}
+
+void PropertyStore::refresh() {
+  for (auto& c : columns_)
+    if (c) c->refresh_members();
+}
+
+}  // namespace alloy

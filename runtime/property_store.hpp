@@ -1,0 +1,207 @@
+// Objects and their properties, stored as columns (struct of arrays, paper 3.1).
+//
+// Every registered property has one column. A column holds one value slot per
+// object slot plus a presence flag: an object "carries" a property when its
+// flag is set. Columns keep a change counter (`version`) that moves whenever a
+// value changes, and a membership counter that moves when objects start or stop
+// carrying the property; derived sets and the scheduler compare these counters
+// to skip work.
+//
+// The store itself has no notion of permission: it is private to the World,
+// which hands out read-only views to everyone and writers only to resolvers
+// for the columns they declared (see access.hpp).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "runtime/error.hpp"
+#include "runtime/property_types.hpp"
+
+namespace alloy {
+
+class ColumnBase {
+ public:
+  ColumnBase(PropertyId id, std::uint64_t* structure_counter)
+      : id_(id), structure_counter_(structure_counter) {}
+  virtual ~ColumnBase() = default;
+
+  PropertyId id() const { return id_; }
+  bool has(std::uint32_t slot) const { return slot < present_.size() && present_[slot]; }
+  /// Moves whenever a value of this column changes.
+  std::uint64_t version() const { return version_; }
+  /// Moves whenever an object starts or stops carrying this property.
+  std::uint64_t membership_version() const { return membership_version_; }
+  /// Slots of the objects that carry this property, ascending.
+  std::span<const std::uint32_t> members() const { return members_; }
+  std::size_t count() const { return members_.size(); }
+
+  virtual PropertyValue get_value(std::uint32_t slot) const = 0;
+
+ protected:
+  friend class PropertyStore;
+  virtual void resize(std::size_t slots) = 0;
+  virtual void reset(std::uint32_t slot) = 0;
+  /// Returns false if the value has the wrong type.
+  virtual bool set_value(std::uint32_t slot, const PropertyValue& v) = 0;
+
+  void mark_present(std::uint32_t slot, bool on) {
+    if (present_[slot] != on) {
+      present_[slot] = on;
+      members_dirty_ = true;
+      ++membership_version_;
+      ++*structure_counter_;
+    }
+  }
+  void refresh_members();
+
+  PropertyId id_;
+  std::uint64_t* structure_counter_;  // the store's: any membership change is structural
+  std::vector<std::uint8_t> present_;
+  std::vector<std::uint32_t> members_;
+  bool members_dirty_ = false;
+  std::uint64_t version_ = 0;
+  std::uint64_t membership_version_ = 0;
+
+  template <class T> friend class ColumnWriter;
+};
+
+template <class T>
+class Column final : public ColumnBase {
+ public:
+  using ColumnBase::ColumnBase;
+  const T& operator[](std::uint32_t slot) const { return values_[slot]; }
+  std::span<const T> values() const { return values_; }
+
+  PropertyValue get_value(std::uint32_t slot) const override {
+    if constexpr (std::is_same_v<T, std::uint8_t>) return PropertyValue(values_[slot] != 0);
+    else return PropertyValue(values_[slot]);
+  }
+
+ private:
+  friend class PropertyStore;
+  template <class U> friend class ColumnWriter;
+
+  void resize(std::size_t slots) override {
+    values_.resize(slots);
+    present_.resize(slots, 0);
+  }
+  void reset(std::uint32_t slot) override {
+    values_[slot] = T{};
+    mark_present(slot, false);
+  }
+  bool set_value(std::uint32_t slot, const PropertyValue& v) override;
+
+  std::vector<T> values_;
+};
+
+/// Objects (generational slots) and one column per registered property.
+class PropertyStore {
+ public:
+  explicit PropertyStore(PropertyRegistry& registry) : registry_(registry) {}
+
+  PropertyRegistry& registry() { return registry_; }
+  const PropertyRegistry& registry() const { return registry_; }
+
+  // --- objects -------------------------------------------------------------
+  ObjectId create();
+  void destroy(ObjectId id);
+  bool alive(ObjectId id) const {
+    return id.index < generations_.size() && generations_[id.index] == id.generation &&
+           alive_[id.index];
+  }
+  /// Throws AccessError naming the object if `id` is stale or null.
+  void check_alive(ObjectId id) const;
+  /// The live id in `slot`, or a null id.
+  ObjectId id_at(std::uint32_t slot) const;
+  std::size_t slot_count() const { return generations_.size(); }
+  std::size_t object_count() const { return live_count_; }
+  /// Moves when objects are created or destroyed or any membership changes.
+  std::uint64_t structure_version() const { return structure_version_; }
+
+  // --- names (the "name" convenience property, indexed) ----------------------
+  /// Sets the unique scene name; throws InputError on a duplicate.
+  void set_name(ObjectId id, const std::string& name);
+  ObjectId find(std::string_view name) const;
+  /// The object's name, or "#<index>" if it has none (for messages).
+  std::string describe(ObjectId id) const;
+
+  // --- columns -------------------------------------------------------------
+  /// The column of a property, created on first use. The typed form checks the
+  /// requested type against the property's kind and throws AccessError.
+  /// Columns are created on first use, so this is logically const.
+  ColumnBase& column(PropertyId id) const;
+  const ColumnBase* find_column(PropertyId id) const {
+    return id < columns_.size() ? columns_[id].get() : nullptr;
+  }
+  template <class T> const Column<T>& typed(PropertyId id) const { return typed_mut<T>(id); }
+
+  /// Generic edit (scene loading, player edits): type-checked against the
+  /// registry, throws InputError naming the property and the expected type.
+  void set(ObjectId id, PropertyId prop, const PropertyValue& value);
+  void remove(ObjectId id, PropertyId prop);
+  bool has(ObjectId id, PropertyId prop) const {
+    const ColumnBase* c = find_column(prop);
+    return c && alive(id) && c->has(id.index);
+  }
+  PropertyValue get(ObjectId id, PropertyId prop) const;
+
+  /// Rebuilds the member lists of columns whose membership changed. The world
+  /// calls this between phases so that views always see sorted, current lists.
+  void refresh();
+
+ private:
+  friend class ResolverAccess;  // the only way to a writable column
+  template <class T> Column<T>& typed_mut(PropertyId id) const;
+
+  PropertyRegistry& registry_;
+  mutable std::vector<std::unique_ptr<ColumnBase>> columns_;
+  std::vector<std::uint32_t> generations_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<std::uint32_t> free_slots_;
+  std::vector<std::string> names_;
+  std::map<std::string, ObjectId, std::less<>> by_name_;
+  std::size_t live_count_ = 0;
+  mutable std::uint64_t structure_version_ = 0;  // columns bump it (see ColumnBase)
+};
+
+// ---------------------------------------------------------------------------
+
+template <class T>
+bool Column<T>::set_value(std::uint32_t slot, const PropertyValue& v) {
+  T value{};
+  if constexpr (std::is_same_v<T, std::uint8_t>) {
+    const bool* b = std::get_if<bool>(&v);
+    if (!b) return false;
+    value = *b ? 1 : 0;
+  } else if constexpr (std::is_same_v<T, double>) {
+    if (const double* d = std::get_if<double>(&v)) value = *d;
+    else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) value = double(*i);
+    else return false;
+  } else {
+    const T* p = std::get_if<T>(&v);
+    if (!p) return false;
+    value = *p;
+  }
+  if (!(values_[slot] == value) || !has(slot)) {
+    values_[slot] = std::move(value);
+    ++version_;
+  }
+  mark_present(slot, true);
+  return true;
+}
+
+template <class T>
+Column<T>& PropertyStore::typed_mut(PropertyId id) const {
+  const PropertyDef& d = registry_.def(id);
+  if (d.kind != kind_of<T>())
+    throw AccessError("property '" + d.name + "' is " + std::string(to_string(d.kind)) +
+                      ", requested as " + std::string(to_string(kind_of<T>())));
+  return static_cast<Column<T>&>(column(id));
+}
+
+}  // namespace alloy

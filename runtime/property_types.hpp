@@ -1,0 +1,109 @@
+// The property-type registry (paper 3.1): every property is known by name and
+// has one representation, chosen here once. Properties are dumb data; the
+// registry only says what a name means, never what to do with it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "runtime/math.hpp"
+#include "runtime/object_id.hpp"
+
+namespace alloy {
+
+enum class PropertyKind : std::uint8_t {
+  Number,   ///< double
+  Integer,  ///< int64
+  Bool,     ///< stored as uint8 (no vector<bool>)
+  Vec3,     ///< alloy::Vec3
+  Quat,     ///< alloy::Quat
+  String,   ///< std::string
+  Ref,      ///< ObjectId of another object (or null)
+  RefList,  ///< std::vector<ObjectId>
+  Enum,     ///< index into the property's list of named values
+};
+
+std::string_view to_string(PropertyKind kind);
+std::optional<PropertyKind> kind_from_string(std::string_view name);
+
+/// Value of an enum property: the index into PropertyDef::enum_values.
+struct EnumValue {
+  std::int32_t index = 0;
+  friend constexpr bool operator==(EnumValue, EnumValue) = default;
+};
+
+using RefList = std::vector<ObjectId>;
+
+/// Storage type of each kind.
+template <PropertyKind K> struct StorageOf;
+template <> struct StorageOf<PropertyKind::Number> { using type = double; };
+template <> struct StorageOf<PropertyKind::Integer> { using type = std::int64_t; };
+template <> struct StorageOf<PropertyKind::Bool> { using type = std::uint8_t; };
+template <> struct StorageOf<PropertyKind::Vec3> { using type = Vec3; };
+template <> struct StorageOf<PropertyKind::Quat> { using type = Quat; };
+template <> struct StorageOf<PropertyKind::String> { using type = std::string; };
+template <> struct StorageOf<PropertyKind::Ref> { using type = ObjectId; };
+template <> struct StorageOf<PropertyKind::RefList> { using type = RefList; };
+template <> struct StorageOf<PropertyKind::Enum> { using type = EnumValue; };
+
+/// The kind whose storage is T (used to check a typed column request).
+template <class T> constexpr PropertyKind kind_of();
+template <> constexpr PropertyKind kind_of<double>() { return PropertyKind::Number; }
+template <> constexpr PropertyKind kind_of<std::int64_t>() { return PropertyKind::Integer; }
+template <> constexpr PropertyKind kind_of<std::uint8_t>() { return PropertyKind::Bool; }
+template <> constexpr PropertyKind kind_of<Vec3>() { return PropertyKind::Vec3; }
+template <> constexpr PropertyKind kind_of<Quat>() { return PropertyKind::Quat; }
+template <> constexpr PropertyKind kind_of<std::string>() { return PropertyKind::String; }
+template <> constexpr PropertyKind kind_of<ObjectId>() { return PropertyKind::Ref; }
+template <> constexpr PropertyKind kind_of<RefList>() { return PropertyKind::RefList; }
+template <> constexpr PropertyKind kind_of<EnumValue>() { return PropertyKind::Enum; }
+
+/// Any property value, for editing, scene loading and traces (never in a hot loop).
+using PropertyValue = std::variant<double, std::int64_t, bool, Vec3, Quat, std::string, ObjectId,
+                                   RefList, EnumValue>;
+
+/// Dense index of a registered property; also the index of its column.
+using PropertyId = std::uint32_t;
+inline constexpr PropertyId kNoProperty = 0xffffffffu;
+
+/// Definition of a property type. Create with sane defaults, register once.
+struct PropertyDef {
+  std::string name;                      ///< unique, e.g. "position"
+  PropertyKind kind = PropertyKind::Number;
+  std::string unit;                      ///< SI unit for docs and traces, e.g. "m/s"
+  std::string doc;                       ///< one line: what the value means
+  std::vector<std::string> enum_values;  ///< the names of an Enum's values, in order
+  std::string owner;                     ///< who registered it (plugin or mod), for unloading
+  /// If set, the value must be >= min (numbers only): checked on every edit.
+  std::optional<double> min;
+};
+
+/// Name -> definition. Registration is idempotent when the definition is the
+/// same; a conflicting redefinition is an InputError.
+class PropertyRegistry {
+ public:
+  PropertyId add(PropertyDef def);
+  std::optional<PropertyId> find(std::string_view name) const;
+  /// Throws InputError("unknown property 'x'") if missing.
+  PropertyId id(std::string_view name) const;
+  const PropertyDef& def(PropertyId id) const { return defs_.at(id); }
+  std::size_t size() const { return defs_.size(); }
+  /// Index of an enum value by name, or nullopt.
+  std::optional<EnumValue> enum_value(PropertyId id, std::string_view value) const;
+  /// Names sorted, for messages ("did you mean") and docs.
+  std::vector<std::string> names() const;
+
+ private:
+  std::vector<PropertyDef> defs_;
+  std::map<std::string, PropertyId, std::less<>> by_name_;
+};
+
+/// Closest registered name to `name` by edit distance (for "did you mean"), or "".
+std::string closest_name(std::string_view name, const std::vector<std::string>& candidates);
+
+}  // namespace alloy

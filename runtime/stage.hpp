@@ -1,0 +1,103 @@
+// The three kinds of stage of the method (paper section 3) and their contracts.
+//
+//   Resolver     one kind of physics. The only stage that changes properties,
+//                and only the columns it declared in `writes`. Performs in its
+//                advance() the commands that interactions queued in the previous
+//                interact phase (the one-step delay of paper 3.2).
+//   DerivedSet   a pure function of properties and published resolver state
+//                (contacts, magnetic forces). Reads everything, writes only its
+//                own members. Skipped when none of its inputs changed.
+//   Interaction  reads properties and derived sets, and queues commands on
+//                exactly one resolver (its `target`). Never writes a property.
+//
+// All stages run on the world's thread, in a fixed order, one phase at a time:
+// nothing else runs while a stage runs, and no stage sees another's half-done
+// work. A stage must not call into the world's editing API.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "runtime/error.hpp"
+#include "runtime/property_types.hpp"
+
+namespace alloy {
+
+class WorldView;
+class ResolverAccess;
+
+enum class StageKind : std::uint8_t { Resolver, Derived, Interaction };
+std::string_view to_string(StageKind kind);
+
+/// What a stage declares about itself. The world uses it to decide whether the
+/// stage is needed, in which order stages run, which columns a resolver may
+/// write, and when a derived set may be skipped.
+struct StageInfo {
+  std::string name;                ///< plugin name, e.g. "rigid_body", "gravity.uniform"
+  StageKind kind = StageKind::Resolver;
+  std::vector<std::string> reads;  ///< property columns read
+  std::vector<std::string> writes;  ///< property columns written (resolvers only)
+  /// The stage is instantiated only if some object carries at least one of
+  /// these properties. Empty: needed whenever its dependencies are.
+  std::vector<std::string> needs;
+  std::vector<std::string> derived;    ///< derived sets read (DPS and interactions)
+  std::vector<std::string> resolvers;  ///< resolvers whose published state is read (DPS)
+  std::string target;                  ///< interactions: the one resolver they queue on
+  std::string doc;                     ///< one line for `alloy plugins` and docs
+};
+
+/// Settings given to a plugin by a scene (e.g. `gravity.uniform { g = {0,-9.81,0} }`).
+class PluginSettings {
+ public:
+  void set(std::string key, PropertyValue v) { values_[std::move(key)] = std::move(v); }
+  bool has(std::string_view key) const { return values_.find(key) != values_.end(); }
+  double number(std::string_view key, double fallback) const;
+  std::int64_t integer(std::string_view key, std::int64_t fallback) const;
+  bool boolean(std::string_view key, bool fallback) const;
+  Vec3 vec3(std::string_view key, Vec3 fallback) const;
+  std::string string(std::string_view key, std::string fallback) const;
+  /// Throws InputError naming the first key not in `known`.
+  void check_known(std::string_view plugin, const std::vector<std::string>& known) const;
+  const std::map<std::string, PropertyValue, std::less<>>& values() const { return values_; }
+  ErrorLocation where;  ///< where the settings were written, for messages
+
+ private:
+  std::map<std::string, PropertyValue, std::less<>> values_;
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  /// Called after the set of objects or their memberships changed (objects
+  /// created, destroyed, properties added or removed) and before the next phase.
+  virtual void on_structure_changed(const WorldView&) {}
+};
+
+class Resolver : public Stage {
+ public:
+  /// Builds internal state from properties alone: after creation, after a
+  /// swap, after a structural change. A resolver whose state matters keeps it
+  /// in properties, so that a rebuild loses nothing.
+  virtual void build(ResolverAccess& access) = 0;
+  /// Performs the queued commands, then integrates over `dt` (the world's step
+  /// times `every`). Writes only through `access`.
+  virtual void advance(ResolverAccess& access, double dt) = 0;
+  /// Moves whenever state published to derived sets changes (0: none published).
+  virtual std::uint64_t state_version() const { return 0; }
+};
+
+class DerivedSet : public Stage {
+ public:
+  /// Recomputes the derived data. Called only when an input changed.
+  virtual void update(const WorldView& world) = 0;
+};
+
+class Interaction : public Stage {
+ public:
+  /// Reads, and queues commands on the target resolver bound at creation.
+  virtual void apply(const WorldView& world) = 0;
+};
+
+}  // namespace alloy
