@@ -54,6 +54,12 @@ World::World(PluginRegistry& plugins, WorldDef def)
 
 World::~World() = default;
 
+void World::set_dt(double dt) {
+  if (started_) throw AccessError("the time step cannot change once the world has started");
+  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("the time step dt must be a positive number");
+  def_.dt = dt;
+}
+
 ObjectId World::create(const std::string& name) {
   const ObjectId id = store_.create();
   if (!name.empty()) {

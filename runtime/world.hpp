@@ -107,6 +107,9 @@ class World {
     for (std::uint64_t i = 0; i < steps; ++i) step();
   }
 
+  /// Changes the fixed step; only before the world starts (no variable dt).
+  void set_dt(double dt);
+
   std::uint64_t step_count() const { return step_; }
   double time() const { return time_; }
   double dt() const { return def_.dt; }

@@ -1,0 +1,179 @@
+#include "apps/alloy/commands.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "apps/alloy/event_log.hpp"
+#include "apps/alloy/profile_report.hpp"
+#include "apps/alloy/trace_writer.hpp"
+#include "lua/scene_loader.hpp"
+#include "resolvers/plugins.hpp"
+
+namespace alloy::app {
+
+namespace {
+
+struct RunOptions {
+  std::string scene;
+  std::optional<std::uint64_t> steps;
+  std::optional<double> seconds;
+  std::optional<double> dt;
+  std::string trace;
+  std::string trace_props = "position,orientation,velocity,angular_velocity";
+  std::uint64_t trace_every = 1;
+  std::string events;
+  bool profile = false;
+  bool quiet = false;
+};
+
+constexpr double kDefaultSeconds = 5.0;  // when neither the scene nor the user says
+
+std::vector<std::string> split_list(const std::string& list) {
+  std::vector<std::string> out;
+  std::stringstream ss(list);
+  for (std::string item; std::getline(ss, item, ',');) {
+    const auto b = item.find_first_not_of(' '), e = item.find_last_not_of(' ');
+    if (b != std::string::npos) out.push_back(item.substr(b, e - b + 1));
+  }
+  return out;
+}
+
+lua::LoadOptions load_options() {
+  lua::LoadOptions o;
+  if (const char* env = std::getenv("ALLOY_MODS")) {
+    std::stringstream ss(env);
+    for (std::string dir; std::getline(ss, dir, ':');)
+      if (!dir.empty()) o.mod_paths.emplace_back(dir);
+  }
+  o.mod_paths.emplace_back(std::string(ALLOY_SOURCE_DIR) + "/mods");
+  return o;
+}
+
+int run(const RunOptions& opt, std::ostream& out) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadedScene scene = lua::load_scene(opt.scene, registry, load_options());
+  World& world = *scene.world;
+  if (opt.dt) world.set_dt(*opt.dt);
+
+  std::uint64_t steps;
+  if (opt.steps) {
+    steps = *opt.steps;
+  } else {
+    const double seconds = opt.seconds ? *opt.seconds : scene.seconds > 0 ? scene.seconds : kDefaultSeconds;
+    steps = std::uint64_t(std::llround(seconds / world.dt()));
+  }
+
+  std::unique_ptr<TraceWriter> trace;
+  if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
+  std::unique_ptr<EventLog> events;
+  if (!opt.events.empty()) events = std::make_unique<EventLog>(opt.events);
+  Narrator narrator(out);
+  world.add_observer([&](const Event& e) {
+    if (events) events->write(world, e);
+    if (!opt.quiet) narrator.narrate(world, e);
+  });
+
+  if (!opt.quiet) {
+    out << "alloy: " << (scene.name.empty() ? opt.scene : scene.name);
+    if (!scene.description.empty()) out << " - " << scene.description;
+    out << "\n";
+  }
+  const double wall0 = now_seconds();
+  world.start();
+  if (!opt.quiet) {
+    out << "stages:";
+    for (const auto& s : world.active_stages()) out << " " << s;
+    out << "\n";
+  }
+  if (trace) trace->sample(world);
+  for (std::uint64_t i = 0; i < steps; ++i) {
+    world.step();
+    if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
+  }
+  const double wall = now_seconds() - wall0;
+  if (trace) trace->close();
+  if (events) events->close();
+  if (!opt.quiet) narrator.summary(world, wall);
+  if (opt.profile) print_profile(out, world.profile());
+  return kExitOk;
+}
+
+int check(const std::string& path, std::ostream& out) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::check(path, registry, load_options());
+  out << path << ": ok\n";
+  return kExitOk;
+}
+
+int list_plugins(std::ostream& out) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  for (const auto& name : registry.order()) {
+    const PluginDef& d = *registry.find(name);
+    out << name << " (" << to_string(d.info.kind) << ")";
+    if (!d.info.target.empty()) out << " -> " << d.info.target;
+    if (!d.info.doc.empty()) out << ": " << d.info.doc;
+    out << "\n";
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app{"alloy: physics simulations that cooperate, scripted by Lua mods"};
+  app.require_subcommand(1);
+
+  RunOptions ro;
+  CLI::App* run_cmd = app.add_subcommand("run", "Run a scene headless and narrate what happens");
+  run_cmd->add_option("scene", ro.scene, "Scene file (.lua) or mod folder")->required();
+  auto* steps_opt = run_cmd->add_option("--steps", ro.steps, "Number of steps to run");
+  run_cmd->add_option("--seconds", ro.seconds, "Simulated seconds to run")
+      ->excludes(steps_opt)
+      ->check(CLI::PositiveNumber);
+  run_cmd->add_option("--dt", ro.dt, "Fixed time step in seconds (overrides the scene)")->check(CLI::PositiveNumber);
+  run_cmd->add_option("--trace", ro.trace, "Write a long-format CSV trace: step,time,object,property,value");
+  run_cmd->add_option("--trace-props", ro.trace_props, "Comma-separated properties to trace")
+      ->capture_default_str();
+  run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")->check(CLI::PositiveNumber);
+  run_cmd->add_option("--events", ro.events, "Write the events as JSON lines");
+  run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
+  run_cmd->add_flag("--quiet", ro.quiet, "No narration");
+
+  std::string check_path;
+  CLI::App* check_cmd = app.add_subcommand("check", "Load and validate a scene or a mod without running it");
+  check_cmd->add_option("path", check_path, "Scene file or mod folder")->required();
+
+  CLI::App* plugins_cmd = app.add_subcommand("plugins", "List the native plugins");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::ostringstream o, e2;
+    const int code = app.exit(e, o, e2);
+    out << o.str();
+    err << e2.str();
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+
+  try {
+    if (run_cmd->parsed()) return run(ro, out);
+    if (check_cmd->parsed()) return check(check_path, out);
+    if (plugins_cmd->parsed()) return list_plugins(out);
+  } catch (const InputError& e) {
+    err << "error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    err << "alloy: failure: " << e.what() << "\n";
+    return kExitFailure;
+  }
+  return kExitFailure;
+}
+
+}  // namespace alloy::app

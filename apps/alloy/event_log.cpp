@@ -1,0 +1,86 @@
+#include "apps/alloy/event_log.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+namespace alloy::app {
+
+EventLog::EventLog(const std::string& path) : path_(path), temp_(path + ".tmp") {
+  out_.open(temp_, std::ios::binary | std::ios::trunc);
+  if (!out_) throw InputError("cannot write events file '" + path + "'");
+}
+
+EventLog::~EventLog() {
+  if (!closed_) {
+    out_.close();
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+  }
+}
+
+void EventLog::write(const World& world, const Event& e) {
+  nlohmann::ordered_json j;
+  j["step"] = e.step;
+  j["time"] = e.time;
+  j["type"] = e.type;
+  if (!e.source.empty()) j["source"] = e.source;
+  if (!e.a.is_null()) j["a"] = world.describe(e.a);
+  if (!e.b.is_null()) j["b"] = world.describe(e.b);
+  for (const auto& [k, v] : e.values) j[k] = std::isfinite(v) ? nlohmann::ordered_json(v) : nullptr;
+  if (!e.text.empty()) j["text"] = e.text;
+  out_ << j.dump() << '\n';
+}
+
+void EventLog::close() {
+  out_.flush();
+  if (!out_) throw std::runtime_error("writing events file '" + path_ + "' failed");
+  out_.close();
+  std::filesystem::rename(temp_, path_);
+  closed_ = true;
+}
+
+void Narrator::narrate(const World& world, const Event& e) {
+  ++counts_[e.type];
+  auto key = std::make_tuple(e.type, e.a, e.b);
+  auto it = last_.find(key);
+  if (it != last_.end() && e.time - it->second < quiet_) {
+    it->second = e.time;
+    ++folded_;
+    return;
+  }
+  last_[key] = e.time;
+
+  std::string what = e.type;
+  for (char& c : what)
+    if (c == '_') c = ' ';
+  char head[64];
+  std::snprintf(head, sizeof head, "step %6llu  t=%7.3f s  ", (unsigned long long)e.step, e.time);
+  out_ << head << what;
+  if (!e.a.is_null()) out_ << ": " << world.describe(e.a);
+  if (!e.b.is_null()) out_ << " - " << world.describe(e.b);
+  for (const auto& [k, v] : e.values) {
+    char num[48];
+    std::snprintf(num, sizeof num, "%.4g", v);
+    out_ << "  " << k << "=" << num;
+  }
+  if (!e.text.empty()) out_ << "  (" << e.text << ")";
+  out_ << '\n';
+}
+
+void Narrator::summary(const World& world, double wall_seconds) const {
+  char line[160];
+  std::snprintf(line, sizeof line, "ran %llu steps of %.6g s: %.3f s simulated in %.3f s wall (%.1fx real time)\n",
+                (unsigned long long)world.step_count(), world.dt(), world.time(), wall_seconds,
+                wall_seconds > 0 ? world.time() / wall_seconds : 0.0);
+  out_ << line;
+  if (!counts_.empty()) {
+    out_ << "events:";
+    for (const auto& [type, n] : counts_) out_ << " " << type << "=" << n;
+    if (folded_) out_ << " (" << folded_ << " quick repeats not narrated)";
+    out_ << '\n';
+  }
+}
+
+}  // namespace alloy::app
