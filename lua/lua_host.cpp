@@ -1,0 +1,233 @@
+#include "lua/lua_host.hpp"
+
+#include <lua.hpp>
+
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+
+#include "lua/sandbox.hpp"
+
+namespace alloy::lua {
+
+namespace {
+
+// Lua calls this only for an error outside any protected call, which the host
+// never makes on purpose. Throwing (rather than letting Lua abort the process)
+// keeps the promise "never abort": LuaJIT on x64 unwinds C++ frames.
+int on_panic(lua_State* L) {
+  const char* s = lua_tostring(L, -1);
+  throw std::runtime_error(std::string("unprotected Lua error: ") + (s ? s : "?"));
+}
+
+std::string read_file(const std::filesystem::path& file, const std::string& display) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(ErrorLocation{display, 0, ""}, "cannot read the file");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+}  // namespace
+
+std::optional<LocatedMessage> split_location(std::string_view message) {
+  // "chunk:12: rest", the prefix luaL_where and the parser put on messages.
+  for (std::size_t i = 0; i < message.size(); ++i) {
+    if (message[i] == '\n') break;
+    if (message[i] != ':') continue;
+    std::size_t j = i + 1;
+    while (j < message.size() && message[j] >= '0' && message[j] <= '9') ++j;
+    if (j == i + 1 || j + 1 >= message.size() || message[j] != ':' || message[j + 1] != ' ') continue;
+    LocatedMessage out;
+    out.chunk = std::string(message.substr(0, i));
+    out.line = std::stoi(std::string(message.substr(i + 1, j - i - 1)));
+    out.message = std::string(message.substr(j + 2));
+    return out;
+  }
+  return std::nullopt;
+}
+
+LuaHost::LuaHost(HostOptions options)
+    : budget_(std::make_unique<MemoryBudget>(options.memory_limit)), memory_limit_(options.memory_limit) {
+  // The limit applies to scripts, not to setting the state up.
+  budget_->set_limit(0);
+  L_ = lua_newstate(&MemoryBudget::allocate, budget_.get());
+  if (!L_) throw std::runtime_error("LuaJIT could not create a state with the alloy allocator");
+  lua_atpanic(L_, on_panic);
+  prepare_state(L_);
+  budget_->set_limit(options.memory_limit == 0 ? 0 : budget_->used() + options.memory_limit);
+}
+
+LuaHost::~LuaHost() {
+  if (L_) lua_close(L_);
+}
+
+void LuaHost::load_string(std::string_view code, const std::string& display) {
+  files_.insert(display);
+  const std::string chunkname = "@" + display;
+  // Mode "t": text only. Precompiled bytecode can crash the VM and is refused.
+  if (luaL_loadbufferx(L_, code.data(), code.size(), chunkname.c_str(), "t") == 0) return;
+  std::string message = lua_tostring(L_, -1) ? lua_tostring(L_, -1) : "cannot load the chunk";
+  lua_pop(L_, 1);
+  ErrorLocation where{display, 0, ""};
+  if (auto loc = split_location(message)) {
+    where.line = loc->line;
+    message = loc->message;
+  }
+  throw InputError(where, message);
+}
+
+void LuaHost::load_file(const std::filesystem::path& file, const std::string& display) {
+  load_string(read_file(file, display), display);
+}
+
+ErrorLocation LuaHost::user_location(lua_State* L) const {
+  ErrorLocation innermost;
+  lua_Debug ar;
+  for (int level = 0; lua_getstack(L, level, &ar); ++level) {
+    if (!lua_getinfo(L, "Sl", &ar)) continue;
+    if (ar.currentline <= 0 || !ar.source || ar.source[0] != '@') continue;  // C or unknown
+    const std::string file = ar.source + 1;
+    if (innermost.file.empty()) innermost = ErrorLocation{file, ar.currentline, ""};
+    if (!is_library(file)) return ErrorLocation{file, ar.currentline, ""};
+  }
+  return innermost;
+}
+
+std::optional<std::string> LuaHost::file_for_chunk_id(std::string_view src) const {
+  // Lua shortens long chunk names to "...<tail>" in messages.
+  const bool truncated = src.substr(0, 3) == "...";
+  if (truncated) src.remove_prefix(3);
+  for (const auto& f : files_) {
+    if (f == src) return f;
+    if (truncated && f.size() >= src.size() && f.compare(f.size() - src.size(), src.size(), src) == 0)
+      return f;
+  }
+  return std::nullopt;
+}
+
+int LuaHost::on_error(lua_State* L) {
+  auto* host = static_cast<LuaHost*>(lua_touserdata(L, lua_upvalueindex(1)));
+  // Only C++ exceptions of our own are caught here; a Lua error raised while
+  // describing (out of memory) makes the call fail with LUA_ERRERR instead.
+  try {
+    host->describe_failure(L);
+  } catch (const std::exception&) {
+    host->failure_.reset();
+  }
+  lua_settop(L, 1);
+  return 1;
+}
+
+void LuaHost::describe_failure(lua_State* L) {
+  Failure f;
+  std::string message;
+  std::optional<ErrorLocation> given;  // an error table that carries its own file and line
+  bool structured = false;
+  switch (lua_type(L, 1)) {
+    case LUA_TTABLE: {
+      auto field = [&](const char* key) -> std::optional<std::string> {
+        lua_pushstring(L, key);
+        lua_rawget(L, 1);  // raw: no metamethod of the script runs here
+        std::optional<std::string> out;
+        if (lua_type(L, -1) == LUA_TSTRING || lua_type(L, -1) == LUA_TNUMBER) {
+          std::size_t n = 0;
+          lua_pushvalue(L, -1);
+          const char* s = lua_tolstring(L, -1, &n);
+          out = std::string(s, n);
+          lua_pop(L, 1);
+        }
+        lua_pop(L, 1);
+        return out;
+      };
+      if (auto m = field("message")) {
+        structured = true;
+        message = *m;
+      } else {
+        message = "error object is a table without a 'message'";
+      }
+      if (auto o = field("object")) f.where.object = *o;
+      if (auto file = field("file")) {
+        auto line = field("line");
+        given = ErrorLocation{*file, line ? std::atoi(line->c_str()) : 0, ""};
+      }
+      break;
+    }
+    case LUA_TSTRING:
+    case LUA_TNUMBER: {
+      std::size_t n = 0;
+      lua_pushvalue(L, 1);
+      const char* s = lua_tolstring(L, -1, &n);
+      message.assign(s, n);
+      lua_pop(L, 1);
+      break;
+    }
+    default:
+      message = std::string("error object is a ") + luaL_typename(L, 1) + " value";
+  }
+
+  // Where did it happen, and whose line is that?
+  std::optional<ErrorLocation> inner;
+  if (auto loc = split_location(message)) {
+    if (auto file = file_for_chunk_id(loc->chunk)) {
+      inner = ErrorLocation{*file, loc->line, ""};
+      message = loc->message;
+    }
+  }
+  const ErrorLocation user = user_location(L);
+  ErrorLocation where;
+  if (given) {
+    where = *given;
+  } else if (inner && !is_library(inner->file)) {
+    where = *inner;
+  } else if (inner) {
+    // Raised inside a library mod: report the user's line, and keep the
+    // library's own line in the text for whoever debugs the mod.
+    where = user.file.empty() ? *inner : user;
+    message += " (in " + inner->file + ":" + std::to_string(inner->line) + ")";
+  } else {
+    where = user;
+  }
+  f.where.file = where.file;
+  f.where.line = where.line;
+  f.message = message;
+  if (!structured) {
+    luaL_traceback(L, L, nullptr, 1);
+    if (const char* tb = lua_tostring(L, -1)) f.traceback = tb;
+    lua_pop(L, 1);
+  }
+  failure_ = std::move(f);
+}
+
+void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
+  lua_State* L = L_;
+  const int func = lua_gettop(L) - nargs;
+  lua_pushlightuserdata(L, this);
+  lua_pushcclosure(L, &LuaHost::on_error, 1);
+  lua_insert(L, func);
+  failure_.reset();
+  const std::size_t refusals = budget_->refusals();
+  const int rc = lua_pcall(L, nargs, nresults, func);
+  lua_remove(L, func);
+  if (rc == 0) return;
+
+  std::string raw = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "";
+  lua_pop(L, 1);
+  std::optional<Failure> f = std::move(failure_);
+  failure_.reset();
+  if (rc == LUA_ERRMEM || (rc == LUA_ERRERR && budget_->refusals() != refusals)) {
+    ErrorLocation where = f ? f->where : fallback;
+    if (where.file.empty()) where = fallback;
+    throw InputError(where, "out of memory: the script needs more than its budget of " +
+                                std::to_string(memory_limit_ / 1024) + " KiB");
+  }
+  if (rc == LUA_ERRERR || !f) throw InputError(fallback, raw.empty() ? "error while handling an error" : raw);
+  if (f->where.file.empty()) {
+    f->where.file = fallback.file;
+    f->where.line = fallback.line;
+  }
+  std::string message = f->message;
+  if (!f->traceback.empty()) message += "\n" + f->traceback;
+  throw InputError(f->where, message);
+}
+
+}  // namespace alloy::lua

@@ -1,0 +1,98 @@
+// One LuaJIT state and everything needed to run untrusted script code in it
+// safely: a counting allocator, text-only loading, protected calls with a
+// traceback handler, and the mapping of a Lua error to an InputError that
+// names the file, the line and the object.
+//
+// One host per use (a scene load, later a running mod set); there is no
+// global state. The host is not a core class: the world and the resolvers
+// never see it.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+
+#include "lua/memory_budget.hpp"
+#include "runtime/error.hpp"
+
+struct lua_State;
+
+namespace alloy::lua {
+
+struct HostOptions {
+  /// Bytes the state may hold; 0 = no limit.
+  std::size_t memory_limit = 0;
+};
+
+class LuaHost {
+ public:
+  explicit LuaHost(HostOptions options = {});
+  ~LuaHost();
+  LuaHost(const LuaHost&) = delete;
+  LuaHost& operator=(const LuaHost&) = delete;
+
+  lua_State* state() const { return L_; }
+  const MemoryBudget& memory() const { return *budget_; }
+
+  /// Reads a Lua source file and pushes it as a function (text only: a
+  /// precompiled chunk is refused). `display` is the name used in messages.
+  /// A syntax error throws InputError at the file and line.
+  void load_file(const std::filesystem::path& file, const std::string& display);
+  /// Same for source text in memory (tests, generated code).
+  void load_string(std::string_view code, const std::string& display);
+
+  /// Calls the function below its `nargs` arguments, protected, with a
+  /// traceback handler. On success the results replace function and arguments;
+  /// on failure the stack is as before the function was pushed, and an
+  /// InputError located by the attribution rules below is thrown
+  /// (`fallback` when nothing better is known).
+  void call(int nargs, int nresults, const ErrorLocation& fallback = {});
+
+  // --- source attribution ------------------------------------------------------
+  // An object or an error belongs to the scene statement that caused it, not to
+  // the kit function several frames down that carried it out. Files of mods the
+  // scene uses are "library" files; the innermost frame outside them is the
+  // user's line.
+
+  /// Marks a loaded file (by display name) as belonging to a library mod.
+  void mark_library(const std::string& display) { library_.insert(display); }
+  bool is_library(std::string_view display) const { return library_.count(std::string(display)) > 0; }
+  /// Display names of every file loaded so far.
+  const std::set<std::string>& files() const { return files_; }
+  /// The innermost Lua frame on the current stack that is not library code
+  /// (falls back to the innermost Lua frame); empty if no Lua frame is running.
+  ErrorLocation user_location(lua_State* L) const;
+
+ private:
+  struct Failure {
+    ErrorLocation where;
+    std::string message;
+    std::string traceback;  ///< only for runtime errors, not for validation errors
+  };
+  static int on_error(lua_State* L);  // the message handler of call()
+  void describe_failure(lua_State* L);
+  /// The known file whose (possibly truncated) chunk id is `src`.
+  std::optional<std::string> file_for_chunk_id(std::string_view src) const;
+
+  std::unique_ptr<MemoryBudget> budget_;
+  std::size_t memory_limit_ = 0;
+  lua_State* L_ = nullptr;
+  std::set<std::string> files_;
+  std::set<std::string> library_;
+  std::optional<Failure> failure_;
+};
+
+/// Splits "chunk:12: message" into its parts; nullopt if there is no such prefix.
+struct LocatedMessage {
+  std::string chunk;
+  int line = 0;
+  std::string message;
+};
+std::optional<LocatedMessage> split_location(std::string_view message);
+
+}  // namespace alloy::lua

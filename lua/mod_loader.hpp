@@ -1,0 +1,94 @@
+// Mods: folders with a manifest (mod.lua) and Lua files, found by name on a
+// search path, loaded by the sandbox's `require`.
+//
+//   mods/kit/mod.lua       return { name = "kit", version = "0.1.0", depends = {},
+//                                   description = "...", main = "init.lua" }
+//   require "kit"          runs mods/kit/init.lua (the manifest's `main`)
+//   require "kit.materials"  runs mods/kit/materials.lua
+//
+// Only Lua source files inside a mod folder can be required: names are
+// dot-separated identifiers, so no path can leave the folder, and there is no
+// native-code loader. Each mod runs in its own sandbox environment (its files
+// share it); the scene's own mod shares the scene's. A module runs once per
+// load; later requires get its cached value. A mod that requires another must
+// list it in `depends`. Cycles are reported with the chain.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "runtime/error.hpp"
+
+struct lua_State;
+
+namespace alloy::lua {
+
+class LuaHost;
+
+struct Manifest {
+  std::string name;
+  std::string version;
+  std::string description;
+  std::vector<std::string> depends;
+  std::string scene;             ///< scene file of the mod, relative to its folder ("" = none)
+  std::string main = "init.lua";  ///< the file `require "<name>"` runs
+  std::filesystem::path folder;
+  std::string file;  ///< display name of mod.lua, for messages
+};
+
+/// Reads and checks folder/mod.lua. The manifest is data: it runs in an empty
+/// environment. Throws InputError at the manifest.
+Manifest read_manifest(LuaHost& host, const std::filesystem::path& folder);
+
+/// Lexically normal display form of a path ("mods/kit/init.lua").
+std::string display_path(const std::filesystem::path& p);
+
+class ModLoader {
+ public:
+  /// Called for each new environment (at the given index) to add the host API.
+  using Decorate = std::function<void(lua_State*, int env)>;
+
+  ModLoader(LuaHost& host, std::vector<std::filesystem::path> search_path, Decorate decorate);
+  ModLoader(const ModLoader&) = delete;
+  ModLoader& operator=(const ModLoader&) = delete;
+
+  /// The mod the scene belongs to (nullopt: a loose scene file). Its files share
+  /// the scene's environment and count as the user's code, not library code.
+  void set_scene_mod(std::optional<Manifest> manifest);
+  /// Registers a file run in the scene's environment (the scene itself).
+  void add_scene_file(const std::string& display);
+
+  /// Pushes the environment of `mod` (the scene's when `mod` is the scene mod
+  /// or ""), creating it on first use.
+  void push_environment(const std::string& mod);
+
+  const std::vector<std::filesystem::path>& search_path() const { return search_path_; }
+  /// The manifest of the mod called `name` on the search path, or nullptr.
+  const Manifest* find(const std::string& name);
+  /// Names of every mod on the search path (for "did you mean").
+  std::vector<std::string> available() const;
+
+ private:
+  static int require_fn(lua_State* L);
+  int require(lua_State* L);
+  std::string scene_mod_name() const { return scene_mod_ ? scene_mod_->name : ""; }
+  /// The mod whose file called the running C function ("" = the scene or unknown).
+  std::optional<std::string> caller_mod(lua_State* L) const;
+  void check_depends(const Manifest& m);
+
+  LuaHost& host_;
+  std::vector<std::filesystem::path> search_path_;
+  Decorate decorate_;
+  std::optional<Manifest> scene_mod_;
+  std::map<std::string, std::optional<Manifest>> manifests_;  // by name; nullopt = not found
+  std::map<std::string, std::string> file_mod_;               // display name -> mod ("" = scene)
+  std::vector<std::string> loading_;                          // require chain, for cycles
+  std::vector<std::string> checked_;                          // mods whose depends exist
+};
+
+}  // namespace alloy::lua

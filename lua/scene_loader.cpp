@@ -1,0 +1,163 @@
+#include "lua/scene_loader.hpp"
+
+#include <lua.hpp>
+
+#include <algorithm>
+#include <optional>
+
+#include "lua/alloy_api.hpp"
+#include "lua/lua_bridge.hpp"
+#include "lua/lua_host.hpp"
+#include "lua/mod_loader.hpp"
+#include "lua/scene_bindings.hpp"
+#include "lua/scene_builder.hpp"
+
+#ifndef ALLOY_MODS_DIR
+#define ALLOY_MODS_DIR "mods"
+#endif
+
+namespace alloy::lua {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The file to run and the mod it belongs to (if any).
+struct SceneSource {
+  fs::path file;
+  std::string display;
+  std::optional<Manifest> mod;
+};
+
+struct RecordedScene {
+  SceneSource source;
+  SceneRecord record;
+};
+
+SceneSource resolve(LuaHost& host, const fs::path& path, bool allow_library_mod) {
+  const std::string display = display_path(path);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(ErrorLocation{display, 0, ""}, "no such scene file or mod folder");
+  SceneSource src;
+  if (fs::is_directory(path, ec)) {
+    Manifest m = read_manifest(host, path);
+    fs::path file;
+    if (!m.scene.empty()) {
+      file = path / m.scene;
+      if (!fs::is_regular_file(file, ec))
+        throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + m.name + "' names its scene '" + m.scene +
+                                                           "', but there is no file " + display_path(file));
+    } else if (allow_library_mod) {
+      file = path / m.main;  // checking a library mod: run its main file
+    } else {
+      throw InputError(ErrorLocation{m.file, 0, ""},
+                       "mod '" + m.name + "' has no scene (add scene = \"scene.lua\" to its mod.lua)");
+    }
+    src.file = file;
+    src.mod = std::move(m);
+  } else {
+    if (path.extension() != ".lua")
+      throw InputError(ErrorLocation{display, 0, ""}, "a scene is a .lua file or a mod folder");
+    src.file = path;
+    fs::path folder = path.parent_path();
+    if (folder.empty()) folder = ".";
+    if (fs::is_regular_file(folder / "mod.lua", ec)) src.mod = read_manifest(host, folder);
+  }
+  src.display = display_path(src.file);
+  return src;
+}
+
+/// Explicit folders first, then the defaults; each folder once.
+std::vector<fs::path> search_path(const LoadOptions& options, const SceneSource& src) {
+  std::vector<fs::path> candidates = options.mod_paths;
+  if (src.mod) {
+    fs::path parent = src.mod->folder.lexically_normal();
+    if (parent.filename().empty()) parent = parent.parent_path();
+    parent = parent.parent_path();
+    candidates.push_back(parent.empty() ? fs::path(".") : parent);
+  }
+  fs::path beside = src.file.parent_path();
+  candidates.push_back((beside.empty() ? fs::path(".") : beside) / "mods");
+  candidates.push_back(ALLOY_MODS_DIR);
+
+  std::vector<fs::path> out;
+  std::vector<fs::path> seen;
+  for (const auto& c : candidates) {
+    std::error_code ec;
+    if (!fs::is_directory(c, ec)) continue;
+    const fs::path canonical = fs::weakly_canonical(c, ec);
+    if (std::find(seen.begin(), seen.end(), canonical) != seen.end()) continue;
+    seen.push_back(canonical);
+    out.push_back(c);
+  }
+  return out;
+}
+
+RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool allow_library_mod) {
+  LuaHost host(HostOptions{options.memory_limit});
+  RecordedScene out;
+  out.source = resolve(host, path, allow_library_mod);
+  const SceneSource& src = out.source;
+
+  SceneRecorder recorder(host);
+  ModLoader mods(host, search_path(options, src), [&](lua_State* L, int env) {
+    recorder.install(L, env);
+    push_alloy_api(L);
+    lua_setfield(L, env, "alloy");
+  });
+  mods.set_scene_mod(src.mod);
+  mods.add_scene_file(src.display);
+
+  lua_State* L = host.state();
+  StackGuard guard(L);
+  host.load_file(src.file, src.display);
+  mods.push_environment(src.mod ? src.mod->name : "");
+  lua_setfenv(L, -2);
+  host.call(0, 0, ErrorLocation{src.display, 0, ""});
+  out.record = std::move(recorder.record());
+  return out;
+}
+
+}  // namespace
+
+LoadedScene load_scene(const fs::path& path, PluginRegistry& registry, const LoadOptions& options) {
+  RecordedScene rec = run_scene(path, options, false);
+  BuiltScene built = build_scene(rec.record, registry);
+  const RecordedWorld& w = rec.record.world;
+  LoadedScene scene;
+  scene.name = !w.name.empty() ? w.name : rec.source.mod ? rec.source.mod->name : rec.source.file.stem().string();
+  scene.file = rec.source.file;
+  scene.def = std::move(built.def);
+  scene.world = std::move(built.world);
+  scene.seconds = w.seconds;
+  scene.description = !w.description.empty() ? w.description : rec.source.mod ? rec.source.mod->description : "";
+  scene.sources = std::move(built.sources);
+  return scene;
+}
+
+void check(const fs::path& path, PluginRegistry& registry, const LoadOptions& options) {
+  RecordedScene rec = run_scene(path, options, true);
+  BuiltScene built = build_scene(rec.record, registry);
+  LoadedScene scene;
+  scene.file = rec.source.file;
+  scene.sources = std::move(built.sources);
+  try {
+    built.world->start();  // the plugins the scene needs are created and check their settings
+  } catch (const InputError& e) {
+    throw locate(scene, e);
+  }
+}
+
+InputError locate(const LoadedScene& scene, const InputError& error) {
+  if (!error.where().file.empty()) return error;
+  ErrorLocation where = error.where();
+  if (auto it = scene.sources.find(where.object); !where.object.empty() && it != scene.sources.end()) {
+    where.file = it->second.file;
+    where.line = it->second.line;
+  } else {
+    where.file = display_path(scene.file);
+  }
+  return InputError(where, error.bare());
+}
+
+}  // namespace alloy::lua
