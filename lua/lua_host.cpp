@@ -209,6 +209,10 @@ void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
   const int rc = lua_pcall(L, nargs, nresults, func);
   lua_remove(L, func);
   if (rc == 0) return;
+  // LuaJIT has no emergency collection: after a failure (above all an
+  // out-of-memory one) free the failed script's garbage now, so that the
+  // host can go on within its budget.
+  lua_gc(L, LUA_GCCOLLECT, 0);
 
   std::string raw = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "";
   lua_pop(L, 1);
