@@ -1,0 +1,95 @@
+-- Bodies of the kit: bars and disks that move in the play area, and static
+-- floors and walls. Each is a function from arguments to properties; mass
+-- comes from the material's density and the part's volume.
+local geometry = require "kit.geometry"
+
+local bodies = {}
+
+-- Arguments every moving part takes.
+local function motion_args(list)
+  list[#list + 1] = { "angle", "number", default = 0, doc = "rotation about +z, rad" }
+  list[#list + 1] = { "velocity", "vec", doc = "initial velocity, m/s" }
+  list[#list + 1] = { "spin", "number", doc = "initial angular velocity about +z, rad/s" }
+  list[#list + 1] = { "pinned", "boolean", default = false, doc = "held in place on the play area" }
+  return list
+end
+
+local function moving_body(a, shape_props, volume)
+  local m = a.material
+  local p = shape_props
+  p.position = a.at
+  p.orientation = geometry.quat_z(a.angle)
+  p.density = m.density
+  p.mass = m.density * volume
+  p.friction = m.friction
+  p.restitution = m.restitution
+  p.planar = true
+  if a.pinned then p.pinned = true end
+  if a.velocity then p.velocity = a.velocity end
+  if a.spin then p.angular_velocity = { 0, 0, a.spin } end
+  return p
+end
+
+bodies.bar = {
+  doc = "a straight bar of rectangular section lying in the play area",
+  args = motion_args({
+    { "material", "material", default = "steel" },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "length", "positive", required = true, doc = "along the bar, m" },
+    { "width", "positive", default = 0.02, doc = "across the bar in the plane, m" },
+    { "depth", "positive", doc = "thickness out of the plane, m; default: the width" },
+  }),
+  build = function(a)
+    local size = { a.length, a.width, a.depth or a.width }
+    return moving_body(a, { shape = "box", size = size }, geometry.box_volume(size))
+  end,
+}
+
+bodies.disk = {
+  doc = "a round part rolling in the play area (a sphere, so it rolls and bounces alike in 3D)",
+  args = motion_args({
+    { "material", "material", default = "steel" },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "radius", "positive", required = true, doc = "m" },
+  }),
+  build = function(a)
+    return moving_body(a, { shape = "sphere", radius = a.radius }, geometry.sphere_volume(a.radius))
+  end,
+}
+
+local function static_args(default_material)
+  return {
+    { "material", "material", default = default_material },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "size", "extent", required = true, doc = "{width, height} in the plane, m" },
+    { "depth", "positive", default = 1, doc = "extent out of the plane, m: wide enough for any part" },
+    { "angle", "number", default = 0, doc = "rotation about +z, rad (a tilted floor is a ramp)" },
+  }
+end
+
+local function static_body(a)
+  local m = a.material
+  return {
+    shape = "box",
+    size = { a.size[1], a.size[2], a.size[3] or a.depth },
+    position = a.at,
+    orientation = geometry.quat_z(a.angle),
+    static = true,
+    friction = m.friction,
+    restitution = m.restitution,
+  }
+end
+
+bodies.floor = {
+  doc = "a static slab: the ground, a shelf, or tilted, a ramp",
+  args = static_args("wood"),
+  build = static_body,
+}
+
+bodies.wall = {
+  doc = "a static upright slab that bounds the play area",
+  args = static_args("wood"),
+  build = static_body,
+}
+
+return bodies

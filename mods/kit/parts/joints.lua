@@ -1,0 +1,63 @@
+-- Joints of the kit: hinges (rotation about the play area's normal), pins
+-- (a part held to the play area) and glue (two parts fixed together).
+-- A missing second body means the play area itself.
+local joints = {}
+
+local Z = { 0, 0, 1 }  -- hinges turn in the plane: about +z
+
+local function hinge_props(a, b, anchor, friction, limits)
+  local p = { joint = "hinge", body_a = a, body_b = b, anchor = anchor, axis = Z }
+  if friction then p.joint_friction = friction end
+  if limits then
+    p.limit_low, p.limit_high = limits[1], limits[2]
+  end
+  return p
+end
+
+joints.hinge = {
+  doc = "a hinge joining part a to part b (or to the play area) about a point",
+  args = {
+    { "a", "object", required = true, doc = "the part that turns" },
+    { "b", "object", doc = "the other part; absent: the play area" },
+    { "anchor", "vec", required = true, doc = "the hinge point {x, y}, m" },
+    { "friction", "nonnegative", doc = "friction torque of the hinge, N m" },
+    { "limits", "range", doc = "{low, high} angles, rad" },
+  },
+  build = function(a)
+    return hinge_props(a.a, a.b, a.anchor, a.friction, a.limits)
+  end,
+}
+
+joints.pin = {
+  doc = "a pin through a part into the play area: the part turns about it (or, fixed, cannot move)",
+  args = {
+    { "part", "object", required = true },
+    { "at", "vec", doc = "the pin's point {x, y}, m; default: the part's centre" },
+    { "fixed", "boolean", default = false, doc = "true: the part cannot turn either" },
+    { "friction", "nonnegative", doc = "friction torque of the pin, N m" },
+  },
+  build = function(a, kit)
+    local at = a.at or kit.placed(a.part)
+    if not at then
+      kit.fail(a.name, "kit.pin needs 'at': '" .. a.part .. "' was not made by the kit, so its centre is unknown")
+    end
+    if a.fixed then
+      return { joint = "fixed", body_a = a.part, anchor = at }
+    end
+    return hinge_props(a.part, nil, at, a.friction, nil)
+  end,
+}
+
+joints.glue = {
+  doc = "glue: two parts fixed together so that they move as one",
+  args = {
+    { "a", "object", required = true },
+    { "b", "object", required = true },
+  },
+  build = function(a, kit)
+    local at = kit.placed(a.a)
+    return { joint = "fixed", body_a = a.a, body_b = a.b, anchor = at }
+  end,
+}
+
+return joints
