@@ -1,0 +1,2 @@
+local kit = require "kit"
+return {}

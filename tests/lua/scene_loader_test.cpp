@@ -1,0 +1,101 @@
+// lua/scene_loader: world settings, names, the mod search path, mods and
+// their manifests, and the errors of loading that are not about one object.
+#include <gtest/gtest.h>
+
+#include "lua/scene_loader.hpp"
+#include "tests/lua/lua_test_support.hpp"
+#include "tests/lua/scene_plugins.hpp"
+
+namespace alloy::lua {
+namespace {
+
+using test::get;
+using test::source_path;
+
+class SceneLoaderTest : public ::testing::Test {
+ protected:
+  void SetUp() override { test::register_scene_plugins(registry); }
+
+  /// The InputError of loading `relative`, or a failure if it loads.
+  InputError load_error(const std::string& relative, const LoadOptions& options = {}) {
+    try {
+      load_scene(source_path(relative), registry, options);
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << relative << " loaded without error";
+    return InputError("none");
+  }
+
+  PluginRegistry registry;
+};
+
+TEST_F(SceneLoaderTest, WorldSettingsBecomeTheWorldDef) {
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/settings.lua"), registry);
+  EXPECT_EQ(s.name, "moon");
+  EXPECT_EQ(s.description, "low gravity");
+  EXPECT_DOUBLE_EQ(s.seconds, 2.5);
+  EXPECT_DOUBLE_EQ(s.def.dt, 1.0 / 120);
+  EXPECT_DOUBLE_EQ(s.world->dt(), 1.0 / 120);
+  EXPECT_EQ(s.def.plugins, (std::vector<std::string>{"rigid_body", "gravity.uniform", "rigid_body_from_gravity"}));
+  const PluginSettings& g = s.def.settings.at("gravity.uniform");
+  EXPECT_EQ(g.vec3("g", {}), (Vec3{0, -1.62, 0}));  // {x, y}: z = 0
+  EXPECT_EQ(g.where.line, 2);
+  EXPECT_EQ(s.def.every.at("gravity.uniform"), 2);
+  EXPECT_DOUBLE_EQ(get<double>(*s.world, "rock", "mass"), 2);
+}
+
+TEST_F(SceneLoaderTest, DefaultsWithoutWorldStatement) {
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/no_world.lua"), registry);
+  EXPECT_EQ(s.name, "no_world");
+  EXPECT_DOUBLE_EQ(s.seconds, 0);
+  EXPECT_DOUBLE_EQ(s.def.dt, WorldDef{}.dt);
+  EXPECT_TRUE(s.world->find("lonely"));
+  EXPECT_EQ(s.world->step_count(), 0u);  // loaded, not started
+}
+
+TEST_F(SceneLoaderTest, ExtraModFoldersAreSearched) {
+  const InputError e = load_error("tests/lua/scenes/uses_extra.lua");
+  EXPECT_NE(std::string(e.what()).find("no mod named 'extra'"), std::string::npos) << e.what();
+  EXPECT_EQ(e.where().line, 2);
+
+  LoadOptions options;
+  options.mod_paths.push_back(source_path("tests/lua/scenes/extra_mods"));
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/uses_extra.lua"), registry, options);
+  EXPECT_DOUBLE_EQ(get<Vec3>(*s.world, "thing", "position").y, 3);
+}
+
+TEST_F(SceneLoaderTest, MissingAndWrongFilesAreInputErrors) {
+  const InputError missing = load_error("tests/lua/scenes/does_not_exist.lua");
+  EXPECT_NE(missing.where().file.find("does_not_exist.lua"), std::string::npos);
+  const InputError not_lua = load_error("tests/lua/CMakeLists.txt");
+  EXPECT_NE(std::string(not_lua.what()).find("a scene is a .lua file or a mod folder"), std::string::npos);
+  // A library mod has no scene to run...
+  const InputError library = load_error("mods/kit");
+  EXPECT_NE(std::string(library.what()).find("has no scene"), std::string::npos) << library.what();
+  EXPECT_NE(library.where().file.find("mod.lua"), std::string::npos);
+}
+
+TEST_F(SceneLoaderTest, ModsThatAreNotDeclaredCannotBeRequired) {
+  const InputError e = load_error("tests/lua/bad_scenes/undeclared_dependency.lua");
+  EXPECT_NE(std::string(e.what()).find("does not list it in depends"), std::string::npos) << e.what();
+}
+
+TEST_F(SceneLoaderTest, AMemoryHungrySceneIsStopped) {
+  LoadOptions options;
+  options.memory_limit = 4u << 20;
+  const InputError e = load_error("tests/lua/limits/memory_hog.lua", options);
+  EXPECT_NE(std::string(e.what()).find("out of memory"), std::string::npos) << e.what();
+}
+
+TEST_F(SceneLoaderTest, LocateFillsInTheObjectsLine) {
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/no_world.lua"), registry);
+  const InputError later(ErrorLocation{"", 0, "lonely"}, "refused by a resolver");
+  const InputError located = locate(s, later);
+  EXPECT_EQ(located.where().line, 2);
+  EXPECT_NE(located.where().file.find("no_world.lua"), std::string::npos);
+  EXPECT_EQ(located.bare(), "refused by a resolver");
+}
+
+}  // namespace
+}  // namespace alloy::lua

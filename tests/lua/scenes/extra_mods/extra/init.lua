@@ -1,0 +1,1 @@
+return { height = 3 }

@@ -1,0 +1,1 @@
+return { name = "extra", version = "0.0.1" }
