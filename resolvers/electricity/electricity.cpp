@@ -1,0 +1,434 @@
+#include "resolvers/electricity/electricity.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace alloy::electricity {
+
+namespace {
+
+PropertyDef number(const char* name, const char* unit, const char* doc, std::optional<double> min = {}) {
+  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = min};
+}
+
+/// The columns that decide the network. `emf` counts by membership only
+/// (which objects are batteries): its values enter the right-hand side alone,
+/// read every step, so a new emf needs no new factorisation.
+constexpr const char* kNetworkInputs[] = {
+    prop::kConductive,        prop::kInternalResistance, prop::kInductance,        prop::kResistance,
+    prop::kContactResistance, prop::kWireFrom,           prop::kWireTo,            prop::kWireFromTerminal,
+    prop::kWireToTerminal,    prop::kEmf,
+};
+
+double positive_resistance(double r) { return std::max(r, kMinResistance); }
+
+}  // namespace
+
+std::vector<PropertyDef> electricity_property_defs() {
+  return {
+      {.name = prop::kConductive, .kind = PropertyKind::Bool,
+       .doc = "conducts electricity: touching conductive parts connect; without emf, inductance or "
+              "resistance the part is one equipotential node"},
+      number(prop::kEmf, "V", "battery: electromotive force from terminal 0 (-) to terminal 1 (+)"),
+      number(prop::kInternalResistance, "Ohm", "battery: internal resistance (default 0.1)", 0.0),
+      number(prop::kInductance, "H", "coil: self-inductance between terminals 0 and 1", 0.0),
+      number(prop::kResistance, "Ohm",
+             "resistor or coil: resistance between terminals 0 and 1; wire: end to end (default 0.01)", 0.0),
+      number(prop::kContactResistance, "Ohm",
+             "resistance a touching contact on this part adds (default 0.0005 per side)", 0.0),
+      {.name = prop::kWireFrom, .kind = PropertyKind::Ref,
+       .doc = "this object is a wire: the part its first end is attached to"},
+      {.name = prop::kWireTo, .kind = PropertyKind::Ref,
+       .doc = "this object is a wire: the part its second end is attached to"},
+      {.name = prop::kWireFromTerminal, .kind = PropertyKind::Integer,
+       .doc = "terminal (0 or 1) of wire_from the wire is attached to (default 0)", .min = 0.0},
+      {.name = prop::kWireToTerminal, .kind = PropertyKind::Integer,
+       .doc = "terminal (0 or 1) of wire_to the wire is attached to (default 0)", .min = 0.0},
+      number(prop::kCurrent, "A",
+             "written by electricity: through a battery, coil, resistor or wire from terminal 0 to 1 "
+             "(from wire_from to wire_to); through a node part, the total current passing it. A coil's "
+             "current is its state"),
+      number(prop::kVoltage, "V",
+             "written by electricity: node part, potential against its circuit's ground; battery, "
+             "V(1) - V(0); coil and resistor, V(0) - V(1); wire, V(from) - V(to)"),
+      {.name = prop::kPowered, .kind = PropertyKind::Bool,
+       .doc = "written by electricity: |current| is above the powered threshold (1 mA)"},
+  };
+}
+
+// --- settings ------------------------------------------------------------------
+
+const std::vector<std::string>& ElectricityConfig::keys() {
+  static const std::vector<std::string> k = {"powered_threshold", "contact_resistance", "wire_resistance",
+                                             "internal_resistance", "substeps", "dense_limit"};
+  return k;
+}
+
+ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
+  s.check_known(kResolverName, keys());
+  ElectricityConfig c;
+  c.powered_threshold = s.number("powered_threshold", c.powered_threshold);
+  c.contact_resistance = s.number("contact_resistance", c.contact_resistance);
+  c.wire_resistance = s.number("wire_resistance", c.wire_resistance);
+  c.internal_resistance = s.number("internal_resistance", c.internal_resistance);
+  c.substeps = int(s.integer("substeps", c.substeps));
+  c.dense_limit = s.integer("dense_limit", c.dense_limit);
+  auto non_negative = [&](const char* key, double v) {
+    if (!(v >= 0) || !std::isfinite(v))
+      throw InputError(s.where, "electricity setting '" + std::string(key) + "' must be a finite number >= 0");
+  };
+  non_negative("powered_threshold", c.powered_threshold);
+  non_negative("contact_resistance", c.contact_resistance);
+  non_negative("wire_resistance", c.wire_resistance);
+  non_negative("internal_resistance", c.internal_resistance);
+  if (c.substeps < 1 || c.substeps > 1000)
+    throw InputError(s.where, "electricity setting 'substeps' must be between 1 and 1000");
+  if (c.dense_limit < 0) throw InputError(s.where, "electricity setting 'dense_limit' must be >= 0");
+  return c;
+}
+
+// --- the resolver ----------------------------------------------------------------
+
+ElectricityResolver::ElectricityResolver(ElectricityConfig config)
+    : config_(config), solver_(std::size_t(config.dense_limit)) {}
+
+void ElectricityResolver::connect(ObjectId a, ObjectId b, int terminal_a, int terminal_b) {
+  if (terminal_a < 0 || terminal_a > 1 || terminal_b < 0 || terminal_b > 1)
+    throw AccessError("electricity: connect() takes terminals 0 or 1");
+  if (a == b) return;  // a part touching itself joins nothing
+  if (b < a) std::swap(a, b), std::swap(terminal_a, terminal_b);
+  queue_.push_back({true, a, b, terminal_a, terminal_b});
+}
+
+void ElectricityResolver::disconnect(ObjectId a, ObjectId b) {
+  if (a == b) return;
+  if (b < a) std::swap(a, b);
+  queue_.push_back({false, a, b, 0, 0});
+}
+
+bool ElectricityResolver::connected(ObjectId a, ObjectId b) const {
+  if (b < a) std::swap(a, b);
+  return contacts_.count({a, b}) != 0;
+}
+
+bool ElectricityResolver::closed(ObjectId element) const {
+  auto it = reported_closed_.find(element);
+  return it != reported_closed_.end() && it->second;
+}
+
+void ElectricityResolver::build(ResolverAccess& access) {
+  // Called after any structural change in the world: the network is rebuilt
+  // at the next advance (and refactorised only if its matrix changed).
+  dirty_ = true;
+  // Give every part and wire its output columns now, so that advance() only
+  // ever changes values: a new membership would be a structural change, and
+  // with it a rebuild of every resolver, on every step that makes one.
+  auto current = access.writer<double>(prop::kCurrent);
+  auto voltage = access.writer<double>(prop::kVoltage);
+  auto powered = access.writer<std::uint8_t>(prop::kPowered);
+  auto conductive = access.column<std::uint8_t>(prop::kConductive);
+  auto give = [&](std::uint32_t slot) {
+    if (!current.has(slot)) current.set(slot, 0.0);  // a coil's preset current is its state: keep it
+    if (!voltage.has(slot)) voltage.set(slot, 0.0);
+    if (!powered.has(slot)) powered.set(slot, 0);
+  };
+  for (std::uint32_t s : conductive.members())
+    if (conductive[s]) give(s);
+  for (std::uint32_t s : access.column<double>(prop::kEmf).members()) give(s);
+  for (std::uint32_t s : access.column<double>(prop::kInductance).members()) give(s);
+  for (std::uint32_t s : access.column<ObjectId>(prop::kWireFrom).members()) give(s);
+  for (std::uint32_t s : access.column<ObjectId>(prop::kWireTo).members()) give(s);
+}
+
+std::vector<std::uint64_t> ElectricityResolver::input_versions(const WorldView& view) const {
+  std::vector<std::uint64_t> v;
+  v.reserve(2 * std::size(kNetworkInputs));
+  for (const char* name : kNetworkInputs) {
+    const ColumnBase& c = view.store().column(view.property(name));
+    // emf values enter only the right-hand side; its membership is structural.
+    v.push_back(std::string_view(name) == prop::kEmf ? 0 : c.version());
+    v.push_back(c.membership_version());
+  }
+  return v;
+}
+
+bool ElectricityResolver::inputs_changed(const WorldView& view) const {
+  return input_versions(view) != seen_versions_;
+}
+
+void ElectricityResolver::perform_commands(const WorldView& view) {
+  const PropertyStore& store = view.store();
+  for (const Command& c : queue_) {
+    if (!store.alive(c.a) || !store.alive(c.b)) continue;  // a part destroyed since the command was queued
+    const auto key = std::make_pair(c.a, c.b);
+    auto it = contacts_.find(key);
+    if (c.connect) {
+      if (it == contacts_.end()) {
+        contacts_.emplace(key, Contact{c.terminal_a, c.terminal_b});
+        view.emit({.type = event::kConnected, .a = c.a, .b = c.b});
+        dirty_ = true;
+      } else if (it->second.terminal_a != c.terminal_a || it->second.terminal_b != c.terminal_b) {
+        it->second = {c.terminal_a, c.terminal_b};
+        dirty_ = true;
+      }
+    } else if (it != contacts_.end()) {
+      contacts_.erase(it);
+      view.emit({.type = event::kDisconnected, .a = c.a, .b = c.b});
+      dirty_ = true;
+    }
+  }
+  queue_.clear();
+}
+
+void ElectricityResolver::build_network(const WorldView& view, double h) {
+  ++network_builds_;
+  h_ = h;
+  const PropertyStore& store = view.store();
+  const auto conductive = view.column<std::uint8_t>(prop::kConductive);
+  const auto emf = view.column<double>(prop::kEmf);
+  const auto internal_r = view.column<double>(prop::kInternalResistance);
+  const auto inductance = view.column<double>(prop::kInductance);
+  const auto resistance = view.column<double>(prop::kResistance);
+  const auto contact_r = view.column<double>(prop::kContactResistance);
+  const auto wire_from = view.column<ObjectId>(prop::kWireFrom);
+  const auto wire_to = view.column<ObjectId>(prop::kWireTo);
+  const auto from_terminal = view.column<std::int64_t>(prop::kWireFromTerminal);
+  const auto to_terminal = view.column<std::int64_t>(prop::kWireToTerminal);
+
+  // Which slots are wires, which are parts, and of what kind.
+  const std::size_t slots = store.slot_count();
+  std::vector<std::uint8_t> is_wire(slots, 0), is_part(slots, 0);
+  for (std::uint32_t s : wire_from.members()) is_wire[s] = 1;
+  for (std::uint32_t s : wire_to.members()) is_wire[s] = 1;
+  for (std::uint32_t s : conductive.members()) is_part[s] |= conductive[s] != 0;
+  for (std::uint32_t s : emf.members()) is_part[s] = 1;
+  for (std::uint32_t s : inductance.members()) is_part[s] = 1;
+
+  Network net;
+  parts_.clear();
+  wires_.clear();
+  batteries_.clear();
+  std::vector<Coil> coils;
+  std::vector<std::int32_t> part_of_slot(slots, -1);
+  for (std::uint32_t s = 0; s < slots; ++s) {
+    if (!is_part[s] || is_wire[s]) continue;
+    Part p{s, PartKind::Node, {net.node_count, net.node_count}, -1};
+    if (emf.has(s)) p.kind = PartKind::Battery;
+    else if (inductance.has(s)) p.kind = PartKind::Coil;
+    else if (resistance.has(s)) p.kind = PartKind::Resistor;
+    if (p.kind == PartKind::Node) net.node_count += 1;
+    else p.node[1] = net.node_count + 1, net.node_count += 2;
+    part_of_slot[s] = std::int32_t(parts_.size());
+    parts_.push_back(p);
+  }
+
+  // Thevenin branches: batteries first, so that a component's ground is the
+  // negative terminal of its first battery; then coils (backward-Euler
+  // companion: z = R + L/h, source (L/h) I_n, see docs/electricity.md).
+  for (Part& p : parts_)
+    if (p.kind == PartKind::Battery) {
+      p.element = std::int32_t(net.branches.size());
+      batteries_.push_back(p.slot);
+      net.branches.push_back(
+          {p.node[0], p.node[1], positive_resistance(internal_r.value_or(p.slot, config_.internal_resistance))});
+    }
+  for (Part& p : parts_)
+    if (p.kind == PartKind::Coil) {
+      const double l = inductance[p.slot];
+      const double r = resistance.value_or(p.slot, 0.0);
+      p.element = std::int32_t(net.branches.size());
+      coils.push_back({p.slot, l, r, 0.0});
+      net.branches.push_back({p.node[0], p.node[1], positive_resistance(r + l / h)});
+    }
+  coils_ = std::move(coils);
+  for (Part& p : parts_)
+    if (p.kind == PartKind::Resistor) {
+      p.element = std::int32_t(net.conductances.size());
+      net.conductances.push_back({p.node[0], p.node[1], 1.0 / positive_resistance(resistance[p.slot])});
+    }
+
+  // Wires: an end on a destroyed object (or a null ref) is open; an end on a
+  // live object that is not an electrical part is a scene error.
+  auto end_node = [&](std::uint32_t wire, ObjectId target, std::int64_t terminal,
+                      const char* which) -> std::int64_t {
+    if (terminal < 0 || terminal > 1)
+      throw InputError(ErrorLocation{"", 0, store.describe(store.id_at(wire))},
+                       std::string(which) + "_terminal must be 0 or 1, got " + std::to_string(terminal));
+    if (target.is_null() || !store.alive(target)) return -1;
+    const std::int32_t pi = target.index < slots ? part_of_slot[target.index] : -1;
+    if (pi < 0)
+      throw InputError(ErrorLocation{"", 0, store.describe(store.id_at(wire))},
+                       std::string(which) + " is '" + store.describe(target) + "', which is not an electrical part " +
+                           (is_wire[target.index] ? "(it is a wire: wires join parts)"
+                                                  : "(give it conductive = true, emf or inductance)"));
+    return parts_[std::size_t(pi)].node[terminal];
+  };
+  for (std::uint32_t s = 0; s < slots; ++s) {
+    if (!is_wire[s]) continue;
+    const std::int64_t a = end_node(s, wire_from.value_or(s, ObjectId{}), from_terminal.value_or(s, 0), "wire_from");
+    const std::int64_t b = end_node(s, wire_to.value_or(s, ObjectId{}), to_terminal.value_or(s, 0), "wire_to");
+    Wire w{s, -1};
+    if (a >= 0 && b >= 0) {
+      w.conductance = std::int32_t(net.conductances.size());
+      net.conductances.push_back({std::uint32_t(a), std::uint32_t(b),
+                                  1.0 / positive_resistance(resistance.value_or(s, config_.wire_resistance))});
+    }
+    wires_.push_back(w);
+  }
+
+  // Contacts: dropped when an object is gone; kept but inert while either
+  // object is not an electrical part (it may become one).
+  for (auto it = contacts_.begin(); it != contacts_.end();) {
+    const auto [a, b] = it->first;
+    if (!store.alive(a) || !store.alive(b)) {
+      it = contacts_.erase(it);
+      continue;
+    }
+    const std::int32_t pa = part_of_slot[a.index], pb = part_of_slot[b.index];
+    if (pa >= 0 && pb >= 0) {
+      const double half = config_.contact_resistance / 2;
+      const double r = contact_r.value_or(a.index, half) + contact_r.value_or(b.index, half);
+      net.conductances.push_back({parts_[std::size_t(pa)].node[it->second.terminal_a],
+                                  parts_[std::size_t(pb)].node[it->second.terminal_b], 1.0 / positive_resistance(r)});
+    }
+    ++it;
+  }
+
+  // Which elements lie on a closed loop. One that does not (a bridge of the
+  // network graph) carries exactly zero current by Kirchhoff's current law
+  // across the cut it spans; the solver gives zero only to rounding, so its
+  // current is set to exact zero after each solve (a dead circuit then reads
+  // 0, not 1e-14, and an opened coil's state is exactly 0).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  edges.reserve(net.branches.size() + net.conductances.size());
+  for (const auto& br : net.branches) edges.emplace_back(br.a, br.b);
+  for (const auto& g : net.conductances) edges.emplace_back(g.a, g.b);
+  const std::vector<bool> on_cycle = edges_on_cycles(net.node_count, edges);
+  branch_on_loop_.assign(on_cycle.begin(), on_cycle.begin() + std::ptrdiff_t(net.branches.size()));
+  conductance_on_loop_.assign(on_cycle.begin() + std::ptrdiff_t(net.branches.size()), on_cycle.end());
+  element_closed_.assign(parts_.size(), false);
+  for (std::size_t i = 0; i < parts_.size(); ++i) {
+    const Part& p = parts_[i];
+    if (p.kind == PartKind::Battery || p.kind == PartKind::Coil) element_closed_[i] = on_cycle[std::size_t(p.element)];
+    else if (p.kind == PartKind::Resistor) element_closed_[i] = on_cycle[net.branches.size() + std::size_t(p.element)];
+  }
+
+  // Objects that still carry our outputs but are no longer parts or wires
+  // (a battery whose emf was removed) are zeroed, not left showing old values.
+  stale_outputs_.clear();
+  for (std::uint32_t s : view.column<double>(prop::kCurrent).members())
+    if (part_of_slot[s] < 0 && !is_wire[s]) stale_outputs_.push_back(s);
+  for (auto it = reported_closed_.begin(); it != reported_closed_.end();)
+    it = store.alive(it->first) ? std::next(it) : reported_closed_.erase(it);
+
+  // The expensive part, only when the matrix changed.
+  if (!(net == network_)) solver_.factor(net);
+  network_ = std::move(net);
+  e_.assign(network_.branches.size(), 0.0);
+  potential_.assign(network_.node_count, 0.0);
+  branch_current_.assign(network_.branches.size(), 0.0);
+  seen_versions_ = input_versions(view);
+  dirty_ = false;
+}
+
+void ElectricityResolver::advance(ResolverAccess& access, double dt) {
+  perform_commands(access);
+  const double h = dt / config_.substeps;
+  if (dirty_ || h != h_ || inputs_changed(access)) build_network(access, h);
+
+  // The coil's state is its `current` property (written at the end of every
+  // advance, or edited from outside): reading it here makes a rebuild, a swap
+  // or an edit lose nothing.
+  const auto current = access.column<double>(prop::kCurrent);
+  for (Coil& c : coils_) c.current = current.value_or(c.slot, 0.0);
+
+  const auto emf = access.column<double>(prop::kEmf);
+  const std::size_t nb = batteries_.size();
+  for (std::size_t k = 0; k < nb; ++k) e_[k] = emf[batteries_[k]];
+  for (int step = 0; step < config_.substeps; ++step) {
+    for (std::size_t i = 0; i < coils_.size(); ++i) e_[nb + i] = coils_[i].inductance / h * coils_[i].current;
+    solver_.solve(e_, potential_, branch_current_);
+    for (std::size_t k = 0; k < branch_current_.size(); ++k)
+      if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+    for (std::size_t i = 0; i < coils_.size(); ++i) coils_[i].current = branch_current_[nb + i];
+  }
+  write_outputs(access);
+}
+
+void ElectricityResolver::write_outputs(ResolverAccess& access) {
+  auto current = access.writer<double>(prop::kCurrent);
+  auto voltage = access.writer<double>(prop::kVoltage);
+  auto powered = access.writer<std::uint8_t>(prop::kPowered);
+  const double threshold = config_.powered_threshold;
+  const auto& p = potential_;
+
+  // Conductance currents, and the current passing each node: half the sum of
+  // |current| over the elements that meet there (what flows in flows out).
+  std::vector<double> through(network_.node_count, 0.0);
+  std::vector<double> g_current(network_.conductances.size());
+  for (std::size_t i = 0; i < network_.conductances.size(); ++i) {
+    const Conductance& g = network_.conductances[i];
+    g_current[i] = conductance_on_loop_[i] ? g.g * (p[g.a] - p[g.b]) : 0.0;
+    through[g.a] += std::abs(g_current[i]) / 2, through[g.b] += std::abs(g_current[i]) / 2;
+  }
+  for (std::size_t k = 0; k < network_.branches.size(); ++k) {
+    const TheveninBranch& br = network_.branches[k];
+    through[br.a] += std::abs(branch_current_[k]) / 2, through[br.b] += std::abs(branch_current_[k]) / 2;
+  }
+
+  auto publish = [&](std::uint32_t slot, double i, double v) {
+    current.set(slot, i);
+    voltage.set(slot, v);
+    powered.set(slot, std::abs(i) > threshold ? 1 : 0);
+  };
+  const PropertyStore& store = access.store();
+  for (std::size_t idx = 0; idx < parts_.size(); ++idx) {
+    const Part& part = parts_[idx];
+    const double v0 = p[part.node[0]], v1 = p[part.node[1]];
+    double i = 0;
+    switch (part.kind) {
+      case PartKind::Node: publish(part.slot, through[part.node[0]], v0); continue;
+      case PartKind::Battery: i = branch_current_[std::size_t(part.element)]; publish(part.slot, i, v1 - v0); break;
+      case PartKind::Coil: i = branch_current_[std::size_t(part.element)]; publish(part.slot, i, v0 - v1); break;
+      case PartKind::Resistor: i = g_current[std::size_t(part.element)]; publish(part.slot, i, v0 - v1); break;
+    }
+    // Events when an element joins or leaves a closed loop.
+    const ObjectId id = store.id_at(part.slot);
+    bool& reported = reported_closed_[id];
+    if (reported != element_closed_[idx]) {
+      reported = element_closed_[idx];
+      access.emit({.type = reported ? event::kCircuitClosed : event::kCircuitOpened, .a = id,
+                   .values = {{"current", i}}});
+    }
+  }
+  for (const Wire& w : wires_) {
+    if (w.conductance < 0) {
+      publish(w.slot, 0.0, 0.0);
+      continue;
+    }
+    const Conductance& g = network_.conductances[std::size_t(w.conductance)];
+    publish(w.slot, g_current[std::size_t(w.conductance)], p[g.a] - p[g.b]);
+  }
+  for (std::uint32_t s : stale_outputs_) publish(s, 0.0, 0.0);
+}
+
+void register_electricity_resolver(PluginRegistry& registry) {
+  registry.add({
+      .info = {.name = kResolverName,
+               .kind = StageKind::Resolver,
+               .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance, prop::kInductance,
+                         prop::kResistance, prop::kContactResistance, prop::kWireFrom, prop::kWireTo,
+                         prop::kWireFromTerminal, prop::kWireToTerminal, prop::kCurrent},
+               .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered},
+               // Without a battery or a coil (which may hold a current) no
+               // current can flow: bars that merely conduct need no solver.
+               .needs = {prop::kEmf, prop::kInductance},
+               .doc = "DC circuits with coils: modified nodal analysis over parts, wires and contacts"},
+      .properties = electricity_property_defs(),
+      .create = [](PluginContext& ctx) {
+        return std::make_unique<ElectricityResolver>(ElectricityConfig::from(ctx.settings()));
+      },
+  });
+}
+
+}  // namespace alloy::electricity

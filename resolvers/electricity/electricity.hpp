@@ -1,0 +1,209 @@
+// The electricity resolver: DC circuits with coils, solved by modified nodal
+// analysis (paper 3.2: "updates the electrical state of any given object,
+// reacting to changes to the electrical circuit, such as new connections and
+// broken connections"). docs/electricity.md has the model, the equations, the
+// units and the limits.
+//
+// Parts   an object is an electrical part if it carries `emf` (battery),
+//         `inductance` (coil), or `conductive` = true (with `resistance`: a
+//         resistor; without: a single equipotential node such as a bar, a
+//         contact, the striker). Batteries, coils and resistors have two
+//         terminals, 0 and 1; a node part has one (terminal 1 means the same node).
+// Wires   objects carrying `wire_from` / `wire_to` (refs to parts) join two
+//         terminals through `resistance`.
+// Contacts made and broken by touching arrive as connect / disconnect
+//         commands (from electricity_from_collisions) and are performed in the
+//         next advance.
+// Reads   conductive, emf, internal_resistance, inductance, resistance,
+//         contact_resistance, wire_from, wire_to, wire_from_terminal,
+//         wire_to_terminal, current (the coil's state).
+// Writes  current, voltage, powered, on every part and wire.
+// Events  connected / disconnected (a, b) when a contact is made / broken;
+//         circuit_closed / circuit_opened (a = battery, coil or resistor, value
+//         "current") when the element joins / leaves a closed loop.
+//
+// State that matters lives in properties: a coil's current is its `current`,
+// so build() loses nothing. Contacts are not stored: they are the touching
+// pairs of the collisions set, and electricity_from_collisions re-sends every
+// touching pair when it starts, so a new resolver instance recovers them.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "resolvers/electricity/mna.hpp"
+#include "runtime/plugin_registry.hpp"
+#include "runtime/stage.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::electricity {
+
+/// Property names: a contract with the Lua kit, the viewer and the other
+/// resolvers (magnetism reads `current`). Keep them exactly.
+namespace prop {
+inline constexpr const char* kConductive = "conductive";
+inline constexpr const char* kEmf = "emf";
+inline constexpr const char* kInternalResistance = "internal_resistance";
+inline constexpr const char* kInductance = "inductance";
+inline constexpr const char* kResistance = "resistance";
+inline constexpr const char* kContactResistance = "contact_resistance";
+inline constexpr const char* kWireFrom = "wire_from";
+inline constexpr const char* kWireTo = "wire_to";
+inline constexpr const char* kWireFromTerminal = "wire_from_terminal";
+inline constexpr const char* kWireToTerminal = "wire_to_terminal";
+inline constexpr const char* kCurrent = "current";
+inline constexpr const char* kVoltage = "voltage";
+inline constexpr const char* kPowered = "powered";
+}  // namespace prop
+
+/// Plugin names.
+inline constexpr const char* kResolverName = "electricity";
+inline constexpr const char* kFromCollisionsName = "electricity_from_collisions";
+
+/// Event types.
+namespace event {
+inline constexpr const char* kConnected = "connected";
+inline constexpr const char* kDisconnected = "disconnected";
+inline constexpr const char* kCircuitClosed = "circuit_closed";
+inline constexpr const char* kCircuitOpened = "circuit_opened";
+}  // namespace event
+
+/// The property types electricity defines.
+std::vector<PropertyDef> electricity_property_defs();
+
+/// Smallest resistance the solver uses, Ohm: a value of 0 (an ideal wire or
+/// battery) is taken as this, so that every element has a finite conductance
+/// and a short circuit a huge but finite current.
+inline constexpr double kMinResistance = 1e-6;
+
+/// Settings of the `electricity` plugin.
+struct ElectricityConfig {
+  /// A part or wire is `powered` when |current| exceeds this, A.
+  double powered_threshold = 1e-3;
+  /// Resistance of a touching contact when neither part carries
+  /// `contact_resistance`, Ohm: each side contributes half.
+  double contact_resistance = 1e-3;
+  /// Resistance of a wire that does not carry `resistance`, Ohm (about 30 cm
+  /// of 0.5 mm^2 copper with its terminals).
+  double wire_resistance = 0.01;
+  /// Internal resistance of a battery that does not carry `internal_resistance`, Ohm
+  /// (a fresh alkaline cell).
+  double internal_resistance = 0.1;
+  /// Backward-Euler substeps per advance: the coil model's error is first
+  /// order in dt / substeps. 4 keeps a kit coil's rise (L/R ~ 10 ms, 2.4 steps
+  /// of 1/240 s) within 2 % of the analytic curve instead of 6 %; a substep
+  /// costs one back-substitution per driven circuit (docs/electricity.md).
+  int substeps = 4;
+  /// Components with at most this many unknowns are solved with dense LU,
+  /// larger ones with sparse LU.
+  std::int64_t dense_limit = 64;
+
+  /// Reads and validates the plugin settings; InputError names the bad key.
+  static ElectricityConfig from(const PluginSettings& settings);
+  /// The setting keys `from` accepts.
+  static const std::vector<std::string>& keys();
+};
+
+/// What an electrical part is, by the properties it carries (first match wins:
+/// a wire is never a part; then emf, inductance, resistance).
+enum class PartKind : std::uint8_t { Node, Battery, Coil, Resistor };
+
+class ElectricityResolver final : public Resolver {
+ public:
+  explicit ElectricityResolver(ElectricityConfig config = {});
+
+  void build(ResolverAccess& access) override;
+  void advance(ResolverAccess& access, double dt) override;
+
+  // --- interaction functions: queued, performed in the next advance -------------
+  /// Joins terminal `terminal_a` of part a to terminal `terminal_b` of part b
+  /// through a contact resistance. Connecting a connected pair again only
+  /// updates its terminals. Pairs of which either object is not (or no longer)
+  /// an electrical part carry nothing.
+  void connect(ObjectId a, ObjectId b, int terminal_a = 0, int terminal_b = 0);
+  /// Breaks the contact between a and b, if there is one.
+  void disconnect(ObjectId a, ObjectId b);
+
+  // --- introspection (tests, tools) ---------------------------------------------
+  /// Whether a and b touch electrically, as of the last advance.
+  bool connected(ObjectId a, ObjectId b) const;
+  std::size_t contact_count() const { return contacts_.size(); }
+  /// Whether a battery, coil or resistor lies on a closed loop, as of the last advance.
+  bool closed(ObjectId element) const;
+  /// Component factorisations so far: moves only when the network's matrix changes.
+  std::uint64_t factorizations() const { return solver_.factorizations(); }
+  /// Rebuilds of the network from properties (cheap; a rebuild that yields the
+  /// same matrix does not factorise).
+  std::uint64_t network_builds() const { return network_builds_; }
+  const MnaSolver& solver() const { return solver_; }
+  const ElectricityConfig& config() const { return config_; }
+
+ private:
+  struct Command {
+    bool connect;
+    ObjectId a, b;
+    int terminal_a, terminal_b;
+  };
+  struct Contact {
+    int terminal_a = 0, terminal_b = 0;
+  };
+  struct Part {
+    std::uint32_t slot;
+    PartKind kind;
+    std::uint32_t node[2];   // node of terminal 0 and 1 (equal for a node part)
+    std::int32_t element;    // branch (battery, coil) or conductance (resistor) index
+  };
+  struct Wire {
+    std::uint32_t slot;
+    std::int32_t conductance;  // -1: an end is open
+  };
+  struct Coil {
+    std::uint32_t slot;
+    double inductance, resistance;
+    double current;  // the state: A, from terminal 0 to 1 through the coil
+  };
+
+  void perform_commands(const WorldView& view);
+  bool inputs_changed(const WorldView& view) const;
+  void build_network(const WorldView& view, double h);
+  void write_outputs(ResolverAccess& access);
+  std::vector<std::uint64_t> input_versions(const WorldView& view) const;
+
+  ElectricityConfig config_;
+  std::vector<Command> queue_;
+  std::map<std::pair<ObjectId, ObjectId>, Contact> contacts_;  // key (a, b) with a < b
+
+  // The network, rebuilt from properties when an input changed.
+  bool dirty_ = true;
+  bool reload_coil_state_ = true;
+  double h_ = 0;  // the substep the coil companions were built for, s
+  std::vector<std::uint64_t> seen_versions_;
+  std::uint64_t seen_current_version_ = 0;
+  std::uint64_t network_builds_ = 0;
+  Network network_;
+  MnaSolver solver_;
+  std::vector<Part> parts_;
+  std::vector<Wire> wires_;
+  std::vector<Coil> coils_;                 // branch index = batteries_.size() + coil index
+  std::vector<std::uint32_t> batteries_;    // slots; branch index = position
+  std::vector<bool> element_closed_;        // per part: on a closed loop (two-terminal parts)
+  std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
+  std::map<ObjectId, bool> reported_closed_;  // what the last events said, per element
+  std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
+
+  // Per-solve results.
+  std::vector<double> e_, potential_, branch_current_;
+};
+
+/// Registers the `electricity` resolver and its property types only (for
+/// tools and tests that run circuits without the rigid body).
+void register_electricity_resolver(PluginRegistry& registry);
+
+/// Registers the `electricity` resolver and the `electricity_from_collisions`
+/// interaction with their property types.
+void register_electricity_plugins(PluginRegistry& registry);
+
+}  // namespace alloy::electricity

@@ -1,0 +1,240 @@
+#include "resolvers/electricity/mna.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseLU>
+
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace alloy::electricity {
+
+namespace {
+
+/// Union-find with path halving; components are found once per factor().
+struct DisjointSets {
+  explicit DisjointSets(std::uint32_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // deterministic root: the lower index
+  }
+  std::vector<std::uint32_t> parent;
+};
+
+constexpr std::int32_t kGround = -1;
+
+}  // namespace
+
+struct MnaSolver::Component {
+  std::vector<std::uint32_t> nodes;     // ascending
+  std::vector<std::uint32_t> branches;  // indices into Network::branches, in network order
+  std::uint32_t ground = 0;
+  std::size_t unknowns = 0;
+  bool dense = true;
+  bool factored = false;
+  Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu;
+  // SparseLU is neither copyable nor movable; keep it behind a pointer.
+  std::unique_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>> sparse_lu;
+  mutable Eigen::VectorXd rhs, x;  // work buffers, sized once
+};
+
+MnaSolver::MnaSolver(std::size_t dense_limit) : dense_limit_(dense_limit) {}
+MnaSolver::~MnaSolver() = default;
+MnaSolver::MnaSolver(MnaSolver&&) noexcept = default;
+MnaSolver& MnaSolver::operator=(MnaSolver&&) noexcept = default;
+
+std::size_t MnaSolver::component_count() const { return components_.size(); }
+std::uint32_t MnaSolver::ground(std::size_t c) const { return components_.at(c).ground; }
+std::size_t MnaSolver::unknowns(std::size_t c) const { return components_.at(c).unknowns; }
+bool MnaSolver::dense(std::size_t c) const { return components_.at(c).dense; }
+
+void MnaSolver::factor(const Network& net) {
+  const std::uint32_t n = net.node_count;
+  auto check = [&](std::uint32_t a, std::uint32_t b, double v, const char* what, std::size_t i) {
+    if (a >= n || b >= n)
+      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " joins a node that does not exist");
+    if (!(v > 0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
+                                  " must be positive and finite, got " + std::to_string(v));
+  };
+  for (std::size_t i = 0; i < net.conductances.size(); ++i)
+    check(net.conductances[i].a, net.conductances[i].b, net.conductances[i].g, "conductance", i);
+  for (std::size_t i = 0; i < net.branches.size(); ++i)
+    check(net.branches[i].a, net.branches[i].b, net.branches[i].z, "branch impedance", i);
+
+  // Connected components over every element: conductances and branches alike.
+  DisjointSets sets(n);
+  for (const auto& c : net.conductances) sets.unite(c.a, c.b);
+  for (const auto& br : net.branches) sets.unite(br.a, br.b);
+  node_count_ = n;
+  branch_count_ = net.branches.size();
+  component_of_node_.assign(n, 0);
+  components_.clear();
+  std::vector<std::int64_t> component_of_root(n, -1);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::uint32_t r = sets.find(v);
+    if (component_of_root[r] < 0) {
+      component_of_root[r] = std::int64_t(components_.size());
+      components_.emplace_back();
+    }
+    component_of_node_[v] = std::uint32_t(component_of_root[r]);
+    components_[component_of_node_[v]].nodes.push_back(v);
+  }
+  for (std::uint32_t k = 0; k < net.branches.size(); ++k)
+    components_[component_of_node_[net.branches[k].a]].branches.push_back(k);
+
+  // Local numbering: node v of a component -> row, ground -> kGround; branch
+  // k -> row after the component's nodes. One array per network, filled per
+  // component (components are disjoint, so entries never clash).
+  std::vector<std::int32_t> node_row(n, kGround);
+  std::vector<std::int32_t> branch_row(net.branches.size(), kGround);
+  std::vector<std::vector<std::uint32_t>> conductances_of(components_.size());
+  for (std::uint32_t i = 0; i < net.conductances.size(); ++i)
+    conductances_of[component_of_node_[net.conductances[i].a]].push_back(i);
+
+  for (std::size_t ci = 0; ci < components_.size(); ++ci) {
+    Component& comp = components_[ci];
+    // The ground: node a of the first branch. The resolver lists batteries
+    // first, terminal 0 (negative) as a, so potentials read as the voltmeter
+    // of a kit user whose black lead is on the first battery's minus.
+    comp.ground = comp.branches.empty() ? comp.nodes.front() : net.branches[comp.branches.front()].a;
+    std::int32_t row = 0;
+    for (std::uint32_t v : comp.nodes)
+      if (v != comp.ground) node_row[v] = row++;
+    for (std::uint32_t k : comp.branches) branch_row[k] = row++;
+    comp.unknowns = std::size_t(row);
+    comp.dense = comp.unknowns <= dense_limit_;
+    comp.factored = false;
+    if (comp.branches.empty()) continue;  // no source, no current: nothing to factorise
+
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(4 * conductances_of[ci].size() + 5 * comp.branches.size());
+    auto add = [&](std::int32_t r, std::int32_t c, double v) {
+      if (r != kGround && c != kGround) t.emplace_back(r, c, v);
+    };
+    for (std::uint32_t i : conductances_of[ci]) {
+      const Conductance& g = net.conductances[i];
+      if (g.a == g.b) continue;  // a conductance from a node to itself carries nothing
+      const std::int32_t ra = node_row[g.a], rb = node_row[g.b];
+      add(ra, ra, g.g), add(rb, rb, g.g), add(ra, rb, -g.g), add(rb, ra, -g.g);
+    }
+    for (std::uint32_t k : comp.branches) {
+      const TheveninBranch& br = net.branches[k];
+      const std::int32_t ra = node_row[br.a], rb = node_row[br.b], rk = branch_row[k];
+      add(ra, rk, 1.0), add(rb, rk, -1.0);  // I leaves a, enters b
+      add(rk, ra, 1.0), add(rk, rb, -1.0), add(rk, rk, -br.z);
+    }
+    Eigen::SparseMatrix<double> a(Eigen::Index(comp.unknowns), Eigen::Index(comp.unknowns));
+    a.setFromTriplets(t.begin(), t.end());  // sums duplicates (parallel elements)
+    if (comp.dense) {
+      comp.dense_lu.compute(Eigen::MatrixXd(a));
+    } else {
+      a.makeCompressed();
+      comp.sparse_lu = std::make_unique<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>();
+      comp.sparse_lu->analyzePattern(a);
+      comp.sparse_lu->factorize(a);
+      if (comp.sparse_lu->info() != Eigen::Success)
+        throw std::runtime_error("electric network component " + std::to_string(ci) +
+                                 " is singular: " + comp.sparse_lu->lastErrorMessage());
+    }
+    comp.rhs.setZero(Eigen::Index(comp.unknowns));
+    comp.x.setZero(Eigen::Index(comp.unknowns));
+    comp.factored = true;
+    ++factorizations_;
+  }
+  node_row_ = std::move(node_row);
+  branch_row_ = std::move(branch_row);
+}
+
+void MnaSolver::solve(std::span<const double> e, std::span<double> potential, std::span<double> current) const {
+  if (e.size() != branch_count_ || potential.size() != node_count_ || current.size() != branch_count_)
+    throw std::invalid_argument("MnaSolver::solve: sizes do not match the factored network");
+  for (std::size_t ci = 0; ci < components_.size(); ++ci) {
+    const Component& comp = components_[ci];
+    bool driven = false;
+    for (std::uint32_t k : comp.branches) driven = driven || e[k] != 0.0;
+    if (!driven) {  // no source anywhere in the component: everything rests at zero
+      for (std::uint32_t v : comp.nodes) potential[v] = 0;
+      for (std::uint32_t k : comp.branches) current[k] = 0;
+      continue;
+    }
+    for (std::uint32_t k : comp.branches) comp.rhs[branch_row_[k]] = -e[k];
+    if (comp.dense) comp.x = comp.dense_lu.solve(comp.rhs);
+    else comp.x = comp.sparse_lu->solve(comp.rhs);
+    if (!comp.x.allFinite())
+      throw std::runtime_error("electric network component " + std::to_string(ci) + " gave a non-finite solution");
+    for (std::uint32_t v : comp.nodes) potential[v] = v == comp.ground ? 0.0 : comp.x[node_row_[v]];
+    for (std::uint32_t k : comp.branches) current[k] = comp.x[branch_row_[k]];
+  }
+}
+
+std::vector<bool> edges_on_cycles(std::uint32_t node_count,
+                                  std::span<const std::pair<std::uint32_t, std::uint32_t>> edges) {
+  std::vector<bool> on_cycle(edges.size(), false);
+  // Adjacency as CSR: (neighbour, edge id). Self-loops are cycles by themselves
+  // and play no part in the lowlink computation.
+  std::vector<std::uint32_t> start(node_count + 1, 0);
+  for (const auto& [a, b] : edges)
+    if (a != b) ++start[a + 1], ++start[b + 1];
+  for (std::uint32_t v = 0; v < node_count; ++v) start[v + 1] += start[v];
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> adj(start[node_count]);
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::uint32_t i = 0; i < edges.size(); ++i) {
+    const auto [a, b] = edges[i];
+    if (a == b) {
+      on_cycle[i] = true;
+      continue;
+    }
+    adj[fill[a]++] = {b, i};
+    adj[fill[b]++] = {a, i};
+  }
+
+  constexpr std::uint32_t kUnseen = 0xffffffffu;
+  std::vector<std::uint32_t> disc(node_count, kUnseen), low(node_count, 0);
+  struct Frame {
+    std::uint32_t node, parent_edge, next;
+  };
+  std::vector<Frame> stack;
+  std::vector<bool> tree(edges.size(), false);
+  std::uint32_t time = 0;
+  for (std::uint32_t root = 0; root < node_count; ++root) {
+    if (disc[root] != kUnseen) continue;
+    disc[root] = low[root] = time++;
+    stack.push_back({root, kUnseen, start[root]});
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      if (f.next < start[f.node + 1]) {
+        const auto [w, id] = adj[f.next++];
+        if (id == f.parent_edge) continue;  // the tree edge we came by (not a parallel twin)
+        if (disc[w] == kUnseen) {
+          disc[w] = low[w] = time++;
+          tree[id] = true;
+          stack.push_back({w, id, start[w]});
+        } else {
+          low[f.node] = std::min(low[f.node], disc[w]);
+        }
+        continue;
+      }
+      // f.node is finished: hand its lowlink to its parent and judge the tree edge.
+      const Frame done = f;
+      stack.pop_back();
+      if (stack.empty()) break;
+      const std::uint32_t parent = stack.back().node;
+      low[parent] = std::min(low[parent], low[done.node]);
+      // The tree edge parent-child is a bridge iff nothing below the child
+      // reaches the parent or above by another edge.
+      on_cycle[done.parent_edge] = low[done.node] <= disc[parent];
+    }
+  }
+  // Every edge that is not a tree edge closes a cycle with the tree path between its ends.
+  for (std::uint32_t i = 0; i < edges.size(); ++i)
+    if (!tree[i]) on_cycle[i] = true;
+  return on_cycle;
+}
+
+}  // namespace alloy::electricity

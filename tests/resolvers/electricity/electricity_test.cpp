@@ -1,0 +1,481 @@
+// Tests for resolvers/electricity/electricity.hpp in a real World: circuits
+// built from parts and wire objects, contacts made by connect / disconnect
+// commands, against Ohm's law and the analytic RL responses.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "resolvers/electricity/electricity.hpp"
+
+namespace alloy::electricity {
+namespace {
+
+class ElectricityTest : public ::testing::Test {
+ protected:
+  void SetUp() override { register_electricity_resolver(registry); }
+
+  static WorldDef def(int substeps = 1, double dt = 1.0 / 240.0) {
+    WorldDef d;
+    d.dt = dt;
+    d.settings["electricity"].set("substeps", std::int64_t(substeps));
+    return d;
+  }
+  static ObjectId battery(World& w, const std::string& name, double emf, double r) {
+    const ObjectId id = w.create(name);
+    w.set(id, "emf", emf);
+    w.set(id, "internal_resistance", r);
+    w.set(id, "conductive", true);
+    return id;
+  }
+  static ObjectId coil(World& w, const std::string& name, double l, double r) {
+    const ObjectId id = w.create(name);
+    w.set(id, "inductance", l);
+    w.set(id, "resistance", r);
+    w.set(id, "conductive", true);
+    return id;
+  }
+  static ObjectId resistor(World& w, const std::string& name, double r) {
+    const ObjectId id = w.create(name);
+    w.set(id, "conductive", true);
+    w.set(id, "resistance", r);
+    return id;
+  }
+  static ObjectId bar(World& w, const std::string& name) {
+    const ObjectId id = w.create(name);
+    w.set(id, "conductive", true);
+    return id;
+  }
+  static ObjectId wire(World& w, const std::string& name, ObjectId from, int from_terminal, ObjectId to,
+                       int to_terminal, double r) {
+    const ObjectId id = w.create(name);
+    w.set(id, "wire_from", from);
+    w.set(id, "wire_from_terminal", std::int64_t(from_terminal));
+    w.set(id, "wire_to", to);
+    w.set(id, "wire_to_terminal", std::int64_t(to_terminal));
+    w.set(id, "resistance", r);
+    return id;
+  }
+  static double num(const World& w, ObjectId id, const char* p) { return std::get<double>(w.get(id, p)); }
+  static bool flag(const World& w, ObjectId id, const char* p) { return std::get<bool>(w.get(id, p)); }
+  static ElectricityResolver& resolver(World& w) {
+    return dynamic_cast<ElectricityResolver&>(*w.stage("electricity"));
+  }
+  static std::vector<Event> of_type(const std::vector<Event>& events, const std::string& type) {
+    std::vector<Event> out;
+    std::copy_if(events.begin(), events.end(), std::back_inserter(out), [&](const Event& e) { return e.type == type; });
+    return out;
+  }
+
+  PluginRegistry registry;
+};
+
+TEST_F(ElectricityTest, ResistiveDividerMatchesOhmsLaw) {
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 9.0, 0.5);
+  const ObjectId r1 = resistor(w, "r1", 100.0);
+  const ObjectId r2 = resistor(w, "r2", 200.0);
+  const ObjectId tap = bar(w, "tap");  // a node part between the two resistors
+  wire(w, "w1", b, 1, r1, 0, 0.01);
+  wire(w, "w2", r1, 1, tap, 0, 0.02);
+  wire(w, "w3", tap, 0, r2, 0, 0.03);
+  const ObjectId w4 = wire(w, "w4", r2, 1, b, 0, 0.04);
+  w.step();
+  const double total = 0.5 + 100 + 200 + 0.01 + 0.02 + 0.03 + 0.04;
+  const double i = 9.0 / total;
+    // Exact to rounding: the matrix spans 100 S (a 0.01 Ohm wire) to 5 mS, so
+  // LU loses about four digits of the sixteen.
+  const double tol = 1e-10;
+  for (ObjectId id : {b, r1, r2, w4}) EXPECT_NEAR(num(w, id, "current"), i, tol * i);
+  EXPECT_NEAR(num(w, b, "voltage"), 9.0 - 0.5 * i, tol * 9);  // terminal voltage, + minus -
+  EXPECT_NEAR(num(w, r1, "voltage"), 100 * i, tol * 9);       // drop along the current
+  EXPECT_NEAR(num(w, r2, "voltage"), 200 * i, tol * 9);
+  // Potentials are measured from the battery's negative terminal.
+  EXPECT_NEAR(num(w, tap, "voltage"), (200 + 0.03 + 0.04) * i, tol * 9);
+  EXPECT_NEAR(num(w, tap, "current"), i, tol * i);  // what passes through the node
+  EXPECT_NEAR(num(w, w4, "voltage"), 0.04 * i, tol * 9);
+  for (ObjectId id : {b, r1, r2, tap, w4}) EXPECT_TRUE(flag(w, id, "powered"));
+}
+
+TEST_F(ElectricityTest, OpenCircuitCarriesNoCurrentAndStaysFinite) {
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 6.0, 0.1);
+  const ObjectId r = resistor(w, "r", 10.0);
+  const ObjectId end = bar(w, "end");
+  wire(w, "w1", b, 1, r, 0, 0.01);
+  wire(w, "w2", r, 1, end, 0, 0.01);  // end does not lead back to the battery
+  w.run(3);
+  for (ObjectId id : {b, r, end}) {
+    EXPECT_EQ(num(w, id, "current"), 0.0);  // exactly: an element off every loop carries nothing
+    EXPECT_TRUE(std::isfinite(num(w, id, "voltage")));
+    EXPECT_FALSE(flag(w, id, "powered"));
+  }
+  // Potentials to rounding (1e-12 of the emf).
+  EXPECT_NEAR(num(w, b, "voltage"), 6.0, 1e-11);    // open-circuit voltage is the emf
+  EXPECT_NEAR(num(w, end, "voltage"), 6.0, 1e-11);  // the dead end floats at the + terminal
+  EXPECT_NEAR(num(w, r, "voltage"), 0.0, 1e-11);    // no current, no drop
+  EXPECT_FALSE(resolver(w).closed(b));
+}
+
+TEST_F(ElectricityTest, ShortCircuitIsLimitedByTheInternalResistance) {
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 1.5, 0.2);
+  const ObjectId s = wire(w, "short", b, 1, b, 0, 0.0);  // 0 Ohm: taken as 1 micro-Ohm
+  w.step();
+  EXPECT_NEAR(num(w, b, "current"), 1.5 / 0.2, 1.5 / 0.2 * 1e-5);
+  EXPECT_NEAR(num(w, s, "current"), 1.5 / 0.2, 1.5 / 0.2 * 1e-5);
+  EXPECT_NEAR(num(w, b, "voltage"), 0.0, 1e-5);
+  // An ideal battery (0 Ohm) shorted by an ideal wire: huge, but finite.
+  w.set(b, "internal_resistance", 0.0);
+  w.step();
+  EXPECT_TRUE(std::isfinite(num(w, b, "current")));
+  EXPECT_NEAR(num(w, b, "current"), 1.5 / (2 * kMinResistance), 1.0);
+}
+
+TEST_F(ElectricityTest, AnIsolatedPartIsFiniteAndDead) {
+  World w(registry);
+  battery(w, "battery", 1.5, 0.1);
+  const ObjectId lone = bar(w, "lone");
+  const ObjectId c = coil(w, "coil", 0.01, 1.0);
+  w.run(2);
+  for (ObjectId id : {lone, c}) {
+    EXPECT_EQ(num(w, id, "current"), 0.0);
+    EXPECT_EQ(num(w, id, "voltage"), 0.0);
+    EXPECT_FALSE(flag(w, id, "powered"));
+  }
+}
+
+/// Battery (E, r) wired to a coil (L, R) with wires of `wire_r` each: an RL loop.
+struct RlLoop {
+  ObjectId battery, coil;
+  double e, r_total, l;
+  double analytic(double t) const { return e / r_total * (1 - std::exp(-t * r_total / l)); }
+};
+
+RlLoop make_rl(World& w) {
+  const double e = 6.0, r = 0.1, rc = 5.9, l = 0.06, wire_r = 0.01;
+  RlLoop rl{.e = e, .r_total = r + rc + 2 * wire_r, .l = l};
+  rl.battery = w.create("battery");
+  w.set(rl.battery, "emf", e);
+  w.set(rl.battery, "internal_resistance", r);
+  rl.coil = w.create("coil");
+  w.set(rl.coil, "inductance", l);
+  w.set(rl.coil, "resistance", rc);
+  for (auto [name, from, ft, to, tt] : {std::tuple{"w1", rl.battery, 1, rl.coil, 0},
+                                        std::tuple{"w2", rl.coil, 1, rl.battery, 0}}) {
+    const ObjectId id = w.create(name);
+    w.set(id, "wire_from", from);
+    w.set(id, "wire_from_terminal", std::int64_t(ft));
+    w.set(id, "wire_to", to);
+    w.set(id, "wire_to_terminal", std::int64_t(tt));
+    w.set(id, "resistance", wire_r);
+  }
+  return rl;
+}
+
+/// Largest |I_sim(t) - I(t)| over five time constants, relative to E/R.
+double rl_rise_error(PluginRegistry& registry, double dt, int substeps) {
+  World w(registry, [&] {
+    WorldDef d;
+    d.dt = dt;
+    d.settings["electricity"].set("substeps", std::int64_t(substeps));
+    return d;
+  }());
+  const RlLoop rl = make_rl(w);
+  const double tau = rl.l / rl.r_total;
+  double worst = 0;
+  while (w.time() < 5 * tau) {
+    w.step();
+    const double i = std::get<double>(w.get(rl.coil, "current"));
+    worst = std::max(worst, std::abs(i - rl.analytic(w.time())));
+  }
+  return worst / (rl.e / rl.r_total);
+}
+
+TEST_F(ElectricityTest, CoilCurrentRisesWithItsTimeConstant) {
+  // tau = L / R = 0.06 / 6.02 = 9.97 ms; dt = 1/240 s = 4.17 ms = 0.42 tau.
+  // Backward Euler's largest error over the rise is 6.4 % of E/R at dt = 1/240
+  // (measured; see docs/electricity.md), and halves with dt: first order.
+  const double e240 = rl_rise_error(registry, 1.0 / 240, 1);
+  const double e480 = rl_rise_error(registry, 1.0 / 480, 1);
+  const double e960 = rl_rise_error(registry, 1.0 / 960, 1);
+  const double e240x4 = rl_rise_error(registry, 1.0 / 240, 4);  // 4 substeps = dt / 4
+  RecordProperty("rl_error_dt240", std::to_string(e240));
+  EXPECT_LT(e240, 0.07);
+  EXPECT_GT(e240, 0.02);  // the model is first order: the figure is not suspiciously small
+  EXPECT_NEAR(e240 / e480, 2.0, 0.35);
+  EXPECT_NEAR(e480 / e960, 2.0, 0.25);
+  EXPECT_NEAR(e240x4, e960, 1e-3);  // substeps are the same integrator on a finer step
+  EXPECT_LT(e240x4, 0.02);
+
+  // And the steady state is Ohm's law exactly.
+  World w(registry);
+  const RlLoop rl = make_rl(w);
+  w.run(400);  // 1.7 s = 167 tau
+  EXPECT_NEAR(num(w, rl.coil, "current"), rl.e / rl.r_total, 1e-12);
+  EXPECT_NEAR(num(w, rl.coil, "voltage"), 5.9 * rl.e / rl.r_total, 1e-11);
+  EXPECT_TRUE(flag(w, rl.coil, "powered"));
+}
+
+TEST_F(ElectricityTest, CoilDecaysThroughItsFlybackPathWhenTheSwitchOpens) {
+  // battery + -> bar s1 ~contact~ bar s2 -> coil 0, coil 1 -> battery -, with a
+  // 20 Ohm flyback resistor across the coil. Opening the s1-s2 contact leaves
+  // the loop coil + flyback: I(t) = I0 exp(-t (R_coil + R_fly + wires) / L).
+  World w(registry);  // default: 4 substeps
+  const ObjectId b = battery(w, "battery", 6.0, 0.1);
+  const ObjectId s1 = bar(w, "s1"), s2 = bar(w, "s2");
+  const ObjectId c = coil(w, "coil", 0.06, 5.9);
+  const ObjectId fly = resistor(w, "flyback", 20.0);
+  wire(w, "w1", b, 1, s1, 0, 0.0);
+  wire(w, "w2", s2, 0, c, 0, 0.0);
+  wire(w, "w3", c, 1, b, 0, 0.0);
+  wire(w, "f1", c, 0, fly, 0, 0.005);
+  wire(w, "f2", fly, 1, c, 1, 0.005);
+  w.start();
+  resolver(w).connect(s1, s2);
+  w.run(480);  // 2 s: steady
+  const double i0 = num(w, c, "current");
+  ASSERT_GT(i0, 0.5);
+  EXPECT_NEAR(num(w, fly, "current"), 5.9 * i0 / 20.01, 1e-9);  // in parallel with the coil's R
+  resolver(w).disconnect(s1, s2);
+  EXPECT_TRUE(resolver(w).connected(s1, s2));  // queued, not yet performed
+  const double h = w.dt() / 4, l = 0.06, r_loop = 5.9 + 20.0 + 0.01;
+  double worst = 0;
+  for (int k = 1; k <= 20; ++k) {
+    w.step();
+    const double i = num(w, c, "current");
+    // Backward Euler's own answer, to rounding: the companion model is exactly what it claims.
+    EXPECT_NEAR(i, i0 / std::pow(1 + h * r_loop / l, 4 * k), 1e-12 * i0) << "step " << k;
+    worst = std::max(worst, std::abs(i - i0 * std::exp(-k * w.dt() * r_loop / l)) / i0);
+    EXPECT_NEAR(num(w, fly, "current"), -i, 1e-12);  // the flyback carries the coil current back
+    EXPECT_EQ(num(w, b, "current"), 0.0);           // the battery hangs off the loop by one end
+  }
+  EXPECT_FALSE(resolver(w).connected(s1, s2));
+  // tau = 2.3 ms = 0.55 dt: a fast decay for this step; measured 6.4 % of I0.
+  RecordProperty("flyback_worst_error", std::to_string(worst));
+  EXPECT_LT(worst, 0.07);
+}
+
+TEST_F(ElectricityTest, CoilCurrentCollapsesAtOnceWhenNoPathRemains) {
+  // Without a flyback path, KCL forces the coil current to zero at the step
+  // the contact opens; the coil shows the inductive kick -L I0 / h for that
+  // one (sub)step, finite, then rests. One substep here, to see the kick in
+  // the published voltage (with more, it is over by the end of the advance).
+  World w(registry, def(1));
+  const ObjectId b = battery(w, "battery", 6.0, 0.1);
+  const ObjectId s1 = bar(w, "s1"), s2 = bar(w, "s2");
+  const ObjectId c = coil(w, "coil", 0.06, 5.9);
+  wire(w, "w1", b, 1, s1, 0, 0.0);
+  wire(w, "w2", s2, 0, c, 0, 0.0);
+  wire(w, "w3", c, 1, b, 0, 0.0);
+  w.start();
+  resolver(w).connect(s1, s2);
+  w.run(480);
+  const double i0 = num(w, c, "current");
+  resolver(w).disconnect(s1, s2);
+  w.step();
+  EXPECT_EQ(num(w, c, "current"), 0.0);
+  EXPECT_NEAR(num(w, c, "voltage"), -0.06 * i0 / w.dt(), 1e-9 * 0.06 * i0 / w.dt());
+  EXPECT_FALSE(flag(w, c, "powered"));
+  w.step();
+  EXPECT_EQ(num(w, c, "voltage"), 0.0);
+}
+
+TEST_F(ElectricityTest, ContactCommandsTakeEffectAtTheNextAdvanceWithEvents) {
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 6.0, 0.1);
+  const ObjectId s1 = bar(w, "s1"), s2 = bar(w, "s2");
+  const ObjectId r = resistor(w, "lamp", 12.0);
+  wire(w, "w1", b, 1, s1, 0, 0.0);
+  wire(w, "w2", s2, 0, r, 0, 0.0);
+  wire(w, "w3", r, 1, b, 0, 0.0);
+  w.step();
+  EXPECT_TRUE(of_type(w.events(), "circuit_closed").empty());
+  resolver(w).connect(s2, s1);  // either order
+  EXPECT_FALSE(resolver(w).connected(s1, s2));
+  EXPECT_EQ(num(w, r, "current"), 0.0);
+  w.step();
+  EXPECT_TRUE(resolver(w).connected(s1, s2));
+  // Contact: 1 mOhm; the three 0 Ohm wires: 1 micro-Ohm each.
+  EXPECT_NEAR(num(w, r, "current"), 6.0 / (12.0 + 0.1 + 1e-3 + 3e-6), 1e-10);
+  const auto connected = of_type(w.events(), "connected");
+  ASSERT_EQ(connected.size(), 1u);
+  EXPECT_EQ(connected[0].a, std::min(s1, s2));
+  EXPECT_EQ(connected[0].b, std::max(s1, s2));
+  EXPECT_EQ(connected[0].source, "electricity");
+  const auto closed = of_type(w.events(), "circuit_closed");
+  ASSERT_EQ(closed.size(), 2u);  // the battery and the lamp: the two-terminal elements
+  EXPECT_EQ(closed[0].a, b);
+  EXPECT_EQ(closed[1].a, r);
+  EXPECT_NEAR(closed[1].value("current"), num(w, r, "current"), 1e-15);
+
+  resolver(w).connect(s1, s2);  // again: nothing new
+  w.step();
+  EXPECT_TRUE(w.events().empty());
+
+  resolver(w).disconnect(s1, s2);
+  w.step();
+  EXPECT_EQ(of_type(w.events(), "disconnected").size(), 1u);
+  const auto opened = of_type(w.events(), "circuit_opened");
+  ASSERT_EQ(opened.size(), 2u);
+  EXPECT_EQ(opened[1].a, r);
+  EXPECT_EQ(opened[1].value("current"), 0.0);
+  EXPECT_EQ(num(w, r, "current"), 0.0);
+  EXPECT_FALSE(flag(w, r, "powered"));
+}
+
+TEST_F(ElectricityTest, FactorisesAgainOnlyWhenTheNetworkChanges) {
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 6.0, 0.1);
+  const ObjectId s1 = bar(w, "s1"), s2 = bar(w, "s2");
+  const ObjectId c = coil(w, "coil", 0.06, 5.9);
+  wire(w, "w1", b, 1, s1, 0, 0.0);
+  wire(w, "w2", s2, 0, c, 0, 0.0);
+  wire(w, "w3", c, 1, b, 0, 0.0);
+  const ObjectId lone = bar(w, "lone");  // a component without a source: never factorised
+  w.run(10);
+  ElectricityResolver& e = resolver(w);
+  // One component (battery, coil and both bars, open between s1 and s2).
+  EXPECT_EQ(e.factorizations(), 1u);
+  w.run(50);
+  EXPECT_EQ(e.factorizations(), 1u);  // stepping reuses the factorisation
+  w.set(b, "emf", 12.0);              // a source value: right-hand side only
+  w.run(5);
+  EXPECT_EQ(e.factorizations(), 1u);
+  const auto builds = e.network_builds();
+  w.create("unrelated");  // a structural change elsewhere: rebuilt, same matrix, not refactorised
+  w.run(5);
+  EXPECT_GT(e.network_builds(), builds);
+  EXPECT_EQ(e.factorizations(), 1u);
+  e.connect(s1, s2);  // the topology changes: the loop closes
+  w.run(5);
+  EXPECT_EQ(e.factorizations(), 2u);
+  e.connect(s1, lone);  // a dead end joins the circuit: a new matrix
+  w.run(5);
+  EXPECT_EQ(e.factorizations(), 3u);
+  w.set(c, "resistance", 3.0);  // an impedance: the matrix changes
+  w.run(5);
+  EXPECT_EQ(e.factorizations(), 4u);
+  EXPECT_GT(num(w, c, "current"), 0.5);
+}
+
+TEST_F(ElectricityTest, CoilStateLivesInItsCurrentProperty) {
+  // A coil shorted through a resistor, no battery: its current only decays.
+  // Set from outside (a scene, or a swapped-in resolver reading what the old
+  // one wrote), the property is the state the resolver integrates from.
+  World w(registry);
+  const ObjectId c = coil(w, "coil", 0.1, 1.0);
+  const ObjectId r = resistor(w, "r", 9.0);
+  wire(w, "w1", c, 1, r, 0, 0.0);
+  wire(w, "w2", r, 1, c, 0, 0.0);
+  w.set(c, "current", 2.0);
+  w.step();
+  // R_loop = 10 Ohm (+ 2 micro-Ohm wires); four backward-Euler substeps per step.
+  const double decay = std::pow(1 + w.dt() / 4 * 10.0 / 0.1, 4);
+  EXPECT_NEAR(num(w, c, "current"), 2.0 / decay, 1e-6);
+  // A structural change rebuilds the resolver from properties: nothing is lost.
+  const double before = num(w, c, "current");
+  w.create("unrelated");
+  w.step();
+  EXPECT_NEAR(num(w, c, "current"), before / decay, 1e-6);
+  // An edit of the state between steps is honoured.
+  w.set(c, "current", -1.0);
+  w.step();
+  EXPECT_NEAR(num(w, c, "current"), -1.0 / decay, 1e-6);
+}
+
+TEST_F(ElectricityTest, ARebuildMidRunChangesNothing) {
+  auto run = [&](bool disturb) {
+    World w(registry);
+    const RlLoop rl = make_rl(w);
+    std::vector<double> trace;
+    for (int k = 0; k < 40; ++k) {
+      if (disturb && k % 7 == 3) w.create("noise" + std::to_string(k));
+      w.step();
+      trace.push_back(std::get<double>(w.get(rl.coil, "current")));
+    }
+    return trace;
+  };
+  EXPECT_EQ(run(false), run(true));  // bit for bit
+}
+
+TEST_F(ElectricityTest, IsInstantiatedOnlyWithABatteryOrACoil) {
+  World w(registry);
+  bar(w, "steel");
+  bar(w, "brass");
+  w.run(2);
+  EXPECT_FALSE(w.has_stage("electricity"));
+  battery(w, "battery", 1.5, 0.1);
+  w.step();
+  EXPECT_TRUE(w.has_stage("electricity"));
+}
+
+TEST_F(ElectricityTest, BadWiresAreReportedWithTheWiresName) {
+  {
+    World w(registry);
+    const ObjectId b = battery(w, "battery", 1.5, 0.1);
+    const ObjectId wood = w.create("wood");  // carries nothing electrical
+    wire(w, "lead", b, 1, wood, 0, 0.0);
+    try {
+      w.step();
+      FAIL() << "a wire to a non-conductive part went through";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().object, "lead");
+      EXPECT_NE(std::string(e.what()).find("'wood', which is not an electrical part"), std::string::npos) << e.what();
+    }
+  }
+  {
+    World w(registry);
+    const ObjectId b = battery(w, "battery", 1.5, 0.1);
+    wire(w, "lead", b, 2, b, 0, 0.0);
+    EXPECT_THROW(w.step(), InputError);
+  }
+  {
+    // A wire whose part was destroyed is open, not an error (a player may delete parts).
+    World w(registry);
+    const ObjectId b = battery(w, "battery", 1.5, 0.1);
+    const ObjectId s = bar(w, "s");
+    const ObjectId lead = wire(w, "lead", b, 1, s, 0, 0.0);
+    wire(w, "back", s, 0, b, 0, 0.0);
+    w.step();
+    EXPECT_GT(num(w, lead, "current"), 1.0);
+    w.destroy(s);
+    w.step();
+    EXPECT_EQ(num(w, lead, "current"), 0.0);
+    EXPECT_EQ(num(w, b, "current"), 0.0);
+  }
+}
+
+TEST_F(ElectricityTest, ContactsJoinTheTerminalTheyAreGiven) {
+  // A battery touched at its + end (terminal 1) by a bar that is wired back
+  // to its - end: a short through the contact.
+  World w(registry);
+  const ObjectId b = battery(w, "battery", 1.5, 0.5);
+  const ObjectId s = bar(w, "s");
+  wire(w, "back", s, 0, b, 0, 0.0);
+  w.start();
+  resolver(w).connect(s, b, 0, 1);
+  w.step();
+  EXPECT_NEAR(num(w, b, "current"), 1.5 / (0.5 + 1e-3), 1e-5);
+  resolver(w).connect(s, b, 0, 0);  // the same pair, now touching the - end: no loop
+  w.step();
+  EXPECT_EQ(num(w, b, "current"), 0.0);
+}
+
+TEST_F(ElectricityTest, SettingsAreValidated) {
+  WorldDef d;
+  d.settings["electricity"].set("substep", std::int64_t(2));
+  World w(registry, d);
+  battery(w, "battery", 1.5, 0.1);
+  try {
+    w.step();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'substeps'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace alloy::electricity
