@@ -1,0 +1,174 @@
+#include "resolvers/magnetism/magnet_parts.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "resolvers/magnetism/pole_model.hpp"
+
+namespace alloy::magnetism {
+
+std::vector<PropertyDef> magnetism_property_defs() {
+  using K = PropertyKind;
+  return {
+      {.name = prop::kMagnet, .kind = K::Enum,
+       .doc = "kind of magnetic part; carrying it makes the object magnetic",
+       .enum_values = {"permanent", "electromagnet", "soft_iron"}},
+      {.name = prop::kPoleStrength, .kind = K::Number, .unit = "A*m",
+       .doc = "pole strength q: north (+q) at the local +x end when positive, at -x when "
+              "negative; set for permanent magnets, written by magnetism for electromagnets"},
+      {.name = prop::kPoleSeparation, .kind = K::Number, .unit = "m",
+       .doc = "distance between the two poles along local x; default 0.85 x the part's length",
+       .min = 0.0},
+      {.name = prop::kTurns, .kind = K::Number, .unit = "1",
+       .doc = "electromagnet: number of turns N of the coil", .min = 0.0},
+      {.name = prop::kCoilFactor, .kind = K::Number, .unit = "m",
+       .doc = "electromagnet: pole strength per ampere-turn, q = coil_factor N I; default "
+              "cross-section / pole_separation (air core); an iron core multiplies it",
+       .min = 0.0},
+      {.name = prop::kCoilTimeConstant, .kind = K::Number, .unit = "s",
+       .doc = "electromagnet: time constant with which the pole strength follows the current "
+              "(0: at the next step)",
+       .min = 0.0},
+      {.name = prop::kSusceptibility, .kind = K::Number, .unit = "1",
+       .doc = "soft iron: intrinsic volume susceptibility chi (iron: 100 to 5000)", .min = 0.0},
+      {.name = prop::kSaturationPole, .kind = K::Number, .unit = "A*m",
+       .doc = "soft iron: largest induced pole strength; default from iron's saturation "
+              "magnetisation 1.71e6 A/m x volume / pole_separation",
+       .min = 0.0},
+  };
+}
+
+void ensure_geometry_properties(PropertyRegistry& registry) {
+  using K = PropertyKind;
+  const PropertyDef defs[] = {
+      {.name = prop::kPosition, .kind = K::Vec3, .unit = "m", .doc = "centre of mass, world frame"},
+      {.name = prop::kOrientation, .kind = K::Quat, .doc = "rotation from body to world frame"},
+      {.name = prop::kShape, .kind = K::Enum, .doc = "collision shape",
+       .enum_values = {"box", "sphere", "capsule"}},
+      {.name = prop::kSize, .kind = K::Vec3, .unit = "m", .doc = "box: full extents along local x, y, z"},
+      {.name = prop::kRadius, .kind = K::Number, .unit = "m", .doc = "sphere and capsule radius",
+       .min = 0.0},
+      {.name = prop::kLength, .kind = K::Number, .unit = "m",
+       .doc = "capsule: length of the cylinder part, along local x", .min = 0.0},
+  };
+  for (const PropertyDef& d : defs)
+    if (!registry.find(d.name)) {
+      PropertyDef copy = d;
+      copy.owner = "magnetism";
+      registry.add(std::move(copy));
+    }
+}
+
+MagnetColumns MagnetColumns::bind(const WorldView& w) {
+  MagnetColumns c;
+  c.magnet = w.column<EnumValue>(prop::kMagnet);
+  c.pole_strength = w.column<double>(prop::kPoleStrength);
+  c.pole_separation = w.column<double>(prop::kPoleSeparation);
+  c.turns = w.column<double>(prop::kTurns);
+  c.coil_factor = w.column<double>(prop::kCoilFactor);
+  c.coil_time_constant = w.column<double>(prop::kCoilTimeConstant);
+  c.susceptibility = w.column<double>(prop::kSusceptibility);
+  c.saturation_pole = w.column<double>(prop::kSaturationPole);
+  c.position = w.column<Vec3>(prop::kPosition);
+  c.orientation = w.column<Quat>(prop::kOrientation);
+  c.shape = w.column<EnumValue>(prop::kShape);
+  c.size = w.column<Vec3>(prop::kSize);
+  c.radius = w.column<double>(prop::kRadius);
+  c.length = w.column<double>(prop::kLength);
+  const PropertyId shape = w.property(prop::kShape);
+  auto index = [&](const char* name) {
+    auto v = w.properties().enum_value(shape, name);
+    return v ? v->index : -1;
+  };
+  c.shape_box = index("box");
+  c.shape_sphere = index("sphere");
+  c.shape_capsule = index("capsule");
+  return c;
+}
+
+std::optional<PartBulk> part_bulk(const MagnetColumns& c, std::uint32_t slot) {
+  if (!c.shape.has(slot)) return std::nullopt;
+  constexpr double pi = std::numbers::pi;
+  const int shape = c.shape[slot].index;
+  PartBulk b;
+  if (shape == c.shape_box && c.size.has(slot)) {
+    const Vec3 s = c.size[slot];
+    b.length = s.x;
+    b.cross_section = s.y * s.z;
+    b.volume = s.x * s.y * s.z;
+    // Diameter of the circle with the same cross-section.
+    const double diameter = std::sqrt(4.0 * b.cross_section / pi);
+    b.aspect_ratio = diameter > 0 ? b.length / diameter : 1.0;
+  } else if (shape == c.shape_sphere && c.radius.has(slot)) {
+    const double r = c.radius[slot];
+    b.length = 2 * r;
+    b.cross_section = pi * r * r;
+    b.volume = 4.0 / 3.0 * pi * r * r * r;
+    b.aspect_ratio = 1.0;
+  } else if (shape == c.shape_capsule && c.radius.has(slot) && c.length.has(slot)) {
+    const double r = c.radius[slot], l = c.length[slot];
+    b.length = l + 2 * r;
+    b.cross_section = pi * r * r;
+    b.volume = pi * r * r * l + 4.0 / 3.0 * pi * r * r * r;
+    b.aspect_ratio = r > 0 ? b.length / (2 * r) : 1.0;
+  } else {
+    return std::nullopt;
+  }
+  if (!(b.length > 0) || !(b.cross_section > 0) || !std::isfinite(b.volume)) return std::nullopt;
+  return b;
+}
+
+std::optional<double> pole_separation(const MagnetColumns& c, std::uint32_t slot) {
+  if (c.pole_separation.has(slot)) return c.pole_separation[slot];
+  if (auto b = part_bulk(c, slot)) return kMagneticLengthRatio * b->length;
+  return std::nullopt;
+}
+
+std::optional<double> coil_factor(const MagnetColumns& c, std::uint32_t slot) {
+  if (c.coil_factor.has(slot)) return c.coil_factor[slot];
+  const auto b = part_bulk(c, slot);
+  const auto d = pole_separation(c, slot);
+  if (!b || !d || !(*d > 0)) return std::nullopt;
+  return b->cross_section / *d;
+}
+
+std::optional<SoftIronModel> soft_iron_model(const MagnetColumns& c, std::uint32_t slot) {
+  const auto b = part_bulk(c, slot);
+  const auto d = pole_separation(c, slot);
+  if (!b || !d || !(*d > 0)) return std::nullopt;
+  const double chi = c.susceptibility.value_or(slot, 0.0);
+  const double chi_app = apparent_susceptibility(chi, demagnetizing_factor(b->aspect_ratio));
+  // The bar's moment chi_app V H, carried by two poles d apart.
+  SoftIronModel m;
+  m.gain = chi_app * b->volume / *d;
+  m.saturation = c.saturation_pole.has(slot) ? c.saturation_pole[slot]
+                                             : kIronSaturationMagnetization * b->volume / *d;
+  return m;
+}
+
+std::string check_part(const MagnetColumns& c, std::uint32_t slot) {
+  if (!c.position.has(slot)) return "a magnet needs a 'position'";
+  if (auto d = pole_separation(c, slot); d && !(*d > 0))
+    return "'pole_separation' must be positive: poles at one point cancel";
+  switch (c.kind(slot)) {
+    case MagnetKind::Permanent:
+      if (!pole_separation(c, slot))
+        return "a permanent magnet needs 'pole_separation' or a shape (box 'size', sphere "
+               "'radius', capsule 'radius' and 'length')";
+      return "";
+    case MagnetKind::Electromagnet:
+      if (!pole_separation(c, slot) || !coil_factor(c, slot))
+        return "an electromagnet needs a shape (box 'size', sphere 'radius', capsule 'radius' "
+               "and 'length'), or 'pole_separation' and 'coil_factor'";
+      return "";
+    case MagnetKind::SoftIron:
+      if (!c.susceptibility.has(slot)) return "soft iron needs a 'susceptibility'";
+      if (!soft_iron_model(c, slot))
+        return "soft iron needs a shape (box 'size', sphere 'radius', capsule 'radius' and "
+               "'length') for its volume";
+      return "";
+  }
+  return "unknown kind of magnet";
+}
+
+}  // namespace alloy::magnetism

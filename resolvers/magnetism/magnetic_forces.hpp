@@ -1,0 +1,76 @@
+// The `magnetic_forces` derived property set (paper 4.1.3.2): from the magnetic
+// parts' properties, the poles of every part (permanent, electromagnet, and the
+// poles the field induces in soft iron) and the force and torque on each part.
+//
+// Contract:
+//   reads     magnet, pole_strength, pole_separation, susceptibility,
+//             saturation_pole, position, orientation, shape, size, radius, length;
+//             the magnetism resolver (whose electromagnets it sees through pole_strength)
+//   writes    only its own data below; recomputed only when an input changed
+//   settings  softening (m, default 0.005): the Plummer length eps of the pole force law
+//   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
+//             to the uncoupled estimate (text says why; emitted once per episode)
+//
+// Readers (rigid_body_from_magnetism, the viewer, tests) get it from the world
+// by name and read bodies() and poles(). Forces are in newtons, torques in
+// newton metres about the part's position (its centre of mass), both in the
+// world frame.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "resolvers/magnetism/pole_model.hpp"
+#include "runtime/stage.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::magnetism {
+
+/// One magnetic part, as the derived set publishes it.
+struct MagneticBody {
+  ObjectId id;                   ///< the object
+  Vec3 force;                    ///< total magnetic force on it, N (world)
+  Vec3 torque;                   ///< about its position (centre of mass), N*m (world)
+  double pole_strength = 0;      ///< its present pole strength, A*m (induced for soft iron)
+  std::uint32_t first_pole = 0;  ///< index of its north pole in poles(); south follows
+  std::uint32_t pole_count = 0;  ///< 2, or 0 if its pole strength is zero
+};
+
+class MagneticForces : public DerivedSet {
+ public:
+  /// Plugin name.
+  static constexpr const char* kName = "magnetic_forces";
+  static constexpr double kDefaultSoftening = 0.005;
+
+  explicit MagneticForces(double softening = kDefaultSoftening) : softening_(softening) {}
+
+  void update(const WorldView& world) override;
+
+  /// Every magnetic part with a position, in slot order.
+  std::span<const MagneticBody> bodies() const { return bodies_; }
+  /// Every non-zero pole; Pole::body indexes bodies(). North (> 0) red, south (< 0) green.
+  std::span<const Pole> poles() const { return poles_; }
+  /// The part `id`, or nullptr if it is not magnetic (or was not at the last update).
+  const MagneticBody* find(ObjectId id) const;
+  /// Magnetic flux density B at `point` from every pole, T (for field lines and compasses).
+  Vec3 field(Vec3 point) const;
+
+  double softening() const { return softening_; }
+  /// Newton iterations of the last soft-iron solve, and whether it converged.
+  int induction_iterations() const { return induction_iterations_; }
+  bool induction_converged() const { return induction_converged_; }
+  /// Times update() ran (the harness skips it when the inputs did not change).
+  std::uint64_t updates() const { return updates_; }
+
+ private:
+  double softening_;
+  std::vector<MagneticBody> bodies_;
+  std::vector<Pole> poles_;
+  std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody
+  int induction_iterations_ = 0;
+  bool induction_converged_ = true;
+  std::uint64_t updates_ = 0;
+};
+
+}  // namespace alloy::magnetism

@@ -1,0 +1,32 @@
+// The (Magnetism <- Electricity) interaction of paper 4.1.2.2: a coil in a
+// closed circuit becomes a magnet. Each step it reads the `current` the
+// electricity resolver published for every electromagnet and queues it on the
+// magnetism resolver, which sets the coil's pole strength in its next advance
+// (the one-step delay of paper 3.2: a current of step n magnetises at step n+1).
+//
+// Contract:
+//   reads    magnet, current (A, signed; written by electricity)
+//   target   magnetism (set_coil_current)
+//   needs    current: instantiated once some object carries a current, i.e.
+//            once electricity runs; an electromagnet that carries no current
+//            (not wired) is commanded 0 A.
+#pragma once
+
+#include "resolvers/magnetism/magnetism_resolver.hpp"
+#include "runtime/stage.hpp"
+
+namespace alloy::magnetism {
+
+class MagnetismFromElectricity : public Interaction {
+ public:
+  /// Plugin name.
+  static constexpr const char* kName = "magnetism_from_electricity";
+
+  explicit MagnetismFromElectricity(MagnetismResolver& target) : target_(target) {}
+  void apply(const WorldView& world) override;
+
+ private:
+  MagnetismResolver& target_;
+};
+
+}  // namespace alloy::magnetism

@@ -1,0 +1,70 @@
+#include "resolvers/magnetism/magnetism_plugins.hpp"
+
+#include <cmath>
+
+#include "resolvers/magnetism/magnet_parts.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
+#include "resolvers/magnetism/magnetism_from_electricity.hpp"
+#include "resolvers/magnetism/magnetism_resolver.hpp"
+
+namespace alloy::magnetism {
+
+namespace {
+const std::vector<std::string> kShapeReads = {prop::kShape, prop::kSize, prop::kRadius, prop::kLength};
+
+std::vector<std::string> with_shape(std::vector<std::string> names) {
+  names.insert(names.end(), kShapeReads.begin(), kShapeReads.end());
+  return names;
+}
+}  // namespace
+
+void register_magnetism_plugins(PluginRegistry& registry) {
+  ensure_geometry_properties(registry.properties());
+
+  registry.add({
+      .info = {.name = MagnetismResolver::kName,
+               .kind = StageKind::Resolver,
+               .reads = with_shape({prop::kMagnet, prop::kTurns, prop::kCoilFactor,
+                                    prop::kCoilTimeConstant, prop::kPoleSeparation}),
+               .writes = {prop::kPoleStrength},
+               .needs = {prop::kMagnet},
+               .doc = "magnets: electromagnets' pole strength follows their coil current"},
+      .properties = magnetism_property_defs(),
+      .create = [](PluginContext&) { return std::make_unique<MagnetismResolver>(); },
+  });
+
+  registry.add({
+      .info = {.name = MagneticForces::kName,
+               .kind = StageKind::Derived,
+               .reads = with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
+                                    prop::kSusceptibility, prop::kSaturationPole, prop::kPosition,
+                                    prop::kOrientation}),
+               .needs = {prop::kMagnet},
+               .resolvers = {MagnetismResolver::kName},
+               .doc = "poles of magnets, coils and induced soft iron; force and torque on each part"},
+      .create =
+          [](PluginContext& ctx) {
+            const PluginSettings& s = ctx.settings();
+            s.check_known(MagneticForces::kName, {"softening"});
+            const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
+            if (!(eps >= 0) || !std::isfinite(eps))
+              throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
+            return std::make_unique<MagneticForces>(eps);
+          },
+  });
+
+  registry.add({
+      .info = {.name = MagnetismFromElectricity::kName,
+               .kind = StageKind::Interaction,
+               .reads = {prop::kMagnet, prop::kCurrent},
+               .needs = {prop::kCurrent},
+               .target = MagnetismResolver::kName,
+               .doc = "a coil's current makes it a magnet at the next step"},
+      .create =
+          [](PluginContext& ctx) {
+            return std::make_unique<MagnetismFromElectricity>(ctx.target<MagnetismResolver>());
+          },
+  });
+}
+
+}  // namespace alloy::magnetism

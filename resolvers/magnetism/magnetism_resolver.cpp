@@ -1,0 +1,94 @@
+#include "resolvers/magnetism/magnetism_resolver.hpp"
+
+#include <cmath>
+
+#include "resolvers/magnetism/magnet_parts.hpp"
+
+namespace alloy::magnetism {
+
+void MagnetismResolver::set_coil_current(ObjectId id, double current) {
+  queue_.push_back({id, current});
+}
+
+std::optional<double> MagnetismResolver::commanded_current(ObjectId id) const {
+  if (id.index >= coils_.size()) return std::nullopt;
+  const Coil& c = coils_[id.index];
+  if (c.id != id || !c.commanded) return std::nullopt;
+  return c.current;
+}
+
+void MagnetismResolver::build(ResolverAccess& access) {
+  const MagnetColumns c = MagnetColumns::bind(access);
+  const PropertyStore& store = access.store();
+  // Refuse a part that cannot be simulated now, naming it, rather than letting
+  // it exert nothing without a word.
+  for (std::uint32_t slot : c.magnet.members()) {
+    if (std::string why = check_part(c, slot); !why.empty())
+      throw InputError(ErrorLocation{.object = store.describe(store.id_at(slot))}, why);
+  }
+  // Commanded currents survive a rebuild for the coils that are still coils.
+  coils_.resize(store.slot_count());
+  for (std::uint32_t slot = 0; slot < coils_.size(); ++slot) {
+    Coil& coil = coils_[slot];
+    if (coil.id.is_null()) continue;
+    if (!store.alive(coil.id) || !c.magnet.has(slot) || c.kind(slot) != MagnetKind::Electromagnet)
+      coil = Coil{};
+  }
+}
+
+void MagnetismResolver::advance(ResolverAccess& access, double dt) {
+  const MagnetColumns c = MagnetColumns::bind(access);
+  const PropertyStore& store = access.store();
+  auto pole_strength = access.writer<double>(prop::kPoleStrength);
+
+  // 1. Perform the commands queued by the interactions of the last step.
+  for (const Command& cmd : queue_) {
+    const char* refused = nullptr;
+    if (!store.alive(cmd.id)) refused = "the object no longer exists";
+    else if (!c.magnet.has(cmd.id.index) || c.kind(cmd.id.index) != MagnetKind::Electromagnet)
+      refused = "the object is not an electromagnet";
+    else if (!std::isfinite(cmd.current)) refused = "the current is not a finite number";
+    if (refused) {
+      access.emit({.type = "magnetism_command_refused", .a = cmd.id,
+                   .values = {{"current", cmd.current}},
+                   .text = std::string("set_coil_current: ") + refused});
+      continue;
+    }
+    if (coils_.size() <= cmd.id.index) coils_.resize(cmd.id.index + 1);
+    Coil& coil = coils_[cmd.id.index];
+    if (coil.id != cmd.id) coil = Coil{.id = cmd.id};
+    const bool was_on = coil.commanded && coil.current != 0;
+    const bool now_on = cmd.current != 0;
+    coil.commanded = true;
+    coil.current = cmd.current;
+    if (was_on != now_on) {
+      const double target = coil_factor(c, cmd.id.index).value_or(0) *
+                            c.turns.value_or(cmd.id.index, 0.0) * cmd.current;
+      access.emit({.type = now_on ? "electromagnet_on" : "electromagnet_off", .a = cmd.id,
+                   .values = {{"current", cmd.current}, {"pole_strength", target}}});
+    }
+  }
+  queue_.clear();
+
+  // 2. Move each commanded coil's pole strength toward coil_factor * N * I.
+  for (std::uint32_t slot : c.magnet.members()) {
+    if (slot >= coils_.size() || c.kind(slot) != MagnetKind::Electromagnet) continue;
+    const Coil& coil = coils_[slot];
+    if (!coil.commanded || coil.id != store.id_at(slot)) continue;
+    const double target = coil_factor(c, slot).value_or(0) * c.turns.value_or(slot, 0.0) * coil.current;
+    const double tau = c.coil_time_constant.value_or(slot, 0.0);
+    const double present = pole_strength.has(slot) ? pole_strength[slot] : 0.0;
+    double next = target;
+    if (tau > 0) {
+      // Exact solution of dq/dt = (target - q) / tau over the step: the paper's
+      // "rapidly (but not instantly)" cool-down, stable for any dt.
+      next = present + (target - present) * -std::expm1(-dt / tau);
+      // Land exactly on the target once the rest is rounding, so that a coil
+      // at rest stops changing the column (and stops waking the forces).
+      if (std::abs(next - target) <= 1e-9 * std::abs(target) + 1e-12) next = target;
+    }
+    pole_strength.set(slot, next);
+  }
+}
+
+}  // namespace alloy::magnetism

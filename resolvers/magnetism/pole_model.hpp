@@ -1,0 +1,139 @@
+// The magnetic pole model (Gilbert model), free of any world or property: the
+// physics of docs/magnetism.md in plain functions, so that it can be tested
+// against closed forms and swapped for a faster summation without touching the
+// stages.
+//
+// A magnetic part is a bar whose magnetisation is represented by two point
+// poles of strength +q (north) and -q (south) on its local x axis. A pole of
+// strength q (A*m) at p makes the field
+//
+//   H(x) = q / (4 pi) * K(x - p),   B = mu0 H,   K(r) = r / (|r|^2 + eps^2)^(3/2)
+//
+// and a pole q2 at x feels F = mu0 q2 H(x). K is the Plummer-softened inverse
+// square: for |r| >> eps it is r_hat / |r|^2 exactly, it stays finite (at most
+// 2 / (3 sqrt(3) eps^2)) when poles touch, and it is the gradient of the
+// potential 1 / sqrt(|r|^2 + eps^2), so softened forces still conserve energy
+// and obey Newton's third law pair by pair.
+#pragma once
+
+#include <cstdint>
+#include <numbers>
+#include <span>
+#include <vector>
+
+#include "runtime/math.hpp"
+
+namespace alloy::magnetism {
+
+/// Vacuum permeability, N/A^2 (CODATA 2018).
+inline constexpr double kMu0 = 1.25663706212e-6;
+/// mu0 / (4 pi), N/A^2: the constant of the pole force law.
+inline constexpr double kMu0Over4Pi = kMu0 / (4.0 * std::numbers::pi);
+/// Saturation magnetisation of soft iron, A/m (mu0 Ms = 2.15 T).
+inline constexpr double kIronSaturationMagnetization = 1.71e6;
+/// Effective poles of a bar magnet sit about L/12 inside its ends, so the
+/// default pole separation is this fraction of the bar's length.
+inline constexpr double kMagneticLengthRatio = 0.85;
+
+/// One point pole.
+struct Pole {
+  Vec3 position;           ///< world position, m
+  double strength = 0;     ///< A*m; > 0 north (drawn red), < 0 south (drawn green)
+  std::uint32_t body = 0;  ///< index of the part it belongs to; a part never acts on itself
+};
+
+/// The softened inverse-square kernel K(r) = r / (|r|^2 + eps^2)^(3/2), 1/m^2 along r.
+inline Vec3 softened_kernel(Vec3 r, double softening) {
+  const double s2 = dot(r, r) + softening * softening;
+  if (s2 <= 0) return {};  // coincident poles with no softening: no direction, no force
+  return r * (1.0 / (s2 * std::sqrt(s2)));
+}
+
+/// Force on pole 2 (strength q2 at x2) from pole 1 (q1 at x1), N. Like poles repel.
+inline Vec3 pole_pair_force(double q1, Vec3 x1, double q2, Vec3 x2, double softening) {
+  return softened_kernel(x2 - x1, softening) * (kMu0Over4Pi * q1 * q2);
+}
+
+/// Where the poles of a bar are: +q at centre + (d/2) axis, -q at centre - (d/2) axis.
+struct BarPoles {
+  Vec3 north, south;
+};
+inline BarPoles bar_poles(Vec3 centre, Vec3 axis, double separation) {
+  const Vec3 half = axis * (0.5 * separation);
+  return {centre + half, centre - half};
+}
+
+// --- summation -----------------------------------------------------------------
+// Every pole-pair sum of the resolver goes through these two functions. They are
+// direct O(n^2) sums; a tree or multipole method would replace them alone.
+
+/// Adds to `force[i]` the force on pole i from every pole of another body, N.
+/// Each pair is evaluated once and applied with opposite signs, so the sum of
+/// all forces is zero to rounding.
+void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::span<Vec3> force);
+
+/// H at each point from every pole whose body differs from `exclude_body[i]`, A/m.
+/// `exclude_body[i]` may be kNoBody to include every pole.
+inline constexpr std::uint32_t kNoBody = 0xffffffffu;
+void pole_fields(std::span<const Pole> poles, double softening, std::span<const Vec3> points,
+                 std::span<const std::uint32_t> exclude_body, std::span<Vec3> field);
+
+// --- induced poles (soft iron) ------------------------------------------------------
+
+/// Demagnetising factor along the symmetry axis of a spheroid of aspect ratio
+/// p = length / diameter (exact for ellipsoids; 1/3 for a sphere, -> 0 for a
+/// long needle, -> 1 for a flat disc magnetised through its face).
+double demagnetizing_factor(double aspect_ratio);
+
+/// Apparent susceptibility of a body of intrinsic susceptibility chi and
+/// demagnetising factor n: M = chi / (1 + n chi) * H_applied. It is bounded by
+/// 1/n, which is why a long bar magnetises far more than a short lump.
+inline double apparent_susceptibility(double chi, double n) { return chi / (1.0 + n * chi); }
+
+/// Smooth saturation: linear with slope 1 for |q| << q_sat, tends to +-q_sat.
+inline double saturate(double q_linear, double q_saturation) {
+  if (!(q_saturation > 0)) return q_linear;
+  return q_saturation * std::tanh(q_linear / q_saturation);
+}
+/// d saturate / d q_linear.
+inline double saturate_slope(double q_linear, double q_saturation) {
+  if (!(q_saturation > 0)) return 1.0;
+  const double t = std::tanh(q_linear / q_saturation);
+  return 1.0 - t * t;
+}
+
+/// Simpson weights of the three field samples along an induced bar (its south
+/// end, its centre, its north end): the bar's magnetisation follows the mean
+/// axial field along it, not the field at one point.
+inline constexpr double kAxialSampleWeights[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};
+
+/// A soft-iron bar, as the induction solve sees it.
+struct InducedBar {
+  Vec3 centre;               ///< m
+  Vec3 axis;                 ///< unit vector along the bar (local x in world)
+  double separation = 0;     ///< pole separation d, m
+  double gain = 0;           ///< linear pole strength per axial field, m^2 (chi_app * V / d)
+  double saturation = 0;     ///< saturation pole strength, A*m (<= 0: none)
+  std::uint32_t body = 0;    ///< body index, as in Pole::body
+};
+
+/// Result of the induction solve.
+struct InductionResult {
+  std::vector<double> strength;  ///< induced pole strength of each bar, A*m (north at +axis)
+  int iterations = 0;            ///< Newton iterations used
+  bool converged = true;         ///< false: the uncoupled estimate was kept
+};
+
+/// Solves the induced pole strengths s of soft-iron bars consistently:
+///
+///   s_b = sat_b( gain_b * Haxial_b(s) ),
+///   Haxial_b(s) = axis_b . sum_k w_k H(sample_k of b)   (fixed poles + other bars' poles)
+///
+/// by Newton's method on the dense system (bars are few: tens in a kit scene),
+/// starting from the uncoupled estimate (bars ignore one another). If Newton
+/// fails to converge (strongly coupled bars beyond the model's validity) the
+/// uncoupled estimate is returned and `converged` is false.
+InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<const InducedBar> bars,
+                                double softening);
+
+}  // namespace alloy::magnetism
