@@ -7,9 +7,10 @@
 // Contract:
 //   reads    magnet, current (A, signed; written by electricity)
 //   target   magnetism (set_coil_current)
-//   needs    current: instantiated once some object carries a current, i.e.
-//            once electricity runs; an electromagnet that carries no current
-//            (not wired) is commanded 0 A.
+//   needs    magnet, and the `electricity` resolver active (declared in
+//            StageInfo::resolvers): then it runs from the first step, so even
+//            the first current arrives one step late, not two. An electromagnet
+//            that carries no current (not wired) is commanded 0 A.
 #pragma once
 
 #include "resolvers/magnetism/magnetism_resolver.hpp"

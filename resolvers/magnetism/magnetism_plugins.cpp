@@ -10,6 +10,10 @@
 namespace alloy::magnetism {
 
 namespace {
+// The electricity resolver's plugin name (resolvers/electricity/electricity.hpp;
+// not included, so that magnetism builds without electricity).
+constexpr const char* kElectricity = "electricity";
+
 const std::vector<std::string> kShapeReads = {prop::kShape, prop::kSize, prop::kRadius, prop::kLength};
 
 std::vector<std::string> with_shape(std::vector<std::string> names) {
@@ -57,7 +61,10 @@ void register_magnetism_plugins(PluginRegistry& registry) {
       .info = {.name = MagnetismFromElectricity::kName,
                .kind = StageKind::Interaction,
                .reads = {prop::kMagnet, prop::kCurrent},
-               .needs = {prop::kCurrent},
+               .needs = {prop::kMagnet},
+               // Active with electricity from the first step, so that a current
+               // of step n magnetises at n+1 even for the very first current.
+               .resolvers = {kElectricity},
                .target = MagnetismResolver::kName,
                .doc = "a coil's current makes it a magnet at the next step"},
       .create =

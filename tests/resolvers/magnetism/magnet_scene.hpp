@@ -27,10 +27,11 @@ class CurrentSource : public Resolver {
   double next = 0;  ///< A
 };
 
-/// Registers the stand-in under the name "current_source", with the electricity
-/// resolver's definition of `current`.
+/// Registers the stand-in under the electricity resolver's name, "electricity",
+/// with its definition of `current` (magnetism_from_electricity runs only when
+/// a resolver of that name does).
 inline void register_current_source(PluginRegistry& r) {
-  r.add({.info = {.name = "current_source", .kind = StageKind::Resolver, .writes = {prop::kCurrent},
+  r.add({.info = {.name = "electricity", .kind = StageKind::Resolver, .writes = {prop::kCurrent},
                   .needs = {prop::kCurrent}},
          .properties = {{.name = prop::kCurrent, .kind = PropertyKind::Number, .unit = "A",
                          .doc = "current through the element"}},
@@ -68,6 +69,9 @@ inline ObjectId add_iron(World& w, const std::string& name, Vec3 at, double angl
   return id;
 }
 
+inline CurrentSource& current_source_of(World& w) {
+  return dynamic_cast<CurrentSource&>(*w.stage("electricity"));
+}
 inline MagneticForces& forces_of(World& w) {
   return dynamic_cast<MagneticForces&>(*w.stage(MagneticForces::kName));
 }

@@ -157,7 +157,7 @@ TEST_F(MagnetismTest, CurrentMagnetisesTheCoilOneStepLater) {
   const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
   w.set(coil, prop::kCurrent, 0.0);
   w.run(5);
-  auto& source = dynamic_cast<CurrentSource&>(*w.stage("current_source"));
+  auto& source = current_source_of(w);
   source.next = 2.0;
   w.step();  // electricity publishes 2 A; the interaction queues it
   EXPECT_EQ(number(w, coil, prop::kCurrent), 2.0);
@@ -189,7 +189,7 @@ IronAndCoil iron_force(PluginRegistry& registry, double current, double saturati
   if (saturation_pole >= 0) w.set(iron, prop::kSaturationPole, saturation_pole);
   w.set(coil, prop::kCurrent, 0.0);
   w.start();
-  dynamic_cast<CurrentSource&>(*w.stage("current_source")).next = current;
+  current_source_of(w).next = current;
   w.run(3);
   return {forces_of(w).find(iron)->force, forces_of(w).find(coil)->force};
 }
@@ -228,7 +228,7 @@ TEST_F(MagnetismTest, CurrentDirectionSetsThePolarity) {
     const ObjectId magnet = add_permanent(w, "magnet", {0.2, 0, 0}, 0, 20);  // south faces the coil
     w.set(coil, prop::kCurrent, 0.0);
     w.start();
-    dynamic_cast<CurrentSource&>(*w.stage("current_source")).next = current;
+    current_source_of(w).next = current;
     w.run(2);
     return forces_of(w).find(magnet)->force.x;
   };
@@ -243,7 +243,7 @@ TEST_F(MagnetismTest, CoilTimeConstantRampsThePoleStrengthExponentially) {
   w.set(coil, prop::kCurrent, 0.0);
   w.set(coil, prop::kCoilTimeConstant, 0.02);
   w.start();
-  dynamic_cast<CurrentSource&>(*w.stage("current_source")).next = 1.0;
+  current_source_of(w).next = 1.0;
   w.step();  // the interaction queues 1 A
   const double target = kBarSize.y * kBarSize.z / d * 100 * 1.0;
   for (int n = 1; n <= 24; ++n) {
@@ -261,7 +261,7 @@ TEST_F(MagnetismTest, CoilsSwitchingOnAndOffAreEvents) {
   std::vector<Event> seen;
   w.add_observer([&](const Event& e) { seen.push_back(e); });
   w.run(2);
-  auto& source = dynamic_cast<CurrentSource&>(*w.stage("current_source"));
+  auto& source = current_source_of(w);
   source.next = 1.5;
   w.run(3);
   source.next = 0;

@@ -37,7 +37,7 @@ struct Doorbell {
     w.set(striker, "mass", 0.05);
     w.set(striker, "planar", true);
     w.start();
-    source = &dynamic_cast<CurrentSource&>(*w.stage("current_source"));
+    source = &current_source_of(w);
   }
   Vec3 position() const { return sim.position(striker); }
   Vec3 velocity() const { return sim.velocity(striker); }
