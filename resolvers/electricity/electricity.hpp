@@ -199,11 +199,9 @@ class ElectricityResolver final : public Resolver {
 };
 
 /// Registers the `electricity` resolver and its property types only (for
-/// tools and tests that run circuits without the rigid body).
+/// tools and tests that run circuits without the rigid body). The full set,
+/// with electricity_from_collisions, is register_electricity_plugins in
+/// electricity_from_collisions.hpp.
 void register_electricity_resolver(PluginRegistry& registry);
-
-/// Registers the `electricity` resolver and the `electricity_from_collisions`
-/// interaction with their property types.
-void register_electricity_plugins(PluginRegistry& registry);
 
 }  // namespace alloy::electricity

@@ -1,0 +1,75 @@
+#include "resolvers/electricity/electricity_from_collisions.hpp"
+
+#include <algorithm>
+
+namespace alloy::electricity {
+
+ElectricityFromCollisions::ElectricityFromCollisions(ElectricityResolver& target, const rigid::CollisionSet& contacts)
+    : target_(target), contacts_(contacts) {}
+
+int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orientation, Vec3 point) {
+  const Quat inverse{part_orientation.w, -part_orientation.x, -part_orientation.y, -part_orientation.z};
+  return rotate(inverse, point - part_position).x > 0 ? 1 : 0;
+}
+
+void ElectricityFromCollisions::apply(const WorldView& world) {
+  const auto conductive = world.column<std::uint8_t>(prop::kConductive);
+  const auto position = world.column<Vec3>("position");
+  const auto orientation = world.column<Quat>("orientation");
+  auto conducts = [&](ObjectId o) { return conductive.has(o.index) && conductive[o.index] != 0; };
+
+  // The touching pairs of two conductive parts, in (a, b) order: began and
+  // ongoing are each sorted, so merge them.
+  std::vector<const rigid::ContactPair*> touching;
+  const auto began = contacts_.began(), ongoing = contacts_.ongoing();
+  touching.reserve(began.size() + ongoing.size());
+  std::size_t i = 0, j = 0;
+  while (i < began.size() || j < ongoing.size()) {
+    const bool take_began = j == ongoing.size() ||
+                            (i < began.size() && rigid::pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b));
+    const rigid::ContactPair& p = take_began ? began[i++] : ongoing[j++];
+    if (conducts(p.a) && conducts(p.b)) touching.push_back(&p);
+  }
+
+  auto terminal = [&](ObjectId part, const rigid::ContactPair& pair) {
+    const auto points = contacts_.points(pair);
+    if (points.empty() || !position.has(part.index)) return 0;
+    Vec3 mean{};
+    for (const auto& pt : points) mean += pt.position;
+    mean = mean / double(points.size());
+    return terminal_at(position[part.index], orientation.value_or(part.index, Quat{}), mean);
+  };
+
+  // Compare with what we connected before; both lists are sorted by (a, b).
+  std::vector<std::pair<ObjectId, ObjectId>> now;
+  now.reserve(touching.size());
+  std::size_t k = 0;
+  for (const rigid::ContactPair* p : touching) {
+    const std::pair<ObjectId, ObjectId> key{p->a, p->b};
+    for (; k < connected_.size() && connected_[k] < key; ++k) target_.disconnect(connected_[k].first, connected_[k].second);
+    if (k < connected_.size() && connected_[k] == key) ++k;  // still touching: nothing to say
+    else target_.connect(p->a, p->b, terminal(p->a, *p), terminal(p->b, *p));
+    now.push_back(key);
+  }
+  for (; k < connected_.size(); ++k) target_.disconnect(connected_[k].first, connected_[k].second);
+  connected_ = std::move(now);
+}
+
+void register_electricity_plugins(PluginRegistry& registry) {
+  register_electricity_resolver(registry);
+  registry.add({
+      .info = {.name = kFromCollisionsName,
+               .kind = StageKind::Interaction,
+               .reads = {prop::kConductive, "position", "orientation"},
+               .derived = {"collisions"},
+               .target = kResolverName,
+               .doc = "conductive parts that touch are connected; parted, disconnected"},
+      .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+        ctx.settings().check_known(kFromCollisionsName, {});
+        return std::make_unique<ElectricityFromCollisions>(ctx.target<ElectricityResolver>(),
+                                                           ctx.dependency<rigid::CollisionSet>("collisions"));
+      },
+  });
+}
+
+}  // namespace alloy::electricity

@@ -1,0 +1,54 @@
+// The (Electricity <- Collisions) interaction of paper 4.1.2 and 4.1.4.3:
+// conductive parts that touch are connected, and disconnected when they part.
+//
+// Reads    the `collisions` derived set (began, ongoing, ended pairs with their
+//          contact points), conductive, position, orientation.
+// Target   electricity: connect(a, b, terminal_a, terminal_b) / disconnect(a, b),
+//          performed in its next advance (the one-step delay of paper 3.2).
+//
+// Level-triggered: each apply compares the touching pairs of both-conductive
+// parts (began + ongoing) with the pairs it has already connected, and sends
+// connect for the new ones and disconnect for those gone. In a normal run that
+// is exactly "began -> connect, ended -> disconnect"; it also stays right
+// when the collisions set is skipped (nothing moved, its lists unchanged),
+// when a part stops being conductive while touching, and when it starts: the
+// first apply connects every pair already touching (a battery dropped into a
+// running world; a newly created electricity resolver recovers its contacts).
+//
+// Which terminal a touch reaches. A two-terminal part (battery, coil,
+// resistor) has terminal 0 at its -x end and terminal 1 at its +x end, in its
+// own frame; a touch connects to the terminal of the half it lands on (the mean
+// of the pair's contact points, mapped into the part's frame). The terminal is
+// chosen when the contact is made and kept while it lasts. For a single-node
+// part the terminal does not matter.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include "resolvers/electricity/electricity.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
+
+namespace alloy::electricity {
+
+class ElectricityFromCollisions final : public Interaction {
+ public:
+  ElectricityFromCollisions(ElectricityResolver& target, const rigid::CollisionSet& contacts);
+  void apply(const WorldView& world) override;
+
+  /// The terminal of a part that a touch at `point` (world frame, m) reaches:
+  /// 1 if the point lies on the part's +x side of its centre, else 0.
+  static int terminal_at(Vec3 part_position, Quat part_orientation, Vec3 point);
+
+ private:
+  ElectricityResolver& target_;
+  const rigid::CollisionSet& contacts_;
+  std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
+};
+
+/// Registers the `electricity` resolver and the `electricity_from_collisions`
+/// interaction with their property types. Needs the rigid body's plugins
+/// (the `collisions` set) registered for the interaction to be instantiated.
+void register_electricity_plugins(PluginRegistry& registry);
+
+}  // namespace alloy::electricity
