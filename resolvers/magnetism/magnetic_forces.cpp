@@ -94,7 +94,8 @@ void MagneticForces::update(const WorldView& world) {
       body.torque += cross(poles_[i].position - frames[b].centre, pole_force[i]);
     }
     if (!is_finite(body.force) || !is_finite(body.torque)) {
-      world.emit({.type = "magnetic_force_nonfinite", .a = body.id,
+      world.emit({.type = "magnetic_force_nonfinite",
+                  .a = body.id,
                   .text = "magnetic force on the part is not finite; applying none"});
       body.force = {};
       body.torque = {};

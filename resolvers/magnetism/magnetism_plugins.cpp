@@ -14,7 +14,8 @@ namespace {
 // not included, so that magnetism builds without electricity).
 constexpr const char* kElectricity = "electricity";
 
-const std::vector<std::string> kShapeReads = {prop::kShape, prop::kSize, prop::kRadius, prop::kLength};
+const std::vector<std::string> kShapeReads = {prop::kShape, prop::kSize, prop::kRadius,
+                                              prop::kLength};
 
 std::vector<std::string> with_shape(std::vector<std::string> names) {
   names.insert(names.end(), kShapeReads.begin(), kShapeReads.end());
@@ -45,7 +46,8 @@ void register_magnetism_plugins(PluginRegistry& registry) {
                                     prop::kOrientation}),
                .needs = {prop::kMagnet},
                .resolvers = {MagnetismResolver::kName},
-               .doc = "poles of magnets, coils and induced soft iron; force and torque on each part"},
+               .doc =
+                   "poles of magnets, coils and induced soft iron; force and torque on each part"},
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();

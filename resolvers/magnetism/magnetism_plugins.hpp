@@ -6,9 +6,9 @@
 //
 // and the property types of magnet_parts.hpp. Each is instantiated only when
 // some object carries `magnet` (magnetism_from_electricity: and the
-// electricity resolver is active), so a scene without magnets pays nothing. rigid_body_from_magnetism registers
-// on its own (rigid_body_from_magnetism.hpp): it belongs to the rigid body and
-// is the only magnetism code that needs it.
+// electricity resolver is active), so a scene without magnets pays nothing.
+// rigid_body_from_magnetism registers on its own (rigid_body_from_magnetism.hpp):
+// it belongs to the rigid body and is the only magnetism code that needs it.
 #pragma once
 
 #include "runtime/plugin_registry.hpp"

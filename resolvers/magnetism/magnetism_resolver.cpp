@@ -44,12 +44,15 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
   // 1. Perform the commands queued by the interactions of the last step.
   for (const Command& cmd : queue_) {
     const char* refused = nullptr;
-    if (!store.alive(cmd.id)) refused = "the object no longer exists";
+    if (!store.alive(cmd.id))
+      refused = "the object no longer exists";
     else if (!c.magnet.has(cmd.id.index) || c.kind(cmd.id.index) != MagnetKind::Electromagnet)
       refused = "the object is not an electromagnet";
-    else if (!std::isfinite(cmd.current)) refused = "the current is not a finite number";
+    else if (!std::isfinite(cmd.current))
+      refused = "the current is not a finite number";
     if (refused) {
-      access.emit({.type = "magnetism_command_refused", .a = cmd.id,
+      access.emit({.type = "magnetism_command_refused",
+                   .a = cmd.id,
                    .values = {{"current", cmd.current}},
                    .text = std::string("set_coil_current: ") + refused});
       continue;
@@ -64,7 +67,8 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     if (was_on != now_on) {
       const double target = coil_factor(c, cmd.id.index).value_or(0) *
                             c.turns.value_or(cmd.id.index, 0.0) * cmd.current;
-      access.emit({.type = now_on ? "electromagnet_on" : "electromagnet_off", .a = cmd.id,
+      access.emit({.type = now_on ? "electromagnet_on" : "electromagnet_off",
+                   .a = cmd.id,
                    .values = {{"current", cmd.current}, {"pole_strength", target}}});
     }
   }
@@ -75,7 +79,8 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     if (slot >= coils_.size() || c.kind(slot) != MagnetKind::Electromagnet) continue;
     const Coil& coil = coils_[slot];
     if (!coil.commanded || coil.id != store.id_at(slot)) continue;
-    const double target = coil_factor(c, slot).value_or(0) * c.turns.value_or(slot, 0.0) * coil.current;
+    const double target =
+        coil_factor(c, slot).value_or(0) * c.turns.value_or(slot, 0.0) * coil.current;
     const double tau = c.coil_time_constant.value_or(slot, 0.0);
     const double present = pole_strength.has(slot) ? pole_strength[slot] : 0.0;
     double next = target;

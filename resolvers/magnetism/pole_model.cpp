@@ -113,7 +113,8 @@ InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<con
   for (int it = 0; it < kMaxIterations && !converged; ++it) {
     const Eigen::VectorXd u = gain.cwiseProduct(h + g * s);
     Eigen::MatrixXd jac = Eigen::MatrixXd::Identity(n, n);
-    for (std::size_t b = 0; b < n; ++b) jac.row(b) -= saturate_slope(u[b], qsat[b]) * gain[b] * g.row(b);
+    for (std::size_t b = 0; b < n; ++b)
+      jac.row(b) -= saturate_slope(u[b], qsat[b]) * gain[b] * g.row(b);
     const Eigen::VectorXd ds = jac.partialPivLu().solve(-r);
     // Backtracking keeps Newton from jumping across the saturation knee.
     double lambda = 1.0;

@@ -88,7 +88,9 @@ double demagnetizing_factor(double aspect_ratio);
 /// Apparent susceptibility of a body of intrinsic susceptibility chi and
 /// demagnetising factor n: M = chi / (1 + n chi) * H_applied. It is bounded by
 /// 1/n, which is why a long bar magnetises far more than a short lump.
-inline double apparent_susceptibility(double chi, double n) { return chi / (1.0 + n * chi); }
+inline double apparent_susceptibility(double chi, double n) {
+  return chi / (1.0 + n * chi);
+}
 
 /// Smooth saturation: linear with slope 1 for |q| << q_sat, tends to +-q_sat.
 inline double saturate(double q_linear, double q_saturation) {
@@ -109,12 +111,12 @@ inline constexpr double kAxialSampleWeights[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.
 
 /// A soft-iron bar, as the induction solve sees it.
 struct InducedBar {
-  Vec3 centre;               ///< m
-  Vec3 axis;                 ///< unit vector along the bar (local x in world)
-  double separation = 0;     ///< pole separation d, m
-  double gain = 0;           ///< linear pole strength per axial field, m^2 (chi_app * V / d)
-  double saturation = 0;     ///< saturation pole strength, A*m (<= 0: none)
-  std::uint32_t body = 0;    ///< body index, as in Pole::body
+  Vec3 centre;             ///< m
+  Vec3 axis;               ///< unit vector along the bar (local x in world)
+  double separation = 0;   ///< pole separation d, m
+  double gain = 0;         ///< linear pole strength per axial field, m^2 (chi_app * V / d)
+  double saturation = 0;   ///< saturation pole strength, A*m (<= 0: none)
+  std::uint32_t body = 0;  ///< body index, as in Pole::body
 };
 
 /// Result of the induction solve.

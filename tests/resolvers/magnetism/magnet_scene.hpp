@@ -31,16 +31,20 @@ class CurrentSource : public Resolver {
 /// with its definition of `current` (magnetism_from_electricity runs only when
 /// a resolver of that name does).
 inline void register_current_source(PluginRegistry& r) {
-  r.add({.info = {.name = "electricity", .kind = StageKind::Resolver, .writes = {prop::kCurrent},
+  r.add({.info = {.name = "electricity",
+                  .kind = StageKind::Resolver,
+                  .writes = {prop::kCurrent},
                   .needs = {prop::kCurrent}},
-         .properties = {{.name = prop::kCurrent, .kind = PropertyKind::Number, .unit = "A",
+         .properties = {{.name = prop::kCurrent,
+                         .kind = PropertyKind::Number,
+                         .unit = "A",
                          .doc = "current through the element"}},
          .create = [](PluginContext&) { return std::make_unique<CurrentSource>(); }});
 }
 
 /// A bar on the play area at `at`, rotated by `angle` about z, of the given kind.
-inline ObjectId add_bar(World& w, const std::string& name, MagnetKind kind, Vec3 at, double angle = 0,
-                        Vec3 size = kBarSize) {
+inline ObjectId add_bar(World& w, const std::string& name, MagnetKind kind, Vec3 at,
+                        double angle = 0, Vec3 size = kBarSize) {
   const ObjectId id = w.create(name);
   const PropertyRegistry& reg = w.properties();
   w.set(id, prop::kPosition, at);

@@ -3,13 +3,14 @@
 // electromagnet (the doorbell's frames 100-101, paper 4.1.2-4.1.3). The coil's
 // pole strength follows its current one step late, with the current's sign,
 // and drops when the circuit is broken.
+#include "resolvers/magnetism/magnetism_from_electricity.hpp"
+
 #include <gtest/gtest.h>
 
 #include <tuple>
 
 #include "magnet_scene.hpp"
 #include "resolvers/electricity/electricity.hpp"
-#include "resolvers/magnetism/magnetism_from_electricity.hpp"
 
 namespace alloy::magnetism {
 namespace {
@@ -32,8 +33,8 @@ class MagnetismFromElectricityTest : public ::testing::Test {
     w.set(coil, "inductance", 0.06);
     w.set(coil, "resistance", 5.9);
     const int in = reversed ? 1 : 0, out = reversed ? 0 : 1;
-    for (auto [name, from, ft, to, tt] : {std::tuple{"w1", battery, 1, coil, in},
-                                          std::tuple{"w2", coil, out, battery, 0}}) {
+    for (auto [name, from, ft, to, tt] :
+         {std::tuple{"w1", battery, 1, coil, in}, std::tuple{"w2", coil, out, battery, 0}}) {
       const ObjectId id = w.create(name);
       w.set(id, "wire_from", from);
       w.set(id, "wire_from_terminal", std::int64_t(ft));
@@ -43,7 +44,9 @@ class MagnetismFromElectricityTest : public ::testing::Test {
       wires.push_back(id);
     }
   }
-  double factor() const { return kBarSize.y * kBarSize.z / (kMagneticLengthRatio * kBarSize.x) * 200; }
+  double factor() const {
+    return kBarSize.y * kBarSize.z / (kMagneticLengthRatio * kBarSize.x) * 200;
+  }
 
   PluginRegistry registry;
   ObjectId battery, coil;
@@ -59,7 +62,8 @@ TEST_F(MagnetismFromElectricityTest, PoleStrengthFollowsTheCoilCurrentOneStepLat
   EXPECT_GT(previous_current, 0);
   for (int n = 0; n < 20; ++n) {  // two time constants of the coil's rise
     w.step();
-    EXPECT_DOUBLE_EQ(number(w, coil, prop::kPoleStrength), factor() * previous_current) << "step " << n;
+    EXPECT_DOUBLE_EQ(number(w, coil, prop::kPoleStrength), factor() * previous_current)
+        << "step " << n;
     previous_current = number(w, coil, prop::kCurrent);
   }
   // North at +x: current enters at terminal 0.

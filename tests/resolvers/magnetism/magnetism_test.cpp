@@ -17,8 +17,8 @@ using namespace testing;
 
 /// Force on bar b from bar a, both along their x axes, written independently
 /// of the resolver: the four Coulomb terms, softened with `eps` (0: not at all).
-Vec3 four_pole_force(Vec3 ca, Vec3 axis_a, double qa, double da, Vec3 cb, Vec3 axis_b, double qb, double db,
-                     double eps = 0) {
+Vec3 four_pole_force(Vec3 ca, Vec3 axis_a, double qa, double da, Vec3 cb, Vec3 axis_b, double qb,
+                     double db, double eps = 0) {
   const Vec3 pa[2] = {ca + axis_a * (da / 2), ca - axis_a * (da / 2)};
   const Vec3 pb[2] = {cb + axis_b * (db / 2), cb - axis_b * (db / 2)};
   const double sa[2] = {qa, -qa}, sb[2] = {qb, -qb};
@@ -59,7 +59,8 @@ TEST_F(MagnetismTest, NorthAttractsSouthAsThePoleFormulaSays) {
   // Softening 5 mm at pole distances of 11.5 to 28.5 cm: 0.46 % weaker.
   EXPECT_NEAR(fb.x, ref.x, 0.01 * std::abs(ref.x));
   const double eps = MagneticForces::kDefaultSoftening;
-  EXPECT_NEAR(fb.x, four_pole_force({0, 0, 0}, {1, 0, 0}, 20, d, {0.2, 0, 0}, {1, 0, 0}, 30, d, eps).x,
+  EXPECT_NEAR(fb.x,
+              four_pole_force({0, 0, 0}, {1, 0, 0}, 20, d, {0.2, 0, 0}, {1, 0, 0}, 30, d, eps).x,
               1e-12 * std::abs(ref.x));
   EXPECT_NEAR(fb.y, 0, 1e-12 * std::abs(ref.x));
   EXPECT_NEAR(f.find(a)->force.x, -fb.x, 1e-12 * std::abs(fb.x));
@@ -133,7 +134,8 @@ TEST_F(MagnetismTest, SofteningKeepsTouchingPolesFinite) {
     peak = std::max(peak, length(f));
   }
   // At most the softened peak of the touching pair plus the three far pairs.
-  const double bound = kMu0Over4Pi * q * q * (2 / (3 * std::sqrt(3.0) * eps * eps) + 3 / (0.1 * 0.1));
+  const double bound =
+      kMu0Over4Pi * q * q * (2 / (3 * std::sqrt(3.0) * eps * eps) + 3 / (0.1 * 0.1));
   EXPECT_LT(peak, bound);
   EXPECT_GT(peak, 0.5 * bound);
 }

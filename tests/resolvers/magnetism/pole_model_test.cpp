@@ -69,7 +69,8 @@ TEST(MagnetismPoleModel, SummedForcesObeyNewtonsThirdLaw) {
   std::vector<Vec3> f(poles.size());
   accumulate_pole_forces(poles, 0.005, f);
   Vec3 total, scale_sum;
-  for (const Vec3& v : f) total += v, scale_sum += Vec3{std::abs(v.x), std::abs(v.y), std::abs(v.z)};
+  for (const Vec3& v : f)
+    total += v, scale_sum += Vec3{std::abs(v.x), std::abs(v.y), std::abs(v.z)};
   EXPECT_LE(length(total), 1e-14 * length(scale_sum));
   // A part never pushes itself: one bar alone feels nothing.
   std::vector<Vec3> alone(2);
@@ -123,13 +124,14 @@ TEST(MagnetismPoleModel, InducedPoleIsLinearInTheFieldThenSaturates) {
   const double Q = 1000, R = 10;
   const std::vector<Pole> source = {{{-R, 0, 0}, Q, 0}};
   const double h = Q / (4 * kPi * R * R);
-  InducedBar bar{.centre = {}, .axis = {1, 0, 0}, .separation = 0.1, .gain = 2e-3, .saturation = 0, .body = 1};
+  InducedBar bar{
+      .centre = {}, .axis = {1, 0, 0}, .separation = 0.1, .gain = 2e-3, .saturation = 0, .body = 1};
   auto solve = [&](double qsat) {
     bar.saturation = qsat;
     return solve_induction(source, std::span(&bar, 1), 0.0).strength[0];
   };
   EXPECT_NEAR(solve(0.0), 2e-3 * h, 1e-4 * 2e-3 * h);  // no saturation: linear
-  const double qsat = 2e-3 * h;                       // saturation at the linear value
+  const double qsat = 2e-3 * h;                        // saturation at the linear value
   EXPECT_NEAR(solve(qsat), qsat * std::tanh(1.0), 1e-4 * qsat);
   EXPECT_LT(solve(qsat), qsat);
   // A bar across the field is not magnetised along its axis.
@@ -140,15 +142,26 @@ TEST(MagnetismPoleModel, InducedPoleIsLinearInTheFieldThenSaturates) {
 TEST(MagnetismPoleModel, CoupledBarsInAChainReinforceEachOtherConsistently) {
   const std::vector<Pole> source = {{{-0.2, 0, 0}, 20.0, 0}, {{-0.3, 0, 0}, -20.0, 0}};
   std::vector<InducedBar> bars = {
-      {.centre = {-0.1, 0, 0}, .axis = {1, 0, 0}, .separation = 0.085, .gain = 7e-3, .saturation = 800, .body = 1},
-      {.centre = {0.005, 0, 0}, .axis = {1, 0, 0}, .separation = 0.085, .gain = 7e-3, .saturation = 800, .body = 2},
+      {.centre = {-0.1, 0, 0},
+       .axis = {1, 0, 0},
+       .separation = 0.085,
+       .gain = 7e-3,
+       .saturation = 800,
+       .body = 1},
+      {.centre = {0.005, 0, 0},
+       .axis = {1, 0, 0},
+       .separation = 0.085,
+       .gain = 7e-3,
+       .saturation = 800,
+       .body = 2},
   };
   const InductionResult r = solve_induction(source, bars, 0.005);
   ASSERT_TRUE(r.converged);
   EXPECT_GE(r.iterations, 1);
   // Uncoupled estimates, bar by bar.
   std::vector<double> alone;
-  for (const InducedBar& b : bars) alone.push_back(solve_induction(source, std::span(&b, 1), 0.005).strength[0]);
+  for (const InducedBar& b : bars)
+    alone.push_back(solve_induction(source, std::span(&b, 1), 0.005).strength[0]);
   EXPECT_GT(r.strength[0], alone[0]);  // a chain of iron magnetises more than its links
   EXPECT_GT(r.strength[1], alone[1]);
   // The answer satisfies the equations: recompute each bar's axial field.

@@ -3,10 +3,11 @@
 // coil (the doorbell's frames 101-102, paper 4.1.3), the pull starts two steps
 // after the current (electricity -> magnetism -> rigid body), and it stops
 // when the current drops. Gravity is off so that only magnetism moves it.
+#include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
+
 #include <gtest/gtest.h>
 
 #include "magnet_scene.hpp"
-#include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
 namespace alloy::magnetism {
