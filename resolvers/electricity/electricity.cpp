@@ -7,7 +7,8 @@ namespace alloy::electricity {
 
 namespace {
 
-PropertyDef number(const char* name, const char* unit, const char* doc, std::optional<double> min = {}) {
+PropertyDef number(const char* name, const char* unit, const char* doc,
+                   std::optional<double> min = {}) {
   return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = min};
 }
 
@@ -15,43 +16,58 @@ PropertyDef number(const char* name, const char* unit, const char* doc, std::opt
 /// (which objects are batteries): its values enter the right-hand side alone,
 /// read every step, so a new emf needs no new factorisation.
 constexpr const char* kNetworkInputs[] = {
-    prop::kConductive,        prop::kInternalResistance, prop::kInductance,        prop::kResistance,
-    prop::kContactResistance, prop::kWireFrom,           prop::kWireTo,            prop::kWireFromTerminal,
-    prop::kWireToTerminal,    prop::kEmf,
+    prop::kConductive, prop::kInternalResistance, prop::kInductance,
+    prop::kResistance, prop::kContactResistance,  prop::kWireFrom,
+    prop::kWireTo,     prop::kWireFromTerminal,   prop::kWireToTerminal,
+    prop::kEmf,
 };
 
-double positive_resistance(double r) { return std::max(r, kMinResistance); }
+double positive_resistance(double r) {
+  return std::max(r, kMinResistance);
+}
 
 }  // namespace
 
 std::vector<PropertyDef> electricity_property_defs() {
   return {
-      {.name = prop::kConductive, .kind = PropertyKind::Bool,
+      {.name = prop::kConductive,
+       .kind = PropertyKind::Bool,
        .doc = "conducts electricity: touching conductive parts connect; without emf, inductance or "
               "resistance the part is one equipotential node"},
       number(prop::kEmf, "V", "battery: electromotive force from terminal 0 (-) to terminal 1 (+)"),
       number(prop::kInternalResistance, "Ohm", "battery: internal resistance (default 0.1)", 0.0),
       number(prop::kInductance, "H", "coil: self-inductance between terminals 0 and 1", 0.0),
-      number(prop::kResistance, "Ohm",
-             "resistor or coil: resistance between terminals 0 and 1; wire: end to end (default 0.01)", 0.0),
+      number(
+          prop::kResistance, "Ohm",
+          "resistor or coil: resistance between terminals 0 and 1; wire: end to end (default 0.01)",
+          0.0),
       number(prop::kContactResistance, "Ohm",
              "resistance a touching contact on this part adds (default 0.0005 per side)", 0.0),
-      {.name = prop::kWireFrom, .kind = PropertyKind::Ref,
+      {.name = prop::kWireFrom,
+       .kind = PropertyKind::Ref,
        .doc = "this object is a wire: the part its first end is attached to"},
-      {.name = prop::kWireTo, .kind = PropertyKind::Ref,
+      {.name = prop::kWireTo,
+       .kind = PropertyKind::Ref,
        .doc = "this object is a wire: the part its second end is attached to"},
-      {.name = prop::kWireFromTerminal, .kind = PropertyKind::Integer,
-       .doc = "terminal (0 or 1) of wire_from the wire is attached to (default 0)", .min = 0.0},
-      {.name = prop::kWireToTerminal, .kind = PropertyKind::Integer,
-       .doc = "terminal (0 or 1) of wire_to the wire is attached to (default 0)", .min = 0.0},
-      number(prop::kCurrent, "A",
-             "written by electricity: through a battery, coil, resistor or wire from terminal 0 to 1 "
-             "(from wire_from to wire_to); through a node part, the total current passing it. A coil's "
-             "current is its state"),
+      {.name = prop::kWireFromTerminal,
+       .kind = PropertyKind::Integer,
+       .doc = "terminal (0 or 1) of wire_from the wire is attached to (default 0)",
+       .min = 0.0},
+      {.name = prop::kWireToTerminal,
+       .kind = PropertyKind::Integer,
+       .doc = "terminal (0 or 1) of wire_to the wire is attached to (default 0)",
+       .min = 0.0},
+      number(
+          prop::kCurrent, "A",
+          "written by electricity: through a battery, coil, resistor or wire from terminal 0 to 1 "
+          "(from wire_from to wire_to); through a node part, the total current passing it. A "
+          "coil's "
+          "current is its state"),
       number(prop::kVoltage, "V",
              "written by electricity: node part, potential against its circuit's ground; battery, "
              "V(1) - V(0); coil and resistor, V(0) - V(1); wire, V(from) - V(to)"),
-      {.name = prop::kPowered, .kind = PropertyKind::Bool,
+      {.name = prop::kPowered,
+       .kind = PropertyKind::Bool,
        .doc = "written by electricity: |current| is above the powered threshold (1 mA)"},
   };
 }
@@ -59,8 +75,9 @@ std::vector<PropertyDef> electricity_property_defs() {
 // --- settings ------------------------------------------------------------------
 
 const std::vector<std::string>& ElectricityConfig::keys() {
-  static const std::vector<std::string> k = {"powered_threshold", "contact_resistance", "wire_resistance",
-                                             "internal_resistance", "substeps", "dense_limit"};
+  static const std::vector<std::string> k = {"powered_threshold", "contact_resistance",
+                                             "wire_resistance",   "internal_resistance",
+                                             "substeps",          "dense_limit"};
   return k;
 }
 
@@ -75,7 +92,8 @@ ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
   c.dense_limit = s.integer("dense_limit", c.dense_limit);
   auto non_negative = [&](const char* key, double v) {
     if (!(v >= 0) || !std::isfinite(v))
-      throw InputError(s.where, "electricity setting '" + std::string(key) + "' must be a finite number >= 0");
+      throw InputError(
+          s.where, "electricity setting '" + std::string(key) + "' must be a finite number >= 0");
   };
   non_negative("powered_threshold", c.powered_threshold);
   non_negative("contact_resistance", c.contact_resistance);
@@ -83,7 +101,8 @@ ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
   non_negative("internal_resistance", c.internal_resistance);
   if (c.substeps < 1 || c.substeps > 1000)
     throw InputError(s.where, "electricity setting 'substeps' must be between 1 and 1000");
-  if (c.dense_limit < 0) throw InputError(s.where, "electricity setting 'dense_limit' must be >= 0");
+  if (c.dense_limit < 0)
+    throw InputError(s.where, "electricity setting 'dense_limit' must be >= 0");
   return c;
 }
 
@@ -128,7 +147,8 @@ void ElectricityResolver::build(ResolverAccess& access) {
   auto powered = access.writer<std::uint8_t>(prop::kPowered);
   auto conductive = access.column<std::uint8_t>(prop::kConductive);
   auto give = [&](std::uint32_t slot) {
-    if (!current.has(slot)) current.set(slot, 0.0);  // a coil's preset current is its state: keep it
+    if (!current.has(slot))
+      current.set(slot, 0.0);  // a coil's preset current is its state: keep it
     if (!voltage.has(slot)) voltage.set(slot, 0.0);
     if (!powered.has(slot)) powered.set(slot, 0);
   };
@@ -159,7 +179,8 @@ bool ElectricityResolver::inputs_changed(const WorldView& view) const {
 void ElectricityResolver::perform_commands(const WorldView& view) {
   const PropertyStore& store = view.store();
   for (const Command& c : queue_) {
-    if (!store.alive(c.a) || !store.alive(c.b)) continue;  // a part destroyed since the command was queued
+    if (!store.alive(c.a) || !store.alive(c.b))
+      continue;  // a part destroyed since the command was queued
     const auto key = std::make_pair(c.a, c.b);
     auto it = contacts_.find(key);
     if (c.connect) {
@@ -213,11 +234,16 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   for (std::uint32_t s = 0; s < slots; ++s) {
     if (!is_part[s] || is_wire[s]) continue;
     Part p{s, PartKind::Node, {net.node_count, net.node_count}, -1};
-    if (emf.has(s)) p.kind = PartKind::Battery;
-    else if (inductance.has(s)) p.kind = PartKind::Coil;
-    else if (resistance.has(s)) p.kind = PartKind::Resistor;
-    if (p.kind == PartKind::Node) net.node_count += 1;
-    else p.node[1] = net.node_count + 1, net.node_count += 2;
+    if (emf.has(s))
+      p.kind = PartKind::Battery;
+    else if (inductance.has(s))
+      p.kind = PartKind::Coil;
+    else if (resistance.has(s))
+      p.kind = PartKind::Resistor;
+    if (p.kind == PartKind::Node)
+      net.node_count += 1;
+    else
+      p.node[1] = net.node_count + 1, net.node_count += 2;
     part_of_slot[s] = std::int32_t(parts_.size());
     parts_.push_back(p);
   }
@@ -230,7 +256,8 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
       p.element = std::int32_t(net.branches.size());
       batteries_.push_back(p.slot);
       net.branches.push_back(
-          {p.node[0], p.node[1], positive_resistance(internal_r.value_or(p.slot, config_.internal_resistance))});
+          {p.node[0], p.node[1],
+           positive_resistance(internal_r.value_or(p.slot, config_.internal_resistance))});
     }
   for (Part& p : parts_)
     if (p.kind == PartKind::Coil) {
@@ -244,7 +271,8 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   for (Part& p : parts_)
     if (p.kind == PartKind::Resistor) {
       p.element = std::int32_t(net.conductances.size());
-      net.conductances.push_back({p.node[0], p.node[1], 1.0 / positive_resistance(resistance[p.slot])});
+      net.conductances.push_back(
+          {p.node[0], p.node[1], 1.0 / positive_resistance(resistance[p.slot])});
     }
 
   // Wires: an end on a destroyed object (or a null ref) is open; an end on a
@@ -252,26 +280,32 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   auto end_node = [&](std::uint32_t wire, ObjectId target, std::int64_t terminal,
                       const char* which) -> std::int64_t {
     if (terminal < 0 || terminal > 1)
-      throw InputError(ErrorLocation{"", 0, store.describe(store.id_at(wire))},
-                       std::string(which) + "_terminal must be 0 or 1, got " + std::to_string(terminal));
+      throw InputError(
+          ErrorLocation{"", 0, store.describe(store.id_at(wire))},
+          std::string(which) + "_terminal must be 0 or 1, got " + std::to_string(terminal));
     if (target.is_null() || !store.alive(target)) return -1;
     const std::int32_t pi = target.index < slots ? part_of_slot[target.index] : -1;
     if (pi < 0)
-      throw InputError(ErrorLocation{"", 0, store.describe(store.id_at(wire))},
-                       std::string(which) + " is '" + store.describe(target) + "', which is not an electrical part " +
-                           (is_wire[target.index] ? "(it is a wire: wires join parts)"
-                                                  : "(give it conductive = true, emf or inductance)"));
+      throw InputError(
+          ErrorLocation{"", 0, store.describe(store.id_at(wire))},
+          std::string(which) + " is '" + store.describe(target) +
+              "', which is not an electrical part " +
+              (is_wire[target.index] ? "(it is a wire: wires join parts)"
+                                     : "(give it conductive = true, emf or inductance)"));
     return parts_[std::size_t(pi)].node[terminal];
   };
   for (std::uint32_t s = 0; s < slots; ++s) {
     if (!is_wire[s]) continue;
-    const std::int64_t a = end_node(s, wire_from.value_or(s, ObjectId{}), from_terminal.value_or(s, 0), "wire_from");
-    const std::int64_t b = end_node(s, wire_to.value_or(s, ObjectId{}), to_terminal.value_or(s, 0), "wire_to");
+    const std::int64_t a =
+        end_node(s, wire_from.value_or(s, ObjectId{}), from_terminal.value_or(s, 0), "wire_from");
+    const std::int64_t b =
+        end_node(s, wire_to.value_or(s, ObjectId{}), to_terminal.value_or(s, 0), "wire_to");
     Wire w{s, -1};
     if (a >= 0 && b >= 0) {
       w.conductance = std::int32_t(net.conductances.size());
-      net.conductances.push_back({std::uint32_t(a), std::uint32_t(b),
-                                  1.0 / positive_resistance(resistance.value_or(s, config_.wire_resistance))});
+      net.conductances.push_back(
+          {std::uint32_t(a), std::uint32_t(b),
+           1.0 / positive_resistance(resistance.value_or(s, config_.wire_resistance))});
     }
     wires_.push_back(w);
   }
@@ -289,7 +323,8 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
       const double half = config_.contact_resistance / 2;
       const double r = contact_r.value_or(a.index, half) + contact_r.value_or(b.index, half);
       net.conductances.push_back({parts_[std::size_t(pa)].node[it->second.terminal_a],
-                                  parts_[std::size_t(pb)].node[it->second.terminal_b], 1.0 / positive_resistance(r)});
+                                  parts_[std::size_t(pb)].node[it->second.terminal_b],
+                                  1.0 / positive_resistance(r)});
     }
     ++it;
   }
@@ -305,12 +340,15 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   for (const auto& g : net.conductances) edges.emplace_back(g.a, g.b);
   const std::vector<bool> on_cycle = edges_on_cycles(net.node_count, edges);
   branch_on_loop_.assign(on_cycle.begin(), on_cycle.begin() + std::ptrdiff_t(net.branches.size()));
-  conductance_on_loop_.assign(on_cycle.begin() + std::ptrdiff_t(net.branches.size()), on_cycle.end());
+  conductance_on_loop_.assign(on_cycle.begin() + std::ptrdiff_t(net.branches.size()),
+                              on_cycle.end());
   element_closed_.assign(parts_.size(), false);
   for (std::size_t i = 0; i < parts_.size(); ++i) {
     const Part& p = parts_[i];
-    if (p.kind == PartKind::Battery || p.kind == PartKind::Coil) element_closed_[i] = on_cycle[std::size_t(p.element)];
-    else if (p.kind == PartKind::Resistor) element_closed_[i] = on_cycle[net.branches.size() + std::size_t(p.element)];
+    if (p.kind == PartKind::Battery || p.kind == PartKind::Coil)
+      element_closed_[i] = on_cycle[std::size_t(p.element)];
+    else if (p.kind == PartKind::Resistor)
+      element_closed_[i] = on_cycle[net.branches.size() + std::size_t(p.element)];
   }
 
   // Objects that still carry our outputs but are no longer parts or wires
@@ -346,7 +384,8 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   const std::size_t nb = batteries_.size();
   for (std::size_t k = 0; k < nb; ++k) e_[k] = emf[batteries_[k]];
   for (int step = 0; step < config_.substeps; ++step) {
-    for (std::size_t i = 0; i < coils_.size(); ++i) e_[nb + i] = coils_[i].inductance / h * coils_[i].current;
+    for (std::size_t i = 0; i < coils_.size(); ++i)
+      e_[nb + i] = coils_[i].inductance / h * coils_[i].current;
     solver_.solve(e_, potential_, branch_current_);
     for (std::size_t k = 0; k < branch_current_.size(); ++k)
       if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
@@ -373,7 +412,8 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
   }
   for (std::size_t k = 0; k < network_.branches.size(); ++k) {
     const TheveninBranch& br = network_.branches[k];
-    through[br.a] += std::abs(branch_current_[k]) / 2, through[br.b] += std::abs(branch_current_[k]) / 2;
+    through[br.a] += std::abs(branch_current_[k]) / 2,
+        through[br.b] += std::abs(branch_current_[k]) / 2;
   }
 
   auto publish = [&](std::uint32_t slot, double i, double v) {
@@ -387,17 +427,29 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     const double v0 = p[part.node[0]], v1 = p[part.node[1]];
     double i = 0;
     switch (part.kind) {
-      case PartKind::Node: publish(part.slot, through[part.node[0]], v0); continue;
-      case PartKind::Battery: i = branch_current_[std::size_t(part.element)]; publish(part.slot, i, v1 - v0); break;
-      case PartKind::Coil: i = branch_current_[std::size_t(part.element)]; publish(part.slot, i, v0 - v1); break;
-      case PartKind::Resistor: i = g_current[std::size_t(part.element)]; publish(part.slot, i, v0 - v1); break;
+      case PartKind::Node:
+        publish(part.slot, through[part.node[0]], v0);
+        continue;
+      case PartKind::Battery:
+        i = branch_current_[std::size_t(part.element)];
+        publish(part.slot, i, v1 - v0);
+        break;
+      case PartKind::Coil:
+        i = branch_current_[std::size_t(part.element)];
+        publish(part.slot, i, v0 - v1);
+        break;
+      case PartKind::Resistor:
+        i = g_current[std::size_t(part.element)];
+        publish(part.slot, i, v0 - v1);
+        break;
     }
     // Events when an element joins or leaves a closed loop.
     const ObjectId id = store.id_at(part.slot);
     bool& reported = reported_closed_[id];
     if (reported != element_closed_[idx]) {
       reported = element_closed_[idx];
-      access.emit({.type = reported ? event::kCircuitClosed : event::kCircuitOpened, .a = id,
+      access.emit({.type = reported ? event::kCircuitClosed : event::kCircuitOpened,
+                   .a = id,
                    .values = {{"current", i}}});
     }
   }
@@ -414,20 +466,22 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
 
 void register_electricity_resolver(PluginRegistry& registry) {
   registry.add({
-      .info = {.name = kResolverName,
-               .kind = StageKind::Resolver,
-               .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance, prop::kInductance,
-                         prop::kResistance, prop::kContactResistance, prop::kWireFrom, prop::kWireTo,
-                         prop::kWireFromTerminal, prop::kWireToTerminal, prop::kCurrent},
-               .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered},
-               // Without a battery or a coil (which may hold a current) no
-               // current can flow: bars that merely conduct need no solver.
-               .needs = {prop::kEmf, prop::kInductance},
-               .doc = "DC circuits with coils: modified nodal analysis over parts, wires and contacts"},
+      .info =
+          {.name = kResolverName,
+           .kind = StageKind::Resolver,
+           .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance, prop::kInductance,
+                     prop::kResistance, prop::kContactResistance, prop::kWireFrom, prop::kWireTo,
+                     prop::kWireFromTerminal, prop::kWireToTerminal, prop::kCurrent},
+           .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered},
+           // Without a battery or a coil (which may hold a current) no
+           // current can flow: bars that merely conduct need no solver.
+           .needs = {prop::kEmf, prop::kInductance},
+           .doc = "DC circuits with coils: modified nodal analysis over parts, wires and contacts"},
       .properties = electricity_property_defs(),
-      .create = [](PluginContext& ctx) {
-        return std::make_unique<ElectricityResolver>(ElectricityConfig::from(ctx.settings()));
-      },
+      .create =
+          [](PluginContext& ctx) {
+            return std::make_unique<ElectricityResolver>(ElectricityConfig::from(ctx.settings()));
+          },
   });
 }
 

@@ -153,8 +153,8 @@ class ElectricityResolver final : public Resolver {
   struct Part {
     std::uint32_t slot;
     PartKind kind;
-    std::uint32_t node[2];   // node of terminal 0 and 1 (equal for a node part)
-    std::int32_t element;    // branch (battery, coil) or conductance (resistor) index
+    std::uint32_t node[2];  // node of terminal 0 and 1 (equal for a node part)
+    std::int32_t element;   // branch (battery, coil) or conductance (resistor) index
   };
   struct Wire {
     std::uint32_t slot;
@@ -187,9 +187,9 @@ class ElectricityResolver final : public Resolver {
   MnaSolver solver_;
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
-  std::vector<Coil> coils_;                 // branch index = batteries_.size() + coil index
-  std::vector<std::uint32_t> batteries_;    // slots; branch index = position
-  std::vector<bool> element_closed_;        // per part: on a closed loop (two-terminal parts)
+  std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index
+  std::vector<std::uint32_t> batteries_;  // slots; branch index = position
+  std::vector<bool> element_closed_;      // per part: on a closed loop (two-terminal parts)
   std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
   std::map<ObjectId, bool> reported_closed_;  // what the last events said, per element
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts

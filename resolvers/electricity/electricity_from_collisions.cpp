@@ -4,11 +4,13 @@
 
 namespace alloy::electricity {
 
-ElectricityFromCollisions::ElectricityFromCollisions(ElectricityResolver& target, const rigid::CollisionSet& contacts)
+ElectricityFromCollisions::ElectricityFromCollisions(ElectricityResolver& target,
+                                                     const rigid::CollisionSet& contacts)
     : target_(target), contacts_(contacts) {}
 
 int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orientation, Vec3 point) {
-  const Quat inverse{part_orientation.w, -part_orientation.x, -part_orientation.y, -part_orientation.z};
+  const Quat inverse{part_orientation.w, -part_orientation.x, -part_orientation.y,
+                     -part_orientation.z};
   return rotate(inverse, point - part_position).x > 0 ? 1 : 0;
 }
 
@@ -25,8 +27,9 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
   touching.reserve(began.size() + ongoing.size());
   std::size_t i = 0, j = 0;
   while (i < began.size() || j < ongoing.size()) {
-    const bool take_began = j == ongoing.size() ||
-                            (i < began.size() && rigid::pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b));
+    const bool take_began =
+        j == ongoing.size() ||
+        (i < began.size() && rigid::pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b));
     const rigid::ContactPair& p = take_began ? began[i++] : ongoing[j++];
     if (conducts(p.a) && conducts(p.b)) touching.push_back(&p);
   }
@@ -46,9 +49,12 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
   std::size_t k = 0;
   for (const rigid::ContactPair* p : touching) {
     const std::pair<ObjectId, ObjectId> key{p->a, p->b};
-    for (; k < connected_.size() && connected_[k] < key; ++k) target_.disconnect(connected_[k].first, connected_[k].second);
-    if (k < connected_.size() && connected_[k] == key) ++k;  // still touching: nothing to say
-    else target_.connect(p->a, p->b, terminal(p->a, *p), terminal(p->b, *p));
+    for (; k < connected_.size() && connected_[k] < key; ++k)
+      target_.disconnect(connected_[k].first, connected_[k].second);
+    if (k < connected_.size() && connected_[k] == key)
+      ++k;  // still touching: nothing to say
+    else
+      target_.connect(p->a, p->b, terminal(p->a, *p), terminal(p->b, *p));
     now.push_back(key);
   }
   for (; k < connected_.size(); ++k) target_.disconnect(connected_[k].first, connected_[k].second);
@@ -66,8 +72,8 @@ void register_electricity_plugins(PluginRegistry& registry) {
                .doc = "conductive parts that touch are connected; parted, disconnected"},
       .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
         ctx.settings().check_known(kFromCollisionsName, {});
-        return std::make_unique<ElectricityFromCollisions>(ctx.target<ElectricityResolver>(),
-                                                           ctx.dependency<rigid::CollisionSet>("collisions"));
+        return std::make_unique<ElectricityFromCollisions>(
+            ctx.target<ElectricityResolver>(), ctx.dependency<rigid::CollisionSet>("collisions"));
       },
   });
 }

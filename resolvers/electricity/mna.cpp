@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseLU>
-
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -14,7 +13,9 @@ namespace {
 
 /// Union-find with path halving; components are found once per factor().
 struct DisjointSets {
-  explicit DisjointSets(std::uint32_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  explicit DisjointSets(std::uint32_t n) : parent(n) {
+    std::iota(parent.begin(), parent.end(), 0u);
+  }
   std::uint32_t find(std::uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
@@ -39,7 +40,8 @@ struct MnaSolver::Component {
   bool factored = false;
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu;
   // SparseLU is neither copyable nor movable; keep it behind a pointer.
-  std::unique_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>> sparse_lu;
+  std::unique_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>
+      sparse_lu;
   mutable Eigen::VectorXd rhs, x;  // work buffers, sized once
 };
 
@@ -48,16 +50,25 @@ MnaSolver::~MnaSolver() = default;
 MnaSolver::MnaSolver(MnaSolver&&) noexcept = default;
 MnaSolver& MnaSolver::operator=(MnaSolver&&) noexcept = default;
 
-std::size_t MnaSolver::component_count() const { return components_.size(); }
-std::uint32_t MnaSolver::ground(std::size_t c) const { return components_.at(c).ground; }
-std::size_t MnaSolver::unknowns(std::size_t c) const { return components_.at(c).unknowns; }
-bool MnaSolver::dense(std::size_t c) const { return components_.at(c).dense; }
+std::size_t MnaSolver::component_count() const {
+  return components_.size();
+}
+std::uint32_t MnaSolver::ground(std::size_t c) const {
+  return components_.at(c).ground;
+}
+std::size_t MnaSolver::unknowns(std::size_t c) const {
+  return components_.at(c).unknowns;
+}
+bool MnaSolver::dense(std::size_t c) const {
+  return components_.at(c).dense;
+}
 
 void MnaSolver::factor(const Network& net) {
   const std::uint32_t n = net.node_count;
   auto check = [&](std::uint32_t a, std::uint32_t b, double v, const char* what, std::size_t i) {
     if (a >= n || b >= n)
-      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " joins a node that does not exist");
+      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
+                                  " joins a node that does not exist");
     if (!(v > 0) || !std::isfinite(v))
       throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
                                   " must be positive and finite, got " + std::to_string(v));
@@ -102,7 +113,8 @@ void MnaSolver::factor(const Network& net) {
     // The ground: node a of the first branch. The resolver lists batteries
     // first, terminal 0 (negative) as a, so potentials read as the voltmeter
     // of a kit user whose black lead is on the first battery's minus.
-    comp.ground = comp.branches.empty() ? comp.nodes.front() : net.branches[comp.branches.front()].a;
+    comp.ground =
+        comp.branches.empty() ? comp.nodes.front() : net.branches[comp.branches.front()].a;
     std::int32_t row = 0;
     for (std::uint32_t v : comp.nodes)
       if (v != comp.ground) node_row[v] = row++;
@@ -135,7 +147,8 @@ void MnaSolver::factor(const Network& net) {
       comp.dense_lu.compute(Eigen::MatrixXd(a));
     } else {
       a.makeCompressed();
-      comp.sparse_lu = std::make_unique<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>();
+      comp.sparse_lu = std::make_unique<
+          Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>();
       comp.sparse_lu->analyzePattern(a);
       comp.sparse_lu->factorize(a);
       if (comp.sparse_lu->info() != Eigen::Success)
@@ -151,8 +164,10 @@ void MnaSolver::factor(const Network& net) {
   branch_row_ = std::move(branch_row);
 }
 
-void MnaSolver::solve(std::span<const double> e, std::span<double> potential, std::span<double> current) const {
-  if (e.size() != branch_count_ || potential.size() != node_count_ || current.size() != branch_count_)
+void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
+                      std::span<double> current) const {
+  if (e.size() != branch_count_ || potential.size() != node_count_ ||
+      current.size() != branch_count_)
     throw std::invalid_argument("MnaSolver::solve: sizes do not match the factored network");
   for (std::size_t ci = 0; ci < components_.size(); ++ci) {
     const Component& comp = components_[ci];
@@ -164,10 +179,13 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential, st
       continue;
     }
     for (std::uint32_t k : comp.branches) comp.rhs[branch_row_[k]] = -e[k];
-    if (comp.dense) comp.x = comp.dense_lu.solve(comp.rhs);
-    else comp.x = comp.sparse_lu->solve(comp.rhs);
+    if (comp.dense)
+      comp.x = comp.dense_lu.solve(comp.rhs);
+    else
+      comp.x = comp.sparse_lu->solve(comp.rhs);
     if (!comp.x.allFinite())
-      throw std::runtime_error("electric network component " + std::to_string(ci) + " gave a non-finite solution");
+      throw std::runtime_error("electric network component " + std::to_string(ci) +
+                               " gave a non-finite solution");
     for (std::uint32_t v : comp.nodes) potential[v] = v == comp.ground ? 0.0 : comp.x[node_row_[v]];
     for (std::uint32_t k : comp.branches) current[k] = comp.x[branch_row_[k]];
   }

@@ -78,7 +78,8 @@ class MnaSolver {
   /// answer is zero. Conductance currents follow as g (V_a - V_b).
   /// Throws std::runtime_error if a solution is not finite (it cannot be for a
   /// network that factor() accepted; the check keeps a NaN from spreading).
-  void solve(std::span<const double> e, std::span<double> potential, std::span<double> current) const;
+  void solve(std::span<const double> e, std::span<double> potential,
+             std::span<double> current) const;
 
   /// Connected component of each node, numbered in order of first node.
   std::span<const std::uint32_t> component_of_node() const { return component_of_node_; }

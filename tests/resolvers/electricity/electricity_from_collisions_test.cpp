@@ -3,12 +3,13 @@
 // closes a circuit one step after the touch (paper 4.1.2), lifting it opens
 // the circuit again (4.1.4 - 4.1.5), and a touch reaches the terminal of the
 // half of a two-terminal part it lands on.
+#include "resolvers/electricity/electricity_from_collisions.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
-#include "resolvers/electricity/electricity_from_collisions.hpp"
 #include "resolvers/plugins.hpp"
 
 namespace alloy::electricity {
@@ -26,11 +27,14 @@ class FromCollisionsTest : public ::testing::Test {
     w.set(b, "shape", std::string("box"));
     w.set(b, "size", size);
     w.set(b, "position", position);
-    if (mass > 0) w.set(b, "mass", mass);
-    else w.set(b, "static", true);
+    if (mass > 0)
+      w.set(b, "mass", mass);
+    else
+      w.set(b, "static", true);
     return b;
   }
-  static ObjectId wire(World& w, const std::string& name, ObjectId from, int ft, ObjectId to, int tt) {
+  static ObjectId wire(World& w, const std::string& name, ObjectId from, int ft, ObjectId to,
+                       int tt) {
     const ObjectId id = w.create(name);
     w.set(id, "wire_from", from);
     w.set(id, "wire_from_terminal", std::int64_t(ft));
@@ -38,7 +42,9 @@ class FromCollisionsTest : public ::testing::Test {
     w.set(id, "wire_to_terminal", std::int64_t(tt));
     return id;  // default resistance: 0.01 Ohm
   }
-  static double num(const World& w, ObjectId id, const char* p) { return std::get<double>(w.get(id, p)); }
+  static double num(const World& w, ObjectId id, const char* p) {
+    return std::get<double>(w.get(id, p));
+  }
   static bool has_event(const World& w, const std::string& type, ObjectId a, ObjectId b = {}) {
     for (const Event& e : w.events())
       if (e.type == type && ((e.a == a && e.b == b) || (e.a == b && e.b == a))) return true;
@@ -146,7 +152,8 @@ double current_when_dropped_at(PluginRegistry& registry, double x) {
   const ObjectId r = w.create("r");
   w.set(r, "conductive", true);
   w.set(r, "resistance", 1.0);
-  for (auto [name, from, ft, to, tt] : {std::tuple{"w1", probe, 0, r, 0}, std::tuple{"w2", r, 1, battery, 0}}) {
+  for (auto [name, from, ft, to, tt] :
+       {std::tuple{"w1", probe, 0, r, 0}, std::tuple{"w2", r, 1, battery, 0}}) {
     const ObjectId id = w.create(name);
     w.set(id, "wire_from", from);
     w.set(id, "wire_from_terminal", std::int64_t(ft));
@@ -170,7 +177,8 @@ TEST_F(FromCollisionsTest, TerminalAtFollowsThePartsOrientation) {
   const Quat half_turn = Quat::from_angle_z(3.14159265358979);
   EXPECT_EQ(ElectricityFromCollisions::terminal_at({1, 0, 0}, {}, {1.2, 0.1, 0}), 1);
   EXPECT_EQ(ElectricityFromCollisions::terminal_at({1, 0, 0}, {}, {0.8, 0.1, 0}), 0);
-  EXPECT_EQ(ElectricityFromCollisions::terminal_at({1, 0, 0}, half_turn, {1.2, 0.1, 0}), 0);  // + end now at -x
+  EXPECT_EQ(ElectricityFromCollisions::terminal_at({1, 0, 0}, half_turn, {1.2, 0.1, 0}),
+            0);  // + end now at -x
 }
 
 TEST_F(FromCollisionsTest, ABatteryAddedToARunningWorldFindsThePartsAlreadyTouching) {
@@ -190,7 +198,8 @@ TEST_F(FromCollisionsTest, ABatteryAddedToARunningWorldFindsThePartsAlreadyTouch
   wire(w, "w1", battery, 1, contact, 0);
   wire(w, "w2", bar, 0, lamp, 0);
   wire(w, "w3", lamp, 1, battery, 0);
-  w.step();  // the resolver and the interaction come to life; the interaction sees the touching pair
+  w.step();  // the resolver and the interaction come to life; the interaction sees the touching
+             // pair
   ASSERT_TRUE(w.has_stage("electricity_from_collisions"));
   EXPECT_EQ(num(w, lamp, "current"), 0.0);
   w.step();  // and the resolver connects it

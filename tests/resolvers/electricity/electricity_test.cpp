@@ -1,14 +1,14 @@
 // Tests for resolvers/electricity/electricity.hpp in a real World: circuits
 // built from parts and wire objects, contacts made by connect / disconnect
 // commands, against Ohm's law and the analytic RL responses.
+#include "resolvers/electricity/electricity.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include "resolvers/electricity/electricity.hpp"
 
 namespace alloy::electricity {
 namespace {
@@ -48,8 +48,8 @@ class ElectricityTest : public ::testing::Test {
     w.set(id, "conductive", true);
     return id;
   }
-  static ObjectId wire(World& w, const std::string& name, ObjectId from, int from_terminal, ObjectId to,
-                       int to_terminal, double r) {
+  static ObjectId wire(World& w, const std::string& name, ObjectId from, int from_terminal,
+                       ObjectId to, int to_terminal, double r) {
     const ObjectId id = w.create(name);
     w.set(id, "wire_from", from);
     w.set(id, "wire_from_terminal", std::int64_t(from_terminal));
@@ -58,14 +58,19 @@ class ElectricityTest : public ::testing::Test {
     w.set(id, "resistance", r);
     return id;
   }
-  static double num(const World& w, ObjectId id, const char* p) { return std::get<double>(w.get(id, p)); }
-  static bool flag(const World& w, ObjectId id, const char* p) { return std::get<bool>(w.get(id, p)); }
+  static double num(const World& w, ObjectId id, const char* p) {
+    return std::get<double>(w.get(id, p));
+  }
+  static bool flag(const World& w, ObjectId id, const char* p) {
+    return std::get<bool>(w.get(id, p));
+  }
   static ElectricityResolver& resolver(World& w) {
     return dynamic_cast<ElectricityResolver&>(*w.stage("electricity"));
   }
   static std::vector<Event> of_type(const std::vector<Event>& events, const std::string& type) {
     std::vector<Event> out;
-    std::copy_if(events.begin(), events.end(), std::back_inserter(out), [&](const Event& e) { return e.type == type; });
+    std::copy_if(events.begin(), events.end(), std::back_inserter(out),
+                 [&](const Event& e) { return e.type == type; });
     return out;
   }
 
@@ -85,7 +90,7 @@ TEST_F(ElectricityTest, ResistiveDividerMatchesOhmsLaw) {
   w.step();
   const double total = 0.5 + 100 + 200 + 0.01 + 0.02 + 0.03 + 0.04;
   const double i = 9.0 / total;
-    // Exact to rounding: the matrix spans 100 S (a 0.01 Ohm wire) to 5 mS, so
+  // Exact to rounding: the matrix spans 100 S (a 0.01 Ohm wire) to 5 mS, so
   // LU loses about four digits of the sixteen.
   const double tol = 1e-10;
   for (ObjectId id : {b, r1, r2, w4}) EXPECT_NEAR(num(w, id, "current"), i, tol * i);
@@ -163,8 +168,8 @@ RlLoop make_rl(World& w) {
   rl.coil = w.create("coil");
   w.set(rl.coil, "inductance", l);
   w.set(rl.coil, "resistance", rc);
-  for (auto [name, from, ft, to, tt] : {std::tuple{"w1", rl.battery, 1, rl.coil, 0},
-                                        std::tuple{"w2", rl.coil, 1, rl.battery, 0}}) {
+  for (auto [name, from, ft, to, tt] :
+       {std::tuple{"w1", rl.battery, 1, rl.coil, 0}, std::tuple{"w2", rl.coil, 1, rl.battery, 0}}) {
     const ObjectId id = w.create(name);
     w.set(id, "wire_from", from);
     w.set(id, "wire_from_terminal", std::int64_t(ft));
@@ -250,7 +255,7 @@ TEST_F(ElectricityTest, CoilDecaysThroughItsFlybackPathWhenTheSwitchOpens) {
     EXPECT_NEAR(i, i0 / std::pow(1 + h * r_loop / l, 4 * k), 1e-12 * i0) << "step " << k;
     worst = std::max(worst, std::abs(i - i0 * std::exp(-k * w.dt() * r_loop / l)) / i0);
     EXPECT_NEAR(num(w, fly, "current"), -i, 1e-12);  // the flyback carries the coil current back
-    EXPECT_EQ(num(w, b, "current"), 0.0);           // the battery hangs off the loop by one end
+    EXPECT_EQ(num(w, b, "current"), 0.0);            // the battery hangs off the loop by one end
   }
   EXPECT_FALSE(resolver(w).connected(s1, s2));
   // tau = 2.3 ms = 0.55 dt: a fast decay for this step; measured 6.4 % of I0.
@@ -423,7 +428,9 @@ TEST_F(ElectricityTest, BadWiresAreReportedWithTheWiresName) {
       FAIL() << "a wire to a non-conductive part went through";
     } catch (const InputError& e) {
       EXPECT_EQ(e.where().object, "lead");
-      EXPECT_NE(std::string(e.what()).find("'wood', which is not an electrical part"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'wood', which is not an electrical part"),
+                std::string::npos)
+          << e.what();
     }
   }
   {

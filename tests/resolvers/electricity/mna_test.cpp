@@ -1,13 +1,13 @@
 // Tests for resolvers/electricity/mna.hpp: the MNA solver against Ohm's and
 // Kirchhoff's laws worked by hand, dense against sparse LU, components that
 // cannot carry current, and the bridge finder behind circuit_closed.
+#include "resolvers/electricity/mna.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <stdexcept>
 #include <vector>
-
-#include "resolvers/electricity/mna.hpp"
 
 namespace alloy::electricity {
 namespace {
@@ -45,8 +45,12 @@ TEST(MnaSolver, KirchhoffsLawsHoldInABridgeWithTwoSources) {
   // A Wheatstone-like bridge with two batteries: check KCL at every node and
   // each battery's branch equation, rather than a hand-solved value.
   Network n{.node_count = 5,
-            .conductances = {{1, 2, 1 / 10.0}, {1, 3, 1 / 20.0}, {2, 3, 1 / 30.0}, {2, 0, 1 / 40.0},
-                             {3, 0, 1 / 50.0}, {4, 2, 1 / 5.0}},
+            .conductances = {{1, 2, 1 / 10.0},
+                             {1, 3, 1 / 20.0},
+                             {2, 3, 1 / 30.0},
+                             {2, 0, 1 / 40.0},
+                             {3, 0, 1 / 50.0},
+                             {4, 2, 1 / 5.0}},
             .branches = {{0, 1, 0.2}, {0, 4, 1.0}}};
   MnaSolver s;
   s.factor(n);
@@ -59,7 +63,8 @@ TEST(MnaSolver, KirchhoffsLawsHoldInABridgeWithTwoSources) {
   }
   for (std::size_t k = 0; k < n.branches.size(); ++k) {
     net_out[n.branches[k].a] += x.i[k], net_out[n.branches[k].b] -= x.i[k];
-    EXPECT_NEAR(x.v[n.branches[k].b] - x.v[n.branches[k].a], e[k] - n.branches[k].z * x.i[k], 1e-12);
+    EXPECT_NEAR(x.v[n.branches[k].b] - x.v[n.branches[k].a], e[k] - n.branches[k].z * x.i[k],
+                1e-12);
   }
   for (double r : net_out) EXPECT_NEAR(r, 0.0, 1e-13);
 }
@@ -85,7 +90,7 @@ TEST(MnaSolver, ComponentsAreGroundedAndSolvedSeparately) {
   EXPECT_EQ(s.factorizations(), 2u);
   EXPECT_EQ(s.ground(2), 4u);  // node a of the component's first branch
   const Solution x = solve(s, n, {2.0, 4.0});
-  EXPECT_DOUBLE_EQ(x.i[0], 1.0);  // 2 V over 1 + 1 Ohm
+  EXPECT_DOUBLE_EQ(x.i[0], 1.0);        // 2 V over 1 + 1 Ohm
   EXPECT_DOUBLE_EQ(x.i[1], 4.0 / 3.0);  // 4 V over 1 + 2 Ohm
   EXPECT_EQ(x.v[2], 0.0);
   EXPECT_EQ(x.v[5], 0.0);
@@ -105,7 +110,8 @@ TEST(MnaSolver, DenseAndSparseLuAgree) {
     n.conductances.push_back({2 * k, 2 * k + 2, 1.0 / (1.0 + 0.01 * k)});
     n.conductances.push_back({2 * k + 1, 2 * k + 3, 1.0 / (2.0 + 0.02 * k)});
   }
-  for (std::uint32_t k = 0; k < rungs; ++k) n.conductances.push_back({2 * k, 2 * k + 1, 1.0 / (50.0 + k)});
+  for (std::uint32_t k = 0; k < rungs; ++k)
+    n.conductances.push_back({2 * k, 2 * k + 1, 1.0 / (50.0 + k)});
   n.branches = {{0, 1, 0.1}, {2 * rungs - 1, 2 * rungs - 2, 0.3}};
   MnaSolver dense(1000), sparse(8);
   dense.factor(n);
