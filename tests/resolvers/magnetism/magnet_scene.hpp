@@ -40,6 +40,9 @@ inline void register_current_source(PluginRegistry& r) {
                          .unit = "A",
                          .doc = "current through the element"}},
          .create = [](PluginContext&) { return std::make_unique<CurrentSource>(); }});
+  // The real resolver's interaction (registered with the native plugins)
+  // calls connect() on an ElectricityResolver; the stand-in has none.
+  r.remove("electricity_from_collisions");
 }
 
 /// A bar on the play area at `at`, rotated by `angle` about z, of the given kind.
