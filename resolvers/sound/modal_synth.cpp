@@ -14,7 +14,7 @@ ModalSynth::ModalSynth(Settings settings) : settings_(settings) {
 
 double ModalSynth::Voice::level() const {
   double sum = 0;
-  for (const Oscillator& o : oscillators) sum += std::abs(o.z);
+  for (std::size_t k = 0; k < size(); ++k) sum += std::hypot(re[k], im[k]);
   return sum;
 }
 
@@ -29,10 +29,12 @@ void ModalSynth::strike(std::span<const Mode> modes) {
     // z starts at amplitude on the real axis; after the first turn its
     // imaginary part is A r sin(w): the first sample is one sample after the
     // strike, so the output is A e^{-a t} sin(w t) at t = 1/fs, 2/fs, ...
-    voice.oscillators.push_back({std::complex<double>(m.amplitude, 0),
-                                 std::polar(decay_per_sample, w)});
+    voice.re.push_back(m.amplitude);
+    voice.im.push_back(0);
+    voice.cr.push_back(decay_per_sample * std::cos(w));
+    voice.ci.push_back(decay_per_sample * std::sin(w));
   }
-  if (voice.oscillators.empty()) return;
+  if (voice.size() == 0) return;
   if (voices_.size() >= settings_.max_voices) {
     auto quietest = std::min_element(voices_.begin(), voices_.end(), [](const Voice& a, const Voice& b) {
       return a.level() < b.level();
@@ -46,20 +48,32 @@ void ModalSynth::strike(std::span<const Mode> modes) {
 void ModalSynth::render(std::span<float> out) {
   if (voices_.empty() || out.empty()) return;
   for (Voice& v : voices_) {
-    for (Oscillator& o : v.oscillators) {
-      // Local copies keep the inner loop in registers.
-      std::complex<double> z = o.z;
-      const std::complex<double> turn = o.turn;
-      for (float& s : out) {
-        z *= turn;
-        s += float(z.imag());
+    const std::size_t n = v.size();
+    double* re = v.re.data();
+    double* im = v.im.data();
+    const double* cr = v.cr.data();
+    const double* ci = v.ci.data();
+    for (float& s : out) {
+      double sum = 0;
+      for (std::size_t k = 0; k < n; ++k) {  // independent modes: no chain between them
+        const double r = re[k] * cr[k] - im[k] * ci[k];
+        const double i = re[k] * ci[k] + im[k] * cr[k];
+        re[k] = r;
+        im[k] = i;
+        sum += i;
       }
-      o.z = z;
+      s += float(sum);
     }
-    const double floor = settings_.floor;
-    std::erase_if(v.oscillators, [floor](const Oscillator& o) { return std::abs(o.z) < floor; });
+    // Drop the modes that fell below the floor, keeping the arrays parallel.
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (std::hypot(re[k], im[k]) < settings_.floor) continue;
+      v.re[kept] = v.re[k], v.im[kept] = v.im[k], v.cr[kept] = v.cr[k], v.ci[kept] = v.ci[k];
+      ++kept;
+    }
+    v.re.resize(kept), v.im.resize(kept), v.cr.resize(kept), v.ci.resize(kept);
   }
-  std::erase_if(voices_, [](const Voice& v) { return v.oscillators.empty(); });
+  std::erase_if(voices_, [](const Voice& v) { return v.size() == 0; });
 }
 
 }  // namespace alloy::sound
