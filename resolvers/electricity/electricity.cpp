@@ -160,20 +160,21 @@ void ElectricityResolver::build(ResolverAccess& access) {
   for (std::uint32_t s : access.column<ObjectId>(prop::kWireTo).members()) give(s);
 }
 
-std::vector<std::uint64_t> ElectricityResolver::input_versions(const WorldView& view) const {
-  std::vector<std::uint64_t> v;
-  v.reserve(2 * std::size(kNetworkInputs));
-  for (const char* name : kNetworkInputs) {
-    const ColumnBase& c = view.store().column(view.property(name));
+ElectricityResolver::InputVersions ElectricityResolver::input_versions(const WorldView& view) {
+  static_assert(std::size(kNetworkInputs) == kNetworkInputCount);
+  if (!input_ids_resolved_) {
+    for (std::size_t i = 0; i < kNetworkInputCount; ++i)
+      input_ids_[i] = view.property(kNetworkInputs[i]);
+    input_ids_resolved_ = true;
+  }
+  InputVersions v{};
+  for (std::size_t i = 0; i < kNetworkInputCount; ++i) {
+    const ColumnBase& c = view.store().column(input_ids_[i]);
     // emf values enter only the right-hand side; its membership is structural.
-    v.push_back(std::string_view(name) == prop::kEmf ? 0 : c.version());
-    v.push_back(c.membership_version());
+    v[2 * i] = kNetworkInputs[i] == std::string_view(prop::kEmf) ? 0 : c.version();
+    v[2 * i + 1] = c.membership_version();
   }
   return v;
-}
-
-bool ElectricityResolver::inputs_changed(const WorldView& view) const {
-  return input_versions(view) != seen_versions_;
 }
 
 void ElectricityResolver::perform_commands(const WorldView& view) {

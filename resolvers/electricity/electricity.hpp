@@ -28,6 +28,7 @@
 // touching pair when it starts, so a new resolver instance recovers them.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -167,10 +168,13 @@ class ElectricityResolver final : public Resolver {
   };
 
   void perform_commands(const WorldView& view);
-  bool inputs_changed(const WorldView& view) const;
+  bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
-  std::vector<std::uint64_t> input_versions(const WorldView& view) const;
+  /// Value and membership counters of the columns that define the network.
+  static constexpr std::size_t kNetworkInputCount = 10;
+  using InputVersions = std::array<std::uint64_t, 2 * kNetworkInputCount>;
+  InputVersions input_versions(const WorldView& view);
 
   ElectricityConfig config_;
   std::vector<Command> queue_;
@@ -180,7 +184,9 @@ class ElectricityResolver final : public Resolver {
   bool dirty_ = true;
   bool reload_coil_state_ = true;
   double h_ = 0;  // the substep the coil companions were built for, s
-  std::vector<std::uint64_t> seen_versions_;
+  InputVersions seen_versions_{};
+  std::array<PropertyId, kNetworkInputCount> input_ids_{};  // resolved at the first use
+  bool input_ids_resolved_ = false;
   std::uint64_t seen_current_version_ = 0;
   std::uint64_t network_builds_ = 0;
   Network network_;
