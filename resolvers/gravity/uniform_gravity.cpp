@@ -1,0 +1,41 @@
+#include "resolvers/gravity/uniform_gravity.hpp"
+
+namespace alloy::gravity {
+
+PropertyDef gravity_property() {
+  return {.name = "gravity", .kind = PropertyKind::Vec3, .unit = "m/s^2",
+          .doc = "gravitational acceleration at the body (written by a gravity resolver)"};
+}
+
+void UniformGravity::write(ResolverAccess& access) {
+  if (gravity_ == kNoProperty) {
+    mass_ = access.property("mass"), density_ = access.property("density");
+    static_ = access.property("static"), gravity_ = access.property("gravity");
+  }
+  const auto mass = access.column<double>(mass_);
+  const auto density = access.column<double>(density_);
+  const auto is_static = access.column<std::uint8_t>(static_);
+  auto gravity = access.writer<Vec3>(gravity_);
+  // Objects that carried gravity and no longer qualify (made static) get none.
+  for (std::uint32_t s : gravity.members())
+    if (!(mass.has(s) || density.has(s)) || is_static.value_or(s, 0)) gravity.set(s, Vec3{});
+  auto visit = [&](std::uint32_t s) {
+    if (!is_static.value_or(s, 0)) gravity.set(s, g_);  // set() moves the version only on a change
+  };
+  // Both lists (an object may carry both; the second set() changes nothing).
+  // Member lists are refreshed between phases, so a mass the rigid body just
+  // wrote from density may be in neither list yet: the density list has it.
+  for (std::uint32_t s : mass.members()) visit(s);
+  for (std::uint32_t s : density.members()) visit(s);
+  static_seen_ = is_static.version();
+}
+
+void UniformGravity::build(ResolverAccess& access) { write(access); }
+
+void UniformGravity::advance(ResolverAccess& access, double) {
+  // Membership changes come through build(); only a value edit of `static`
+  // (a part fixed or freed) changes who feels gravity between builds.
+  if (access.store().column(static_).version() != static_seen_) write(access);
+}
+
+}  // namespace alloy::gravity

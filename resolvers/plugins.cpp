@@ -1,0 +1,136 @@
+#include "resolvers/plugins.hpp"
+
+#include "resolvers/electricity/electricity_from_collisions.hpp"
+#include "resolvers/gravity/uniform_gravity.hpp"
+#include "resolvers/magnetism/magnetism_plugins.hpp"
+#include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
+#include "resolvers/rigid_body/properties.hpp"
+#include "resolvers/rigid_body/rigid_body.hpp"
+#include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
+#include "resolvers/rigid_body/rigid_body_from_gravity.hpp"
+
+namespace alloy {
+
+namespace {
+std::vector<PropertyDef> concat(std::initializer_list<std::vector<PropertyDef>> lists) {
+  std::vector<PropertyDef> out;
+  for (const auto& l : lists) out.insert(out.end(), l.begin(), l.end());
+  return out;
+}
+std::vector<PropertyDef> pick(const std::vector<PropertyDef>& defs, std::initializer_list<const char*> names) {
+  std::vector<PropertyDef> out;
+  for (const char* n : names)
+    for (const auto& d : defs)
+      if (d.name == n) out.push_back(d);
+  return out;
+}
+}  // namespace
+
+namespace rigid {
+
+PluginDef rigid_body_plugin() {
+  PluginDef def;
+  def.info = {.name = "rigid_body",
+              .kind = StageKind::Resolver,
+              .reads = {"shape", "size", "radius", "length", "density", "static", "pinned", "planar",
+                        "linear_damping", "angular_damping", "joint", "body_a", "body_b",
+                        "joint_friction", "limit_low", "limit_high"},
+              .writes = {"position", "orientation", "velocity", "angular_velocity", "mass", "anchor", "axis"},
+              .needs = {"mass", "density"},
+              .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
+  def.properties = concat({body_properties(), joint_properties()});
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    return std::make_unique<RigidBodyResolver>(ctx.world(), RigidBodyConfig::from(ctx.settings()));
+  };
+  return def;
+}
+
+PluginDef collisions_plugin() {
+  PluginDef def;
+  def.info = {.name = "collisions",
+              .kind = StageKind::Derived,
+              .reads = {"position", "orientation", "velocity", "angular_velocity", "shape", "size", "radius",
+                        "length", "static", "joint", "body_a", "body_b"},
+              .resolvers = {"rigid_body"},
+              .doc = "contact pairs that began, continue and ended, with points and impulses"};
+  def.properties = concat({body_properties(), joint_properties()});
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    ctx.settings().check_known("collisions", {});
+    auto& rigid = ctx.dependency<RigidBodyResolver>("rigid_body");
+    return std::make_unique<CollisionSet>(rigid, rigid.config().max_contacts);
+  };
+  return def;
+}
+
+PluginDef rigid_body_from_collisions_plugin() {
+  PluginDef def;
+  def.info = {.name = "rigid_body_from_collisions",
+              .kind = StageKind::Interaction,
+              .reads = {"friction", "restitution"},
+              .derived = {"collisions"},
+              .target = "rigid_body",
+              .doc = "contact joints for touching pairs (friction sqrt(mu_a mu_b), restitution max)"};
+  def.properties = material_properties();
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    ctx.settings().check_known("rigid_body_from_collisions", {"bounce_velocity"});
+    const double bounce = ctx.settings().number("bounce_velocity", 0.1);
+    if (!(bounce >= 0))
+      throw InputError(ctx.settings().where, "rigid_body_from_collisions: bounce_velocity must be >= 0");
+    return std::make_unique<RigidBodyFromCollisions>(ctx.target<RigidBodyResolver>(),
+                                                     ctx.dependency<CollisionSet>("collisions"), bounce);
+  };
+  return def;
+}
+
+PluginDef rigid_body_from_gravity_plugin() {
+  PluginDef def;
+  def.info = {.name = "rigid_body_from_gravity",
+              .kind = StageKind::Interaction,
+              .reads = {"gravity", "mass"},
+              .target = "rigid_body",
+              .doc = "the force m g on every body with a gravity value"};
+  def.properties = concat({{gravity::gravity_property()}, pick(body_properties(), {"mass"})});
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    ctx.settings().check_known("rigid_body_from_gravity", {});
+    return std::make_unique<RigidBodyFromGravity>(ctx.target<RigidBodyResolver>());
+  };
+  return def;
+}
+
+}  // namespace rigid
+
+namespace gravity {
+
+PluginDef uniform_gravity_plugin() {
+  PluginDef def;
+  def.info = {.name = "gravity.uniform",
+              .kind = StageKind::Resolver,
+              .reads = {"mass", "density", "static"},
+              .writes = {"gravity"},
+              .needs = {"mass", "density"},
+              .doc = "uniform gravitational acceleration g (setting g, default {0,-9.81,0})"};
+  def.properties = concat({{gravity_property()}, pick(rigid::body_properties(), {"mass", "density", "static"})});
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    ctx.settings().check_known("gravity.uniform", {"g"});
+    const Vec3 g = ctx.settings().vec3("g", {0, -9.81, 0});
+    if (!is_finite(g)) throw InputError(ctx.settings().where, "gravity.uniform: g must be finite");
+    return std::make_unique<UniformGravity>(g);
+  };
+  return def;
+}
+
+}  // namespace gravity
+
+void register_native_plugins(PluginRegistry& registry) {
+  registry.add(rigid::rigid_body_plugin());
+  registry.add(rigid::collisions_plugin());
+  registry.add(rigid::rigid_body_from_collisions_plugin());
+  registry.add(gravity::uniform_gravity_plugin());
+  registry.add(rigid::rigid_body_from_gravity_plugin());
+  electricity::register_electricity_plugins(registry);
+  magnetism::register_magnetism_plugins(registry);
+  magnetism::register_rigid_body_from_magnetism(registry);
+}
+
+}  // namespace alloy

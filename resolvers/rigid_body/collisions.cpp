@@ -1,0 +1,301 @@
+#include "resolvers/rigid_body/collisions.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+#include "resolvers/rigid_body/ode_support.hpp"
+#include "resolvers/rigid_body/properties.hpp"
+#include "resolvers/rigid_body/rigid_body.hpp"
+
+namespace alloy::rigid {
+
+namespace {
+// Category bits: static parts are only tested against movable ones, so ODE's
+// space skips floor-against-wall pairs before any callback.
+constexpr unsigned long kStaticBit = 1, kMovableBit = 2;
+
+std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(a) << 32) | b;
+}
+
+bool by_pair(const ContactPair& x, const ContactPair& y) { return pair_less(x.a, x.b, y.a, y.b); }
+}  // namespace
+
+struct CollisionSet::Impl {
+  struct Geom {
+    dGeomID geom = nullptr;
+    ObjectId id;
+    bool capsule = false;
+    bool placed = false;
+    Vec3 pos;
+    Quat q;
+  };
+
+  explicit Impl(int max_contacts) : buffer(std::size_t(max_contacts)) {
+    ensure_ode();
+    space = dHashSpaceCreate(nullptr);
+  }
+  ~Impl() {
+    clear_geoms();
+    dSpaceDestroy(space);
+  }
+
+  void resolve_ids(const WorldView& v) {
+    if (have_ids) return;
+    position = v.property("position"), orientation = v.property("orientation");
+    velocity = v.property("velocity"), angular_velocity = v.property("angular_velocity");
+    shape = v.property("shape"), size = v.property("size"), radius = v.property("radius");
+    length = v.property("length"), static_ = v.property("static");
+    joint = v.property("joint"), body_a = v.property("body_a"), body_b = v.property("body_b");
+    for (PropertyId p : {shape, size, radius, length, static_}) shape_columns.push_back(&v.store().column(p));
+    for (PropertyId p : {joint, body_a, body_b}) joint_columns.push_back(&v.store().column(p));
+    have_ids = true;
+  }
+
+  static bool changed(const std::vector<const ColumnBase*>& cols, std::vector<std::uint64_t>& seen) {
+    bool any = seen.size() != cols.size();
+    seen.resize(cols.size());
+    for (std::size_t i = 0; i < cols.size(); ++i)
+      if (cols[i]->version() != seen[i]) seen[i] = cols[i]->version(), any = true;
+    return any;
+  }
+
+  void clear_geoms() {
+    for (std::uint32_t s : geom_slots) dGeomDestroy(geoms[s].geom);
+    geom_slots.clear();
+    geoms.clear();
+  }
+
+  void rebuild_geoms(const WorldView& v) {
+    clear_geoms();
+    const PropertyStore& store = v.store();
+    geoms.resize(store.slot_count());
+    const auto pos = v.column<Vec3>(position);
+    const auto shp = v.column<EnumValue>(shape);
+    const auto sz = v.column<Vec3>(size);
+    const auto rad = v.column<double>(radius);
+    const auto len = v.column<double>(length);
+    const auto stat = v.column<std::uint8_t>(static_);
+    for (std::uint32_t s : shp.members()) {
+      if (!pos.has(s)) continue;  // not placed in the world yet
+      const ObjectId id = store.id_at(s);
+      const ErrorLocation where{"", 0, store.describe(id)};
+      Geom& g = geoms[s];
+      switch (Shape(shp[s].index)) {
+        case Shape::Box: {
+          const Vec3 e = sz.value_or(s, {});
+          if (!(e.x > 0 && e.y > 0 && e.z > 0)) throw InputError(where, "a box needs a size with every extent > 0");
+          g.geom = dCreateBox(space, e.x, e.y, e.z);
+          break;
+        }
+        case Shape::Sphere:
+          if (!(rad.value_or(s, 0) > 0)) throw InputError(where, "a sphere needs a radius > 0");
+          g.geom = dCreateSphere(space, rad[s]);
+          break;
+        case Shape::Capsule:
+          if (!(rad.value_or(s, 0) > 0) || !(len.value_or(s, 0) >= 0))
+            throw InputError(where, "a capsule needs a radius > 0 and a length >= 0");
+          g.geom = dCreateCapsule(space, rad[s], len.value_or(s, 0));
+          g.capsule = true;
+          break;
+      }
+      g.id = id;
+      const bool is_static = stat.value_or(s, 0);
+      dGeomSetCategoryBits(g.geom, is_static ? kStaticBit : kMovableBit);
+      dGeomSetCollideBits(g.geom, is_static ? kMovableBit : kStaticBit | kMovableBit);
+      dGeomSetData(g.geom, reinterpret_cast<void*>(std::uintptr_t(s)));
+      geom_slots.push_back(s);
+    }
+  }
+
+  void rebuild_joined(const WorldView& v) {
+    joined.clear();
+    const auto j = v.column<EnumValue>(joint);
+    const auto a = v.column<ObjectId>(body_a);
+    const auto b = v.column<ObjectId>(body_b);
+    for (std::uint32_t s : j.members()) {
+      if (!a.has(s) || !b.has(s) || a[s].is_null() || b[s].is_null()) continue;
+      joined.push_back(pair_key(a[s].index, b[s].index));
+    }
+    std::sort(joined.begin(), joined.end());
+  }
+
+  void place(const WorldView& v) {
+    const auto pos = v.column<Vec3>(position);
+    const auto rot = v.column<Quat>(orientation);
+    for (std::uint32_t s : geom_slots) {
+      Geom& g = geoms[s];
+      const Vec3 x = pos[s];
+      const Quat q = rot.value_or(s, Quat{});
+      // Unchanged parts (static ones, resting ones) keep their cached bounds.
+      if (g.placed && x == g.pos && q == g.q) continue;
+      g.placed = true, g.pos = x, g.q = q;
+      dGeomSetPosition(g.geom, x.x, x.y, x.z);
+      dQuaternion oq;
+      to_ode(g.capsule ? normalized(q) * capsule_axis_rotation() : normalized(q), oq);
+      dGeomSetQuaternion(g.geom, oq);
+    }
+  }
+
+  Vec3 point_velocity(std::uint32_t s, Vec3 p) const {
+    const Vec3 v = vel.value_or(s, {});
+    if (!angvel.has(s)) return v;
+    return v + cross(angvel[s], p - geoms[s].pos);
+  }
+
+  static void near_callback(void* data, dGeomID g1, dGeomID g2) {
+    auto& m = *static_cast<Impl*>(data);
+    auto s1 = std::uint32_t(reinterpret_cast<std::uintptr_t>(dGeomGetData(g1)));
+    auto s2 = std::uint32_t(reinterpret_cast<std::uintptr_t>(dGeomGetData(g2)));
+    // Live objects have distinct slots, so slot order is ObjectId order. Always
+    // collide a before b: the points then do not depend on the space's order.
+    if (s1 > s2) std::swap(s1, s2), std::swap(g1, g2);
+    if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
+    const int n = dCollide(g1, g2, int(m.buffer.size()), m.buffer.data(), sizeof(dContactGeom));
+    if (n <= 0) return;
+    ContactPair pair;
+    pair.a = m.geoms[s1].id;
+    pair.b = m.geoms[s2].id;
+    pair.first = std::uint32_t(m.points->size());
+    pair.count = std::uint32_t(n);
+    pair.normal_speed = -1e300;
+    for (int k = 0; k < n; ++k) {
+      const dContactGeom& c = m.buffer[std::size_t(k)];
+      const ContactPoint p{to_vec3(c.pos), to_vec3(c.normal), c.depth};
+      m.points->push_back(p);
+      pair.depth = std::max(pair.depth, p.depth);
+      const double closing = dot(m.point_velocity(s2, p.position) - m.point_velocity(s1, p.position), p.normal);
+      pair.normal_speed = std::max(pair.normal_speed, closing);
+    }
+    m.pairs->push_back(pair);
+  }
+
+  dSpaceID space = nullptr;
+  std::vector<Geom> geoms;  // by slot
+  std::vector<std::uint32_t> geom_slots;
+  std::vector<std::uint64_t> joined;  // slot pairs held by a joint, sorted
+  std::vector<dContactGeom> buffer;
+  bool geoms_dirty = true, joints_dirty = true;
+
+  bool have_ids = false;
+  PropertyId position{}, orientation{}, velocity{}, angular_velocity{}, shape{}, size{}, radius{}, length{},
+      static_{}, joint{}, body_a{}, body_b{};
+  std::vector<const ColumnBase*> shape_columns, joint_columns;
+  std::vector<std::uint64_t> shape_seen, joint_seen;
+
+  // Valid during one update's dSpaceCollide.
+  ColumnView<Vec3> vel, angvel;
+  std::vector<ContactPair>* pairs = nullptr;
+  std::vector<ContactPoint>* points = nullptr;
+};
+
+CollisionSet::CollisionSet(const RigidBodyResolver& rigid, int max_contacts)
+    : rigid_(rigid), impl_(std::make_unique<Impl>(max_contacts)) {}
+
+CollisionSet::~CollisionSet() = default;
+
+void CollisionSet::on_structure_changed(const WorldView&) {
+  impl_->geoms_dirty = true;
+  impl_->joints_dirty = true;
+}
+
+const ContactPair* CollisionSet::find(ObjectId a, ObjectId b) const {
+  if (b < a) std::swap(a, b);
+  ContactPair key;
+  key.a = a, key.b = b;
+  auto it = std::lower_bound(current_.begin(), current_.end(), key, by_pair);
+  return it != current_.end() && it->a == a && it->b == b ? &*it : nullptr;
+}
+
+void CollisionSet::update(const WorldView& world) {
+  ensure_ode();
+  Impl& m = *impl_;
+  m.resolve_ids(world);
+  if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
+    m.rebuild_geoms(world);
+    m.geoms_dirty = false;
+  }
+  if (Impl::changed(m.joint_columns, m.joint_seen) || m.joints_dirty) {
+    m.rebuild_joined(world);
+    m.joints_dirty = false;
+  }
+  m.place(world);
+
+  // Narrow phase into current_, then sort: ODE's pair order is not ours to rely on.
+  std::swap(previous_, current_);
+  current_.clear();
+  points_.clear();
+  m.vel = world.column<Vec3>(m.velocity);
+  m.angvel = world.column<Vec3>(m.angular_velocity);
+  m.pairs = &current_;
+  m.points = &points_;
+  dSpaceCollide(m.space, &m, &Impl::near_callback);
+  std::sort(current_.begin(), current_.end(), by_pair);
+
+  // The rigid body's impulses are for the pairs it was given, i.e. those that
+  // touched at the previous update: merge them in by pair.
+  const auto impulses = rigid_.impulses();
+  // A merge cursor over the impulses, for one ascending pass over pairs.
+  auto impulse_cursor = [&] {
+    return [&, k = std::size_t(0)](ContactPair& p) mutable {
+      while (k < impulses.size() && pair_less(impulses[k].a, impulses[k].b, p.a, p.b)) ++k;
+      if (k < impulses.size() && impulses[k].a == p.a && impulses[k].b == p.b) {
+        p.impulse = impulses[k].impulse;
+        p.normal_impulse = impulses[k].normal_impulse;
+        p.total_impulse += p.normal_impulse;
+      }
+    };
+  };
+  auto take_impulse = impulse_cursor();
+
+  // began / ongoing / ended by a merge of two sorted lists.
+  began_.clear(), ongoing_.clear(), ended_.clear();
+  const std::uint64_t step = world.step();
+  std::size_t i = 0, j = 0;
+  while (i < current_.size() || j < previous_.size()) {
+    const bool take_new = j == previous_.size() ||
+                          (i < current_.size() && !by_pair(previous_[j], current_[i]));
+    const bool take_old = i == current_.size() ||
+                          (j < previous_.size() && !by_pair(current_[i], previous_[j]));
+    if (take_new && take_old) {  // the same pair: ongoing
+      ContactPair& p = current_[i++];
+      p.began_step = previous_[j].began_step;
+      p.total_impulse = previous_[j++].total_impulse;
+      take_impulse(p);
+      ongoing_.push_back(p);
+    } else if (take_new) {
+      ContactPair& p = current_[i++];
+      p.began_step = step;
+      take_impulse(p);
+      began_.push_back(p);
+    } else {
+      ContactPair p = previous_[j++];
+      p.first = p.count = 0;
+      p.impulse = {};
+      p.normal_impulse = 0;
+      ended_.push_back(p);
+    }
+  }
+  // Impulses of ended pairs (their last push apart), in a second ordered pass.
+  auto take_ended = impulse_cursor();
+  for (ContactPair& p : ended_) take_ended(p);
+
+  for (const ContactPair& p : began_) {
+    Event e;
+    e.type = "contact_began";
+    e.a = p.a, e.b = p.b;
+    e.values = {{"speed", p.normal_speed}, {"depth", p.depth}};
+    world.emit(std::move(e));
+  }
+  for (const ContactPair& p : ended_) {
+    Event e;
+    e.type = "contact_ended";
+    e.a = p.a, e.b = p.b;
+    e.values = {{"impulse", p.total_impulse}, {"duration", double(step - p.began_step) * world.dt()}};
+    world.emit(std::move(e));
+  }
+  step_ = step;
+}
+
+}  // namespace alloy::rigid

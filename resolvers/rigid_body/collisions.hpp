@@ -1,0 +1,80 @@
+// The `collisions` derived property set (paper 3.3): which parts touch, from
+// their positions and shapes alone, with ODE's collision detection in a space
+// of its own (the rigid body's bodies are never touched).
+//
+// Reads    position, orientation, velocity, angular_velocity, shape, size,
+//          radius, length, static; joint, body_a, body_b (joined parts do not
+//          collide); the rigid body's published impulses.
+// Provides for the step of its last update, each list sorted by (a, b):
+//          began    pairs that touch now and did not at the last update
+//          ongoing  pairs that touched then and still do
+//          ended    pairs that touched then and do not now
+//          with contact points, normals, depths, the approach speed, and the
+//          impulse the rigid body applied to the pair in its last advance.
+// Emits    contact_began {speed, depth} and contact_ended {impulse, duration}.
+//
+// Pairs of two static parts are never tested (floor against wall).
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "resolvers/rigid_body/contact.hpp"
+#include "runtime/stage.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::rigid {
+
+class RigidBodyResolver;
+
+/// Two parts in contact (or, in ended(), no longer in contact).
+struct ContactPair {
+  ObjectId a, b;  ///< a < b
+  /// Points [first, first + count) of CollisionSet::points(); count is 0 for ended pairs.
+  std::uint32_t first = 0, count = 0;
+  /// Approach speed along the normal, m/s: > 0 when the parts close in. The
+  /// largest over the pair's points; at `began`, the impact speed.
+  double normal_speed = 0;
+  double depth = 0;  ///< deepest penetration, m
+  /// Impulse the rigid body applied to this pair in its last advance (on a, N*s).
+  Vec3 impulse;
+  double normal_impulse = 0;  ///< its normal part, N*s
+  /// Normal impulse summed over every advance since the pair began, N*s.
+  double total_impulse = 0;
+  std::uint64_t began_step = 0;  ///< world step at which the pair began
+};
+
+class CollisionSet final : public DerivedSet {
+ public:
+  CollisionSet(const RigidBodyResolver& rigid, int max_contacts);
+  ~CollisionSet() override;
+
+  void update(const WorldView& world) override;
+  void on_structure_changed(const WorldView& world) override;
+
+  std::span<const ContactPair> began() const { return began_; }
+  std::span<const ContactPair> ongoing() const { return ongoing_; }
+  std::span<const ContactPair> ended() const { return ended_; }
+  /// The contact points of began and ongoing pairs.
+  std::span<const ContactPoint> points() const { return points_; }
+  std::span<const ContactPoint> points(const ContactPair& p) const {
+    return std::span<const ContactPoint>(points_).subspan(p.first, p.count);
+  }
+  /// The world step of the last update: began() and ended() are about that
+  /// step (the set is skipped, and keeps its lists, while nothing moves).
+  std::uint64_t step() const { return step_; }
+  /// Whether a and b touch (in either order), and the pair if so.
+  const ContactPair* find(ObjectId a, ObjectId b) const;
+
+ private:
+  struct Impl;
+  const RigidBodyResolver& rigid_;
+  std::unique_ptr<Impl> impl_;
+  std::vector<ContactPair> began_, ongoing_, ended_;
+  std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; scratch for the merge
+  std::vector<ContactPoint> points_;
+  std::uint64_t step_ = 0;
+};
+
+}  // namespace alloy::rigid

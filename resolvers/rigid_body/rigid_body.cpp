@@ -1,0 +1,721 @@
+#include "resolvers/rigid_body/rigid_body.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "resolvers/rigid_body/ode_support.hpp"
+#include "resolvers/rigid_body/properties.hpp"
+
+namespace alloy::rigid {
+
+namespace {
+
+/// The angle of rotation q about the unit axis (the twist of a swing-twist
+/// decomposition), wrapped to (-pi, pi].
+double twist_angle(Quat q, Vec3 axis) {
+  double a = 2.0 * std::atan2(q.x * axis.x + q.y * axis.y + q.z * axis.z, q.w);
+  constexpr double pi = std::numbers::pi;
+  if (a > pi) a -= 2 * pi;
+  if (a <= -pi) a += 2 * pi;
+  return a;
+}
+
+}  // namespace
+
+// --- settings -------------------------------------------------------------------------
+
+const std::vector<std::string>& RigidBodyConfig::keys() {
+  static const std::vector<std::string> k = {"solver", "iterations", "sor", "erp", "cfm",
+                                             "max_contacts", "surface_layer", "max_correcting_velocity"};
+  return k;
+}
+
+RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
+  s.check_known("rigid_body", keys());
+  RigidBodyConfig c;
+  const std::string solver = s.string("solver", "quick");
+  if (solver == "quick") c.solver = Solver::Quick;
+  else if (solver == "step") c.solver = Solver::Step;
+  else throw InputError(s.where, "rigid_body: solver must be \"quick\" or \"step\", got \"" + solver + "\"");
+  auto bad = [&](const char* what) { throw InputError(s.where, std::string("rigid_body: ") + what); };
+  c.iterations = int(s.integer("iterations", c.iterations));
+  if (c.iterations < 1 || c.iterations > 10000) bad("iterations must be between 1 and 10000");
+  c.sor = s.number("sor", c.sor);
+  if (!(c.sor > 0 && c.sor < 2)) bad("sor must be in (0, 2)");
+  c.erp = s.number("erp", c.erp);
+  if (!(c.erp >= 0 && c.erp <= 1)) bad("erp must be in [0, 1]");
+  c.cfm = s.number("cfm", c.cfm);
+  if (!(c.cfm >= 0 && c.cfm < 1)) bad("cfm must be in [0, 1)");
+  c.max_contacts = int(s.integer("max_contacts", c.max_contacts));
+  if (c.max_contacts < 1 || c.max_contacts > 64) bad("max_contacts must be between 1 and 64");
+  c.surface_layer = s.number("surface_layer", c.surface_layer);
+  if (!(c.surface_layer >= 0 && c.surface_layer < 1)) bad("surface_layer must be in [0, 1) m");
+  c.max_correcting_velocity = s.number("max_correcting_velocity", c.max_correcting_velocity);
+  if (!(c.max_correcting_velocity > 0)) bad("max_correcting_velocity must be > 0");
+  return c;
+}
+
+// --- the ODE side ----------------------------------------------------------------------
+
+struct RigidBodyResolver::Impl {
+  /// An object simulated as (part of) an ODE body. Parts glued by fixed joints
+  /// share one body: ODE then solves one rigid body instead of a stiff chain of
+  /// fixed joints that sags under load, costs solver rows and drifts apart with
+  /// QuickStep. The assembly's mass and inertia are the sum of its parts'.
+  struct Part {
+    ObjectId id;
+    std::uint32_t body = 0;
+    Vec3 offset;         ///< the part's centre of mass in the body frame
+    Quat rot;            ///< the part's orientation relative to the body frame
+    bool identity = true;  ///< a body of one part: the part's frame is the body's
+    // Values last written, to tell our own writes from edits made between steps.
+    Vec3 pos, vel, angvel;
+    Quat q;
+  };
+  struct Body {
+    dBodyID id = nullptr;
+    std::uint32_t first_part = 0, part_count = 0;
+    bool kinematic = false;  ///< pinned, or glued to the play area or a static part
+    bool planar = false;
+    bool moved = false;      ///< a kinematic body teleported by an edit: write its parts
+    double linear_damping = 0, angular_damping = 0;  ///< 1/s
+  };
+  struct Hinge {
+    ObjectId id;
+    dJointID joint = nullptr;
+    bool to_world = false;  ///< body 2 is the play area: the anchor side to report is ODE's anchor 2
+  };
+  /// A contact pair turned into joints in this advance.
+  struct PairRecord {
+    std::uint32_t command;
+    std::uint32_t first_feedback, count;
+    bool swapped;  ///< b's body was attached first: ODE's force 1 acts on b
+  };
+
+  struct Ids {
+    PropertyId position, orientation, velocity, angular_velocity, mass, density, shape, size, radius,
+        length, static_, pinned, planar, linear_damping, angular_damping, joint, body_a, body_b, anchor,
+        axis, joint_friction, limit_low, limit_high;
+  };
+
+  explicit Impl(const RigidBodyConfig& c) : config(c) { ensure_ode(); }
+  ~Impl() { destroy_world(); }
+
+  void create_world() {
+    world = dWorldCreate();
+    // Gravity is not ODE's business: the gravity resolvers compute it per body
+    // and rigid_body_from_gravity queues it as a force (paper 3, section 4.1.3).
+    dWorldSetGravity(world, 0, 0, 0);
+    dWorldSetERP(world, config.erp);
+    dWorldSetCFM(world, config.cfm);
+    dWorldSetQuickStepNumIterations(world, config.iterations);
+    dWorldSetQuickStepW(world, config.sor);
+    dWorldSetContactSurfaceLayer(world, config.surface_layer);
+    dWorldSetContactMaxCorrectingVel(world, config.max_correcting_velocity);
+    dWorldSetAutoDisableFlag(world, 0);
+    contact_group = dJointGroupCreate(0);
+  }
+  void destroy_world() {
+    if (contact_group) dJointGroupDestroy(contact_group);
+    if (world) dWorldDestroy(world);  // destroys every body and joint in it
+    contact_group = nullptr;
+    world = nullptr;
+    bodies.clear();
+    parts.clear();
+    hinges.clear();
+    std::fill(part_of_slot.begin(), part_of_slot.end(), -1);
+  }
+
+  void resolve_ids(const WorldView& v) {
+    if (have_ids) return;
+    id = {v.property("position"), v.property("orientation"), v.property("velocity"),
+          v.property("angular_velocity"), v.property("mass"), v.property("density"),
+          v.property("shape"), v.property("size"), v.property("radius"), v.property("length"),
+          v.property("static"), v.property("pinned"), v.property("planar"),
+          v.property("linear_damping"), v.property("angular_damping"), v.property("joint"),
+          v.property("body_a"), v.property("body_b"), v.property("anchor"), v.property("axis"),
+          v.property("joint_friction"), v.property("limit_low"), v.property("limit_high")};
+    // Columns whose edit means "the bodies are different now": rebuild.
+    for (PropertyId p : {id.mass, id.density, id.shape, id.size, id.radius, id.length, id.static_,
+                         id.pinned, id.planar, id.linear_damping, id.angular_damping, id.joint,
+                         id.body_a, id.body_b, id.anchor, id.axis, id.joint_friction, id.limit_low,
+                         id.limit_high})
+      defining.push_back(&v.store().column(p));
+    pose_columns = {&v.store().column(id.position), &v.store().column(id.orientation),
+                    &v.store().column(id.velocity), &v.store().column(id.angular_velocity)};
+    have_ids = true;
+  }
+
+  bool defining_changed() const {
+    for (std::size_t i = 0; i < defining.size(); ++i)
+      if (defining[i]->version() != defining_seen[i]) return true;
+    return false;
+  }
+  void snapshot_versions() {
+    defining_seen.resize(defining.size());
+    for (std::size_t i = 0; i < defining.size(); ++i) defining_seen[i] = defining[i]->version();
+    for (std::size_t i = 0; i < 4; ++i) pose_seen[i] = pose_columns[i]->version();
+  }
+
+  void rebuild(ResolverAccess& access);
+  void apply_edits(ResolverAccess& access);
+  void write_poses(ResolverAccess& access, bool all);
+  void write_hinges(ResolverAccess& access);
+  void fix_planar();
+
+  /// The body index of the part in `slot` if it is the live object `id`, else -1.
+  std::int32_t body_of(ObjectId obj) const {
+    if (obj.index >= part_of_slot.size()) return -1;
+    const std::int32_t p = part_of_slot[obj.index];
+    if (p < 0 || parts[p].id != obj) return -1;
+    return std::int32_t(parts[p].body);
+  }
+
+  RigidBodyConfig config;
+  dWorldID world = nullptr;
+  dJointGroupID contact_group = nullptr;
+  std::vector<Body> bodies;
+  std::vector<Part> parts;                 // grouped by body, each body's parts in slot order
+  std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, or -1
+  std::vector<Hinge> hinges;
+  std::vector<dJointFeedback> feedback;
+  std::vector<PairRecord> records;
+  double damping_dt = 0;
+  bool dirty = true;
+
+  bool have_ids = false;
+  Ids id{};
+  std::vector<const ColumnBase*> defining;
+  std::vector<std::uint64_t> defining_seen;
+  std::array<const ColumnBase*, 4> pose_columns{};
+  std::array<std::uint64_t, 4> pose_seen{};
+};
+
+void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
+  destroy_world();
+  create_world();
+  damping_dt = 0;
+
+  const PropertyStore& store = access.store();
+  const auto position = access.column<Vec3>(id.position);
+  const auto orientation = access.column<Quat>(id.orientation);
+  const auto velocity = access.column<Vec3>(id.velocity);
+  const auto angular_velocity = access.column<Vec3>(id.angular_velocity);
+  const auto mass = access.column<double>(id.mass);
+  const auto density = access.column<double>(id.density);
+  const auto shape = access.column<EnumValue>(id.shape);
+  const auto size = access.column<Vec3>(id.size);
+  const auto radius = access.column<double>(id.radius);
+  const auto length = access.column<double>(id.length);
+  const auto is_static = access.column<std::uint8_t>(id.static_);
+  const auto pinned = access.column<std::uint8_t>(id.pinned);
+  const auto planar = access.column<std::uint8_t>(id.planar);
+  const auto linear_damping = access.column<double>(id.linear_damping);
+  const auto angular_damping = access.column<double>(id.angular_damping);
+  const auto joint = access.column<EnumValue>(id.joint);
+  const auto body_a = access.column<ObjectId>(id.body_a);
+  const auto body_b = access.column<ObjectId>(id.body_b);
+  const auto anchor = access.column<Vec3>(id.anchor);
+  const auto axis = access.column<Vec3>(id.axis);
+  const auto joint_friction = access.column<double>(id.joint_friction);
+  const auto limit_low = access.column<double>(id.limit_low);
+  const auto limit_high = access.column<double>(id.limit_high);
+  auto mass_out = access.writer<double>(id.mass);
+  auto anchor_out = access.writer<Vec3>(id.anchor);
+  auto axis_out = access.writer<Vec3>(id.axis);
+
+  const std::size_t slots = store.slot_count();
+  part_of_slot.assign(slots, -1);
+
+  // 1. Candidate parts: every live object with mass or density that is not static.
+  struct Candidate {
+    std::uint32_t slot;
+    double mass;
+    dMass local;  // about the part's centre of mass, in the part's frame
+    Vec3 x;
+    Quat q;
+  };
+  std::vector<Candidate> cand;
+  std::vector<std::int32_t> cand_of_slot(slots, -1);
+  for (std::uint32_t s = 0; s < slots; ++s) {
+    const ObjectId obj = store.id_at(s);
+    if (obj.is_null() || !(mass.has(s) || density.has(s)) || is_static.value_or(s, 0)) continue;
+    const ErrorLocation where{"", 0, store.describe(obj)};
+    if (!shape.has(s)) throw InputError(where, "it has mass but no shape: give it shape = box, sphere or capsule");
+    const auto sh = Shape(shape[s].index);
+    const Vec3 sz = size.value_or(s, {});
+    const double r = radius.value_or(s, 0), len = length.value_or(s, 0);
+    switch (sh) {
+      case Shape::Box:
+        if (!(sz.x > 0 && sz.y > 0 && sz.z > 0)) throw InputError(where, "a box needs a size with every extent > 0");
+        break;
+      case Shape::Sphere:
+        if (!(r > 0)) throw InputError(where, "a sphere needs a radius > 0");
+        break;
+      case Shape::Capsule:
+        if (!(r > 0) || !(len >= 0)) throw InputError(where, "a capsule needs a radius > 0 and a length >= 0");
+        break;
+    }
+    double m;
+    if (density.has(s)) {
+      // Density, when given, decides: mass follows the shape when it is resized.
+      m = density[s] * shape_volume(sh, sz, r, len);
+      if (!(m > 0)) throw InputError(where, "density must be > 0");
+      mass_out.set(s, m);
+    } else {
+      m = mass[s];
+      if (!(m > 0)) throw InputError(where, "mass must be > 0, got " + std::to_string(m));
+    }
+    dMass local;
+    switch (sh) {
+      case Shape::Box: dMassSetBoxTotal(&local, m, sz.x, sz.y, sz.z); break;
+      case Shape::Sphere: dMassSetSphereTotal(&local, m, r); break;
+      case Shape::Capsule: dMassSetCapsuleTotal(&local, m, 1 /* along x */, r, len); break;
+    }
+    cand_of_slot[s] = std::int32_t(cand.size());
+    cand.push_back({s, m, local, position.value_or(s, {}), normalized(orientation.value_or(s, Quat{}))});
+  }
+
+  // 2. Joints: fixed joints unite parts into assemblies; hinges are made below.
+  std::vector<std::int32_t> parent(cand.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = std::int32_t(i);
+  auto find = [&](std::int32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::vector<std::uint8_t> glued_to_world(cand.size(), 0);
+  struct PendingHinge {
+    std::uint32_t slot;
+    std::int32_t a, b;  // candidate indices, -1: the play area
+  };
+  std::vector<PendingHinge> pending;
+  constexpr std::int32_t kWorld = -1, kGone = -2;
+  for (std::uint32_t s : joint.members()) {
+    const ObjectId jid = store.id_at(s);
+    const ErrorLocation where{"", 0, store.describe(jid)};
+    auto ref = [&](const ColumnView<ObjectId>& col, const char* name) -> std::int32_t {
+      if (!col.has(s) || col[s].is_null()) return kWorld;
+      const ObjectId o = col[s];
+      if (!store.alive(o)) return kGone;  // the part was destroyed: the joint holds nothing
+      if (cand_of_slot[o.index] >= 0) return cand_of_slot[o.index];
+      if (is_static.value_or(o.index, 0)) return kWorld;
+      throw InputError(where, std::string(name) + " is '" + store.describe(o) +
+                                  "', which is neither a rigid body (mass or density) nor static");
+    };
+    if (!body_a.has(s)) throw InputError(where, "a joint needs body_a");
+    std::int32_t a = ref(body_a, "body_a"), b = ref(body_b, "body_b");
+    if (a == kGone || b == kGone || (a == kWorld && b == kWorld)) continue;
+    if (JointType(joint[s].index) == JointType::Fixed) {
+      if (a >= 0 && b >= 0) parent[find(a)] = find(b);
+      else glued_to_world[a >= 0 ? a : b] = 1;
+    } else {
+      pending.push_back({s, a, b});
+    }
+  }
+
+  // 3. One ODE body per assembly, in order of the assembly's first part.
+  std::vector<std::int32_t> body_of_root(cand.size(), -1), body_of_cand(cand.size());
+  std::vector<std::vector<std::int32_t>> members;
+  for (std::size_t i = 0; i < cand.size(); ++i) {
+    const std::int32_t r = find(std::int32_t(i));
+    if (body_of_root[r] < 0) {
+      body_of_root[r] = std::int32_t(members.size());
+      members.emplace_back();
+    }
+    body_of_cand[i] = body_of_root[r];
+    members[body_of_root[r]].push_back(std::int32_t(i));
+  }
+  bodies.reserve(members.size());
+  parts.reserve(cand.size());
+  for (std::size_t bi = 0; bi < members.size(); ++bi) {
+    const auto& mem = members[bi];
+    const Candidate& root = cand[mem.front()];
+    Body body;
+    body.first_part = std::uint32_t(parts.size());
+    body.part_count = std::uint32_t(mem.size());
+    // The body frame is the first part's orientation at its centre of mass.
+    const Quat qb = root.q;
+    Vec3 com = root.x;
+    dMass total = root.local;
+    if (mem.size() > 1) {
+      double m_sum = 0;
+      Vec3 mx{};
+      for (std::int32_t i : mem) m_sum += cand[i].mass, mx += cand[i].mass * cand[i].x;
+      com = mx / m_sum;
+      dMassSetZero(&total);
+    }
+    for (std::int32_t i : mem) {
+      const Candidate& c = cand[i];
+      Part p;
+      p.id = store.id_at(c.slot);
+      p.body = std::uint32_t(bi);
+      if (mem.size() > 1) {
+        p.identity = false;
+        p.rot = normalized(conjugate(qb) * c.q);
+        p.offset = rotate(conjugate(qb), c.x - com);
+        dMass m = c.local;
+        dQuaternion q;
+        dMatrix3 R;
+        to_ode(p.rot, q);
+        dQtoR(q, R);
+        dMassRotate(&m, R);
+        dMassTranslate(&m, p.offset.x, p.offset.y, p.offset.z);
+        dMassAdd(&total, &m);
+      }
+      body.kinematic = body.kinematic || pinned.value_or(c.slot, 0) || glued_to_world[i];
+      body.planar = body.planar || planar.value_or(c.slot, 0);
+      body.linear_damping = std::max(body.linear_damping, linear_damping.value_or(c.slot, 0));
+      body.angular_damping = std::max(body.angular_damping, angular_damping.value_or(c.slot, 0));
+      part_of_slot[c.slot] = std::int32_t(parts.size());
+      parts.push_back(p);
+    }
+    // The parts' centres of mass were measured from the assembly's, so the
+    // residual is rounding; ODE wants it exactly at the body origin.
+    total.c[0] = total.c[1] = total.c[2] = 0;
+
+    body.id = dBodyCreate(world);
+    dBodySetMass(body.id, &total);
+    dBodySetPosition(body.id, com.x, com.y, com.z);
+    dQuaternion q;
+    to_ode(qb, q);
+    dBodySetQuaternion(body.id, q);
+    if (body.kinematic) {
+      dBodySetKinematic(body.id);
+    } else {
+      // An assembly moves as its first part does.
+      const Vec3 w = angular_velocity.value_or(root.slot, {});
+      const Vec3 v = velocity.value_or(root.slot, {}) + cross(w, com - root.x);
+      dBodySetLinearVel(body.id, v.x, v.y, v.z);
+      dBodySetAngularVel(body.id, w.x, w.y, w.z);
+      // Exact rotation for a constant angular velocity: the infinitesimal
+      // default loses 1e-5 rad per second at 2 rad/s, more for a motor's rotor.
+      dBodySetFiniteRotationMode(body.id, 1);
+      dBodySetDampingDefaults(body.id);
+      dBodySetLinearDampingThreshold(body.id, 0);
+      dBodySetAngularDampingThreshold(body.id, 0);
+      if (body.planar) {
+        dJointID plane = dJointCreatePlane2D(world, 0);
+        dJointAttach(plane, body.id, nullptr);
+      }
+    }
+    bodies.push_back(body);
+  }
+
+  // 4. Hinges. The angle is that of body_a relative to body_b about the axis,
+  // zero when their orientations are equal: a convention that depends on
+  // properties alone, so that limits survive a rebuild or a swap of resolver.
+  hinges.reserve(pending.size());
+  for (const PendingHinge& h : pending) {
+    const std::int32_t ba = h.a >= 0 ? body_of_cand[h.a] : -1, bb = h.b >= 0 ? body_of_cand[h.b] : -1;
+    if (ba == bb) continue;  // both in one assembly: already rigid
+    const ObjectId jid = store.id_at(h.slot);
+    const ErrorLocation where{"", 0, store.describe(jid)};
+    const Vec3 pivot = anchor.has(h.slot) ? anchor[h.slot] : cand[h.a >= 0 ? h.a : h.b].x;
+    Vec3 ax = axis.value_or(h.slot, {0, 0, 1});
+    const double len = ::alloy::length(ax);
+    if (!(len > 1e-12)) throw InputError(where, "a hinge axis must not be zero");
+    ax = ax / len;
+    const Quat qa = h.a >= 0 ? cand[h.a].q : Quat{}, qbb = h.b >= 0 ? cand[h.b].q : Quat{};
+    double angle = twist_angle(qa * conjugate(qbb), ax);
+    double lo = limit_low.value_or(h.slot, -dInfinity), hi = limit_high.value_or(h.slot, dInfinity);
+    if (lo > hi) throw InputError(where, "limit_low must not exceed limit_high");
+    // ODE wants a body first; when body_a is the play area the joint is seen
+    // from body_b, and angle and limits change sign.
+    const bool swapped = ba < 0;
+    if (swapped) angle = -angle, std::swap(lo, hi), lo = -lo, hi = -hi;
+    dBodyID b1 = bodies[swapped ? bb : ba].id;
+    dBodyID b2 = swapped ? nullptr : (bb >= 0 ? bodies[bb].id : nullptr);
+    dJointID j = dJointCreateHinge(world, 0);
+    dJointAttach(j, b1, b2);
+    dJointSetHingeAnchor(j, pivot.x, pivot.y, pivot.z);
+    const Vec3 ode_axis = ax;
+    dJointSetHingeAxisOffset(j, ode_axis.x, ode_axis.y, ode_axis.z, angle);
+    if (hi < dInfinity) dJointSetHingeParam(j, dParamHiStop, hi);
+    if (lo > -dInfinity) dJointSetHingeParam(j, dParamLoStop, lo);
+    const double friction = joint_friction.value_or(h.slot, 0);
+    if (friction > 0) {
+      // A motor that wants zero relative speed, with at most `friction` of
+      // torque: Coulomb friction in the pivot.
+      dJointSetHingeParam(j, dParamVel, 0);
+      dJointSetHingeParam(j, dParamFMax, friction);
+    }
+    hinges.push_back({jid, j, b2 == nullptr});
+    if (!anchor.has(h.slot)) anchor_out.set(h.slot, pivot);
+    if (!axis.has(h.slot)) axis_out.set(h.slot, ax);
+  }
+
+  write_poses(access, true);
+  dirty = false;
+}
+
+void RigidBodyResolver::Impl::write_poses(ResolverAccess& access, bool all) {
+  auto position = access.writer<Vec3>(id.position);
+  auto orientation = access.writer<Quat>(id.orientation);
+  auto velocity = access.writer<Vec3>(id.velocity);
+  auto angular_velocity = access.writer<Vec3>(id.angular_velocity);
+  for (Body& b : bodies) {
+    if (b.kinematic && !all && !b.moved) continue;  // pinned parts do not move
+    b.moved = false;
+    const Vec3 x = to_vec3(dBodyGetPosition(b.id));
+    const Quat q = to_quat(dBodyGetQuaternion(b.id));
+    const Vec3 v = b.kinematic ? Vec3{} : to_vec3(dBodyGetLinearVel(b.id));
+    const Vec3 w = b.kinematic ? Vec3{} : to_vec3(dBodyGetAngularVel(b.id));
+    for (std::uint32_t i = b.first_part; i < b.first_part + b.part_count; ++i) {
+      Part& p = parts[i];
+      if (p.identity) {
+        p.pos = x, p.q = q, p.vel = v;
+      } else {
+        const Vec3 r = rotate(q, p.offset);
+        p.pos = x + r, p.q = q * p.rot, p.vel = v + cross(w, r);
+      }
+      p.angvel = w;
+      const std::uint32_t s = p.id.index;
+      position.set(s, p.pos);
+      orientation.set(s, p.q);
+      velocity.set(s, p.vel);
+      angular_velocity.set(s, p.angvel);
+    }
+  }
+}
+
+void RigidBodyResolver::Impl::write_hinges(ResolverAccess& access) {
+  if (hinges.empty()) return;
+  auto anchor = access.writer<Vec3>(id.anchor);
+  auto axis = access.writer<Vec3>(id.axis);
+  for (const Hinge& h : hinges) {
+    dVector3 p, a;
+    // A pivot in the play area stays where the play area holds it.
+    if (h.to_world) dJointGetHingeAnchor2(h.joint, p);
+    else dJointGetHingeAnchor(h.joint, p);
+    dJointGetHingeAxis(h.joint, a);
+    anchor.set(h.id.index, to_vec3(p));
+    axis.set(h.id.index, to_vec3(a));
+  }
+}
+
+void RigidBodyResolver::Impl::apply_edits(ResolverAccess& access) {
+  bool changed[4];
+  bool any = false;
+  for (int i = 0; i < 4; ++i) any |= changed[i] = pose_columns[i]->version() != pose_seen[i];
+  if (!any) return;
+  const auto position = access.column<Vec3>(id.position);
+  const auto orientation = access.column<Quat>(id.orientation);
+  const auto velocity = access.column<Vec3>(id.velocity);
+  const auto angular_velocity = access.column<Vec3>(id.angular_velocity);
+  for (Part& p : parts) {
+    const std::uint32_t s = p.id.index;
+    const bool dp = changed[0] && !(position.value_or(s, p.pos) == p.pos);
+    const bool dq = changed[1] && !(orientation.value_or(s, p.q) == p.q);
+    const bool dv = changed[2] && !(velocity.value_or(s, p.vel) == p.vel);
+    const bool dw = changed[3] && !(angular_velocity.value_or(s, p.angvel) == p.angvel);
+    if (!(dp || dq || dv || dw)) continue;
+    Body& b = bodies[p.body];
+    if (dp || dq) {
+      // Teleport: the part goes where it was put, its assembly with it.
+      const Quat qp = dq ? normalized(orientation[s]) : p.q;
+      const Vec3 xp = dp ? position[s] : p.pos;
+      const Quat qb = p.identity ? qp : normalized(qp * conjugate(p.rot));
+      const Vec3 x = p.identity ? xp : xp - rotate(qb, p.offset);
+      dQuaternion q;
+      to_ode(qb, q);
+      dBodySetPosition(b.id, x.x, x.y, x.z);
+      dBodySetQuaternion(b.id, q);
+      b.moved = true;
+    }
+    if ((dv || dw) && !b.kinematic) {
+      const Vec3 w = dw ? angular_velocity[s] : to_vec3(dBodyGetAngularVel(b.id));
+      const Vec3 vp = dv ? velocity[s] : p.vel;
+      Vec3 v = vp;
+      if (!p.identity) v = vp - cross(w, rotate(to_quat(dBodyGetQuaternion(b.id)), p.offset));
+      dBodySetLinearVel(b.id, v.x, v.y, v.z);
+      dBodySetAngularVel(b.id, w.x, w.y, w.z);
+    }
+    dBodyEnable(b.id);
+  }
+}
+
+void RigidBodyResolver::Impl::fix_planar() {
+  // Plane2D constrains velocities; rounding still tilts the rotation a little
+  // each step. Project it back onto rotations about z (as ODE's demo_plane2d does).
+  for (const Body& b : bodies) {
+    if (!b.planar || b.kinematic) continue;
+    const dReal* q = dBodyGetQuaternion(b.id);
+    const double n = std::hypot(q[0], q[3]);
+    if (q[1] == 0 && q[2] == 0 && n == 1) continue;
+    const dQuaternion fixed = {q[0] / n, 0, 0, q[3] / n};
+    dBodySetQuaternion(b.id, fixed);
+    const dReal* w = dBodyGetAngularVel(b.id);
+    dBodySetAngularVel(b.id, 0, 0, w[2]);
+  }
+}
+
+// --- the resolver -------------------------------------------------------------------------
+
+RigidBodyResolver::RigidBodyResolver(const World& world, RigidBodyConfig config)
+    : store_(world.store()), config_(config), impl_(std::make_unique<Impl>(config)) {}
+
+RigidBodyResolver::~RigidBodyResolver() = default;
+
+std::size_t RigidBodyResolver::body_count() const { return impl_->bodies.size(); }
+std::size_t RigidBodyResolver::joint_count() const { return impl_->hinges.size(); }
+
+void RigidBodyResolver::build(ResolverAccess& access) {
+  ensure_ode();
+  Impl& m = *impl_;
+  m.resolve_ids(access);
+  try {
+    m.rebuild(access);
+  } catch (...) {
+    // Nothing half-built survives; the next advance tries again (and reports again).
+    m.destroy_world();
+    m.dirty = true;
+    throw;
+  }
+  ++rebuilds_;
+  m.snapshot_versions();
+}
+
+void RigidBodyResolver::queue(ObjectId part, Vec3 value, Vec3 point, Load kind) {
+  store_.check_alive(part);
+  forces_.push_back({part.index, part.generation, value, point, kind});
+}
+
+void RigidBodyResolver::add_force(ObjectId part, Vec3 force) { queue(part, force, {}, Load::Force); }
+void RigidBodyResolver::add_force(ObjectId part, Vec3 force, Vec3 point) {
+  queue(part, force, point, Load::ForceAtPoint);
+}
+void RigidBodyResolver::add_torque(ObjectId part, Vec3 torque) { queue(part, torque, {}, Load::Torque); }
+
+void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const ContactPoint> points) {
+  ContactCommand c = pair;
+  c.first = std::uint32_t(contact_points_.size());
+  c.count = std::uint32_t(points.size());
+  contact_points_.insert(contact_points_.end(), points.begin(), points.end());
+  contacts_.push_back(c);
+}
+
+void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
+  ensure_ode();
+  Impl& m = *impl_;
+  m.resolve_ids(access);
+  if (m.dirty || m.defining_changed()) build(access);
+  m.apply_edits(access);
+
+  if (dt != m.damping_dt) {
+    // Damping in SI (dv/dt = -c v) as ODE's per-step scale: v *= 1 - scale.
+    for (const auto& b : m.bodies) {
+      if (b.kinematic) continue;
+      dBodySetLinearDamping(b.id, 1 - std::exp(-b.linear_damping * dt));
+      dBodySetAngularDamping(b.id, 1 - std::exp(-b.angular_damping * dt));
+    }
+    m.damping_dt = dt;
+  }
+
+  // 1. Loads queued by interactions.
+  for (const LoadCommand& c : forces_) {
+    if (c.slot >= m.part_of_slot.size()) continue;
+    const std::int32_t pi = m.part_of_slot[c.slot];
+    if (pi < 0) continue;  // not a body (static, or not a rigid part)
+    const Impl::Part& p = m.parts[pi];
+    if (c.generation != 0 && c.generation != p.id.generation) continue;  // another object now
+    const Impl::Body& b = m.bodies[p.body];
+    if (b.kinematic) continue;
+    switch (c.kind) {
+      case Load::Force:
+        if (p.identity) {
+          dBodyAddForce(b.id, c.value.x, c.value.y, c.value.z);
+        } else {
+          dVector3 at;
+          dBodyGetRelPointPos(b.id, p.offset.x, p.offset.y, p.offset.z, at);
+          dBodyAddForceAtPos(b.id, c.value.x, c.value.y, c.value.z, at[0], at[1], at[2]);
+        }
+        break;
+      case Load::ForceAtPoint:
+        dBodyAddForceAtPos(b.id, c.value.x, c.value.y, c.value.z, c.point.x, c.point.y, c.point.z);
+        break;
+      case Load::Torque: dBodyAddTorque(b.id, c.value.x, c.value.y, c.value.z); break;
+    }
+  }
+
+  // 2. Contacts queued by rigid_body_from_collisions become contact joints for this step.
+  m.records.clear();
+  m.feedback.resize(contact_points_.size());  // joints keep pointers into it: no growth below
+  std::uint32_t fb = 0;
+  for (std::uint32_t ci = 0; ci < contacts_.size(); ++ci) {
+    const ContactCommand& c = contacts_[ci];
+    const std::int32_t ba = m.body_of(c.a), bb = m.body_of(c.b);
+    if (ba == bb) continue;  // one assembly, or two parts that are not bodies
+    const bool fixed_a = ba < 0 || m.bodies[ba].kinematic, fixed_b = bb < 0 || m.bodies[bb].kinematic;
+    if (fixed_a && fixed_b) continue;
+    const bool swapped = ba < 0;
+    dBodyID b1 = m.bodies[swapped ? bb : ba].id;
+    dBodyID b2 = swapped ? nullptr : (bb >= 0 ? m.bodies[bb].id : nullptr);
+    dContact contact{};
+    // Approx1: the friction bound is mu times the normal force (Coulomb), not a force.
+    contact.surface.mode = dContactApprox1;
+    contact.surface.mu = c.friction;
+    if (c.restitution > 0) {
+      contact.surface.mode |= dContactBounce;
+      contact.surface.bounce = c.restitution;
+      contact.surface.bounce_vel = c.bounce_velocity;
+    }
+    const double sign = swapped ? -1.0 : 1.0;  // the normal must push body 1 out
+    const std::uint32_t first = fb;
+    for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
+      const ContactPoint& p = contact_points_[k];
+      contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y, contact.geom.pos[2] = p.position.z;
+      contact.geom.normal[0] = sign * p.normal.x, contact.geom.normal[1] = sign * p.normal.y,
+      contact.geom.normal[2] = sign * p.normal.z;
+      contact.geom.depth = p.depth;
+      dJointID j = dJointCreateContact(m.world, m.contact_group, &contact);
+      dJointAttach(j, b1, b2);
+      dJointSetFeedback(j, &m.feedback[fb++]);
+    }
+    m.records.push_back({ci, first, fb - first, swapped});
+  }
+
+  // 3. Integrate. QuickStep shuffles constraints with ODE's global random
+  // generator; seeding it from the step number makes every world's step a
+  // function of its own state (two worlds, or two runs, stay bit-identical).
+  dRandSetSeed(static_cast<unsigned long>(access.step() * 2654435761u + 1));
+  if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, dt);
+  else dWorldStep(m.world, dt);
+  m.fix_planar();
+
+  // 4. Publish the impulse each pair received (force feedback times dt).
+  const bool had = !impulses_.empty();
+  impulses_.clear();
+  for (const auto& r : m.records) {
+    const ContactCommand& c = contacts_[r.command];
+    Vec3 f{};
+    double fn = 0;
+    for (std::uint32_t k = 0; k < r.count; ++k) {
+      const dJointFeedback& jf = m.feedback[r.first_feedback + k];
+      const Vec3 f1 = to_vec3(jf.f1);
+      f += f1;
+      fn += dot(f1, contact_points_[c.first + k].normal) * (r.swapped ? -1.0 : 1.0);
+    }
+    impulses_.push_back({c.a, c.b, (r.swapped ? -1.0 : 1.0) * f * dt, std::max(0.0, fn * dt)});
+  }
+  if (!std::is_sorted(impulses_.begin(), impulses_.end(), [](const PairImpulse& x, const PairImpulse& y) {
+        return pair_less(x.a, x.b, y.a, y.b);
+      }))
+    std::sort(impulses_.begin(), impulses_.end(), [](const PairImpulse& x, const PairImpulse& y) {
+      return pair_less(x.a, x.b, y.a, y.b);
+    });
+  if (had || !impulses_.empty()) ++state_version_;
+  dJointGroupEmpty(m.contact_group);
+
+  // 5. Write the new state to the properties.
+  m.write_poses(access, false);
+  m.write_hinges(access);
+  m.snapshot_versions();
+  forces_.clear();
+  contacts_.clear();
+  contact_points_.clear();
+}
+
+}  // namespace alloy::rigid

@@ -1,0 +1,45 @@
+#include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace alloy::rigid {
+
+RigidBodyFromCollisions::RigidBodyFromCollisions(RigidBodyResolver& target, const CollisionSet& contacts,
+                                                 double bounce_velocity)
+    : target_(target), contacts_(contacts), bounce_velocity_(bounce_velocity) {}
+
+double RigidBodyFromCollisions::mix_friction(double a, double b) { return std::sqrt(a * b); }
+double RigidBodyFromCollisions::mix_restitution(double a, double b) { return std::max(a, b); }
+
+void RigidBodyFromCollisions::apply(const WorldView& world) {
+  if (friction_ == kNoProperty) {
+    friction_ = world.property("friction");
+    restitution_ = world.property("restitution");
+  }
+  const auto friction = world.column<double>(friction_);
+  const auto restitution = world.column<double>(restitution_);
+  const auto points = contacts_.points();
+  auto queue = [&](const ContactPair& p) {
+    ContactCommand c;
+    c.a = p.a, c.b = p.b;
+    c.friction = mix_friction(friction.value_or(p.a.index, kDefaultFriction),
+                              friction.value_or(p.b.index, kDefaultFriction));
+    c.restitution = std::clamp(mix_restitution(restitution.value_or(p.a.index, kDefaultRestitution),
+                                               restitution.value_or(p.b.index, kDefaultRestitution)),
+                               0.0, 1.0);
+    c.bounce_velocity = bounce_velocity_;
+    target_.add_contact(c, points.subspan(p.first, p.count));
+  };
+  // Every touching pair, began and ongoing merged so that commands stay in (a, b) order.
+  const auto began = contacts_.began(), ongoing = contacts_.ongoing();
+  std::size_t i = 0, j = 0;
+  while (i < began.size() || j < ongoing.size()) {
+    if (j == ongoing.size() || (i < began.size() && pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b)))
+      queue(began[i++]);
+    else
+      queue(ongoing[j++]);
+  }
+}
+
+}  // namespace alloy::rigid
