@@ -9,6 +9,7 @@
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
 #include "resolvers/rigid_body/rigid_body_from_gravity.hpp"
+#include "resolvers/sound/sound_plugins.hpp"
 
 namespace alloy {
 
@@ -131,6 +132,7 @@ void register_native_plugins(PluginRegistry& registry) {
   electricity::register_electricity_plugins(registry);
   magnetism::register_magnetism_plugins(registry);
   magnetism::register_rigid_body_from_magnetism(registry);
+  sound::register_sound_plugins(registry);
 }
 
 }  // namespace alloy

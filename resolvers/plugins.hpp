@@ -16,6 +16,8 @@ namespace alloy {
 ///                               (resolvers/electricity/; need emf or inductance)
 ///   magnetism, magnetic_forces, magnetism_from_electricity, rigid_body_from_magnetism
 ///                               (resolvers/magnetism/; need magnet, or current)
+///   sound, sound_from_collisions
+///                               (resolvers/sound/; need acoustic)
 /// and the property types they define.
 void register_native_plugins(PluginRegistry& registry);
 
