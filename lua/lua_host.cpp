@@ -16,6 +16,9 @@ namespace {
 // Lua calls this only for an error outside any protected call, which the host
 // never makes on purpose. Throwing (rather than letting Lua abort the process)
 // keeps the promise "never abort": LuaJIT on x64 unwinds C++ frames.
+constexpr const char* kHostKey = "alloy.host";
+constexpr int kCountStep = 10000;  // instructions between two budget checks
+
 int on_panic(lua_State* L) {
   const char* s = lua_tostring(L, -1);
   throw std::runtime_error(std::string("unprotected Lua error: ") + (s ? s : "?"));
@@ -47,13 +50,21 @@ std::optional<LocatedMessage> split_location(std::string_view message) {
 }
 
 LuaHost::LuaHost(HostOptions options)
-    : budget_(std::make_unique<MemoryBudget>(options.memory_limit)), memory_limit_(options.memory_limit) {
+    : budget_(std::make_unique<MemoryBudget>(options.memory_limit)),
+      memory_limit_(options.memory_limit),
+      instruction_limit_(options.instruction_limit) {
   // The limit applies to scripts, not to setting the state up.
   budget_->set_limit(0);
   L_ = lua_newstate(&MemoryBudget::allocate, budget_.get());
   if (!L_) throw std::runtime_error("LuaJIT could not create a state with the alloy allocator");
   lua_atpanic(L_, on_panic);
   prepare_state(L_);
+  lua_pushlightuserdata(L_, this);
+  lua_setfield(L_, LUA_REGISTRYINDEX, kHostKey);
+  if (instruction_limit_ > 0) {
+    luaJIT_setmode(L_, 0, LUAJIT_MODE_ENGINE | LUAJIT_MODE_OFF);
+    lua_sethook(L_, &LuaHost::on_count, LUA_MASKCOUNT, kCountStep);
+  }
   budget_->set_limit(options.memory_limit == 0 ? 0 : budget_->used() + options.memory_limit);
 }
 
@@ -103,6 +114,22 @@ std::optional<std::string> LuaHost::file_for_chunk_id(std::string_view src) cons
       return f;
   }
   return std::nullopt;
+}
+
+void LuaHost::on_count(lua_State* L, lua_Debug*) {
+  lua_getfield(L, LUA_REGISTRYINDEX, kHostKey);
+  auto* host = static_cast<LuaHost*>(lua_touserdata(L, -1));
+  lua_pop(L, 1);
+  if (!host) return;
+  host->instructions_ += kCountStep;
+  // Once over, check at every instruction and fail every time, so that a
+  // script that catches the error with pcall and loops on is stopped at its
+  // first instruction outside the pcall.
+  if (host->instructions_ > host->instruction_limit_) {
+    lua_sethook(L, &LuaHost::on_count, LUA_MASKCOUNT, 1);
+    luaL_error(L, "the script ran too long (more than %d million Lua instructions)",
+               int(host->instruction_limit_ / 1000000));
+  }
 }
 
 int LuaHost::on_error(lua_State* L) {
@@ -205,8 +232,14 @@ void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
   lua_pushcclosure(L, &LuaHost::on_error, 1);
   lua_insert(L, func);
   failure_.reset();
+  if (depth_ == 0 && instruction_limit_ > 0) {
+    instructions_ = 0;
+    lua_sethook(L, &LuaHost::on_count, LUA_MASKCOUNT, kCountStep);
+  }
   const std::size_t refusals = budget_->refusals();
+  ++depth_;
   const int rc = lua_pcall(L, nargs, nresults, func);
+  --depth_;
   lua_remove(L, func);
   if (rc == 0) return;
   // LuaJIT has no emergency collection: after a failure (above all an

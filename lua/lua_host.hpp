@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -21,12 +22,18 @@
 #include "runtime/error.hpp"
 
 struct lua_State;
+struct lua_Debug;
 
 namespace alloy::lua {
 
 struct HostOptions {
   /// Bytes the state may hold; 0 = no limit.
   std::size_t memory_limit = 0;
+  /// Lua VM instructions one call() may run; 0 = no limit. Setting it turns
+  /// the JIT compiler off: count hooks do not run inside compiled code. Right
+  /// for loading scenes (run once); a per-step budget for Lua stages will
+  /// need another mechanism.
+  std::uint64_t instruction_limit = 0;
 };
 
 class LuaHost {
@@ -75,12 +82,16 @@ class LuaHost {
     std::string traceback;  ///< only for runtime errors, not for validation errors
   };
   static int on_error(lua_State* L);  // the message handler of call()
+  static void on_count(lua_State* L, lua_Debug* ar);  // the instruction budget
   void describe_failure(lua_State* L);
   /// The known file whose (possibly truncated) chunk id is `src`.
   std::optional<std::string> file_for_chunk_id(std::string_view src) const;
 
   std::unique_ptr<MemoryBudget> budget_;
   std::size_t memory_limit_ = 0;
+  std::uint64_t instruction_limit_ = 0;
+  std::uint64_t instructions_ = 0;  // run by the outermost call(), in steps of kCountStep
+  int depth_ = 0;                   // nested call()s (a manifest read while a scene runs)
   lua_State* L_ = nullptr;
   std::set<std::string> files_;
   std::set<std::string> library_;

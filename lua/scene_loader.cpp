@@ -94,7 +94,7 @@ std::vector<fs::path> search_path(const LoadOptions& options, const SceneSource&
 }
 
 RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool allow_library_mod) {
-  LuaHost host(HostOptions{options.memory_limit});
+  LuaHost host(HostOptions{options.memory_limit, options.instruction_limit});
   RecordedScene out;
   out.source = resolve(host, path, allow_library_mod);
   const SceneSource& src = out.source;

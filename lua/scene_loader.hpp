@@ -32,6 +32,9 @@ struct LoadOptions {
   std::vector<std::filesystem::path> mod_paths;
   /// Bytes the scene's Lua may hold; 0 = no limit.
   std::size_t memory_limit = 64u << 20;
+  /// Lua instructions the scene (with the mods it requires) may run while
+  /// loading; 0 = no limit. Stops an endless loop in a scene.
+  std::uint64_t instruction_limit = 2'000'000'000;
 };
 
 struct LoadedScene {

@@ -31,6 +31,6 @@ kit.disk { name = "ball", material = "rubber", at = { 0.3, 1.5 }, radius = 0.08 
 -- A wooden plank falling at an angle: it lands on one end and tips over.
 kit.bar { name = "plank", material = "wood", at = { 0.9, 0.6 }, length = 0.6, width = 0.05, angle = 0.3 }
 
--- A brass wheel pinned through its centre, spun up: pin friction slows it.
-kit.disk { name = "wheel", material = "brass", at = { 2.4, 0.5 }, radius = 0.15, spin = 6 }
-kit.pin  { name = "axle", part = "wheel", friction = 0.02 }
+-- A wooden wheel pinned through its centre, spun up: pin friction slows it.
+kit.disk { name = "wheel", material = "wood", at = { 2.4, 0.5 }, radius = 0.15, spin = 6 }
+kit.pin  { name = "axle", part = "wheel", friction = 0.05 }

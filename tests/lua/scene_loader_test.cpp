@@ -88,6 +88,14 @@ TEST_F(SceneLoaderTest, AMemoryHungrySceneIsStopped) {
   EXPECT_NE(std::string(e.what()).find("out of memory"), std::string::npos) << e.what();
 }
 
+TEST_F(SceneLoaderTest, AnEndlessSceneIsStopped) {
+  LoadOptions options;
+  options.instruction_limit = 20'000'000;
+  const InputError e = load_error("tests/lua/limits/endless_loop.lua", options);
+  EXPECT_NE(std::string(e.what()).find("ran too long"), std::string::npos) << e.what();
+  EXPECT_NE(e.where().file.find("endless_loop.lua"), std::string::npos);
+}
+
 TEST_F(SceneLoaderTest, LocateFillsInTheObjectsLine) {
   LoadedScene s = load_scene(source_path("tests/lua/scenes/no_world.lua"), registry);
   const InputError later(ErrorLocation{"", 0, "lonely"}, "refused by a resolver");
