@@ -2,16 +2,21 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <vector>
 
 #include "apps/alloy/event_log.hpp"
 #include "apps/alloy/profile_report.hpp"
 #include "apps/alloy/trace_writer.hpp"
 #include "lua/scene_loader.hpp"
 #include "resolvers/plugins.hpp"
+#include "resolvers/sound/sound_resolver.hpp"
+#include "resolvers/sound/wav_writer.hpp"
 
 namespace alloy::app {
 
@@ -25,6 +30,7 @@ struct RunOptions {
   std::string trace;
   std::string trace_props = "position,orientation,velocity,angular_velocity";
   std::uint64_t trace_every = 1;
+  std::string audio;
   std::string events;
   bool profile = false;
   bool quiet = false;
@@ -53,6 +59,48 @@ lua::LoadOptions load_options() {
   return o;
 }
 
+/// Refuses an --audio path whose folder does not exist before the run, not after it.
+void check_audio_path(const std::string& path) {
+  const auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir))
+    throw InputError("cannot write audio file '" + path + "': no folder '" + dir.string() + "'");
+}
+
+/// Writes what the run sounded like, from t = 0 to the end, as a 16-bit WAV.
+/// A run in which no part could ring is written as silence of its length.
+void write_audio(World& world, const std::string& path, std::ostream& out, bool quiet) {
+  const auto* sound = dynamic_cast<const sound::SoundResolver*>(world.stage("sound"));
+  const double rate = sound ? sound->sample_rate() : sound::SoundSettings{}.sample_rate;
+  std::vector<float> samples;
+  if (sound) {
+    // A resolver brought to life mid-run starts at its start_time: pad the
+    // front so that the file's time is the world's time.
+    samples.assign(std::size_t(std::llround(sound->start_time() * rate)), 0.0f);
+    samples.insert(samples.end(), sound->samples().begin(), sound->samples().end());
+  } else {
+    samples.assign(std::size_t(std::llround(world.time() * rate)), 0.0f);
+  }
+  sound::WavInfo info;
+  try {
+    info = sound::write_wav(path, samples, int(rate), sound::WavLevel::fit);
+  } catch (const std::runtime_error& e) {
+    throw InputError(std::string("cannot write audio file: ") + e.what());
+  }
+  if (quiet) return;
+  char line[160];
+  std::snprintf(line, sizeof line, "audio: %s, %.3f s at %.0f Hz, ", path.c_str(), double(info.frames) / rate, rate);
+  out << line;
+  if (info.peak > 0) {
+    std::snprintf(line, sizeof line, "peak %.1f dBFS", 20 * std::log10(info.peak));
+    out << line;
+  } else {
+    out << "silent";
+  }
+  if (info.scale < 1) out << " (scaled down to fit)";
+  if (!sound) out << " (no part can ring)";
+  out << "\n";
+}
+
 int run(const RunOptions& opt, std::ostream& out) {
   PluginRegistry registry;
   register_native_plugins(registry);
@@ -68,6 +116,7 @@ int run(const RunOptions& opt, std::ostream& out) {
     steps = std::uint64_t(std::llround(seconds / world.dt()));
   }
 
+  if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
   if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
   std::unique_ptr<EventLog> events;
@@ -99,6 +148,7 @@ int run(const RunOptions& opt, std::ostream& out) {
   if (trace) trace->close();
   if (events) events->close();
   if (!opt.quiet) narrator.summary(world, wall);
+  if (!opt.audio.empty()) write_audio(world, opt.audio, out, opt.quiet);
   if (opt.profile) print_profile(out, world.profile());
   return kExitOk;
 }
@@ -143,6 +193,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->capture_default_str();
   run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")->check(CLI::PositiveNumber);
   run_cmd->add_option("--events", ro.events, "Write the events as JSON lines");
+  run_cmd->add_option("--audio", ro.audio, "Write what the run sounded like as a WAV file (16-bit mono)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
 

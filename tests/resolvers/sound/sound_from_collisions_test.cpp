@@ -86,9 +86,12 @@ TEST_F(SoundFromCollisionsTest, ABallDroppedOnABellMakesItRingAtItsPitch) {
 
   SoundResolver& s = sound(w);
   const double rate = s.sample_rate();
-  const double t_ding = ding.time - w.dt();  // the strike's advance began one step before its end
+  // The strike's advance is the one of the step the event came in: it covers
+  // [(k - 1) dt, k dt] after k steps, and the ringing starts at its first sample.
+  const double t_ding = double(sound_steps[0] - 1) * w.dt();
   const auto all = s.samples();
-  EXPECT_EQ(rms(window(all, rate, 0, t_ding - 0.001)), 0.0) << "sound before the strike";
+  EXPECT_EQ(rms(window(all, rate, 0, t_ding)), 0.0) << "sound before the strike";
+  EXPECT_GT(rms(window(all, rate, t_ding, t_ding + 0.002)), 1e-3) << "no sound at the strike";
   const auto after = window(all, rate, t_ding + 0.01, t_ding + 0.21);
   const double at_pitch = goertzel(after, kBellPitch, rate);
   EXPECT_GT(at_pitch, 1e-3);
