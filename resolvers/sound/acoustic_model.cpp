@@ -48,27 +48,36 @@ const std::vector<std::string>& family_names() {
 
 std::span<const Partial> partials(Family family) {
   switch (family) {
-    case Family::bell: return kBell;
-    case Family::bar: return kBar;
-    case Family::block: return kBlock;
+    case Family::bell:
+      return kBell;
+    case Family::bar:
+      return kBar;
+    case Family::block:
+      return kBlock;
   }
   return kBar;
 }
 
 double default_pitch(Family family) {
   switch (family) {
-    case Family::bell: return 880;   // a small hand bell (A5)
-    case Family::bar: return 440;
-    case Family::block: return 1200;  // a wood block
+    case Family::bell:
+      return 880;  // a small hand bell (A5)
+    case Family::bar:
+      return 440;
+    case Family::block:
+      return 1200;  // a wood block
   }
   return 440;
 }
 
 double default_decay(Family family) {
   switch (family) {
-    case Family::bell: return 4.0;
-    case Family::bar: return 1.5;
-    case Family::block: return 0.08;
+    case Family::bell:
+      return 4.0;
+    case Family::bar:
+      return 1.5;
+    case Family::block:
+      return 0.08;
   }
   return 1.0;
 }
@@ -81,8 +90,8 @@ double bar_pitch(double youngs_modulus, double density, double length, double gy
 
 double plate_pitch(double youngs_modulus, double density, double radius, double thickness) {
   constexpr double kLambda2 = 5.253;  // (2,0) mode of a free circular plate (Leissa)
-  const double rigidity = youngs_modulus * thickness * thickness * thickness /
-                          (12 * (1 - kPoisson * kPoisson));
+  const double rigidity =
+      youngs_modulus * thickness * thickness * thickness / (12 * (1 - kPoisson * kPoisson));
   return kLambda2 / (2 * std::numbers::pi * radius * radius) *
          std::sqrt(rigidity / (density * thickness));
 }

@@ -36,9 +36,9 @@ void ModalSynth::strike(std::span<const Mode> modes) {
   }
   if (voice.size() == 0) return;
   if (voices_.size() >= settings_.max_voices) {
-    auto quietest = std::min_element(voices_.begin(), voices_.end(), [](const Voice& a, const Voice& b) {
-      return a.level() < b.level();
-    });
+    auto quietest =
+        std::min_element(voices_.begin(), voices_.end(),
+                         [](const Voice& a, const Voice& b) { return a.level() < b.level(); });
     *quietest = std::move(voice);
     return;
   }

@@ -5,8 +5,8 @@
 //
 // Each mode is a complex phasor turned by a fixed complex factor per sample
 // (z <- z * r e^{i w / fs}), so a mode costs one complex multiply per sample
-// (no sin, no exp in the loop) and is exact to rounding: the decay rate and frequency a test measures are
-// the ones that were asked for. Pure DSP: no world, no properties.
+// (no sin, no exp in the loop) and is exact to rounding: the decay rate and frequency a test
+// measures are the ones that were asked for. Pure DSP: no world, no properties.
 #pragma once
 
 #include <cstddef>

@@ -10,7 +10,8 @@ void SoundFromCollisions::apply(const WorldView& world) {
   for (const Impact& impact : pending_) {
     const Key& k = impact.key;
     double impulse = 0;
-    if (const rigid::ContactPair* p = collisions_.find(k.a, k.b); p && p->began_step == k.began_step) {
+    if (const rigid::ContactPair* p = collisions_.find(k.a, k.b);
+        p && p->began_step == k.began_step) {
       impulse = p->total_impulse;
     } else {
       for (const rigid::ContactPair& e : collisions_.ended())

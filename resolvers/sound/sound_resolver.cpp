@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numbers>
 
-
 namespace alloy::sound {
 
 namespace {
@@ -26,11 +25,11 @@ std::optional<T> read(const WorldView& w, std::string_view name, ObjectId part) 
 
 /// The dimensions the pitch formulas need, from the rigid body's shape.
 struct Dimensions {
-  double length = 0;      // bar: the free length, m
-  double gyration = 0;    // bar: radius of gyration of the cross-section, m
-  double radius = 0;      // bell: radius of the mouth, m
-  double thickness = 0;   // bell: wall thickness, m
-  double volume = 0;      // m^3 (for density = mass / volume)
+  double length = 0;     // bar: the free length, m
+  double gyration = 0;   // bar: radius of gyration of the cross-section, m
+  double radius = 0;     // bell: radius of the mouth, m
+  double thickness = 0;  // bell: wall thickness, m
+  double volume = 0;     // m^3 (for density = mass / volume)
 };
 
 std::optional<Dimensions> dimensions(const WorldView& w, ObjectId part) {
@@ -76,7 +75,8 @@ std::optional<Dimensions> dimensions(const WorldView& w, ObjectId part) {
 
 std::vector<PropertyDef> sound_properties() {
   return {
-      {.name = "acoustic", .kind = PropertyKind::Enum,
+      {.name = "acoustic",
+       .kind = PropertyKind::Enum,
        .doc = "the part rings when struck, as a bell (bell partials), a bar (free-free bending "
               "modes) or a block (a short clack); absent: silent",
        .enum_values = family_names()},
@@ -216,8 +216,8 @@ void register_sound_resolver(PluginRegistry& registry) {
   registry.add({
       .info = {.name = "sound",
                .kind = StageKind::Resolver,
-               .reads = {"acoustic", "pitch", "decay", "loss_factor", "loudness",
-                         "youngs_modulus", "density"},
+               .reads = {"acoustic", "pitch", "decay", "loss_factor", "loudness", "youngs_modulus",
+                         "density"},
                .needs = {"acoustic"},
                .doc = "struck parts ring (modal synthesis); the run's audio, in step with the "
                       "simulation"},

@@ -41,7 +41,7 @@ struct SoundSettings {
   double min_speed = 0.1;
   /// ... and with at least this contact impulse, N*s (0: no impulse needed).
   double min_impulse = 0;
-  double gain = 1;             ///< master gain applied to every strike
+  double gain = 1;               ///< master gain applied to every strike
   std::int64_t max_voices = 32;  ///< voices ringing at once; more replace the quietest
 
   /// Reads and checks the plugin settings (InputError names the bad key).
@@ -50,10 +50,10 @@ struct SoundSettings {
 
 /// One strike, as an interaction queues it.
 struct Strike {
-  ObjectId part;              ///< the part that rings (must carry `acoustic`)
-  ObjectId other;             ///< what struck it, if known (for the event)
-  double normal_speed = 0;    ///< speed of approach along the contact normal, m/s
-  double impulse = 0;         ///< contact impulse, N*s (0: unknown)
+  ObjectId part;            ///< the part that rings (must carry `acoustic`)
+  ObjectId other;           ///< what struck it, if known (for the event)
+  double normal_speed = 0;  ///< speed of approach along the contact normal, m/s
+  double impulse = 0;       ///< contact impulse, N*s (0: unknown)
 };
 
 /// Fundamental amplitude (full scale = 1) per m/s of strike velocity at

@@ -21,7 +21,9 @@ void put16(std::vector<char>& out, std::uint16_t v) {
 void put32(std::vector<char>& out, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(char((v >> (8 * i)) & 0xff));
 }
-void put_tag(std::vector<char>& out, const char (&tag)[5]) { out.insert(out.end(), tag, tag + 4); }
+void put_tag(std::vector<char>& out, const char (&tag)[5]) {
+  out.insert(out.end(), tag, tag + 4);
+}
 
 }  // namespace
 

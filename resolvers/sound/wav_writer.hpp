@@ -18,10 +18,10 @@ enum class WavLevel {
 
 /// What was written.
 struct WavInfo {
-  std::uint64_t frames = 0;  ///< samples written (mono: one per frame)
-  double peak = 0;           ///< largest |sample| of the input
-  double scale = 1;          ///< factor applied before quantising (fit < 1 if it scaled)
-  std::uint64_t clipped = 0; ///< samples clamped (clip only)
+  std::uint64_t frames = 0;   ///< samples written (mono: one per frame)
+  double peak = 0;            ///< largest |sample| of the input
+  double scale = 1;           ///< factor applied before quantising (fit < 1 if it scaled)
+  std::uint64_t clipped = 0;  ///< samples clamped (clip only)
 };
 
 /// Writes `samples` (full scale = 1) at `sample_rate` Hz to `path`. Throws

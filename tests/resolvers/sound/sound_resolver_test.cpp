@@ -27,7 +27,8 @@ class SoundResolverTest : public ::testing::Test {
   std::unique_ptr<World> bell_world(double pitch = 880, double decay = 2.0, WorldDef def = {}) {
     auto w = std::make_unique<World>(registry, std::move(def));
     bell = w->create("bell");
-    w->set(bell, "acoustic", *registry.properties().enum_value(registry.properties().id("acoustic"), "bell"));
+    w->set(bell, "acoustic",
+           *registry.properties().enum_value(registry.properties().id("acoustic"), "bell"));
     w->set(bell, "pitch", pitch);
     w->set(bell, "decay", decay);
     w->start();
@@ -35,7 +36,9 @@ class SoundResolverTest : public ::testing::Test {
   }
   static SoundResolver& sound(World& w) { return dynamic_cast<SoundResolver&>(*w.stage("sound")); }
   /// Runs whole seconds of steps.
-  static void run_for(World& w, double seconds) { w.run(std::uint64_t(std::llround(seconds / w.dt()))); }
+  static void run_for(World& w, double seconds) {
+    w.run(std::uint64_t(std::llround(seconds / w.dt())));
+  }
 
   PluginRegistry registry;
   ObjectId bell;
@@ -142,7 +145,8 @@ TEST_F(SoundResolverTest, AStrikeEmitsASoundEventNamingThePartAndItsPitch) {
 
 TEST_F(SoundResolverTest, ImpulseOverMassSetsTheStrength) {
   // A light striker hardly stirs a heavy part: the surface velocity is J / m.
-  registry.properties().add({.name = "mass", .kind = PropertyKind::Number, .unit = "kg", .min = 0.0});
+  registry.properties().add(
+      {.name = "mass", .kind = PropertyKind::Number, .unit = "kg", .min = 0.0});
   auto w = bell_world();
   w->set(bell, "mass", 2.0);
   sound(*w).strike({.part = bell, .normal_speed = 1.0, .impulse = 0.1});
@@ -185,7 +189,8 @@ TEST_F(SoundResolverTest, IsInstantiatedOnlyWhenAPartCanRing) {
   w.set(mute, "pitch", 440.0);  // a pitch alone does not make a part ring
   w.run(3);
   EXPECT_FALSE(w.has_stage("sound"));
-  w.set(mute, "acoustic", *registry.properties().enum_value(registry.properties().id("acoustic"), "bar"));
+  w.set(mute, "acoustic",
+        *registry.properties().enum_value(registry.properties().id("acoustic"), "bar"));
   w.step();
   ASSERT_TRUE(w.has_stage("sound"));
   // It joined a running world: its first sample is at the time it started.
@@ -196,7 +201,8 @@ TEST_F(SoundResolverTest, IsInstantiatedOnlyWhenAPartCanRing) {
 TEST_F(SoundResolverTest, ABarsPitchComesFromItsMaterialAndSize) {
   // The rigid body's shape properties, as it registers them.
   auto& props = registry.properties();
-  props.add({.name = "shape", .kind = PropertyKind::Enum, .enum_values = {"box", "sphere", "capsule"}});
+  props.add(
+      {.name = "shape", .kind = PropertyKind::Enum, .enum_values = {"box", "sphere", "capsule"}});
   props.add({.name = "size", .kind = PropertyKind::Vec3, .unit = "m"});
   World w(registry);
   const ObjectId bar = w.create("bar");
@@ -221,7 +227,8 @@ TEST_F(SoundResolverTest, ABarsPitchComesFromItsMaterialAndSize) {
 TEST_F(SoundResolverTest, WithoutPitchOrMaterialAFamilyDefaultIsUsed) {
   World w(registry);
   const ObjectId block = w.create("block");
-  w.set(block, "acoustic", *registry.properties().enum_value(registry.properties().id("acoustic"), "block"));
+  w.set(block, "acoustic",
+        *registry.properties().enum_value(registry.properties().id("acoustic"), "block"));
   w.start();
   const auto v = SoundResolver::voicing(w.view(), block);
   EXPECT_EQ(v.family, Family::block);

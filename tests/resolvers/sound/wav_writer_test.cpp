@@ -38,7 +38,8 @@ class WavWriterTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir = fs::temp_directory_path() /
-          ("alloy_wav_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+          ("alloy_wav_test_" +
+           std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
   }
@@ -50,7 +51,8 @@ TEST_F(WavWriterTest, HeaderAndSamplesRoundTrip) {
   const int rate = 44100;
   const double seconds = 0.75;
   std::vector<float> x(std::size_t(seconds * rate));
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = float(0.8 * std::sin(2 * M_PI * 440 * double(i) / rate));
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] = float(0.8 * std::sin(2 * M_PI * 440 * double(i) / rate));
   const fs::path path = dir / "tone.wav";
   const WavInfo info = write_wav(path.string(), x, rate);
   EXPECT_EQ(info.frames, x.size());
