@@ -9,7 +9,7 @@
 
 #include "lua/scene_loader.hpp"
 #include "tests/lua/lua_test_support.hpp"
-#include "tests/lua/scene_plugins.hpp"
+#include "resolvers/plugins.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -48,7 +48,7 @@ TEST_P(BadScene, IsRefusedWhereItsFirstLineSays) {
   ASSERT_GT(want.line, 0) << file << ": the first line must be -- expect: line N: ...";
 
   PluginRegistry registry;
-  test::register_scene_plugins(registry);
+  register_native_plugins(registry);
   try {
     check(file, registry);
     FAIL() << file << " passed the check";

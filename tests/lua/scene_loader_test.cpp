@@ -4,7 +4,7 @@
 
 #include "lua/scene_loader.hpp"
 #include "tests/lua/lua_test_support.hpp"
-#include "tests/lua/scene_plugins.hpp"
+#include "resolvers/plugins.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -14,7 +14,7 @@ using test::source_path;
 
 class SceneLoaderTest : public ::testing::Test {
  protected:
-  void SetUp() override { test::register_scene_plugins(registry); }
+  void SetUp() override { register_native_plugins(registry); }
 
   /// The InputError of loading `relative`, or a failure if it loads.
   InputError load_error(const std::string& relative, const LoadOptions& options = {}) {
