@@ -25,8 +25,10 @@ int closest(lua_State* L) {
       lua_pop(L, 1);
     }
     const std::string best = closest_name(name, names);
-    if (best.empty()) lua_pushnil(L);
-    else lua_pushlstring(L, best.data(), best.size());
+    if (best.empty())
+      lua_pushnil(L);
+    else
+      lua_pushlstring(L, best.data(), best.size());
     return 1;
   });
 }

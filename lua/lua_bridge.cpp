@@ -48,6 +48,9 @@ void push_error_table(lua_State* L, const ErrorLocation& where, const std::strin
   lua_setmetatable(L, -2);
 }
 
-void raise_error_table(lua_State* L) { lua_error(L); __builtin_unreachable(); }
+void raise_error_table(lua_State* L) {
+  lua_error(L);
+  __builtin_unreachable();
+}
 
 }  // namespace alloy::lua

@@ -14,9 +14,8 @@
 // the same shape with error({message = ..., object = ...}, 0).
 #pragma once
 
-#include <lua.hpp>
-
 #include <exception>
+#include <lua.hpp>
 #include <string>
 #include <utility>
 

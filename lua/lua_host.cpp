@@ -1,9 +1,8 @@
 #include "lua/lua_host.hpp"
 
-#include <lua.hpp>
-
 #include <fstream>
 #include <iterator>
+#include <lua.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -39,7 +38,8 @@ std::optional<LocatedMessage> split_location(std::string_view message) {
     if (message[i] != ':') continue;
     std::size_t j = i + 1;
     while (j < message.size() && message[j] >= '0' && message[j] <= '9') ++j;
-    if (j == i + 1 || j + 1 >= message.size() || message[j] != ':' || message[j + 1] != ' ') continue;
+    if (j == i + 1 || j + 1 >= message.size() || message[j] != ':' || message[j + 1] != ' ')
+      continue;
     LocatedMessage out;
     out.chunk = std::string(message.substr(0, i));
     out.line = std::stoi(std::string(message.substr(i + 1, j - i - 1)));
@@ -110,7 +110,8 @@ std::optional<std::string> LuaHost::file_for_chunk_id(std::string_view src) cons
   if (truncated) src.remove_prefix(3);
   for (const auto& f : files_) {
     if (f == src) return f;
-    if (truncated && f.size() >= src.size() && f.compare(f.size() - src.size(), src.size(), src) == 0)
+    if (truncated && f.size() >= src.size() &&
+        f.compare(f.size() - src.size(), src.size(), src) == 0)
       return f;
   }
   return std::nullopt;
@@ -257,7 +258,8 @@ void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
     throw InputError(where, "out of memory: the script needs more than its budget of " +
                                 std::to_string(memory_limit_ / 1024) + " KiB");
   }
-  if (rc == LUA_ERRERR || !f) throw InputError(fallback, raw.empty() ? "error while handling an error" : raw);
+  if (rc == LUA_ERRERR || !f)
+    throw InputError(fallback, raw.empty() ? "error while handling an error" : raw);
   if (f->where.file.empty()) {
     f->where.file = fallback.file;
     f->where.line = fallback.line;

@@ -68,7 +68,9 @@ class LuaHost {
 
   /// Marks a loaded file (by display name) as belonging to a library mod.
   void mark_library(const std::string& display) { library_.insert(display); }
-  bool is_library(std::string_view display) const { return library_.count(std::string(display)) > 0; }
+  bool is_library(std::string_view display) const {
+    return library_.count(std::string(display)) > 0;
+  }
   /// Display names of every file loaded so far.
   const std::set<std::string>& files() const { return files_; }
   /// The innermost Lua frame on the current stack that is not library code
@@ -81,7 +83,7 @@ class LuaHost {
     std::string message;
     std::string traceback;  ///< only for runtime errors, not for validation errors
   };
-  static int on_error(lua_State* L);  // the message handler of call()
+  static int on_error(lua_State* L);                  // the message handler of call()
   static void on_count(lua_State* L, lua_Debug* ar);  // the instruction budget
   void describe_failure(lua_State* L);
   /// The known file whose (possibly truncated) chunk id is `src`.

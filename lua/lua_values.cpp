@@ -13,7 +13,9 @@ SceneValue list_value(lua_State* L, int index) {
   std::size_t keys = 0;
   for (lua_pushnil(L); lua_next(L, index); lua_pop(L, 1)) ++keys;
   if (keys != n)
-    throw InputError("a table here must be a list such as {1, 2} or {\"a\", \"b\"}, not a table with named fields");
+    throw InputError(
+        "a table here must be a list such as {1, 2} or {\"a\", \"b\"}, not a table with named "
+        "fields");
   std::vector<double> numbers;
   std::vector<std::string> names;
   for (std::size_t i = 1; i <= n; ++i) {
@@ -40,15 +42,19 @@ SceneValue list_value(lua_State* L, int index) {
 SceneValue to_scene_value(lua_State* L, int index) {
   index = abs_index(L, index);
   switch (lua_type(L, index)) {
-    case LUA_TNUMBER: return lua_tonumber(L, index);
-    case LUA_TBOOLEAN: return lua_toboolean(L, index) != 0;
+    case LUA_TNUMBER:
+      return lua_tonumber(L, index);
+    case LUA_TBOOLEAN:
+      return lua_toboolean(L, index) != 0;
     case LUA_TSTRING: {
       std::size_t n = 0;
       const char* s = lua_tolstring(L, index, &n);
       return std::string(s, n);
     }
-    case LUA_TTABLE: return list_value(L, index);
-    default: throw InputError(std::string("a ") + luaL_typename(L, index) + " cannot be a property value");
+    case LUA_TTABLE:
+      return list_value(L, index);
+    default:
+      throw InputError(std::string("a ") + luaL_typename(L, index) + " cannot be a property value");
   }
 }
 
@@ -58,7 +64,8 @@ std::vector<std::string> sorted_keys(lua_State* L, int index, const std::string&
   for (lua_pushnil(L); lua_next(L, index); lua_pop(L, 1)) {
     if (lua_type(L, -2) != LUA_TSTRING) {
       lua_pop(L, 2);
-      throw InputError(what + " must be given as name = value; found a value without a name "
+      throw InputError(what +
+                       " must be given as name = value; found a value without a name "
                        "(a list item?)");
     }
     keys.emplace_back(lua_tostring(L, -2));

@@ -4,7 +4,8 @@
 
 namespace alloy::lua {
 
-void* MemoryBudget::allocate(void* ud, void* ptr, std::size_t old_size, std::size_t new_size) noexcept {
+void* MemoryBudget::allocate(void* ud, void* ptr, std::size_t old_size,
+                             std::size_t new_size) noexcept {
   auto* self = static_cast<MemoryBudget*>(ud);
   // Lua passes old_size = 0 semantics only for fresh blocks when ptr is null.
   const std::size_t old_bytes = ptr ? old_size : 0;

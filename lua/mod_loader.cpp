@@ -18,8 +18,8 @@ namespace {
 constexpr const char* kEnvironments = "alloy.envs";  // registry: mod name -> environment
 constexpr const char* kLoaded = "alloy.loaded";      // registry: module name -> value
 
-const std::vector<std::string> kManifestFields = {"name",  "version", "description",
-                                                  "depends", "scene", "main"};
+const std::vector<std::string> kManifestFields = {"name",    "version", "description",
+                                                  "depends", "scene",   "main"};
 
 /// Pushes registry[key], creating an empty table there on first use.
 void push_registry_table(lua_State* L, const char* key) {
@@ -33,8 +33,9 @@ void push_registry_table(lua_State* L, const char* key) {
 
 bool is_identifier(const std::string& s) {
   if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
-  return std::all_of(s.begin(), s.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
 }
 
 /// "kit.parts.bodies" -> {"kit", "parts", "bodies"}; empty if not a module name.
@@ -80,7 +81,8 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
   lua_setfenv(L, -2);
   host.call(0, 1, where);
   if (!lua_istable(L, -1))
-    throw InputError(where, "mod.lua must return a table such as { name = \"kit\", version = \"0.1.0\" }");
+    throw InputError(where,
+                     "mod.lua must return a table such as { name = \"kit\", version = \"0.1.0\" }");
   const int t = lua_gettop(L);
   std::vector<std::string> keys;
   try {
@@ -91,7 +93,8 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
   for (const auto& key : keys) {
     if (std::find(kManifestFields.begin(), kManifestFields.end(), key) == kManifestFields.end()) {
       std::string msg = "mod.lua has no field '" + key + "'";
-      if (auto near = closest_name(key, kManifestFields); !near.empty()) msg += " (did you mean '" + near + "'?)";
+      if (auto near = closest_name(key, kManifestFields); !near.empty())
+        msg += " (did you mean '" + near + "'?)";
       throw InputError(where, msg);
     }
     lua_getfield(L, t, key.c_str());
@@ -103,34 +106,45 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
     }
     lua_pop(L, 1);
     if (key == "depends") {
-      if (auto* names = std::get_if<std::vector<std::string>>(&v)) m.depends = *names;
-      else if (!(std::holds_alternative<std::vector<double>>(v) && std::get<std::vector<double>>(v).empty()))
+      if (auto* names = std::get_if<std::vector<std::string>>(&v))
+        m.depends = *names;
+      else if (!(std::holds_alternative<std::vector<double>>(v) &&
+                 std::get<std::vector<double>>(v).empty()))
         throw InputError(where, "mod.lua 'depends' must be a list of mod names, such as {\"kit\"}");
       continue;
     }
     const std::string* s = std::get_if<std::string>(&v);
     if (!s) throw InputError(where, "mod.lua '" + key + "' must be a string");
-    if (key == "name") m.name = *s;
-    else if (key == "version") m.version = *s;
-    else if (key == "description") m.description = *s;
-    else if (key == "scene") m.scene = *s;
-    else if (key == "main") m.main = *s;
+    if (key == "name")
+      m.name = *s;
+    else if (key == "version")
+      m.version = *s;
+    else if (key == "description")
+      m.description = *s;
+    else if (key == "scene")
+      m.scene = *s;
+    else if (key == "main")
+      m.main = *s;
   }
   if (m.name.empty()) throw InputError(where, "mod.lua must give the mod's name");
   if (!is_identifier(m.name))
     throw InputError(where, "mod name '" + m.name + "' must be letters, digits and _ only");
   if (m.name != folder_name(folder))
-    throw InputError(where, "mod.lua names the mod '" + m.name + "' but its folder is '" + folder_name(folder) +
-                                "': mods are found by folder name");
+    throw InputError(where, "mod.lua names the mod '" + m.name + "' but its folder is '" +
+                                folder_name(folder) + "': mods are found by folder name");
   return m;
 }
 
 ModLoader::ModLoader(LuaHost& host, std::vector<fs::path> search_path, Decorate decorate)
     : host_(host), search_path_(std::move(search_path)), decorate_(std::move(decorate)) {}
 
-void ModLoader::set_scene_mod(std::optional<Manifest> manifest) { scene_mod_ = std::move(manifest); }
+void ModLoader::set_scene_mod(std::optional<Manifest> manifest) {
+  scene_mod_ = std::move(manifest);
+}
 
-void ModLoader::add_scene_file(const std::string& display) { file_mod_[display] = ""; }
+void ModLoader::add_scene_file(const std::string& display) {
+  file_mod_[display] = "";
+}
 
 void ModLoader::push_environment(const std::string& mod) {
   lua_State* L = host_.state();
@@ -194,8 +208,8 @@ void ModLoader::check_depends(const Manifest& m) {
   if (std::find(checked_.begin(), checked_.end(), m.name) != checked_.end()) return;
   for (const auto& dep : m.depends)
     if (!find(dep))
-      throw InputError(ErrorLocation{m.file, 0, ""},
-                       "mod '" + m.name + "' depends on '" + dep + "', which is not on the mod path");
+      throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + m.name + "' depends on '" + dep +
+                                                         "', which is not on the mod path");
   checked_.push_back(m.name);
 }
 
@@ -214,23 +228,28 @@ int ModLoader::require(lua_State* L) {
 
   const std::vector<std::string> segments = module_segments(name);
   if (segments.empty())
-    throw InputError("require \"" + name + "\": a module name is a mod name, optionally followed by "
-                     "dot-separated file names (\"kit\", \"kit.materials\"); paths are not allowed");
+    throw InputError(
+        "require \"" + name +
+        "\": a module name is a mod name, optionally followed by "
+        "dot-separated file names (\"kit\", \"kit.materials\"); paths are not allowed");
   const std::string& mod = segments[0];
 
   const std::optional<std::string> caller = caller_mod(L);
   if (caller && !caller->empty() && *caller != mod) {
     const Manifest* cm = find(*caller);
     if (cm && std::find(cm->depends.begin(), cm->depends.end(), mod) == cm->depends.end())
-      throw InputError("mod '" + *caller + "' requires '" + mod + "' but its mod.lua does not list it in depends");
+      throw InputError("mod '" + *caller + "' requires '" + mod +
+                       "' but its mod.lua does not list it in depends");
   }
 
   const Manifest* m = find(mod);
   if (!m) {
     std::string msg = "no mod named '" + mod + "' on the mod path (";
-    for (std::size_t i = 0; i < search_path_.size(); ++i) msg += (i ? ", " : "") + display_path(search_path_[i]);
+    for (std::size_t i = 0; i < search_path_.size(); ++i)
+      msg += (i ? ", " : "") + display_path(search_path_[i]);
     msg += ")";
-    if (auto near = closest_name(mod, available()); !near.empty()) msg += "; did you mean '" + near + "'?";
+    if (auto near = closest_name(mod, available()); !near.empty())
+      msg += "; did you mean '" + near + "'?";
     throw InputError(msg);
   }
   check_depends(*m);

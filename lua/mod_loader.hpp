@@ -35,7 +35,7 @@ struct Manifest {
   std::string version;
   std::string description;
   std::vector<std::string> depends;
-  std::string scene;             ///< scene file of the mod, relative to its folder ("" = none)
+  std::string scene;              ///< scene file of the mod, relative to its folder ("" = none)
   std::string main = "init.lua";  ///< the file `require "<name>"` runs
   std::filesystem::path folder;
   std::string file;  ///< display name of mod.lua, for messages

@@ -1,8 +1,7 @@
 #include "lua/sandbox.hpp"
 
-#include <lua.hpp>
-
 #include <cstring>
+#include <lua.hpp>
 #include <string>
 
 #include "lua/lua_bridge.hpp"
@@ -14,9 +13,9 @@ namespace {
 // Base functions a script may use. Everything else of the base library stays
 // out (file access, environments, the collector, bytecode).
 constexpr const char* kBaseWhitelist[] = {
-    "assert", "error",    "ipairs",  "next",   "pairs",        "pcall",        "xpcall",
-    "select", "tonumber", "tostring", "type",  "unpack",       "rawequal",     "rawget",
-    "print",  "setmetatable", "getmetatable", "_VERSION",
+    "assert",   "error",  "ipairs",   "next",         "pairs",        "pcall",
+    "xpcall",   "select", "tonumber", "tostring",     "type",         "unpack",
+    "rawequal", "rawget", "print",    "setmetatable", "getmetatable", "_VERSION",
 };
 
 // Libraries copied into each environment. string.dump is removed from the
@@ -46,8 +45,10 @@ int safe_load(lua_State* L) {
   // A script may not pose as one of the host's files: its chunk names are
   // always literal ("=name"), never file names ("@file").
   std::string name = "=";
-  if (const char* n = lua_tostring(L, 2)) name += (n[0] == '@' || n[0] == '=') ? n + 1 : n;
-  else name += "(load)";
+  if (const char* n = lua_tostring(L, 2))
+    name += (n[0] == '@' || n[0] == '=') ? n + 1 : n;
+  else
+    name += "(load)";
   if (luaL_loadbufferx(L, code, size, name.c_str(), "t") != 0) {
     lua_pushnil(L);
     lua_insert(L, -2);
@@ -70,7 +71,8 @@ int safe_rawset(lua_State* L) {
   luaL_checktype(L, 1, LUA_TTABLE);
   luaL_checkany(L, 2);
   luaL_checkany(L, 3);
-  if (is_frozen(L, 1)) return luaL_error(L, "rawset: this table belongs to the host and is read-only");
+  if (is_frozen(L, 1))
+    return luaL_error(L, "rawset: this table belongs to the host and is read-only");
   lua_settop(L, 3);
   lua_rawset(L, 1);
   lua_settop(L, 1);

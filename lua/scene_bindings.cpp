@@ -26,7 +26,8 @@ void raw_field(lua_State* L, int t, const std::string& key) {
 
 double number_field(lua_State* L, int t, const std::string& key, const ErrorLocation& where) {
   raw_field(L, t, key);
-  if (lua_type(L, -1) != LUA_TNUMBER) throw InputError(where, "world: '" + key + "' must be a number");
+  if (lua_type(L, -1) != LUA_TNUMBER)
+    throw InputError(where, "world: '" + key + "' must be a number");
   const double v = lua_tonumber(L, -1);
   lua_pop(L, 1);
   return v;
@@ -34,13 +35,15 @@ double number_field(lua_State* L, int t, const std::string& key, const ErrorLoca
 
 std::string string_field(lua_State* L, int t, const std::string& key, const ErrorLocation& where) {
   raw_field(L, t, key);
-  if (lua_type(L, -1) != LUA_TSTRING) throw InputError(where, "world: '" + key + "' must be a string");
+  if (lua_type(L, -1) != LUA_TSTRING)
+    throw InputError(where, "world: '" + key + "' must be a string");
   std::string v = lua_tostring(L, -1);
   lua_pop(L, 1);
   return v;
 }
 
-std::vector<SceneField> fields_of(lua_State* L, int t, const std::string& what, const ErrorLocation& where) {
+std::vector<SceneField> fields_of(lua_State* L, int t, const std::string& what,
+                                  const ErrorLocation& where) {
   std::vector<SceneField> out;
   std::vector<std::string> keys;
   try {
@@ -85,7 +88,9 @@ int SceneRecorder::record_object(lua_State* L) {
   obj.where = host_.user_location(L);
   obj.where.object = "#" + std::to_string(record_.objects.size() + 1);
   if (lua_type(L, 1) != LUA_TTABLE)
-    throw InputError(obj.where, "object{} expects a table of properties, e.g. object { name = \"ball\", mass = 1 }");
+    throw InputError(
+        obj.where,
+        "object{} expects a table of properties, e.g. object { name = \"ball\", mass = 1 }");
   lua_settop(L, 1);
 
   raw_field(L, 1, "name");
@@ -94,7 +99,8 @@ int SceneRecorder::record_object(lua_State* L) {
     if (obj.name.empty()) throw InputError(obj.where, "'name' must not be empty");
     obj.where.object = obj.name;
   } else if (!lua_isnil(L, -1)) {
-    throw InputError(obj.where, std::string("'name' must be a string, not a ") + luaL_typename(L, -1));
+    throw InputError(obj.where,
+                     std::string("'name' must be a string, not a ") + luaL_typename(L, -1));
   }
   lua_pop(L, 1);
 
@@ -128,13 +134,18 @@ int SceneRecorder::record_world(lua_State* L) {
   for (const auto& key : keys) {
     if (std::find(kWorldFields.begin(), kWorldFields.end(), key) == kWorldFields.end()) {
       std::string msg = "world has no field '" + key + "'";
-      if (auto near = closest_name(key, kWorldFields); !near.empty()) msg += " (did you mean '" + near + "'?)";
+      if (auto near = closest_name(key, kWorldFields); !near.empty())
+        msg += " (did you mean '" + near + "'?)";
       throw InputError(where, msg);
     }
-    if (key == "name") w.name = string_field(L, 1, key, where);
-    else if (key == "description") w.description = string_field(L, 1, key, where);
-    else if (key == "dt") w.dt = number_field(L, 1, key, where);
-    else if (key == "seconds") w.seconds = number_field(L, 1, key, where);
+    if (key == "name")
+      w.name = string_field(L, 1, key, where);
+    else if (key == "description")
+      w.description = string_field(L, 1, key, where);
+    else if (key == "dt")
+      w.dt = number_field(L, 1, key, where);
+    else if (key == "seconds")
+      w.seconds = number_field(L, 1, key, where);
     else if (key == "plugins") {
       raw_field(L, 1, key);
       SceneValue v;
@@ -144,8 +155,10 @@ int SceneRecorder::record_world(lua_State* L) {
         throw InputError(where, "world: 'plugins' " + e.bare());
       }
       lua_pop(L, 1);
-      if (auto* names = std::get_if<std::vector<std::string>>(&v)) w.plugins = *names;
-      else if (!std::holds_alternative<std::vector<double>>(v) || !std::get<std::vector<double>>(v).empty())
+      if (auto* names = std::get_if<std::vector<std::string>>(&v))
+        w.plugins = *names;
+      else if (!std::holds_alternative<std::vector<double>>(v) ||
+               !std::get<std::vector<double>>(v).empty())
         throw InputError(where, "world: 'plugins' must be a list of plugin names");
     } else if (key == "settings" || key == "every") {
       raw_field(L, 1, key);
@@ -162,11 +175,13 @@ int SceneRecorder::record_world(lua_State* L) {
         raw_field(L, t, plugin);
         if (key == "settings") {
           if (lua_type(L, -1) != LUA_TTABLE)
-            throw InputError(where, "world: the settings of '" + plugin + "' must be a table such as { g = {0, -9.81, 0} }");
+            throw InputError(where, "world: the settings of '" + plugin +
+                                        "' must be a table such as { g = {0, -9.81, 0} }");
           w.settings.push_back({plugin, fields_of(L, lua_gettop(L), "setting", where)});
         } else {
           if (lua_type(L, -1) != LUA_TNUMBER)
-            throw InputError(where, "world: 'every' of '" + plugin + "' must be a whole number of steps");
+            throw InputError(where,
+                             "world: 'every' of '" + plugin + "' must be a whole number of steps");
           w.every.emplace_back(plugin, lua_tonumber(L, -1));
         }
         lua_pop(L, 1);

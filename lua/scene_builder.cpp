@@ -15,11 +15,14 @@ std::string num(double v) {
   return s.str();
 }
 
-[[noreturn]] void wrong_type(const PropertyDef& def, const std::string& expected, const SceneValue& got) {
+[[noreturn]] void wrong_type(const PropertyDef& def, const std::string& expected,
+                             const SceneValue& got) {
   throw InputError("'" + def.name + "' expects " + expected + ", got " + describe(got));
 }
 
-const std::vector<double>* numbers(const SceneValue& v) { return std::get_if<std::vector<double>>(&v); }
+const std::vector<double>* numbers(const SceneValue& v) {
+  return std::get_if<std::vector<double>>(&v);
+}
 
 /// {x, y} (z = 0, the play area) or {x, y, z}.
 std::optional<Vec3> vec3_of(const SceneValue& v) {
@@ -33,13 +36,16 @@ std::string plugin_hint(const PluginRegistry& registry, const std::string& name)
   return near.empty() ? "" : " (did you mean '" + near + "'?)";
 }
 
-PropertyValue setting_value(const SceneValue& v, const std::string& plugin, const std::string& key) {
+PropertyValue setting_value(const SceneValue& v, const std::string& plugin,
+                            const std::string& key) {
   if (const double* d = std::get_if<double>(&v)) return *d;
   if (const bool* b = std::get_if<bool>(&v)) return *b;
   if (const std::string* s = std::get_if<std::string>(&v)) return *s;
   if (auto vec = vec3_of(v)) return *vec;
-  throw InputError("world: setting '" + key + "' of '" + plugin + "' must be a number, a boolean, a string or "
-                   "a vector {x, y[, z]}, not " + describe(v));
+  throw InputError("world: setting '" + key + "' of '" + plugin +
+                   "' must be a number, a boolean, a string or "
+                   "a vector {x, y[, z]}, not " +
+                   describe(v));
 }
 
 WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) {
@@ -47,7 +53,8 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
   const ErrorLocation& where = w.where;
   auto fail = [&](const std::string& msg) { throw InputError(where, msg); };
   if (w.dt) {
-    if (!std::isfinite(*w.dt) || !(*w.dt > 0)) fail("world: 'dt' must be a positive number of seconds, got " + num(*w.dt));
+    if (!std::isfinite(*w.dt) || !(*w.dt > 0))
+      fail("world: 'dt' must be a positive number of seconds, got " + num(*w.dt));
     def.dt = *w.dt;
   }
   if (!std::isfinite(w.seconds) || w.seconds < 0)
@@ -57,7 +64,9 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
     def.plugins.push_back(p);
   }
   for (const auto& s : w.settings) {
-    if (!registry.find(s.plugin)) fail("world: settings for unknown plugin '" + s.plugin + "'" + plugin_hint(registry, s.plugin));
+    if (!registry.find(s.plugin))
+      fail("world: settings for unknown plugin '" + s.plugin + "'" +
+           plugin_hint(registry, s.plugin));
     PluginSettings settings;
     settings.where = ErrorLocation{where.file, where.line, ""};
     for (const auto& f : s.fields) {
@@ -70,9 +79,11 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
     def.settings[s.plugin] = std::move(settings);
   }
   for (const auto& [plugin, n] : w.every) {
-    if (!registry.find(plugin)) fail("world: 'every' for unknown plugin '" + plugin + "'" + plugin_hint(registry, plugin));
+    if (!registry.find(plugin))
+      fail("world: 'every' for unknown plugin '" + plugin + "'" + plugin_hint(registry, plugin));
     if (!(n >= 1) || std::floor(n) != n || n > 1e6)
-      fail("world: 'every' of '" + plugin + "' must be a whole number of steps >= 1, got " + num(n));
+      fail("world: 'every' of '" + plugin + "' must be a whole number of steps >= 1, got " +
+           num(n));
     def.every[plugin] = int(n);
   }
   return def;
@@ -95,7 +106,8 @@ std::string describe(const SceneValue& v) {
   return std::visit(Visitor{}, v);
 }
 
-PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def, const World& world) {
+PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
+                                const World& world) {
   auto resolve = [&](const std::string& name) {
     const ObjectId id = world.find(name);
     if (id) return id;
@@ -104,7 +116,8 @@ PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
     for (std::uint32_t s = 0; s < store.slot_count(); ++s)
       if (ObjectId o = store.id_at(s); o) names.push_back(store.describe(o));
     std::string msg = "'" + def.name + "' refers to '" + name + "', but no object has that name";
-    if (auto near = closest_name(name, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+    if (auto near = closest_name(name, names); !near.empty())
+      msg += " (did you mean '" + near + "'?)";
     throw InputError(msg);
   };
 
@@ -113,7 +126,8 @@ PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
       if (const double* d = std::get_if<double>(&value)) return *d;
       wrong_type(def, "a number", value);
     case PropertyKind::Integer:
-      if (const double* d = std::get_if<double>(&value); d && std::isfinite(*d) && std::floor(*d) == *d)
+      if (const double* d = std::get_if<double>(&value);
+          d && std::isfinite(*d) && std::floor(*d) == *d)
         return std::int64_t(*d);
       wrong_type(def, "a whole number", value);
     case PropertyKind::Bool:
@@ -128,7 +142,8 @@ PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
         const double norm = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
         // A hand-written quaternion is rarely exactly unit; normalise it here
         // (zero and non-finite ones are refused by the value rules).
-        if (norm > 0 && std::isfinite(norm)) return Quat{q.w / norm, q.x / norm, q.y / norm, q.z / norm};
+        if (norm > 0 && std::isfinite(norm))
+          return Quat{q.w / norm, q.x / norm, q.y / norm, q.z / norm};
         return q;
       }
       wrong_type(def, "a quaternion {w, x, y, z}", value);
@@ -152,7 +167,8 @@ PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
         if (!world.properties().enum_value(world.properties().id(def.name), *s)) {
           std::string allowed;
           for (const auto& v : def.enum_values) allowed += (allowed.empty() ? "" : ", ") + v;
-          std::string msg = "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")";
+          std::string msg =
+              "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")";
           throw InputError(msg);
         }
         return *s;  // the store turns the name into its index
@@ -179,7 +195,8 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
   for (const RecordedObject& obj : record.objects) {
     if (!obj.name.empty()) {
       if (auto it = out.sources.find(obj.name); it != out.sources.end())
-        throw InputError(obj.where, "duplicate name: '" + obj.name + "' is already the name of the object at " +
+        throw InputError(obj.where, "duplicate name: '" + obj.name +
+                                        "' is already the name of the object at " +
                                         it->second.file + ":" + std::to_string(it->second.line));
       out.sources.emplace(obj.name, obj.where);
     }
@@ -191,7 +208,8 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
     const RecordedObject& obj = record.objects[i];
     try {
       for (const SceneField& f : obj.fields) {
-        const PropertyId pid = properties.id(f.key);  // "unknown property 'mas' (did you mean 'mass'?)"
+        const PropertyId pid =
+            properties.id(f.key);  // "unknown property 'mas' (did you mean 'mass'?)"
         const PropertyDef& def = properties.def(pid);
         const PropertyValue value = to_property_value(f.value, def, world);
         check_value(def, value);

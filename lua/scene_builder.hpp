@@ -26,6 +26,7 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry);
 
 /// The property value a scene value stands for, given the property's type.
 /// Refs are resolved by name in `world`. Throws InputError without a location.
-PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def, const World& world);
+PropertyValue to_property_value(const SceneValue& value, const PropertyDef& def,
+                                const World& world);
 
 }  // namespace alloy::lua

@@ -1,8 +1,7 @@
 #include "lua/scene_loader.hpp"
 
-#include <lua.hpp>
-
 #include <algorithm>
+#include <lua.hpp>
 #include <optional>
 
 #include "lua/alloy_api.hpp"
@@ -37,7 +36,8 @@ struct RecordedScene {
 SceneSource resolve(LuaHost& host, const fs::path& path, bool allow_library_mod) {
   const std::string display = display_path(path);
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(ErrorLocation{display, 0, ""}, "no such scene file or mod folder");
+  if (!fs::exists(path, ec))
+    throw InputError(ErrorLocation{display, 0, ""}, "no such scene file or mod folder");
   SceneSource src;
   if (fs::is_directory(path, ec)) {
     Manifest m = read_manifest(host, path);
@@ -45,13 +45,15 @@ SceneSource resolve(LuaHost& host, const fs::path& path, bool allow_library_mod)
     if (!m.scene.empty()) {
       file = path / m.scene;
       if (!fs::is_regular_file(file, ec))
-        throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + m.name + "' names its scene '" + m.scene +
-                                                           "', but there is no file " + display_path(file));
+        throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + m.name + "' names its scene '" +
+                                                           m.scene + "', but there is no file " +
+                                                           display_path(file));
     } else if (allow_library_mod) {
       file = path / m.main;  // checking a library mod: run its main file
     } else {
-      throw InputError(ErrorLocation{m.file, 0, ""},
-                       "mod '" + m.name + "' has no scene (add scene = \"scene.lua\" to its mod.lua)");
+      throw InputError(
+          ErrorLocation{m.file, 0, ""},
+          "mod '" + m.name + "' has no scene (add scene = \"scene.lua\" to its mod.lua)");
     }
     src.file = file;
     src.mod = std::move(m);
@@ -125,12 +127,16 @@ LoadedScene load_scene(const fs::path& path, PluginRegistry& registry, const Loa
   BuiltScene built = build_scene(rec.record, registry);
   const RecordedWorld& w = rec.record.world;
   LoadedScene scene;
-  scene.name = !w.name.empty() ? w.name : rec.source.mod ? rec.source.mod->name : rec.source.file.stem().string();
+  scene.name = !w.name.empty()  ? w.name
+               : rec.source.mod ? rec.source.mod->name
+                                : rec.source.file.stem().string();
   scene.file = rec.source.file;
   scene.def = std::move(built.def);
   scene.world = std::move(built.world);
   scene.seconds = w.seconds;
-  scene.description = !w.description.empty() ? w.description : rec.source.mod ? rec.source.mod->description : "";
+  scene.description = !w.description.empty() ? w.description
+                      : rec.source.mod       ? rec.source.mod->description
+                                             : "";
   scene.sources = std::move(built.sources);
   return scene;
 }
@@ -151,7 +157,8 @@ void check(const fs::path& path, PluginRegistry& registry, const LoadOptions& op
 InputError locate(const LoadedScene& scene, const InputError& error) {
   if (!error.where().file.empty()) return error;
   ErrorLocation where = error.where();
-  if (auto it = scene.sources.find(where.object); !where.object.empty() && it != scene.sources.end()) {
+  if (auto it = scene.sources.find(where.object);
+      !where.object.empty() && it != scene.sources.end()) {
     where.file = it->second.file;
     where.line = it->second.line;
   } else {

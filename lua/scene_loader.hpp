@@ -38,11 +38,11 @@ struct LoadOptions {
 };
 
 struct LoadedScene {
-  std::string name;             ///< world{ name }, else the mod's name, else the file's stem
-  std::filesystem::path file;   ///< the scene file that ran
+  std::string name;            ///< world{ name }, else the mod's name, else the file's stem
+  std::filesystem::path file;  ///< the scene file that ran
   WorldDef def;
   std::unique_ptr<World> world;  ///< objects applied, not started
-  double seconds = 0;           ///< suggested run length, 0 = none
+  double seconds = 0;            ///< suggested run length, 0 = none
   std::string description;
   /// Where each named object was defined (to locate errors found later).
   std::map<std::string, ErrorLocation, std::less<>> sources;
@@ -57,7 +57,8 @@ LoadedScene load_scene(const std::filesystem::path& path, PluginRegistry& regist
 /// (instantiating the plugins it needs, which check their settings), without
 /// stepping. A mod folder without a scene is checked by loading its main file.
 /// Throws InputError.
-void check(const std::filesystem::path& path, PluginRegistry& registry, const LoadOptions& options = {});
+void check(const std::filesystem::path& path, PluginRegistry& registry,
+           const LoadOptions& options = {});
 
 /// An error found after loading (a resolver refusing an object) with the
 /// file and line of the object it names filled in from the scene.

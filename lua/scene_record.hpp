@@ -29,8 +29,8 @@ struct SceneField {
 };
 
 struct RecordedObject {
-  std::string name;     ///< may be empty
-  ErrorLocation where;  ///< file and line of the statement; object = name or "#n"
+  std::string name;                ///< may be empty
+  ErrorLocation where;             ///< file and line of the statement; object = name or "#n"
   std::vector<SceneField> fields;  ///< sorted by key, without `name`
 };
 

@@ -46,8 +46,10 @@ void check_finite(const PropertyDef& def, const PropertyValue& value) {
   if (const double* d = std::get_if<double>(&value); d && !std::isfinite(*d))
     fail(def, "must be a finite number, got " + num(*d));
   if (const Vec3* v = std::get_if<Vec3>(&value); v && !is_finite(*v))
-    fail(def, "must have finite components, got {" + num(v->x) + ", " + num(v->y) + ", " + num(v->z) + "}");
-  if (const Quat* q = std::get_if<Quat>(&value); q && !is_finite(*q)) fail(def, "must have finite components");
+    fail(def, "must have finite components, got {" + num(v->x) + ", " + num(v->y) + ", " +
+                  num(v->z) + "}");
+  if (const Quat* q = std::get_if<Quat>(&value); q && !is_finite(*q))
+    fail(def, "must have finite components");
 }
 
 double number_of(const PropertyValue& v) {
@@ -84,10 +86,12 @@ void check_value(const PropertyDef& def, const PropertyValue& value) {
     if (def.name != r.property) continue;
     switch (r.rule) {
       case Rule::Positive:
-        if (!(number_of(value) > 0)) fail(def, "must be greater than 0, got " + num(number_of(value)));
+        if (!(number_of(value) > 0))
+          fail(def, "must be greater than 0, got " + num(number_of(value)));
         break;
       case Rule::NonNegative:
-        if (!(number_of(value) >= 0)) fail(def, "must not be negative, got " + num(number_of(value)));
+        if (!(number_of(value) >= 0))
+          fail(def, "must not be negative, got " + num(number_of(value)));
         break;
       case Rule::UnitInterval:
         if (!(number_of(value) >= 0 && number_of(value) <= 1))
@@ -95,11 +99,12 @@ void check_value(const PropertyDef& def, const PropertyValue& value) {
         break;
       case Rule::PositiveComponents:
         if (const Vec3* v = std::get_if<Vec3>(&value); v && !(v->x > 0 && v->y > 0 && v->z > 0))
-          fail(def, "must be positive in every direction, got {" + num(v->x) + ", " + num(v->y) + ", " +
-                        num(v->z) + "}");
+          fail(def, "must be positive in every direction, got {" + num(v->x) + ", " + num(v->y) +
+                        ", " + num(v->z) + "}");
         break;
       case Rule::NonZero:
-        if (const Vec3* v = std::get_if<Vec3>(&value); v && length(*v) == 0) fail(def, "must not be the zero vector");
+        if (const Vec3* v = std::get_if<Vec3>(&value); v && length(*v) == 0)
+          fail(def, "must not be the zero vector");
         if (const Quat* q = std::get_if<Quat>(&value);
             q && q->w == 0 && q->x == 0 && q->y == 0 && q->z == 0)
           fail(def, "must not be the zero quaternion");
@@ -119,7 +124,8 @@ void check_object(const World& w, ObjectId id) {
       if (has(w, body, "joint"))
         throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' is a joint");
       if (!has(w, body, "shape"))
-        throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' has no shape");
+        throw InputError("a joint can only hold bodies, and '" + w.describe(body) +
+                         "' has no shape");
     }
     auto lo = get<double>(w, id, "limit_low");
     auto hi = get<double>(w, id, "limit_high");
@@ -129,13 +135,15 @@ void check_object(const World& w, ObjectId id) {
   }
   const std::string shape = enum_name(w, id, "shape");
   if (shape.empty()) return;
-  if (shape == "box" && !has(w, id, "size")) throw InputError("a box needs a 'size' (full extents {x, y, z})");
+  if (shape == "box" && !has(w, id, "size"))
+    throw InputError("a box needs a 'size' (full extents {x, y, z})");
   if (shape == "sphere" && !has(w, id, "radius")) throw InputError("a sphere needs a 'radius'");
   if (shape == "capsule" && !(has(w, id, "radius") && has(w, id, "length")))
     throw InputError("a capsule needs a 'radius' and a 'length'");
   const bool is_static = get<bool>(w, id, "static").value_or(false);
   if (!is_static && !has(w, id, "mass") && !has(w, id, "density"))
-    throw InputError("a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
+    throw InputError(
+        "a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
 }
 
 }  // namespace alloy::lua

@@ -8,8 +8,8 @@
 #include <regex>
 
 #include "lua/scene_loader.hpp"
-#include "tests/lua/lua_test_support.hpp"
 #include "resolvers/plugins.hpp"
+#include "tests/lua/lua_test_support.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -68,7 +68,9 @@ TEST_P(BadScene, IsRefusedWhereItsFirstLineSays) {
 INSTANTIATE_TEST_SUITE_P(Files, BadScene, ::testing::ValuesIn(bad_scenes()),
                          [](const auto& info) { return info.param; });
 
-TEST(BadScenes, ThereAreAtLeastTen) { EXPECT_GE(bad_scenes().size(), 10u); }
+TEST(BadScenes, ThereAreAtLeastTen) {
+  EXPECT_GE(bad_scenes().size(), 10u);
+}
 
 }  // namespace
 }  // namespace alloy::lua

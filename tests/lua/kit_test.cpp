@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "lua/scene_loader.hpp"
-#include "tests/lua/lua_test_support.hpp"
 #include "resolvers/plugins.hpp"
+#include "tests/lua/lua_test_support.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -94,7 +94,8 @@ TEST_F(KitTest, PartsBecomeContractProperties) {
 TEST_F(KitTest, KitApiFromLua) {
   LoadedScene s = load_scene(source_path("tests/lua/scenes/kit_api.lua"), registry);
   EXPECT_TRUE(s.world->find("bob"));
-  EXPECT_NEAR(get<double>(*s.world, "lead_disk", "mass"), 11340 * 4.0 / 3.0 * std::numbers::pi * 0.001, 1e-9);
+  EXPECT_NEAR(get<double>(*s.world, "lead_disk", "mass"),
+              11340 * 4.0 / 3.0 * std::numbers::pi * 0.001, 1e-9);
 }
 
 TEST_F(KitTest, ObjectsMadeInsideAnotherModBelongToTheSceneLine) {
@@ -105,7 +106,9 @@ TEST_F(KitTest, ObjectsMadeInsideAnotherModBelongToTheSceneLine) {
   EXPECT_EQ(get<ObjectId>(*s.world, "p_hinge", "body_a"), s.world->find("p_bar"));
 }
 
-TEST_F(KitTest, TheKitModChecksOnItsOwn) { EXPECT_NO_THROW(check(source_path("mods/kit"), registry)); }
+TEST_F(KitTest, TheKitModChecksOnItsOwn) {
+  EXPECT_NO_THROW(check(source_path("mods/kit"), registry));
+}
 
 TEST_F(KitTest, DemoLoadsFromItsModFolder) {
   LoadedScene s = load_scene(source_path("mods/rigid_demo"), registry);
@@ -114,7 +117,8 @@ TEST_F(KitTest, DemoLoadsFromItsModFolder) {
   EXPECT_DOUBLE_EQ(s.seconds, 5);
   EXPECT_FALSE(s.description.empty());
   EXPECT_DOUBLE_EQ(s.def.dt, 1.0 / 240);
-  EXPECT_EQ(std::get<Vec3>(s.def.settings.at("gravity.uniform").values().at("g")), (Vec3{0, -9.81, 0}));
+  EXPECT_EQ(std::get<Vec3>(s.def.settings.at("gravity.uniform").values().at("g")),
+            (Vec3{0, -9.81, 0}));
   for (const char* name : {"floor", "ramp", "pendulum", "pivot", "ball", "plank", "wheel", "axle"})
     EXPECT_TRUE(s.world->find(name)) << name;
   EXPECT_DOUBLE_EQ(get<double>(*s.world, "pendulum", "mass"), 7850 * 0.8 * 0.04 * 0.04);
@@ -138,7 +142,8 @@ TEST_F(KitTest, DemoRunsStably) {
       EXPECT_NEAR(p.z, 0, 1e-4) << name << " left the play area at step " << i;
     }
     const Vec3 bar = get<Vec3>(w, "pendulum", "position");
-    EXPECT_NEAR(length(bar - Vec3{1.5, 1.8, 0}), 0.4, 0.01) << "pendulum off its hinge at step " << i;
+    EXPECT_NEAR(length(bar - Vec3{1.5, 1.8, 0}), 0.4, 0.01)
+        << "pendulum off its hinge at step " << i;
     const Vec3 wheel = get<Vec3>(w, "wheel", "position");
     EXPECT_NEAR(length(wheel - Vec3{2.4, 0.5, 0}), 0, 0.01) << "wheel off its pin at step " << i;
   }

@@ -1,16 +1,16 @@
 // The sandbox and the host: what a script can and cannot reach, errors that
 // keep their place, a memory budget that holds, a stack that stays balanced.
+#include "lua/sandbox.hpp"
+
 #include <gtest/gtest.h>
 
 #include <lua.hpp>
-
 #include <stdexcept>
 #include <string>
 
 #include "lua/alloy_api.hpp"
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_host.hpp"
-#include "lua/sandbox.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -28,15 +28,22 @@ class SandboxTest : public ::testing::Test {
   /// returns its first result as text.
   std::string run(const std::string& code, int env = 0) {
     host.load_string(code, "sandbox_test.lua");
-    if (env) lua_pushvalue(L, env);
-    else push_env();
+    if (env)
+      lua_pushvalue(L, env);
+    else
+      push_env();
     lua_setfenv(L, -2);
     host.call(0, 1, ErrorLocation{"sandbox_test.lua", 0, ""});
     std::string out;
     switch (lua_type(L, -1)) {
-      case LUA_TNIL: out = "nil"; break;
-      case LUA_TBOOLEAN: out = lua_toboolean(L, -1) ? "true" : "false"; break;
-      default: out = lua_tostring(L, -1) ? lua_tostring(L, -1) : luaL_typename(L, -1);
+      case LUA_TNIL:
+        out = "nil";
+        break;
+      case LUA_TBOOLEAN:
+        out = lua_toboolean(L, -1) ? "true" : "false";
+        break;
+      default:
+        out = lua_tostring(L, -1) ? lua_tostring(L, -1) : luaL_typename(L, -1);
     }
     lua_pop(L, 1);
     return out;
@@ -47,8 +54,9 @@ class SandboxTest : public ::testing::Test {
 };
 
 TEST_F(SandboxTest, HostLibrariesAndUnsafeFunctionsAreAbsent) {
-  for (const char* name : {"io", "os", "debug", "ffi", "jit", "package", "dofile", "loadfile", "loadstring",
-                           "getfenv", "setfenv", "collectgarbage", "newproxy", "module", "gcinfo", "require"}) {
+  for (const char* name :
+       {"io", "os", "debug", "ffi", "jit", "package", "dofile", "loadfile", "loadstring", "getfenv",
+        "setfenv", "collectgarbage", "newproxy", "module", "gcinfo", "require"}) {
     EXPECT_EQ(run(std::string("return type(") + name + ")"), "nil") << name;
   }
   EXPECT_EQ(lua_gettop(L), 0);
@@ -73,7 +81,9 @@ TEST_F(SandboxTest, StringDumpIsUnreachable) {
 TEST_F(SandboxTest, LoadCompilesTextIntoTheCallersEnvironment) {
   EXPECT_EQ(run("x = 41 return load('return x + 1')()"), "42");
   EXPECT_EQ(run("local f = load('return y', 'chunk', 't', { y = 'given' }) return f()"), "given");
-  EXPECT_EQ(run("local f, err = load('return +') return tostring(f) .. ' ' .. tostring(err ~= nil)"), "nil true");
+  EXPECT_EQ(
+      run("local f, err = load('return +') return tostring(f) .. ' ' .. tostring(err ~= nil)"),
+      "nil true");
 }
 
 TEST_F(SandboxTest, LoadRefusesBytecode) {
@@ -108,7 +118,9 @@ TEST_F(SandboxTest, HostTablesAreReadOnly) {
   // rawset still works on the script's own tables.
   EXPECT_EQ(run("local t = {} rawset(t, 'k', 5) return t.k"), "5");
   // A script's frozen table is a host table too.
-  EXPECT_EQ(run("local t = alloy.freeze({ a = 1 }) return tostring(pcall(rawset, t, 'a', 2)) .. t.a"), "false1");
+  EXPECT_EQ(
+      run("local t = alloy.freeze({ a = 1 }) return tostring(pcall(rawset, t, 'a', 2)) .. t.a"),
+      "false1");
 }
 
 TEST_F(SandboxTest, EachEnvironmentHasItsOwnLibraries) {
@@ -129,7 +141,8 @@ TEST_F(SandboxTest, RuntimeErrorsKeepFileLineAndTraceback) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where().file, "sandbox_test.lua");
     EXPECT_EQ(e.where().line, 2);
-    EXPECT_NE(std::string(e.what()).find("attempt to perform arithmetic"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("attempt to perform arithmetic"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("stack traceback"), std::string::npos) << e.what();
   }
   EXPECT_EQ(lua_gettop(L), 0);
@@ -172,8 +185,10 @@ TEST_F(SandboxTest, CppExceptionsBecomeLuaErrors) {
   lua_setfield(L, env, "boom");
   EXPECT_EQ(run("local ok, e = pcall(boom, false) return tostring(ok) .. ' ' .. tostring(e)", env),
             "false plain failure");
-  EXPECT_EQ(run("local ok, e = pcall(boom, true) return e.object .. ': ' .. e.message", env), "gear: teeth must mesh");
-  EXPECT_EQ(run("local ok, e = pcall(boom, true) return tostring(e)", env), "object 'gear': teeth must mesh");
+  EXPECT_EQ(run("local ok, e = pcall(boom, true) return e.object .. ': ' .. e.message", env),
+            "gear: teeth must mesh");
+  EXPECT_EQ(run("local ok, e = pcall(boom, true) return tostring(e)", env),
+            "object 'gear': teeth must mesh");
   try {
     run("\n\nboom(true)", env);
     FAIL() << "no error";

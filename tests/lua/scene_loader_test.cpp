@@ -1,10 +1,11 @@
 // lua/scene_loader: world settings, names, the mod search path, mods and
 // their manifests, and the errors of loading that are not about one object.
+#include "lua/scene_loader.hpp"
+
 #include <gtest/gtest.h>
 
-#include "lua/scene_loader.hpp"
-#include "tests/lua/lua_test_support.hpp"
 #include "resolvers/plugins.hpp"
+#include "tests/lua/lua_test_support.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -37,7 +38,8 @@ TEST_F(SceneLoaderTest, WorldSettingsBecomeTheWorldDef) {
   EXPECT_DOUBLE_EQ(s.seconds, 2.5);
   EXPECT_DOUBLE_EQ(s.def.dt, 1.0 / 120);
   EXPECT_DOUBLE_EQ(s.world->dt(), 1.0 / 120);
-  EXPECT_EQ(s.def.plugins, (std::vector<std::string>{"rigid_body", "gravity.uniform", "rigid_body_from_gravity"}));
+  EXPECT_EQ(s.def.plugins,
+            (std::vector<std::string>{"rigid_body", "gravity.uniform", "rigid_body_from_gravity"}));
   const PluginSettings& g = s.def.settings.at("gravity.uniform");
   EXPECT_EQ(g.vec3("g", {}), (Vec3{0, -1.62, 0}));  // {x, y}: z = 0
   EXPECT_EQ(g.where.line, 2);
@@ -69,7 +71,8 @@ TEST_F(SceneLoaderTest, MissingAndWrongFilesAreInputErrors) {
   const InputError missing = load_error("tests/lua/scenes/does_not_exist.lua");
   EXPECT_NE(missing.where().file.find("does_not_exist.lua"), std::string::npos);
   const InputError not_lua = load_error("tests/lua/CMakeLists.txt");
-  EXPECT_NE(std::string(not_lua.what()).find("a scene is a .lua file or a mod folder"), std::string::npos);
+  EXPECT_NE(std::string(not_lua.what()).find("a scene is a .lua file or a mod folder"),
+            std::string::npos);
   // A library mod has no scene to run...
   const InputError library = load_error("mods/kit");
   EXPECT_NE(std::string(library.what()).find("has no scene"), std::string::npos) << library.what();
@@ -78,7 +81,8 @@ TEST_F(SceneLoaderTest, MissingAndWrongFilesAreInputErrors) {
 
 TEST_F(SceneLoaderTest, ModsThatAreNotDeclaredCannotBeRequired) {
   const InputError e = load_error("tests/lua/bad_scenes/undeclared_dependency.lua");
-  EXPECT_NE(std::string(e.what()).find("does not list it in depends"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("does not list it in depends"), std::string::npos)
+      << e.what();
 }
 
 TEST_F(SceneLoaderTest, AMemoryHungrySceneIsStopped) {
