@@ -13,8 +13,10 @@
 namespace alloy {
 
 struct Event {
-  std::uint64_t step = 0;  ///< filled by the world
-  double time = 0;         ///< simulated time at the end of the step, s; filled by the world
+  /// The step the event happened in, counted from 1 (0: before the first step,
+  /// while the world primed itself); filled by the world at publish.
+  std::uint64_t step = 0;
+  double time = 0;  ///< simulated time at the end of that step, s; filled by the world
   std::string type;        ///< e.g. "contact_began", "circuit_closed"
   std::string source;      ///< the stage that emitted it; filled by the world
   ObjectId a{}, b{};       ///< the objects concerned, if any

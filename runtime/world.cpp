@@ -33,8 +33,8 @@ double WorldView::time() const { return world_.time_; }
 double WorldView::dt() const { return world_.def_.dt; }
 
 void WorldView::emit(Event e) const {
-  e.step = world_.step_;
-  e.time = world_.time_;
+  // step and time are stamped at publish: the step an event happened in, and
+  // the simulated time at the end of that step, whichever phase emitted it.
   if (world_.current_stage_) e.source = *world_.current_stage_;
   world_.pending_.push_back(std::move(e));
 }
@@ -216,6 +216,10 @@ void World::interact_phase() {
 void World::publish_phase() {
   published_.swap(pending_);
   pending_.clear();
+  for (Event& e : published_) {
+    e.step = step_;
+    e.time = time_;
+  }
   for (const Event& e : published_)
     for (const auto& observer : observers_) observer(e);
 }

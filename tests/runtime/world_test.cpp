@@ -270,7 +270,8 @@ TEST_F(WorldTest, EventsArePublishedAfterTheStepWithStepAndTime) {
   ASSERT_EQ(seen.size(), 1u);
   EXPECT_EQ(seen[0].type, "ding");
   EXPECT_EQ(seen[0].source, "emitter");
-  EXPECT_EQ(seen[0].step, 2u);
+  EXPECT_EQ(seen[0].step, 3u);  // emitted in the third step's advance (when 2 steps were done)
+  EXPECT_DOUBLE_EQ(seen[0].time, 3 * w.dt());
   EXPECT_DOUBLE_EQ(seen[0].value("pitch"), 880.0);
   EXPECT_TRUE(w.events().empty());  // the last step had none
 }
