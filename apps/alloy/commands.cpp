@@ -133,16 +133,22 @@ int run(const RunOptions& opt, std::ostream& out) {
     out << "\n";
   }
   const double wall0 = now_seconds();
-  world.start();
-  if (!opt.quiet) {
-    out << "stages:";
-    for (const auto& s : world.active_stages()) out << " " << s;
-    out << "\n";
-  }
-  if (trace) trace->sample(world);
-  for (std::uint64_t i = 0; i < steps; ++i) {
-    world.step();
-    if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
+  try {
+    world.start();
+    if (!opt.quiet) {
+      out << "stages:";
+      for (const auto& s : world.active_stages()) out << " " << s;
+      out << "\n";
+    }
+    if (trace) trace->sample(world);
+    for (std::uint64_t i = 0; i < steps; ++i) {
+      world.step();
+      if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
+    }
+  } catch (const InputError& e) {
+    // A resolver refused an object (or a setting) only once the world ran:
+    // point at the scene line that made it.
+    throw lua::locate(scene, e);
   }
   const double wall = now_seconds() - wall0;
   if (trace) trace->close();

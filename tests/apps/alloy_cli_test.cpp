@@ -1,0 +1,180 @@
+// Tests for apps/alloy: the command line as a user meets it. Runs in-process
+// through run_cli (fast), and once through the real binary for exit codes.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/alloy/commands.hpp"
+
+namespace fs = std::filesystem;
+
+namespace alloy::app {
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "alloy");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  const int code = run_cli(int(argv.size()), argv.data(), out, err);
+  return {code, out.str(), err.str()};
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+fs::path temp_dir() {
+  fs::path d = fs::temp_directory_path() / ("alloy_cli_test_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+const char* kDemo = "mods/rigid_demo";
+
+TEST(AlloyCli, RunNarratesAndSucceeds) {
+  Result r = cli({"run", kDemo, "--seconds", "2"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("stages:"), std::string::npos);
+  EXPECT_NE(r.out.find("rigid_body"), std::string::npos);
+  EXPECT_NE(r.out.find("contact began"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ran 480 steps"), std::string::npos) << r.out;
+}
+
+TEST(AlloyCli, TraceIsLongFormatWithNamedObjectsAndComponents) {
+  const fs::path trace = temp_dir() / "trace.csv";
+  Result r = cli({"run", kDemo, "--steps", "10", "--trace", trace.string(), "--trace-props", "position,mass",
+                  "--trace-every", "5", "--quiet"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  std::ifstream in(trace);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "step,time,object,property,value");
+  std::set<std::string> steps, props;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    ASSERT_EQ(f.size(), 5u) << line;
+    steps.insert(f[0]);
+    props.insert(f[3]);
+    EXPECT_NE(f[2].rfind("#", 0), 0u) << "demo objects are named: " << line;
+  }
+  EXPECT_EQ(steps, (std::set<std::string>{"0", "5", "10"}));
+  EXPECT_TRUE(props.count("position.x") && props.count("position.y") && props.count("position.z"));
+  EXPECT_TRUE(props.count("mass"));
+  EXPECT_FALSE(fs::exists(trace.string() + ".tmp"));
+}
+
+TEST(AlloyCli, SameSceneTwiceGivesAnIdenticalTrace) {
+  const fs::path dir = temp_dir();
+  for (const char* name : {"a.csv", "b.csv"})
+    ASSERT_EQ(cli({"run", kDemo, "--seconds", "3", "--trace", (dir / name).string(), "--quiet"}).code, kExitOk);
+  const std::string a = slurp(dir / "a.csv"), b = slurp(dir / "b.csv");
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_TRUE(a == b) << "traces differ";
+}
+
+TEST(AlloyCli, EventsAreJsonLinesWithStepTimeType) {
+  const fs::path events = temp_dir() / "events.jsonl";
+  ASSERT_EQ(cli({"run", kDemo, "--seconds", "2", "--events", events.string(), "--quiet"}).code, kExitOk);
+  std::ifstream in(events);
+  int n = 0;
+  for (std::string line; std::getline(in, line); ++n) {
+    auto j = nlohmann::json::parse(line);
+    EXPECT_TRUE(j.contains("step") && j.contains("time") && j.contains("type")) << line;
+  }
+  EXPECT_GT(n, 0);
+}
+
+TEST(AlloyCli, ProfileListsStagesAndSkippedPlugins) {
+  Result r = cli({"run", kDemo, "--steps", "50", "--profile", "--quiet"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("us/step"), std::string::npos);
+  EXPECT_NE(r.out.find("rigid_body"), std::string::npos);
+  EXPECT_NE(r.out.find("not instantiated"), std::string::npos);
+}
+
+TEST(AlloyCli, DtOverridesTheScene) {
+  Result r = cli({"run", kDemo, "--seconds", "1", "--dt", "0.01"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("ran 100 steps of 0.01 s"), std::string::npos) << r.out;
+}
+
+TEST(AlloyCli, BadArgumentsAreBadInput) {
+  EXPECT_EQ(cli({"run"}).code, kExitBadInput);
+  EXPECT_EQ(cli({"run", kDemo, "--steps", "10", "--seconds", "1"}).code, kExitBadInput);
+  EXPECT_EQ(cli({"run", kDemo, "--dt", "-1"}).code, kExitBadInput);
+  EXPECT_EQ(cli({"frobnicate"}).code, kExitBadInput);
+  Result r = cli({"run", "no/such/scene.lua"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("no/such/scene.lua"), std::string::npos) << r.err;
+  r = cli({"run", kDemo, "--steps", "1", "--trace", "/tmp/x.csv", "--trace-props", "positon"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("did you mean 'position'"), std::string::npos) << r.err;
+}
+
+TEST(AlloyCli, CheckAcceptsTheBundledMods) {
+  for (const char* mod : {"mods/kit", kDemo}) {
+    Result r = cli({"check", mod});
+    EXPECT_EQ(r.code, kExitOk) << mod << ": " << r.err;
+  }
+}
+
+// Every malformed scene of the Lua tests: exit code 2 from check and run,
+// with a message naming the file, the line and the object it expects.
+TEST(AlloyCli, MalformedScenesGiveExitCodeTwoWithFileLineAndObject) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator("tests/lua/bad_scenes")) {
+    if (entry.path().extension() != ".lua") continue;
+    ++count;
+    std::ifstream in(entry.path());
+    std::string first;
+    std::getline(in, first);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(first, m, std::regex("expect: (.*)$"))) << entry.path();
+    // "line N: rest" is printed as "FILE:N: rest" (see tests/lua/bad_scenes/README.md).
+    std::smatch lm;
+    const std::string expect_line = m[1];
+    ASSERT_TRUE(std::regex_match(expect_line, lm, std::regex("line ([0-9]+): (.*)"))) << entry.path();
+    const std::string expected = entry.path().string() + ":" + lm[1].str() + ": " + lm[2].str();
+    for (const std::vector<std::string>& args : {std::vector<std::string>{"check", entry.path().string()},
+                                                 std::vector<std::string>{"run", entry.path().string(), "--quiet"}}) {
+      const std::string& cmd = args[0];
+      Result r = cli(args);
+      EXPECT_EQ(r.code, kExitBadInput) << cmd << " " << entry.path() << "\n" << r.out << r.err;
+      EXPECT_NE(r.err.find(expected), std::string::npos)
+          << entry.path() << ": expected '" << expected << "' in: " << r.err;
+    }
+  }
+  EXPECT_GE(count, 10);
+}
+
+TEST(AlloyCli, TheBinaryReturnsTheDocumentedExitCodes) {
+  const std::string bin = ALLOY_BINARY;
+  EXPECT_EQ(std::system((bin + " run mods/rigid_demo --steps 10 --quiet > /dev/null").c_str()), 0);
+  const int bad = std::system((bin + " check no/such/scene.lua 2> /dev/null").c_str());
+  ASSERT_TRUE(WIFEXITED(bad));
+  EXPECT_EQ(WEXITSTATUS(bad), kExitBadInput);
+}
+
+}  // namespace
+}  // namespace alloy::app
