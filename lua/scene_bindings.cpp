@@ -1,6 +1,7 @@
 #include "lua/scene_bindings.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_host.hpp"
@@ -73,6 +74,32 @@ void SceneRecorder::install(lua_State* L, int env) {
   lua_pushlightuserdata(L, this);
   lua_pushcclosure(L, &SceneRecorder::object_fn, 1);
   lua_setfield(L, env, "object");
+  lua_pushlightuserdata(L, this);
+  lua_pushcclosure(L, &SceneRecorder::at_fn, 1);
+  lua_setfield(L, env, "at");
+}
+
+int SceneRecorder::at_fn(lua_State* L) {
+  return catch_exceptions(L, [&] { return self(L)->record_input(L); });
+}
+
+int SceneRecorder::record_input(lua_State* L) {
+  RecordedInput in;
+  in.where = host_.user_location(L);
+  const char* usage = "at(time, \"object\", { property = value, ... }) expects a time in seconds, "
+                      "an object's name and a table of properties";
+  if (lua_type(L, 1) != LUA_TNUMBER || lua_type(L, 2) != LUA_TSTRING || lua_type(L, 3) != LUA_TTABLE)
+    throw InputError(in.where, usage);
+  lua_settop(L, 3);
+  in.time = lua_tonumber(L, 1);
+  in.object = lua_tostring(L, 2);
+  in.where.object = in.object;
+  if (!std::isfinite(in.time) || in.time < 0)
+    throw InputError(in.where, "at(): the time must be a number of seconds >= 0");
+  in.fields = fields_of(L, 3, "property", in.where);
+  if (in.fields.empty()) throw InputError(in.where, "at(): nothing to set");
+  record_.inputs.push_back(std::move(in));
+  return 0;
 }
 
 int SceneRecorder::world_fn(lua_State* L) {

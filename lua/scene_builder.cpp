@@ -228,6 +228,23 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
       throw InputError(record.objects[i].where, e.bare());
     }
   }
+  // The timeline: each input is typed and checked now, applied when its time comes.
+  for (const RecordedInput& in : record.inputs) {
+    try {
+      const ObjectId id = world.find(in.object);
+      if (!id) throw InputError("at(): no object is called '" + in.object + "'");
+      for (const SceneField& f : in.fields) {
+        const PropertyId pid = properties.id(f.key);
+        const PropertyDef& def = properties.def(pid);
+        if (def.name == "name") throw InputError("at(): an object's name cannot change");
+        const PropertyValue value = to_property_value(f.value, def, world);
+        check_value(def, value);
+        world.schedule(in.time, id, pid, value);
+      }
+    } catch (const InputError& e) {
+      throw InputError(in.where, e.bare());
+    }
+  }
   return out;
 }
 

@@ -51,9 +51,19 @@ struct RecordedWorld {
   std::vector<std::pair<std::string, double>> every;
 };
 
+/// `at(time, "object", { property = value, ... })`: values to set on a named
+/// object when the world reaches `time` (the scene's timeline of input).
+struct RecordedInput {
+  double time = 0;
+  std::string object;
+  ErrorLocation where;  ///< line of the at() statement; object = the target's name
+  std::vector<SceneField> fields;
+};
+
 struct SceneRecord {
   RecordedWorld world;
   std::vector<RecordedObject> objects;
+  std::vector<RecordedInput> inputs;
 };
 
 }  // namespace alloy::lua

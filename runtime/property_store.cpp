@@ -127,7 +127,7 @@ ColumnBase& PropertyStore::column(PropertyId id) const {
   return *c;
 }
 
-void PropertyStore::set(ObjectId id, PropertyId prop, const PropertyValue& value) {
+PropertyValue PropertyStore::checked(ObjectId id, PropertyId prop, const PropertyValue& value) const {
   check_alive(id);
   const PropertyDef& def = registry_.def(prop);
   const ErrorLocation where{"", 0, describe(id)};
@@ -140,17 +140,19 @@ void PropertyStore::set(ObjectId id, PropertyId prop, const PropertyValue& value
         for (const auto& v : def.enum_values) allowed += (allowed.empty() ? "" : ", ") + v;
         throw InputError(where, "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")");
       }
-      set(id, prop, PropertyValue(*e));
-      return;
+      return PropertyValue(*e);
     }
   }
   if (def.kind == PropertyKind::Integer) {
     // A whole double from a script is an integer; anything else is a type error.
-    if (const double* d = std::get_if<double>(&value); d && std::floor(*d) == *d && std::isfinite(*d)) {
-      set(id, prop, PropertyValue(std::int64_t(*d)));
-      return;
-    }
+    if (const double* d = std::get_if<double>(&value); d && std::floor(*d) == *d && std::isfinite(*d))
+      return PropertyValue(std::int64_t(*d));
   }
+  if (def.kind == PropertyKind::Number)
+    if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) return checked(id, prop, PropertyValue(double(*i)));
+  if (value_kind_name(value) != to_string(def.kind))
+    throw InputError(where, "'" + def.name + "' expects " + std::string(to_string(def.kind)) +
+                                ", got " + value_kind_name(value));
   if (!finite_value(value))
     throw InputError(where, "'" + def.name + "' must be finite, got NaN or infinity");
   if (def.min) {
@@ -160,12 +162,15 @@ void PropertyStore::set(ObjectId id, PropertyId prop, const PropertyValue& value
   }
   if (const ObjectId* ref = std::get_if<ObjectId>(&value); ref && !ref->is_null() && !alive(*ref))
     throw InputError(where, "'" + def.name + "' refers to an object that does not exist");
-  ColumnBase& c = column(prop);
-  if (!c.set_value(id.index, value))
-    throw InputError(where, "'" + def.name + "' expects " + std::string(to_string(def.kind)) +
-                                ", got " + value_kind_name(value));
-  if (def.name == "name")
-    if (const std::string* s = std::get_if<std::string>(&value)) set_name(id, *s);
+  return value;
+}
+
+void PropertyStore::set(ObjectId id, PropertyId prop, const PropertyValue& value) {
+  const PropertyValue v = checked(id, prop, value);
+  if (registry_.def(prop).name == "name")  // the index first: it refuses duplicates
+    if (const std::string* s = std::get_if<std::string>(&v)) set_name(id, *s);
+  if (!column(prop).set_value(id.index, v))
+    throw AccessError("column of '" + registry_.def(prop).name + "' refused a checked value");
 }
 
 void PropertyStore::remove(ObjectId id, PropertyId prop) {

@@ -143,6 +143,9 @@ class PropertyStore {
   /// Generic edit (scene loading, player edits): type-checked against the
   /// registry, throws InputError naming the property and the expected type.
   void set(ObjectId id, PropertyId prop, const PropertyValue& value);
+  /// The value `set` would store (enum names resolved, whole numbers as
+  /// integers), or the InputError it would throw; stores nothing.
+  PropertyValue checked(ObjectId id, PropertyId prop, const PropertyValue& value) const;
   void remove(ObjectId id, PropertyId prop);
   bool has(ObjectId id, PropertyId prop) const {
     const ColumnBase* c = find_column(prop);

@@ -1,6 +1,7 @@
 #include "runtime/world.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <set>
 
 namespace alloy {
@@ -86,6 +87,49 @@ PropertyValue World::get(ObjectId id, std::string_view property) const {
   return store_.get(id, properties().id(property));
 }
 
+void World::schedule(double time, ObjectId id, PropertyId property, const PropertyValue& value) {
+  if (!std::isfinite(time) || time < 0)
+    throw InputError(ErrorLocation{"", 0, store_.describe(id)}, "an input's time must be a number of seconds >= 0");
+  PropertyValue v = store_.checked(id, property, value);
+  auto at = std::upper_bound(inputs_.begin() + std::ptrdiff_t(next_input_), inputs_.end(), time,
+                             [](double t, const ScheduledInput& in) { return t < in.time; });
+  inputs_.insert(at, ScheduledInput{time, id, property, std::move(v)});
+}
+
+namespace {
+std::string value_text(const PropertyValue& v, const PropertyDef& def, const PropertyStore& store) {
+  char buf[96];
+  return std::visit(
+      [&](const auto& x) -> std::string {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, double>) return std::snprintf(buf, sizeof buf, "%g", x), buf;
+        else if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(x);
+        else if constexpr (std::is_same_v<T, bool>) return x ? "true" : "false";
+        else if constexpr (std::is_same_v<T, Vec3>) return std::snprintf(buf, sizeof buf, "{%g, %g, %g}", x.x, x.y, x.z), buf;
+        else if constexpr (std::is_same_v<T, Quat>)
+          return std::snprintf(buf, sizeof buf, "{%g, %g, %g, %g}", x.w, x.x, x.y, x.z), buf;
+        else if constexpr (std::is_same_v<T, std::string>) return "\"" + x + "\"";
+        else if constexpr (std::is_same_v<T, ObjectId>) return x.is_null() ? "none" : store.describe(x);
+        else if constexpr (std::is_same_v<T, RefList>) return std::to_string(x.size()) + " objects";
+        else return def.enum_values.at(std::size_t(x.index));
+      },
+      v);
+}
+}  // namespace
+
+void World::apply_inputs() {
+  // Half a step of tolerance: an input at t = 1 s is applied before the step
+  // that starts at 1 s, whatever the rounding of the accumulated time.
+  while (next_input_ < inputs_.size() && inputs_[next_input_].time <= time_ + 0.5 * def_.dt) {
+    const ScheduledInput& in = inputs_[next_input_++];
+    if (!store_.alive(in.id)) continue;  // the player removed it meanwhile
+    store_.set(in.id, in.property, in.value);
+    const PropertyDef& def = properties().def(in.property);
+    pending_.push_back(Event{.type = "input", .source = "schedule", .a = in.id,
+                             .text = def.name + " = " + value_text(in.value, def, store_)});
+  }
+}
+
 bool World::has_stage(std::string_view name) const {
   return std::any_of(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == name; });
 }
@@ -119,6 +163,7 @@ void World::start() {
 void World::step() {
   if (!started_) start();
   const double t0 = now_seconds();
+  apply_inputs();
   sync_structure();
   const double t1 = now_seconds();
   advance_phase();

@@ -94,6 +94,13 @@ class World {
   void set(ObjectId id, PropertyId property, const PropertyValue& value);
   void remove(ObjectId id, std::string_view property);
   PropertyValue get(ObjectId id, std::string_view property) const;
+  /// Input scheduled ahead, such as a scene's timeline ("at t = 1 s the switch
+  /// bar is let go"): the edit is applied like a player's hand, between steps,
+  /// at the start of the first step that begins at or after `time`, and is
+  /// published as an "input" event. The value is checked now (InputError).
+  void schedule(double time, ObjectId id, PropertyId property, const PropertyValue& value);
+  /// Scheduled edits not yet applied.
+  std::size_t pending_inputs() const { return inputs_.size() - next_input_; }
   ObjectId find(std::string_view name) const { return store_.find(name); }
   std::string describe(ObjectId id) const { return store_.describe(id); }
 
@@ -140,6 +147,13 @@ class World {
   friend class PluginContext;
   struct Slot;
 
+  struct ScheduledInput {
+    double time;
+    ObjectId id;
+    PropertyId property;
+    PropertyValue value;
+  };
+  void apply_inputs();
   void advance_phase();
   void derive_phase();
   void interact_phase();
@@ -158,6 +172,8 @@ class World {
   PropertyStore store_;
   std::vector<std::unique_ptr<Slot>> slots_;  // active stages
   std::vector<Slot*> resolvers_, derived_, interactions_;
+  std::vector<ScheduledInput> inputs_;  // sorted by time, stable
+  std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;
   double time_ = 0;
   bool started_ = false;

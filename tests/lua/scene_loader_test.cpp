@@ -109,5 +109,17 @@ TEST_F(SceneLoaderTest, LocateFillsInTheObjectsLine) {
   EXPECT_EQ(located.bare(), "refused by a resolver");
 }
 
+TEST_F(SceneLoaderTest, TimelineInputsApplyAtTheirTime) {
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/timeline.lua"), registry);
+  World& w = *s.world;
+  EXPECT_EQ(w.pending_inputs(), 1u);
+  const ObjectId bar = w.find("bar");
+  w.run(110);  // 0.458 s: still held
+  EXPECT_DOUBLE_EQ(std::get<Vec3>(w.get(bar, "position")).y, 1.0);
+  w.run(130);  // let go at 0.5 s, then falls for half a second
+  EXPECT_FALSE(std::get<bool>(w.get(bar, "pinned")));
+  EXPECT_LT(std::get<Vec3>(w.get(bar, "position")).y, 0.0);
+}
+
 }  // namespace
 }  // namespace alloy::lua

@@ -289,5 +289,26 @@ TEST_F(WorldTest, StructuralChangesRebuildResolvers) {
   EXPECT_EQ(osc.builds, builds + 1);
 }
 
+TEST_F(WorldTest, ScheduledInputsApplyBetweenStepsAtTheirTime) {
+  World w(registry);
+  const ObjectId a = add_oscillator(w, "a", 0.0);
+  w.schedule(10 * w.dt(), a, registry.properties().id("v"), 2.0);
+  EXPECT_THROW(w.schedule(1.0, a, registry.properties().id("v"), Vec3{}), InputError);  // checked now
+  EXPECT_EQ(w.pending_inputs(), 1u);
+  std::vector<Event> inputs;
+  w.add_observer([&](const Event& e) {
+    if (e.type == "input") inputs.push_back(e);
+  });
+  w.run(10);
+  EXPECT_EQ(std::get<double>(w.get(a, "x")), 0.0);  // at rest until the input
+  w.step();                                          // the step that starts at t = 10 dt
+  EXPECT_GT(std::get<double>(w.get(a, "x")), 0.0);
+  ASSERT_EQ(inputs.size(), 1u);
+  EXPECT_EQ(inputs[0].step, 11u);
+  EXPECT_EQ(inputs[0].a, a);
+  EXPECT_EQ(inputs[0].text, "v = 2");
+  EXPECT_EQ(w.pending_inputs(), 0u);
+}
+
 }  // namespace
 }  // namespace alloy
