@@ -73,6 +73,13 @@ class ColumnWriter {
       ++c_->version_;
     }
   }
+  /// The object in `slot` stops carrying the property (a structural change).
+  void erase(std::uint32_t slot) {
+    if (!c_->has(slot)) return;
+    c_->values_[slot] = T{};
+    c_->mark_present(slot, false);
+    ++c_->version_;
+  }
   std::span<const std::uint32_t> members() const { return c_->members(); }
   std::uint64_t version() const { return c_->version(); }
 

@@ -22,6 +22,8 @@ struct World::Slot {
   std::vector<std::uint64_t> seen;
   bool updated_once = false;
   std::uint64_t output_version = 0;
+  bool primed = false;  // has had its first derive / interact
+  bool built = false;   // a resolver that has had its first build
 };
 
 // --- WorldView / ResolverAccess ----------------------------------------------
@@ -158,6 +160,8 @@ void World::start() {
   derive_phase();
   interact_phase();
   publish_phase();
+  for (auto& s : slots_) s->primed = true;
+  primed_ = true;
 }
 
 void World::step() {
@@ -274,22 +278,50 @@ void World::publish_phase() {
 void World::sync_structure() {
   if (synced_ && seen_structure_ == store_.structure_version()) return;
   synced_ = true;
-  store_.refresh();
-  const std::size_t before = slots_.size();
-  activate_needed();
-  seen_structure_ = store_.structure_version();
-  for (Slot* s : resolvers_) {
-    current_stage_ = &s->info.name;
-    ResolverAccess access(*this, s->info.name, s->writes);
-    s->resolver->build(access);
+  // A resolver's build may give objects a column that makes another plugin
+  // needed (gravity publishes `gravity`); settle that in a few rounds. Only
+  // the first round rebuilds every resolver: later rounds see memberships that
+  // resolvers wrote themselves, so only resolvers created in them are built.
+  for (int round = 0; round < 4; ++round) {
+    store_.refresh();
+    activate_needed();
+    seen_structure_ = store_.structure_version();
+    for (Slot* s : resolvers_) {
+      if (round > 0 && s->built) continue;
+      s->built = true;
+      current_stage_ = &s->info.name;
+      ResolverAccess access(*this, s->info.name, s->writes);
+      s->resolver->build(access);
+    }
+    store_.refresh();
+    if (seen_structure_ == store_.structure_version()) break;
   }
-  // Builds may add memberships (a resolver publishing a new column); settle them.
-  store_.refresh();
   seen_structure_ = store_.structure_version();
   for (auto& s : slots_)
     if (!s->resolver) s->stage->on_structure_changed(view());
   current_stage_ = nullptr;
-  if (slots_.size() != before) order_stages();
+  if (primed_) prime_new_stages();
+}
+
+void World::prime_new_stages() {
+  // A derived set or interaction created mid-run (a battery dropped into the
+  // world) computes and queues from the present state now, so that its first
+  // commands act in this step's advance, as at start().
+  for (Slot* s : derived_) {
+    if (s->primed) continue;
+    current_stage_ = &s->info.name;
+    inputs_changed(*s);  // record its input counters
+    s->derived->update(view());
+    s->updated_once = true;
+    ++s->output_version;
+  }
+  for (Slot* s : interactions_) {
+    if (s->primed) continue;
+    current_stage_ = &s->info.name;
+    s->interaction->apply(view());
+  }
+  for (auto& s : slots_) s->primed = true;
+  current_stage_ = nullptr;
 }
 
 bool World::needed(const PluginDef& def) const {

@@ -159,6 +159,7 @@ class World {
   void interact_phase();
   void publish_phase();
   void sync_structure();
+  void prime_new_stages();
   void activate_needed();
   bool needed(const PluginDef& def) const;
   void instantiate(const PluginDef& def);
@@ -178,6 +179,7 @@ class World {
   double time_ = 0;
   bool started_ = false;
   bool synced_ = false;
+  bool primed_ = false;  // start() has primed the pipeline
   std::uint64_t seen_structure_ = 0;
   const std::string* current_stage_ = nullptr;  // for Event::source
   mutable std::vector<Event> pending_;

@@ -107,7 +107,9 @@ void register_test_plugins(PluginRegistry& r) {
          .create = [](PluginContext&) { return std::make_unique<Energy>(); }});
   r.add({.info = {.name = "kicker", .kind = StageKind::Interaction, .derived = {"energy"}, .target = "oscillator"},
          .create = [](PluginContext& c) {
-           return std::make_unique<Kicker>(c.target<Oscillator>(), c.dependency<Energy>("energy"));
+           auto k = std::make_unique<Kicker>(c.target<Oscillator>(), c.dependency<Energy>("energy"));
+           k->threshold = c.settings().number("threshold", 0);
+           return k;
          }});
   r.add({.info = {.name = "magnets", .kind = StageKind::Resolver, .needs = {"pole"}},
          .properties = {{.name = "pole", .kind = PropertyKind::Number}},
@@ -308,6 +310,21 @@ TEST_F(WorldTest, ScheduledInputsApplyBetweenStepsAtTheirTime) {
   EXPECT_EQ(inputs[0].a, a);
   EXPECT_EQ(inputs[0].text, "v = 2");
   EXPECT_EQ(w.pending_inputs(), 0u);
+}
+
+TEST_F(WorldTest, StagesCreatedMidRunArePrimedLikeAtStart) {
+  WorldDef def;
+  def.settings["kicker"].set("threshold", 10.0);  // kick whenever it applies
+  World w(registry, def);
+  const ObjectId m = w.create("magnet");
+  w.set(m, "pole", 1.0);
+  w.run(3);
+  EXPECT_FALSE(w.has_stage("oscillator"));
+  add_oscillator(w, "late", 1.0);
+  w.step();  // creates oscillator, energy and kicker, primes them, then advances
+  auto& osc = dynamic_cast<Oscillator&>(*w.stage("oscillator"));
+  ASSERT_EQ(osc.performed.size(), 1u) << "the kick queued at creation acts in the same step";
+  EXPECT_EQ(dynamic_cast<Energy&>(*w.stage("energy")).updates, 2);  // primed, then this step's
 }
 
 }  // namespace

@@ -198,11 +198,10 @@ TEST_F(FromCollisionsTest, ABatteryAddedToARunningWorldFindsThePartsAlreadyTouch
   wire(w, "w1", battery, 1, contact, 0);
   wire(w, "w2", bar, 0, lamp, 0);
   wire(w, "w3", lamp, 1, battery, 0);
-  w.step();  // the resolver and the interaction come to life; the interaction sees the touching
-             // pair
+  w.step();  // the resolver and the interaction come to life; the interaction is primed at
+             // creation (as at start), sees the touching pair, and the resolver connects it
+             // in this same step's advance
   ASSERT_TRUE(w.has_stage("electricity_from_collisions"));
-  EXPECT_EQ(num(w, lamp, "current"), 0.0);
-  w.step();  // and the resolver connects it
   EXPECT_NEAR(num(w, lamp, "current"), 6.0 / (0.1 + 12.0 + 1e-3 + 3 * 0.01), 1e-9);
 }
 
