@@ -11,6 +11,7 @@
 #include <span>
 
 #include "runtime/property_store.hpp"
+#include "runtime/scope.hpp"
 
 namespace alloy {
 class ResolverAccess;
@@ -19,18 +20,20 @@ class ResolverAccess;
 namespace alloy {
 
 /// Read-only view of one column. Cheap to copy; valid for the world's lifetime.
+/// A view handed to a stage of an area sees only the objects in that area.
 template <class T>
 class ColumnView {
  public:
   ColumnView() = default;
-  ColumnView(const Column<T>* column, const PropertyStore* store) : c_(column), store_(store) {}
+  ColumnView(const Column<T>* column, const PropertyStore* store, const Scope* scope = nullptr)
+      : c_(column), store_(store), scope_(scope) {}
 
   explicit operator bool() const { return c_ != nullptr; }
   PropertyId id() const { return c_->id(); }
   /// Fast path for loops over members(): no liveness check.
   const T& operator[](std::uint32_t slot) const { return (*c_)[slot]; }
-  bool has(std::uint32_t slot) const { return c_ && c_->has(slot); }
-  bool has(ObjectId id) const { return c_ && store_->alive(id) && c_->has(id.index); }
+  bool has(std::uint32_t slot) const { return c_ && c_->has(slot) && (!scope_ || scope_->contains(slot)); }
+  bool has(ObjectId id) const { return store_ && store_->alive(id) && has(id.index); }
   /// Checked access: a stale id or a missing property fails loudly.
   const T& get(ObjectId id) const {
     store_->check_alive(id);
@@ -40,15 +43,18 @@ class ColumnView {
     return (*c_)[id.index];
   }
   /// `fallback` if the object does not carry the property.
-  T value_or(std::uint32_t slot, T fallback) const { return has(slot) ? (*c_)[slot] : fallback; }
+  T value_or(std::uint32_t slot, T fallback) const { return c_ && c_->has(slot) ? (*c_)[slot] : fallback; }
+  /// The objects carrying the property (in scope), ascending.
   std::span<const std::uint32_t> members() const {
-    return c_ ? c_->members() : std::span<const std::uint32_t>{};
+    if (!c_) return {};
+    return scope_ ? scope_->members_of(*c_) : c_->members();
   }
   std::uint64_t version() const { return c_ ? c_->version() : 0; }
 
  private:
   const Column<T>* c_ = nullptr;
   const PropertyStore* store_ = nullptr;
+  const Scope* scope_ = nullptr;
 };
 
 /// Write access to one column that a resolver declared. Setting a value that
@@ -64,6 +70,7 @@ class ColumnWriter {
   /// Writes `value` for the object in `slot`; the object starts carrying the
   /// property if it did not.
   void set(std::uint32_t slot, const T& value) {
+    if (scope_ && !scope_->contains(slot)) out_of_scope(slot);
     if (!c_->has(slot)) {
       c_->values_[slot] = value;
       c_->mark_present(slot, true);
@@ -76,17 +83,26 @@ class ColumnWriter {
   /// The object in `slot` stops carrying the property (a structural change).
   void erase(std::uint32_t slot) {
     if (!c_->has(slot)) return;
+    if (scope_ && !scope_->contains(slot)) out_of_scope(slot);
     c_->values_[slot] = T{};
     c_->mark_present(slot, false);
     ++c_->version_;
   }
-  std::span<const std::uint32_t> members() const { return c_->members(); }
+  /// The objects carrying the property (in scope), ascending.
+  std::span<const std::uint32_t> members() const {
+    return scope_ ? scope_->members_of(*c_) : c_->members();
+  }
   std::uint64_t version() const { return c_->version(); }
 
  private:
   friend class ResolverAccess;
-  explicit ColumnWriter(Column<T>* column) : c_(column) {}
+  ColumnWriter(Column<T>* column, const Scope* scope) : c_(column), scope_(scope) {}
+  [[noreturn]] void out_of_scope(std::uint32_t slot) const {
+    throw AccessError("a resolver of an area wrote object #" + std::to_string(slot) +
+                      ", which is outside its area");
+  }
   Column<T>* c_ = nullptr;
+  const Scope* scope_ = nullptr;
 };
 
 }  // namespace alloy

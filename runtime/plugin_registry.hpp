@@ -20,8 +20,11 @@ class World;
 /// stages it depends on (the target of an interaction, the derived sets read).
 class PluginContext {
  public:
-  PluginContext(World& world, const StageInfo& info, const PluginSettings& settings)
-      : world_(world), info_(info), settings_(settings) {}
+  PluginContext(World& world, const StageInfo& info, const PluginSettings& settings,
+                std::string area = "")
+      : world_(world), info_(info), settings_(settings), area_(std::move(area)) {}
+  /// The area the stage is created for, or "" for a global stage.
+  const std::string& area() const { return area_; }
 
   World& world() { return world_; }
   const StageInfo& info() const { return info_; }
@@ -42,6 +45,7 @@ class PluginContext {
   World& world_;
   const StageInfo& info_;
   const PluginSettings& settings_;
+  std::string area_;
 };
 
 struct PluginDef {

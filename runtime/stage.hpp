@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,10 @@ struct StageInfo {
   std::vector<std::string> derived;    ///< derived sets read (DPS and interactions)
   std::vector<std::string> resolvers;  ///< resolvers whose published state is read (DPS)
   std::string target;                  ///< interactions: the one resolver they queue on
+  /// What the stage provides, when several plugins are alternatives for it
+  /// ("gravity": gravity.uniform or gravity.nbody). In any one scope only one
+  /// provider of a thing is active: the scene's choice, else the first registered.
+  std::string provides;
   std::string doc;                     ///< one line for `alloy plugins` and docs
 };
 
@@ -77,6 +82,10 @@ class Stage {
 
 class Resolver : public Stage {
  public:
+  /// Objects in `left` have just left this resolver's area (they keep every
+  /// property; another area's resolvers take them over). Called before the
+  /// rebuild that follows; a resolver may erase values it published for them.
+  virtual void on_scope_exit(ResolverAccess&, std::span<const std::uint32_t> left) {}
   /// Builds internal state from properties alone: after creation, after a
   /// swap, after a structural change. A resolver whose state matters keeps it
   /// in properties, so that a rebuild loses nothing.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cmath>
 #include <set>
 
 namespace alloy {
@@ -9,6 +10,9 @@ namespace alloy {
 /// An active stage and what the scheduler keeps about it.
 struct World::Slot {
   StageInfo info;
+  std::string instance;          // plugin name, or "plugin@area"
+  int area = -1;                 // index into areas_, -1 for a global stage
+  const Scope* scope = nullptr;  // what it acts on; null: every object
   std::unique_ptr<Stage> stage;
   Resolver* resolver = nullptr;
   DerivedSet* derived = nullptr;
@@ -53,6 +57,19 @@ World::World(PluginRegistry& plugins, WorldDef def)
     if (n < 1) throw InputError("'every' for '" + name + "' must be at least 1");
   plugins_.properties().add({.name = "name", .kind = PropertyKind::String,
                              .doc = "unique scene name of the object", .owner = "runtime"});
+  for (const AreaDef& a : def_.areas) {
+    if (a.name.empty()) throw InputError("an area needs a name");
+    for (const Area& other : areas_)
+      if (other.def.name == a.name) throw InputError("two areas are called '" + a.name + "'");
+    for (const auto& p : a.plugins)
+      if (!plugins_.find(p)) throw InputError("area '" + a.name + "': unknown plugin '" + p + "'");
+    areas_.push_back(Area{a, {}, {}});
+  }
+  for (const auto& [what, name] : def_.use) {
+    const PluginDef* d = plugins_.find(name);
+    if (!d) throw InputError("use: unknown plugin '" + name + "'");
+    if (d->info.provides != what) throw InputError("use: '" + name + "' does not provide '" + what + "'");
+  }
 }
 
 World::~World() = default;
@@ -120,6 +137,11 @@ std::string value_text(const PropertyValue& v, const PropertyDef& def, const Pro
 }  // namespace
 
 void World::apply_inputs() {
+  while (!swaps_.empty() && swaps_.front().time <= time_ + 0.5 * def_.dt) {
+    ScheduledSwap sw = std::move(swaps_.front());
+    swaps_.erase(swaps_.begin());
+    swap(sw.area, sw.from, sw.to);
+  }
   // Half a step of tolerance: an input at t = 1 s is applied before the step
   // that starts at 1 s, whatever the rounding of the accumulated time.
   while (next_input_ < inputs_.size() && inputs_[next_input_].time <= time_ + 0.5 * def_.dt) {
@@ -132,20 +154,31 @@ void World::apply_inputs() {
   }
 }
 
-bool World::has_stage(std::string_view name) const {
-  return std::any_of(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == name; });
+World::Slot* World::find_slot(std::string_view instance) const {
+  for (const auto& s : slots_)
+    if (s->instance == instance) return s.get();
+  return nullptr;
 }
 
+bool World::has_stage(std::string_view name) const { return find_slot(name) != nullptr; }
+
 Stage* World::stage(std::string_view name) {
-  for (auto& s : slots_)
-    if (s->info.name == name) return s->stage.get();
-  return nullptr;
+  Slot* s = find_slot(name);
+  return s ? s->stage.get() : nullptr;
+}
+
+World::Slot* World::dependency(const Slot& of, std::string_view plugin) const {
+  // A stage of an area depends on the area's own instance first, else the global one.
+  if (of.area >= 0)
+    if (Slot* s = find_slot(std::string(plugin) + "@" + areas_[std::size_t(of.area)].def.name)) return s;
+  Slot* s = find_slot(plugin);
+  return s && s->area < 0 ? s : nullptr;
 }
 
 std::vector<std::string> World::active_stages() const {
   std::vector<std::string> out;
   for (const auto* group : {&resolvers_, &derived_, &interactions_})
-    for (const Slot* s : *group) out.push_back(s->info.name);
+    for (const Slot* s : *group) out.push_back(s->instance);
   return out;
 }
 
@@ -154,6 +187,7 @@ std::vector<std::string> World::active_stages() const {
 void World::start() {
   if (started_) return;
   started_ = true;
+  assign_areas();
   sync_structure();
   // Prime the pipeline: derived data and queued commands from the initial
   // properties, so that the first advance integrates with the forces of t = 0.
@@ -168,7 +202,9 @@ void World::step() {
   if (!started_) start();
   const double t0 = now_seconds();
   apply_inputs();
+  const bool crossed = assign_areas();
   sync_structure();
+  if (crossed) rescope();
   const double t1 = now_seconds();
   advance_phase();
   store_.refresh();
@@ -197,8 +233,8 @@ void World::advance_phase() {
       ++timing.skipped;
       continue;
     }
-    current_stage_ = &s->info.name;
-    ResolverAccess access(*this, s->info.name, s->writes);
+    current_stage_ = &s->instance;
+    ResolverAccess access(*this, s->instance, s->writes, s->scope);
     const double t = now_seconds();
     s->resolver->advance(access, def_.dt * s->every);
     timing.seconds += now_seconds() - t;
@@ -225,6 +261,7 @@ bool World::inputs_changed(Slot& s) const {
   }
   for (const Slot* in : s.inputs)
     check(in->resolver ? in->resolver->state_version() : in->output_version);
+  check(s.scope ? s.scope->version() : 0);
   return changed;
 }
 
@@ -235,9 +272,9 @@ void World::derive_phase() {
       ++timing.skipped;
       continue;
     }
-    current_stage_ = &s->info.name;
+    current_stage_ = &s->instance;
     const double t = now_seconds();
-    s->derived->update(view());
+    s->derived->update(WorldView(*this, s->scope));
     timing.seconds += now_seconds() - t;
     ++timing.runs;
     s->updated_once = true;
@@ -253,9 +290,9 @@ void World::interact_phase() {
       ++timing.skipped;
       continue;
     }
-    current_stage_ = &s->info.name;
+    current_stage_ = &s->instance;
     const double t = now_seconds();
-    s->interaction->apply(view());
+    s->interaction->apply(WorldView(*this, s->scope));
     timing.seconds += now_seconds() - t;
     ++timing.runs;
   }
@@ -289,8 +326,8 @@ void World::sync_structure() {
     for (Slot* s : resolvers_) {
       if (round > 0 && s->built) continue;
       s->built = true;
-      current_stage_ = &s->info.name;
-      ResolverAccess access(*this, s->info.name, s->writes);
+      current_stage_ = &s->instance;
+      ResolverAccess access(*this, s->instance, s->writes, s->scope);
       s->resolver->build(access);
     }
     store_.refresh();
@@ -298,7 +335,7 @@ void World::sync_structure() {
   }
   seen_structure_ = store_.structure_version();
   for (auto& s : slots_)
-    if (!s->resolver) s->stage->on_structure_changed(view());
+    if (!s->resolver) s->stage->on_structure_changed(WorldView(*this, s->scope));
   current_stage_ = nullptr;
   if (primed_) prime_new_stages();
 }
@@ -309,38 +346,85 @@ void World::prime_new_stages() {
   // commands act in this step's advance, as at start().
   for (Slot* s : derived_) {
     if (s->primed) continue;
-    current_stage_ = &s->info.name;
+    current_stage_ = &s->instance;
     inputs_changed(*s);  // record its input counters
-    s->derived->update(view());
+    s->derived->update(WorldView(*this, s->scope));
     s->updated_once = true;
     ++s->output_version;
   }
   for (Slot* s : interactions_) {
     if (s->primed) continue;
-    current_stage_ = &s->info.name;
-    s->interaction->apply(view());
+    current_stage_ = &s->instance;
+    s->interaction->apply(WorldView(*this, s->scope));
   }
   for (auto& s : slots_) s->primed = true;
   current_stage_ = nullptr;
 }
 
-bool World::needed(const PluginDef& def) const {
-  const StageInfo& info = def.info;
-  if (!def_.plugins.empty() &&
-      std::find(def_.plugins.begin(), def_.plugins.end(), info.name) == def_.plugins.end())
-    return false;
-  auto active = [&](const std::string& n) {
-    return std::any_of(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == n; });
+namespace {
+bool listed(const std::vector<std::string>& names, std::string_view n) {
+  return std::find(names.begin(), names.end(), n) != names.end();
+}
+}  // namespace
+
+bool World::chosen_globally(const PluginDef& def) const {
+  const std::string& n = def.info.name;
+  auto available = [&](const std::string& name) {
+    return !listed(disabled_, name) &&
+           (def_.plugins.empty() || listed(def_.plugins, name) || listed(enabled_, name));
   };
-  if (!info.target.empty() && !active(info.target)) return false;
+  if (!available(n)) return false;
+  const std::string& what = def.info.provides;
+  if (what.empty()) return true;
+  // One provider of a thing per scope: the scene's choice, else the first registered.
+  if (auto it = def_.use.find(what); it != def_.use.end()) return it->second == n;
+  for (const auto& name : plugins_.order())
+    if (plugins_.find(name)->info.provides == what && available(name)) return name == n;
+  return false;
+}
+
+const Scope* World::global_scope(const PluginDef& def) {
+  // A global stage leaves alone the areas that have their own instance of it
+  // or their own provider of what it provides.
+  std::vector<int> excluded;
+  for (std::size_t i = 0; i < areas_.size(); ++i)
+    for (const auto& p : areas_[i].def.plugins) {
+      const PluginDef* d = plugins_.find(p);
+      if (p == def.info.name || (d && !def.info.provides.empty() && d->info.provides == def.info.provides)) {
+        excluded.push_back(int(i));
+        break;
+      }
+    }
+  if (excluded.empty()) return nullptr;
+  Outside& o = outside_[def.info.name];
+  o.areas = std::move(excluded);
+  refresh_outside(o);
+  return &o.scope;
+}
+
+bool World::needed_in(const PluginDef& def, int area) const {
+  const StageInfo& info = def.info;
+  const Scope* scope = nullptr;
+  Slot probe;  // for dependency lookups in the right area
+  probe.area = area;
+  if (area < 0) {
+    if (!chosen_globally(def)) return false;
+    if (auto it = outside_.find(info.name); it != outside_.end()) scope = &it->second.scope;
+  } else {
+    if (!listed(areas_[std::size_t(area)].def.plugins, info.name)) return false;
+    scope = &areas_[std::size_t(area)].scope;
+  }
+  if (!info.target.empty() && !dependency(probe, info.target)) return false;
   for (const auto& d : info.derived)
-    if (!active(d)) return false;
+    if (!dependency(probe, d)) return false;
   for (const auto& r : info.resolvers)
-    if (!active(r)) return false;
+    if (!dependency(probe, r)) return false;
   if (info.needs.empty()) return true;
   for (const auto& p : info.needs) {
     auto id = properties().find(p);
-    if (id && store_.column(*id).count() > 0) return true;
+    if (!id) continue;
+    const ColumnBase& c = store_.column(*id);
+    if (scope ? !scope->members_of(c).empty() : c.count() > 0) return true;
   }
   return false;
 }
@@ -348,34 +432,50 @@ bool World::needed(const PluginDef& def) const {
 void World::activate_needed() {
   // Resolvers first, then the derived sets and interactions that depend on
   // them; repeat until nothing new is needed (a derived set may read another).
+  // Global stages, then each area's, in the order the areas were given.
   for (bool grew = true; grew;) {
     grew = false;
     for (StageKind kind : {StageKind::Resolver, StageKind::Derived, StageKind::Interaction}) {
-      for (const auto& name : plugins_.order()) {
-        const PluginDef* def = plugins_.find(name);
-        if (def->info.kind != kind || has_stage(name) || !needed(*def)) continue;
-        instantiate(*def);
-        grew = true;
+      for (int area = -1; area < int(areas_.size()); ++area) {
+        for (const auto& name : plugins_.order()) {
+          const PluginDef* def = plugins_.find(name);
+          const std::string instance = area < 0 ? name : name + "@" + areas_[std::size_t(area)].def.name;
+          if (def->info.kind != kind || has_stage(instance) || !needed_in(*def, area)) continue;
+          instantiate(*def, area);
+          grew = true;
+        }
       }
     }
   }
   profile_.not_instantiated.clear();
-  for (const auto& name : plugins_.order())
-    if (!has_stage(name)) profile_.not_instantiated.push_back(name);
+  for (const auto& name : plugins_.order()) {
+    bool any = has_stage(name);
+    for (const auto& a : areas_) any = any || has_stage(name + "@" + a.def.name);
+    if (!any) profile_.not_instantiated.push_back(name);
+  }
 }
 
-void World::instantiate(const PluginDef& def) {
+void World::instantiate(const PluginDef& def, int area) {
   auto slot = std::make_unique<Slot>();
   slot->info = def.info;
+  slot->area = area;
+  slot->instance = area < 0 ? def.info.name : def.info.name + "@" + areas_[std::size_t(area)].def.name;
+  slot->scope = area < 0 ? global_scope(def) : &areas_[std::size_t(area)].scope;
   for (const auto& p : def.info.reads) slot->reads.push_back(properties().id(p));
   for (const auto& p : def.info.writes) slot->writes.push_back(properties().id(p));
-  if (auto it = def_.every.find(def.info.name); it != def_.every.end()) slot->every = it->second;
+  if (auto it = def_.every.find(slot->instance); it != def_.every.end()) slot->every = it->second;
+  else if (auto it2 = def_.every.find(def.info.name); it2 != def_.every.end()) slot->every = it2->second;
   const auto& order = plugins_.order();
   slot->registry_rank = std::size_t(std::find(order.begin(), order.end(), def.info.name) - order.begin());
 
   static const PluginSettings kNoSettings;
-  auto it = def_.settings.find(def.info.name);
-  PluginContext ctx(*this, slot->info, it == def_.settings.end() ? kNoSettings : it->second);
+  const PluginSettings* settings = &kNoSettings;
+  if (auto it = def_.settings.find(def.info.name); it != def_.settings.end()) settings = &it->second;
+  if (area >= 0) {
+    const auto& own = areas_[std::size_t(area)].def.settings;
+    if (auto it = own.find(def.info.name); it != own.end()) settings = &it->second;
+  }
+  PluginContext ctx(*this, slot->info, *settings, area < 0 ? "" : areas_[std::size_t(area)].def.name);
   slot->stage = def.create(ctx);
   if (!slot->stage) throw AccessError("plugin '" + def.info.name + "' created nothing");
   switch (def.info.kind) {
@@ -385,14 +485,163 @@ void World::instantiate(const PluginDef& def) {
   }
   if (!slot->resolver && !slot->derived && !slot->interaction)
     throw AccessError("plugin '" + def.info.name + "' created a stage of the wrong kind");
-  for (const auto& n : def.info.derived)
-    for (auto& s : slots_)
-      if (s->info.name == n) slot->inputs.push_back(s.get());
-  for (const auto& n : def.info.resolvers)
-    for (auto& s : slots_)
-      if (s->info.name == n) slot->inputs.push_back(s.get());
+  for (const auto* names : {&def.info.derived, &def.info.resolvers})
+    for (const auto& n : *names)
+      if (Slot* in = dependency(*slot, n)) slot->inputs.push_back(in);
   slots_.push_back(std::move(slot));
   order_stages();
+}
+
+// --- areas and swaps ----------------------------------------------------------
+
+bool AreaDef::contains(Vec3 p) const {
+  const Vec3 d = p - center;
+  if (radius > 0) return dot(d, d) <= radius * radius;
+  if (half_extents == Vec3{}) return true;  // everywhere
+  return std::abs(d.x) <= half_extents.x && std::abs(d.y) <= half_extents.y &&
+         std::abs(d.z) <= half_extents.z;
+}
+
+std::string World::area_of(ObjectId id) const {
+  if (!store_.alive(id) || id.index >= area_of_slot_.size() || area_of_slot_[id.index] < 0) return "";
+  return areas_[std::size_t(area_of_slot_[id.index])].def.name;
+}
+
+void World::refresh_outside(Outside& o) const {
+  Scope& sc = o.scope;
+  sc.in_.assign(store_.slot_count(), 0);
+  sc.slots_.clear();
+  for (std::uint32_t slot = 0; slot < store_.slot_count(); ++slot) {
+    if (store_.id_at(slot).is_null()) continue;
+    const int a = slot < area_of_slot_.size() ? area_of_slot_[slot] : -1;
+    if (a >= 0 && listed_area(o.areas, a)) continue;
+    sc.in_[slot] = 1;
+    sc.slots_.push_back(slot);
+  }
+  ++sc.version_;
+}
+
+bool World::assign_areas() {
+  if (areas_.empty()) return false;
+  const auto position = properties().find("position");
+  const ColumnBase* pos = position ? store_.find_column(*position) : nullptr;
+  const auto* column = pos ? static_cast<const Column<Vec3>*>(pos) : nullptr;
+  const std::size_t n = store_.slot_count();
+  bool changed = area_of_slot_.size() != n;
+  area_of_slot_.resize(n, -1);
+  for (Area& a : areas_) a.left.clear();
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    int in = -1;
+    if (column && !store_.id_at(slot).is_null() && column->has(slot))
+      for (std::size_t i = 0; i < areas_.size(); ++i)
+        if (areas_[i].def.contains((*column)[slot])) {
+          in = int(i);
+          break;
+        }
+    int& was = area_of_slot_[slot];
+    if (in == was) continue;
+    if (was >= 0) areas_[std::size_t(was)].left.push_back(slot);
+    was = in;
+    changed = true;
+  }
+  if (!changed) return false;
+  for (std::size_t i = 0; i < areas_.size(); ++i) {
+    Scope& sc = areas_[i].scope;
+    sc.in_.assign(n, 0);
+    sc.slots_.clear();
+    for (std::uint32_t slot = 0; slot < n; ++slot)
+      if (area_of_slot_[slot] == int(i)) sc.in_[slot] = 1, sc.slots_.push_back(slot);
+    ++sc.version_;
+  }
+  for (auto& [name, o] : outside_) refresh_outside(o);
+  return true;
+}
+
+void World::rescope() {
+  // Objects crossed a border: stages of areas (and global stages kept out of
+  // some areas) now act on other objects. Create what is newly needed, let
+  // each scoped resolver drop what it published for objects that left, and
+  // rebuild it from the properties; nothing else is touched.
+  activate_needed();
+  for (Slot* s : resolvers_) {
+    if (!s->scope) continue;
+    current_stage_ = &s->instance;
+    ResolverAccess access(*this, s->instance, s->writes, s->scope);
+    if (s->area >= 0) s->resolver->on_scope_exit(access, areas_[std::size_t(s->area)].left);
+    s->resolver->build(access);
+    s->built = true;
+  }
+  store_.refresh();
+  for (auto& s : slots_)
+    if (!s->resolver && s->scope) s->stage->on_structure_changed(WorldView(*this, s->scope));
+  current_stage_ = nullptr;
+  if (primed_) prime_new_stages();
+}
+
+void World::remove_with_dependents(Slot* root) {
+  std::vector<Slot*> doomed{root};
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (auto& s : slots_) {
+      if (listed_slot(doomed, s.get())) continue;
+      bool depends = false;
+      for (Slot* d : doomed) {
+        depends = depends || listed_slot(s->inputs, d);
+        depends = depends || (!s->info.target.empty() && dependency(*s, s->info.target) == d);
+      }
+      if (depends) doomed.push_back(s.get()), grew = true;
+    }
+  }
+  std::erase_if(slots_, [&](const auto& s) { return listed_slot(doomed, s.get()); });
+  order_stages();
+}
+
+void World::swap(std::string_view area, std::string_view from, std::string_view to) {
+  const PluginDef* f = plugins_.find(from);
+  const PluginDef* t = plugins_.find(to);
+  if (!f) throw InputError("swap: unknown plugin '" + std::string(from) + "'");
+  if (!t) throw InputError("swap: unknown plugin '" + std::string(to) + "'" +
+                           [&] { auto n = closest_name(to, plugins_.order());
+                                 return n.empty() ? std::string() : " (did you mean '" + n + "'?)"; }());
+  if (f->info.kind != t->info.kind)
+    throw InputError("swap: '" + std::string(from) + "' is a " + std::string(to_string(f->info.kind)) +
+                     " and '" + std::string(to) + "' a " + std::string(to_string(t->info.kind)));
+  Slot* old = nullptr;
+  if (area.empty()) {
+    old = find_slot(from);
+    std::erase(disabled_, std::string(to));
+    if (!listed(disabled_, from)) disabled_.emplace_back(from);
+    if (!def_.plugins.empty() && !listed(def_.plugins, to) && !listed(enabled_, to)) enabled_.emplace_back(to);
+    if (!t->info.provides.empty()) def_.use[t->info.provides] = std::string(to);
+  } else {
+    auto a = std::find_if(areas_.begin(), areas_.end(), [&](const Area& x) { return x.def.name == area; });
+    if (a == areas_.end()) throw InputError("swap: no area is called '" + std::string(area) + "'");
+    auto it = std::find(a->def.plugins.begin(), a->def.plugins.end(), from);
+    if (it == a->def.plugins.end())
+      throw InputError("swap: area '" + std::string(area) + "' has no plugin '" + std::string(from) + "'");
+    *it = std::string(to);
+    old = find_slot(std::string(from) + "@" + std::string(area));
+  }
+  if (old) remove_with_dependents(old);
+  // Global scopes depend on which areas provide what; recompute them.
+  for (auto& s : slots_)
+    if (s->area < 0) s->scope = global_scope(*plugins_.find(s->info.name));
+  pending_.push_back(Event{.type = "resolver_swapped", .source = "world",
+                           .text = std::string(from) + " -> " + std::string(to) +
+                                   (area.empty() ? std::string(" (everywhere)") : " in " + std::string(area))});
+  if (started_) {
+    synced_ = false;
+    sync_structure();  // instantiate the new stage and its dependents, build, prime
+  }
+}
+
+void World::schedule_swap(double time, std::string area, std::string from, std::string to) {
+  if (!std::isfinite(time) || time < 0) throw InputError("a swap's time must be a number of seconds >= 0");
+  if (!plugins_.find(from)) throw InputError("swap: unknown plugin '" + from + "'");
+  if (!plugins_.find(to)) throw InputError("swap: unknown plugin '" + to + "'");
+  auto at = std::upper_bound(swaps_.begin(), swaps_.end(), time,
+                             [](double t, const ScheduledSwap& s) { return t < s.time; });
+  swaps_.insert(at, ScheduledSwap{time, std::move(area), std::move(from), std::move(to)});
 }
 
 void World::order_stages() {
@@ -444,9 +693,9 @@ void World::order_stages() {
   std::vector<StageTiming> timings;
   for (const auto* group : {&resolvers_, &derived_, &interactions_})
     for (Slot* s : *group) {
-      StageTiming t{s->info.name, s->info.kind};
+      StageTiming t{s->instance, s->info.kind};
       for (const auto& old : profile_.stages)
-        if (old.name == s->info.name) t = old;
+        if (old.name == s->instance) t = old;
       s->timing = timings.size();
       timings.push_back(t);
     }

@@ -12,6 +12,7 @@
 // columns' change counters or from on_structure_changed / build.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -28,6 +29,26 @@ namespace alloy {
 
 class World;
 
+/// A named region of the world with its own set of plugins (paper section 3:
+/// uniform gravity on a planet, N-body gravity in orbit). An object is in the
+/// first area, in the order given, whose region holds its position; it keeps
+/// every property when it crosses a border, only the stages acting on it change.
+struct AreaDef {
+  std::string name;
+  /// The region: a sphere if radius > 0, else a box of these half extents
+  /// about the centre; with neither, everywhere (a catch-all, put it last).
+  Vec3 center;
+  Vec3 half_extents;
+  double radius = 0;
+  /// Plugins instanced in this area, acting only on its objects. A plugin
+  /// that provides something (StageInfo::provides) replaces the global
+  /// provider of it for the objects in the area.
+  std::vector<std::string> plugins;
+  std::map<std::string, PluginSettings, std::less<>> settings;
+
+  bool contains(Vec3 p) const;
+};
+
 /// Definition of a world, with defaults (Box2D's b2DefaultWorldDef idea).
 struct WorldDef {
   double dt = 1.0 / 240.0;  ///< fixed step, s
@@ -38,12 +59,18 @@ struct WorldDef {
   std::map<std::string, PluginSettings, std::less<>> settings;
   /// Run a stage only every n-th step (a resolver then advances by n * dt).
   std::map<std::string, int, std::less<>> every;
+  /// Which plugin provides a thing globally, e.g. {"gravity", "gravity.nbody"};
+  /// otherwise the first registered provider.
+  std::map<std::string, std::string, std::less<>> use;
+  std::vector<AreaDef> areas;
 };
 
 /// What every stage may see: properties read-only, derived sets, events.
 class WorldView {
  public:
-  explicit WorldView(const World& w) : world_(w) {}
+  explicit WorldView(const World& w, const Scope* scope = nullptr) : world_(w), scope_(scope) {}
+  /// The objects this stage acts on (its area), or null for every object.
+  const Scope* scope() const { return scope_; }
   const PropertyRegistry& properties() const;
   const PropertyStore& store() const;
   PropertyId property(std::string_view name) const;
@@ -59,14 +86,16 @@ class WorldView {
 
  protected:
   const World& world_;
+  const Scope* scope_ = nullptr;
 };
 
 /// What a resolver gets in build() and advance(): everything a view gives,
 /// plus writers for the columns it declared, and nothing else.
 class ResolverAccess : public WorldView {
  public:
-  ResolverAccess(World& w, const std::string& stage, const std::vector<PropertyId>& writes)
-      : WorldView(w), mutable_world_(w), stage_(stage), writes_(writes) {}
+  ResolverAccess(World& w, const std::string& stage, const std::vector<PropertyId>& writes,
+                 const Scope* scope = nullptr)
+      : WorldView(w, scope), mutable_world_(w), stage_(stage), writes_(writes) {}
   /// Throws AccessError if the resolver did not declare `id` in its writes.
   template <class T> ColumnWriter<T> writer(PropertyId id);
   template <class T> ColumnWriter<T> writer(std::string_view name) {
@@ -130,7 +159,20 @@ class World {
   const Profile& profile() const { return profile_; }
   WorldView view() const { return WorldView(*this); }
 
+  // --- areas and swaps ---------------------------------------------------------
+  /// The area an object is in, or "" (none). Updated at the start of each step.
+  std::string area_of(ObjectId id) const;
+  /// Replaces plugin `from` with `to` (another implementation of the same
+  /// kind) in `area`, or globally when `area` is empty, between steps. The new
+  /// stage builds its state from the properties, so nothing is lost; the
+  /// stages that depended on the old one are recreated. Throws InputError.
+  void swap(std::string_view area, std::string_view from, std::string_view to);
+  /// The same at a time to come (a scene's timeline, `alloy run --swap`).
+  void schedule_swap(double time, std::string area, std::string from, std::string to);
+
   // --- stages -----------------------------------------------------------------
+  /// Stages are named after their plugin, with "@area" for a stage of an area
+  /// ("gravity.nbody@orbit").
   bool has_stage(std::string_view name) const;
   Stage* stage(std::string_view name);
   /// Active stage names in run order.
@@ -153,7 +195,35 @@ class World {
     PropertyId property;
     PropertyValue value;
   };
+  struct ScheduledSwap {
+    double time;
+    std::string area, from, to;
+  };
+  struct Area {
+    AreaDef def;
+    Scope scope;
+    std::vector<std::uint32_t> left;  // slots that left at the last assignment
+  };
   void apply_inputs();
+  struct Outside {
+    std::vector<int> areas;  // excluded
+    Scope scope;
+  };
+  bool assign_areas();
+  void rescope();
+  void refresh_outside(Outside& o) const;
+  static bool listed_area(const std::vector<int>& v, int a) {
+    return std::find(v.begin(), v.end(), a) != v.end();
+  }
+  static bool listed_slot(const std::vector<Slot*>& v, const Slot* s) {
+    return std::find(v.begin(), v.end(), s) != v.end();
+  }
+  bool chosen_globally(const PluginDef& def) const;
+  const Scope* global_scope(const PluginDef& def);
+  bool needed_in(const PluginDef& def, int area) const;
+  Slot* find_slot(std::string_view instance) const;
+  Slot* dependency(const Slot& of, std::string_view plugin) const;
+  void remove_with_dependents(Slot* s);
   void advance_phase();
   void derive_phase();
   void interact_phase();
@@ -161,8 +231,7 @@ class World {
   void sync_structure();
   void prime_new_stages();
   void activate_needed();
-  bool needed(const PluginDef& def) const;
-  void instantiate(const PluginDef& def);
+  void instantiate(const PluginDef& def, int area);
   void order_stages();
   bool due(const Slot& s) const;
   bool inputs_changed(Slot& s) const;
@@ -173,6 +242,12 @@ class World {
   PropertyStore store_;
   std::vector<std::unique_ptr<Slot>> slots_;  // active stages
   std::vector<Slot*> resolvers_, derived_, interactions_;
+  std::vector<Area> areas_;
+  std::vector<int> area_of_slot_;  // area index per object slot, -1 for none
+  std::map<std::string, Outside, std::less<>> outside_;  // scopes of global stages kept out of areas
+  std::vector<std::string> disabled_;  // global plugins swapped out
+  std::vector<std::string> enabled_;   // global plugins swapped in beyond def_.plugins
+  std::vector<ScheduledSwap> swaps_;   // sorted by time
   std::vector<ScheduledInput> inputs_;  // sorted by time, stable
   std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;
@@ -192,13 +267,13 @@ class World {
 
 template <class T>
 ColumnView<T> WorldView::column(PropertyId id) const {
-  return ColumnView<T>(&world_.store_.typed<T>(id), &world_.store_);
+  return ColumnView<T>(&world_.store_.typed<T>(id), &world_.store_, scope_);
 }
 
 template <class T>
 ColumnWriter<T> ResolverAccess::writer(PropertyId id) {
   for (PropertyId w : writes_)
-    if (w == id) return ColumnWriter<T>(&mutable_world_.store_.typed_mut<T>(id));
+    if (w == id) return ColumnWriter<T>(&mutable_world_.store_.typed_mut<T>(id), scope_);
   throw AccessError("resolver '" + stage_ + "' may not write '" + properties().def(id).name +
                     "': it is not in the resolver's declared writes");
 }
