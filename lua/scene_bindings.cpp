@@ -12,8 +12,10 @@ namespace alloy::lua {
 
 namespace {
 
-const std::vector<std::string> kWorldFields = {"name",    "description", "dt",   "seconds",
-                                               "plugins", "settings",    "every"};
+const std::vector<std::string> kWorldFields = {"name",  "description", "dt",  "seconds", "plugins",
+                                               "settings", "every",     "use", "areas"};
+const std::vector<std::string> kAreaFields = {"name", "center", "half_extents", "radius", "plugins",
+                                              "settings"};
 
 SceneRecorder* self(lua_State* L) {
   return static_cast<SceneRecorder*>(lua_touserdata(L, lua_upvalueindex(1)));
@@ -77,6 +79,30 @@ void SceneRecorder::install(lua_State* L, int env) {
   lua_pushlightuserdata(L, this);
   lua_pushcclosure(L, &SceneRecorder::at_fn, 1);
   lua_setfield(L, env, "at");
+  lua_pushlightuserdata(L, this);
+  lua_pushcclosure(L, &SceneRecorder::swap_fn, 1);
+  lua_setfield(L, env, "swap");
+}
+
+int SceneRecorder::swap_fn(lua_State* L) {
+  return catch_exceptions(L, [&] { return self(L)->record_swap(L); });
+}
+
+int SceneRecorder::record_swap(lua_State* L) {
+  RecordedSwap sw;
+  sw.where = host_.user_location(L);
+  if (lua_type(L, 1) != LUA_TNUMBER || lua_type(L, 2) != LUA_TSTRING || lua_type(L, 3) != LUA_TSTRING ||
+      lua_type(L, 4) != LUA_TSTRING)
+    throw InputError(sw.where, "swap(time, \"area\" or \"\", \"from\", \"to\") expects a time in seconds, "
+                               "an area's name (\"\" for everywhere) and two plugin names");
+  sw.time = lua_tonumber(L, 1);
+  if (!std::isfinite(sw.time) || sw.time < 0)
+    throw InputError(sw.where, "swap(): the time must be a number of seconds >= 0");
+  sw.area = lua_tostring(L, 2);
+  sw.from = lua_tostring(L, 3);
+  sw.to = lua_tostring(L, 4);
+  record_.swaps.push_back(std::move(sw));
+  return 0;
 }
 
 int SceneRecorder::at_fn(lua_State* L) {
@@ -187,6 +213,64 @@ int SceneRecorder::record_world(lua_State* L) {
       else if (!std::holds_alternative<std::vector<double>>(v) ||
                !std::get<std::vector<double>>(v).empty())
         throw InputError(where, "world: 'plugins' must be a list of plugin names");
+    } else if (key == "use") {
+      raw_field(L, 1, key);
+      const int t = lua_gettop(L);
+      if (lua_type(L, t) != LUA_TTABLE)
+        throw InputError(where, "world: 'use' must be a table such as { gravity = \"gravity.nbody\" }");
+      for (const SceneField& f : fields_of(L, t, "use", where)) {
+        const std::string* plugin = std::get_if<std::string>(&f.value);
+        if (!plugin) throw InputError(where, "world: 'use' of '" + f.key + "' must be a plugin name");
+        w.use.emplace_back(f.key, *plugin);
+      }
+      lua_pop(L, 1);
+    } else if (key == "areas") {
+      raw_field(L, 1, key);
+      const int t = lua_gettop(L);
+      if (lua_type(L, t) != LUA_TTABLE)
+        throw InputError(where, "world: 'areas' must be a list of areas such as "
+                                "{ name = \"orbit\", plugins = {\"gravity.nbody\"} }");
+      const int n = int(lua_objlen(L, t));
+      for (int i = 1; i <= n; ++i) {
+        lua_rawgeti(L, t, i);
+        const int a = lua_gettop(L);
+        const std::string what = "world: area " + std::to_string(i);
+        if (lua_type(L, a) != LUA_TTABLE) throw InputError(where, what + " must be a table");
+        RecordedArea area;
+        for (const std::string& k : sorted_keys(L, a, what)) {
+          if (std::find(kAreaFields.begin(), kAreaFields.end(), k) == kAreaFields.end()) {
+            std::string msg = what + " has no field '" + k + "'";
+            if (auto near = closest_name(k, kAreaFields); !near.empty()) msg += " (did you mean '" + near + "'?)";
+            throw InputError(where, msg);
+          }
+          raw_field(L, a, k);
+          const int v = lua_gettop(L);
+          if (k == "name") {
+            if (lua_type(L, v) != LUA_TSTRING) throw InputError(where, what + ": 'name' must be a string");
+            area.name = lua_tostring(L, v);
+          } else if (k == "settings") {
+            if (lua_type(L, v) != LUA_TTABLE) throw InputError(where, what + ": 'settings' must be a table keyed by plugin name");
+            for (const std::string& plugin : sorted_keys(L, v, what + " settings")) {
+              raw_field(L, v, plugin);
+              if (lua_type(L, -1) != LUA_TTABLE)
+                throw InputError(where, what + ": the settings of '" + plugin + "' must be a table");
+              area.settings.push_back({plugin, fields_of(L, lua_gettop(L), "setting", where)});
+              lua_pop(L, 1);
+            }
+          } else if (k == "plugins") {
+            SceneValue pv = to_scene_value(L, v);
+            if (auto* names = std::get_if<std::vector<std::string>>(&pv)) area.plugins = *names;
+            else throw InputError(where, what + ": 'plugins' must be a list of plugin names");
+          } else {
+            area.region.push_back({k, to_scene_value(L, v)});
+          }
+          lua_pop(L, 1);
+        }
+        if (area.name.empty()) throw InputError(where, what + " needs a name");
+        w.areas.push_back(std::move(area));
+        lua_pop(L, 1);
+      }
+      lua_pop(L, 1);
     } else if (key == "settings" || key == "every") {
       raw_field(L, 1, key);
       const int t = lua_gettop(L);

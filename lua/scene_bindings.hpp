@@ -5,6 +5,7 @@
 //            every = { collisions = 2 } }
 //   object { name = "ball", position = {0, 1}, shape = "sphere", radius = 0.1, mass = 1 }
 //   at(1.0, "switch", { pinned = false })   -- the scene's timeline: input, as by a player's hand
+//   swap(5.0, "orbit", "gravity.nbody", "gravity.uniform")   -- a resolver swap on the timeline
 //
 // All only record (collect, then apply): the values go into a SceneRecord
 // with the line of the scene statement that asked for them, found host-side
@@ -36,9 +37,11 @@ class SceneRecorder {
   static int world_fn(lua_State* L);
   static int object_fn(lua_State* L);
   static int at_fn(lua_State* L);
+  static int swap_fn(lua_State* L);
   int record_world(lua_State* L);
   int record_object(lua_State* L);
   int record_input(lua_State* L);
+  int record_swap(lua_State* L);
 
   LuaHost& host_;
   SceneRecord record_;

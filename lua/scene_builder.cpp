@@ -1,5 +1,6 @@
 #include "lua/scene_builder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -77,6 +78,53 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
       }
     }
     def.settings[s.plugin] = std::move(settings);
+  }
+  for (const auto& [what, plugin] : w.use) {
+    const PluginDef* d = registry.find(plugin);
+    if (!d) fail("world: use: unknown plugin '" + plugin + "'" + plugin_hint(registry, plugin));
+    if (d->info.provides != what)
+      fail("world: use: '" + plugin + "' does not provide '" + what + "'" +
+           (d->info.provides.empty() ? std::string() : " (it provides '" + d->info.provides + "')"));
+    def.use[what] = plugin;
+  }
+  for (const RecordedArea& ra : w.areas) {
+    AreaDef a;
+    a.name = ra.name;
+    const std::string what = "world: area '" + ra.name + "'";
+    for (const SceneField& f : ra.region) {
+      if (f.key == "radius") {
+        const double* r = std::get_if<double>(&f.value);
+        if (!r || !std::isfinite(*r) || *r <= 0) fail(what + ": 'radius' must be a positive number of metres");
+        a.radius = *r;
+      } else {
+        auto v = vec3_of(f.value);
+        if (!v || !is_finite(*v)) fail(what + ": '" + f.key + "' must be a vector {x, y} or {x, y, z}");
+        if (f.key == "center") a.center = *v;
+        else {
+          // A 2D box {hx, hy} reaches through the play area in z.
+          if (const auto* n = numbers(f.value); n && n->size() == 2) v->z = 1e9;
+          if (v->x <= 0 || v->y <= 0 || v->z <= 0) fail(what + ": 'half_extents' must be positive");
+          a.half_extents = *v;
+        }
+      }
+    }
+    for (const auto& p : ra.plugins)
+      if (!registry.find(p)) fail(what + ": unknown plugin '" + p + "'" + plugin_hint(registry, p));
+    a.plugins = ra.plugins;
+    for (const auto& s : ra.settings) {
+      if (!registry.find(s.plugin)) fail(what + ": settings for unknown plugin '" + s.plugin + "'" + plugin_hint(registry, s.plugin));
+      PluginSettings settings;
+      settings.where = ErrorLocation{where.file, where.line, ""};
+      for (const auto& f : s.fields) {
+        try {
+          settings.set(f.key, setting_value(f.value, s.plugin, f.key));
+        } catch (const InputError& e) {
+          fail(e.bare());
+        }
+      }
+      a.settings[s.plugin] = std::move(settings);
+    }
+    def.areas.push_back(std::move(a));
   }
   for (const auto& [plugin, n] : w.every) {
     if (!registry.find(plugin))
@@ -226,6 +274,18 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
       check_object(world, ids[i]);
     } catch (const InputError& e) {
       throw InputError(record.objects[i].where, e.bare());
+    }
+  }
+  for (const RecordedSwap& sw : record.swaps) {
+    try {
+      if (!sw.area.empty() && std::none_of(out.def.areas.begin(), out.def.areas.end(),
+                                           [&](const AreaDef& a) { return a.name == sw.area; }))
+        throw InputError("swap(): no area is called '" + sw.area + "'");
+      for (const std::string* p : {&sw.from, &sw.to})
+        if (!registry.find(*p)) throw InputError("swap(): unknown plugin '" + *p + "'" + plugin_hint(registry, *p));
+      world.schedule_swap(sw.time, sw.area, sw.from, sw.to);
+    } catch (const InputError& e) {
+      throw InputError(sw.where, e.bare());
     }
   }
   // The timeline: each input is typed and checked now, applied when its time comes.

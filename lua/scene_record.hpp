@@ -39,6 +39,14 @@ struct RecordedSettings {
   std::vector<SceneField> fields;
 };
 
+/// One entry of world{ areas = {...} }.
+struct RecordedArea {
+  std::string name;
+  std::vector<SceneField> region;  ///< center, half_extents, radius as written
+  std::vector<std::string> plugins;
+  std::vector<RecordedSettings> settings;
+};
+
 struct RecordedWorld {
   bool given = false;   ///< world{} was called
   ErrorLocation where;  ///< line of the world{} statement
@@ -49,6 +57,15 @@ struct RecordedWorld {
   std::vector<std::string> plugins;
   std::vector<RecordedSettings> settings;
   std::vector<std::pair<std::string, double>> every;
+  std::vector<std::pair<std::string, std::string>> use;  ///< thing -> plugin
+  std::vector<RecordedArea> areas;
+};
+
+/// `swap(time, "area" or "", "from", "to")`: a resolver swap on the timeline.
+struct RecordedSwap {
+  double time = 0;
+  std::string area, from, to;
+  ErrorLocation where;
 };
 
 /// `at(time, "object", { property = value, ... })`: values to set on a named
@@ -64,6 +81,7 @@ struct SceneRecord {
   RecordedWorld world;
   std::vector<RecordedObject> objects;
   std::vector<RecordedInput> inputs;
+  std::vector<RecordedSwap> swaps;
 };
 
 }  // namespace alloy::lua

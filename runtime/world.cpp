@@ -639,6 +639,8 @@ void World::schedule_swap(double time, std::string area, std::string from, std::
   if (!std::isfinite(time) || time < 0) throw InputError("a swap's time must be a number of seconds >= 0");
   if (!plugins_.find(from)) throw InputError("swap: unknown plugin '" + from + "'");
   if (!plugins_.find(to)) throw InputError("swap: unknown plugin '" + to + "'");
+  if (!area.empty() && std::none_of(areas_.begin(), areas_.end(), [&](const Area& a) { return a.def.name == area; }))
+    throw InputError("swap: no area is called '" + area + "'");
   auto at = std::upper_bound(swaps_.begin(), swaps_.end(), time,
                              [](double t, const ScheduledSwap& s) { return t < s.time; });
   swaps_.insert(at, ScheduledSwap{time, std::move(area), std::move(from), std::move(to)});

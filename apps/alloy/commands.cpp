@@ -31,6 +31,7 @@ struct RunOptions {
   std::string trace_props = "position,orientation,velocity,angular_velocity";
   std::uint64_t trace_every = 1;
   std::string audio;
+  std::vector<std::string> swaps;
   std::string events;
   bool profile = false;
   bool quiet = false;
@@ -101,6 +102,32 @@ void write_audio(World& world, const std::string& path, std::ostream& out, bool 
   out << "\n";
 }
 
+/// --swap [AREA:]FROM=TO[@TIME]: a resolver swap at TIME (default 0, before the first step).
+void schedule_swap(World& world, const std::string& spec) {
+  const auto bad = [&] {
+    return InputError("--swap '" + spec + "': expected [AREA:]FROM=TO[@TIME], e.g. orbit:gravity.nbody=gravity.uniform@2.5");
+  };
+  std::string rest = spec, area;
+  double time = 0;
+  if (auto at = rest.rfind('@'); at != std::string::npos) {
+    try {
+      std::size_t used = 0;
+      time = std::stod(rest.substr(at + 1), &used);
+      if (used != rest.size() - at - 1) throw bad();
+    } catch (const std::logic_error&) {
+      throw bad();
+    }
+    rest.resize(at);
+  }
+  if (auto colon = rest.find(':'); colon != std::string::npos) {
+    area = rest.substr(0, colon);
+    rest = rest.substr(colon + 1);
+  }
+  const auto eq = rest.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == rest.size()) throw bad();
+  world.schedule_swap(time, area, rest.substr(0, eq), rest.substr(eq + 1));
+}
+
 int run(const RunOptions& opt, std::ostream& out) {
   PluginRegistry registry;
   register_native_plugins(registry);
@@ -116,6 +143,7 @@ int run(const RunOptions& opt, std::ostream& out) {
     steps = std::uint64_t(std::llround(seconds / world.dt()));
   }
 
+  for (const std::string& spec : opt.swaps) schedule_swap(world, spec);
   if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
   if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
@@ -200,6 +228,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")->check(CLI::PositiveNumber);
   run_cmd->add_option("--events", ro.events, "Write the events as JSON lines");
   run_cmd->add_option("--audio", ro.audio, "Write what the run sounded like as a WAV file (16-bit mono)");
+  run_cmd->add_option("--swap", ro.swaps,
+                      "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
 

@@ -176,5 +176,17 @@ TEST(AlloyCli, TheBinaryReturnsTheDocumentedExitCodes) {
   EXPECT_EQ(WEXITSTATUS(bad), kExitBadInput);
 }
 
+TEST(AlloyCli, SwapReplacesAResolverWhileRunning) {
+  Result r = cli({"run", "tests/lua/scenes/areas.lua", "--seconds", "0.1", "--swap",
+                  "moon:gravity.uniform=gravity.uniform@0.05"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("step     13"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("resolver swapped  (gravity.uniform -> gravity.uniform in moon)"), std::string::npos) << r.out;
+  r = cli({"run", "tests/lua/scenes/areas.lua", "--swap", "mars:gravity.uniform=gravity.uniform"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("no area is called 'mars'"), std::string::npos) << r.err;
+  EXPECT_EQ(cli({"run", "tests/lua/scenes/areas.lua", "--swap", "a=b=c@x"}).code, kExitBadInput);
+}
+
 }  // namespace
 }  // namespace alloy::app

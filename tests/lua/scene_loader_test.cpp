@@ -121,5 +121,20 @@ TEST_F(SceneLoaderTest, TimelineInputsApplyAtTheirTime) {
   EXPECT_LT(std::get<Vec3>(w.get(bar, "position")).y, 0.0);
 }
 
+TEST_F(SceneLoaderTest, AreasHaveTheirOwnResolvers) {
+  LoadedScene s = load_scene(source_path("tests/lua/scenes/areas.lua"), registry);
+  World& w = *s.world;
+  ASSERT_EQ(s.def.areas.size(), 1u);
+  EXPECT_EQ(s.def.areas[0].name, "moon");
+  w.run(120);  // 0.5 s
+  EXPECT_EQ(w.area_of(w.find("moon_ball")), "moon");
+  EXPECT_TRUE(w.has_stage("gravity.uniform@moon"));
+  EXPECT_TRUE(w.has_stage("gravity.uniform"));
+  const double moon_v = std::get<Vec3>(w.get(w.find("moon_ball"), "velocity")).y;
+  const double earth_v = std::get<Vec3>(w.get(w.find("earth_ball"), "velocity")).y;
+  EXPECT_NEAR(moon_v, -1.62 * 0.5, 0.02);
+  EXPECT_NEAR(earth_v, -9.81 * 0.5, 0.05);
+}
+
 }  // namespace
 }  // namespace alloy::lua
