@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 
-#include "lua/value_rules.hpp"
 
 namespace alloy::lua {
 
@@ -260,7 +259,6 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
             properties.id(f.key);  // "unknown property 'mas' (did you mean 'mass'?)"
         const PropertyDef& def = properties.def(pid);
         const PropertyValue value = to_property_value(f.value, def, world);
-        check_value(def, value);
         world.set(ids[i], pid, value);
       }
     } catch (const InputError& e) {
@@ -271,7 +269,7 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
   // body may be defined after the joint).
   for (std::size_t i = 0; i < record.objects.size(); ++i) {
     try {
-      check_object(world, ids[i]);
+      world.check(ids[i]);
     } catch (const InputError& e) {
       throw InputError(record.objects[i].where, e.bare());
     }
@@ -298,7 +296,6 @@ BuiltScene build_scene(const SceneRecord& record, PluginRegistry& registry) {
         const PropertyDef& def = properties.def(pid);
         if (def.name == "name") throw InputError("at(): an object's name cannot change");
         const PropertyValue value = to_property_value(f.value, def, world);
-        check_value(def, value);
         world.schedule(in.time, id, pid, value);
       }
     } catch (const InputError& e) {

@@ -1,6 +1,7 @@
 // The second half of loading (collect, then apply): a SceneRecord becomes a
 // WorldDef and a World with its objects. Every value is typed against the
-// property registry and checked (value_rules.hpp) here, before any resolver
+// property registry and checked (the owners' bounds on PropertyDef, and each
+// plugin's whole-object check through World::check) here, before any resolver
 // exists; any error is reported at the scene line that recorded the object.
 // Nothing here knows Lua.
 #pragma once

@@ -41,6 +41,7 @@ PluginDef rigid_body_plugin() {
               .needs = {"mass", "density"},
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
   def.properties = concat({body_properties(), joint_properties()});
+  def.check = check_object;
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     return std::make_unique<RigidBodyResolver>(ctx.world(), RigidBodyConfig::from(ctx.settings()));
   };

@@ -53,6 +53,10 @@ struct PluginDef {
   /// Property types this plugin defines (registered with the plugin).
   std::vector<PropertyDef> properties;
   std::function<std::unique_ptr<Stage>(PluginContext&)> create;
+  /// Optional whole-object check: throws InputError when an object, taken as
+  /// a whole, is not something this plugin can simulate (a box without a
+  /// size, a joint to itself). Run by World::check on scene load and edits.
+  std::function<void(const World&, ObjectId)> check;
 };
 
 class PluginRegistry {

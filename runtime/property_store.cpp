@@ -1,6 +1,7 @@
 #include "runtime/property_store.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace alloy {
 
@@ -33,6 +34,51 @@ bool finite_value(const PropertyValue& v) {
   if (const Vec3* p = std::get_if<Vec3>(&v)) return is_finite(*p);
   if (const Quat* q = std::get_if<Quat>(&v)) return is_finite(*q);
   return true;
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+std::string text(const PropertyValue& v) {
+  if (const double* d = std::get_if<double>(&v)) return num(*d);
+  if (const Vec3* p = std::get_if<Vec3>(&v)) return "{" + num(p->x) + ", " + num(p->y) + ", " + num(p->z) + "}";
+  if (const Quat* q = std::get_if<Quat>(&v))
+    return "{" + num(q->w) + ", " + num(q->x) + ", " + num(q->y) + ", " + num(q->z) + "}";
+  return value_kind_name(v);
+}
+
+/// The owner's bounds (PropertyDef::min, max, nonzero), in words a scene author reads.
+void check_bounds(const PropertyDef& def, const PropertyValue& value, const ErrorLocation& where) {
+  auto fail = [&](const std::string& what) { throw InputError(where, "'" + def.name + "' " + what); };
+  auto in_bounds = [&](double x) {
+    if (def.min && (def.min_exclusive ? !(x > *def.min) : !(x >= *def.min))) return false;
+    return !(def.max && x > *def.max);
+  };
+  auto bounds = [&] {
+    if (def.min && def.max) return "must lie between " + num(*def.min) + " and " + num(*def.max);
+    if (def.min && *def.min == 0) return std::string(def.min_exclusive ? "must be greater than 0" : "must not be negative");
+    if (def.min) return (def.min_exclusive ? "must be greater than " : "must be at least ") + num(*def.min);
+    return "must be at most " + num(*def.max);
+  };
+  if (def.min || def.max) {
+    double x = 0;
+    if (const double* d = std::get_if<double>(&value)) x = *d;
+    else if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) x = double(*i);
+    if (const Vec3* p = std::get_if<Vec3>(&value)) {
+      if (!in_bounds(p->x) || !in_bounds(p->y) || !in_bounds(p->z))
+        fail(bounds() + " in every direction, got " + text(value));
+    } else if ((std::holds_alternative<double>(value) || std::holds_alternative<std::int64_t>(value)) && !in_bounds(x)) {
+      fail(bounds() + ", got " + num(x));
+    }
+  }
+  if (def.nonzero) {
+    if (const Vec3* p = std::get_if<Vec3>(&value); p && *p == Vec3{}) fail("must not be the zero vector");
+    if (const Quat* q = std::get_if<Quat>(&value); q && q->w == 0 && q->x == 0 && q->y == 0 && q->z == 0)
+      fail("must not be the zero quaternion");
+  }
 }
 
 }  // namespace
@@ -153,13 +199,8 @@ PropertyValue PropertyStore::checked(ObjectId id, PropertyId prop, const Propert
   if (value_kind_name(value) != to_string(def.kind))
     throw InputError(where, "'" + def.name + "' expects " + std::string(to_string(def.kind)) +
                                 ", got " + value_kind_name(value));
-  if (!finite_value(value))
-    throw InputError(where, "'" + def.name + "' must be finite, got NaN or infinity");
-  if (def.min) {
-    if (const double* d = std::get_if<double>(&value); d && *d < *def.min)
-      throw InputError(where, "'" + def.name + "' must be at least " + std::to_string(*def.min) +
-                                  ", got " + std::to_string(*d));
-  }
+  if (!finite_value(value)) throw InputError(where, "'" + def.name + "' must be a finite number, got " + text(value));
+  check_bounds(def, value, where);
   if (const ObjectId* ref = std::get_if<ObjectId>(&value); ref && !ref->is_null() && !alive(*ref))
     throw InputError(where, "'" + def.name + "' refers to an object that does not exist");
   return value;

@@ -16,7 +16,8 @@ constexpr std::pair<PropertyKind, std::string_view> kKindNames[] = {
 };
 
 bool same_definition(const PropertyDef& a, const PropertyDef& b) {
-  return a.kind == b.kind && a.enum_values == b.enum_values && a.unit == b.unit && a.min == b.min;
+  return a.kind == b.kind && a.enum_values == b.enum_values && a.unit == b.unit && a.min == b.min &&
+         a.min_exclusive == b.min_exclusive && a.max == b.max && a.nonzero == b.nonzero;
 }
 }  // namespace
 

@@ -79,8 +79,12 @@ struct PropertyDef {
   std::string doc;                       ///< one line: what the value means
   std::vector<std::string> enum_values;  ///< the names of an Enum's values, in order
   std::string owner;                     ///< who registered it (plugin or mod), for unloading
-  /// If set, the value must be >= min (numbers only): checked on every edit.
+  /// Bounds, checked on every edit (scene, player, timeline): numbers and
+  /// integers, and each component of a vec3 (a box's size).
   std::optional<double> min;
+  bool min_exclusive = false;  ///< the value must be > min, not >= min
+  std::optional<double> max;
+  bool nonzero = false;  ///< vec3 / quat: must not be all zeros (an axis, a rotation)
 };
 
 /// Name -> definition. Registration is idempotent when the definition is the

@@ -102,6 +102,19 @@ void World::set(ObjectId id, PropertyId property, const PropertyValue& value) {
   store_.set(id, property, value);
 }
 void World::remove(ObjectId id, std::string_view property) { store_.remove(id, properties().id(property)); }
+void World::check(ObjectId id) const {
+  store_.check_alive(id);
+  for (const auto& name : plugins_.order()) {
+    const PluginDef* def = plugins_.find(name);
+    if (!def->check) continue;
+    try {
+      def->check(*this, id);
+    } catch (const InputError& e) {
+      throw InputError(ErrorLocation{e.where().file, e.where().line, store_.describe(id)}, e.bare());
+    }
+  }
+}
+
 PropertyValue World::get(ObjectId id, std::string_view property) const {
   return store_.get(id, properties().id(property));
 }

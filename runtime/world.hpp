@@ -131,6 +131,9 @@ class World {
   /// Scheduled edits not yet applied.
   std::size_t pending_inputs() const { return inputs_.size() - next_input_; }
   ObjectId find(std::string_view name) const { return store_.find(name); }
+  /// Runs every registered plugin's whole-object check on `id`; throws
+  /// InputError naming the object.
+  void check(ObjectId id) const;
   std::string describe(ObjectId id) const { return store_.describe(id); }
 
   // --- running --------------------------------------------------------------

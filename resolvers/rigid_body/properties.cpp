@@ -1,12 +1,22 @@
 #include "resolvers/rigid_body/properties.hpp"
 
+#include <cstdio>
 #include <numbers>
+#include <optional>
 
 namespace alloy::rigid {
 
 namespace {
-PropertyDef number(const char* name, const char* unit, const char* doc, std::optional<double> min = {}) {
-  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = min};
+// Bounds are declared with the types, so every edit (scene, viewer, timeline)
+// is checked in one place, the property store.
+PropertyDef number(const char* name, const char* unit, const char* doc) {
+  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc};
+}
+PropertyDef positive(const char* name, const char* unit, const char* doc) {
+  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = 0.0, .min_exclusive = true};
+}
+PropertyDef non_negative(const char* name, const char* unit, const char* doc) {
+  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = 0.0};
 }
 PropertyDef vec3(const char* name, const char* unit, const char* doc) {
   return {.name = name, .kind = PropertyKind::Vec3, .unit = unit, .doc = doc};
@@ -19,21 +29,23 @@ PropertyDef boolean(const char* name, const char* doc) {
 std::vector<PropertyDef> body_properties() {
   return {
       vec3("position", "m", "position of the part's centre of mass, world frame"),
-      {.name = "orientation", .kind = PropertyKind::Quat, .doc = "rotation from the part's frame to the world frame"},
+      {.name = "orientation", .kind = PropertyKind::Quat, .doc = "rotation from the part's frame to the world frame",
+       .nonzero = true},
       vec3("velocity", "m/s", "linear velocity of the part's centre of mass"),
       vec3("angular_velocity", "rad/s", "angular velocity, world frame"),
-      number("mass", "kg", "mass (must be > 0); written from density * volume when density is given", 0.0),
-      number("density", "kg/m^3", "density; when given, mass = density * volume of the shape", 0.0),
+      positive("mass", "kg", "mass (must be > 0); written from density * volume when density is given"),
+      positive("density", "kg/m^3", "density; when given, mass = density * volume of the shape"),
       {.name = "shape", .kind = PropertyKind::Enum, .doc = "collision and inertia shape",
        .enum_values = {"box", "sphere", "capsule"}},
-      vec3("size", "m", "box: full extents along the part's x, y, z"),
-      number("radius", "m", "sphere and capsule radius", 0.0),
-      number("length", "m", "capsule: length of the cylinder part, along the part's x axis", 0.0),
+      {.name = "size", .kind = PropertyKind::Vec3, .unit = "m", .doc = "box: full extents along the part's x, y, z",
+       .min = 0.0, .min_exclusive = true},
+      positive("radius", "m", "sphere and capsule radius"),
+      non_negative("length", "m", "capsule: length of the cylinder part, along the part's x axis"),
       boolean("static", "immovable geometry with no body (floor, walls)"),
       boolean("pinned", "fixed to the play area; keeps its mass and can be unpinned"),
       boolean("planar", "held to the z = 0 plane, rotating about z only (the 2D kit)"),
-      number("linear_damping", "1/s", "velocity decays as dv/dt = -c v", 0.0),
-      number("angular_damping", "1/s", "angular velocity decays as dw/dt = -c w", 0.0),
+      non_negative("linear_damping", "1/s", "velocity decays as dv/dt = -c v"),
+      non_negative("angular_damping", "1/s", "angular velocity decays as dw/dt = -c w"),
   };
 }
 
@@ -44,8 +56,9 @@ std::vector<PropertyDef> joint_properties() {
       {.name = "body_a", .kind = PropertyKind::Ref, .doc = "first joined part"},
       {.name = "body_b", .kind = PropertyKind::Ref, .doc = "second joined part; absent or null: the play area"},
       vec3("anchor", "m", "hinge pivot, world frame (kept current by the rigid body resolver)"),
-      vec3("axis", "", "hinge axis, world frame (default {0,0,1}; kept current by the resolver)"),
-      number("joint_friction", "N*m", "hinge: resisting torque of the pivot", 0.0),
+      {.name = "axis", .kind = PropertyKind::Vec3, .doc = "hinge axis, world frame (default {0,0,1}; kept current by the resolver)",
+       .nonzero = true},
+      non_negative("joint_friction", "N*m", "hinge: resisting torque of the pivot"),
       number("limit_low", "rad", "hinge: lowest angle of body_a relative to body_b about the axis"),
       number("limit_high", "rad", "hinge: highest angle of body_a relative to body_b about the axis"),
   };
@@ -53,9 +66,66 @@ std::vector<PropertyDef> joint_properties() {
 
 std::vector<PropertyDef> material_properties() {
   return {
-      number("friction", "", "Coulomb friction coefficient (default 0.5)", 0.0),
-      number("restitution", "", "coefficient of restitution, 0..1 (default 0)", 0.0),
+      non_negative("friction", "", "Coulomb friction coefficient (default 0.5)"),
+      {.name = "restitution", .kind = PropertyKind::Number, .doc = "coefficient of restitution, 0..1 (default 0)",
+       .min = 0.0, .max = 1.0},
   };
+}
+
+namespace {
+bool carries(const World& w, ObjectId id, const char* property) {
+  auto p = w.properties().find(property);
+  return p && w.store().has(id, *p);
+}
+template <class T>
+std::optional<T> value(const World& w, ObjectId id, const char* property) {
+  if (!carries(w, id, property)) return std::nullopt;
+  const PropertyValue v = w.get(id, property);
+  if (const T* t = std::get_if<T>(&v)) return *t;
+  return std::nullopt;
+}
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace
+
+void check_object(const World& w, ObjectId id) {
+  if (carries(w, id, "joint")) {
+    auto a = value<ObjectId>(w, id, "body_a");
+    if (!a || a->is_null()) throw InputError("a joint needs 'body_a', the body it holds");
+    auto b = value<ObjectId>(w, id, "body_b");
+    if (b && *b == *a) throw InputError("a joint cannot join '" + w.describe(*a) + "' to itself");
+    for (ObjectId body : {*a, b.value_or(ObjectId{})}) {
+      if (body.is_null()) continue;
+      if (carries(w, body, "joint"))
+        throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' is a joint");
+      if (!carries(w, body, "shape"))
+        throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' has no shape");
+    }
+    auto lo = value<double>(w, id, "limit_low");
+    auto hi = value<double>(w, id, "limit_high");
+    if (lo && hi && *lo > *hi)
+      throw InputError("'limit_low' (" + num(*lo) + ") is above 'limit_high' (" + num(*hi) + ")");
+    return;
+  }
+  auto shape = value<EnumValue>(w, id, "shape");
+  if (!shape) return;
+  switch (Shape(shape->index)) {
+    case Shape::Box:
+      if (!carries(w, id, "size")) throw InputError("a box needs a 'size' (full extents {x, y, z})");
+      break;
+    case Shape::Sphere:
+      if (!carries(w, id, "radius")) throw InputError("a sphere needs a 'radius'");
+      break;
+    case Shape::Capsule:
+      if (!carries(w, id, "radius") || !carries(w, id, "length"))
+        throw InputError("a capsule needs a 'radius' and a 'length'");
+      break;
+  }
+  if (!value<bool>(w, id, "static").value_or(false) && !carries(w, id, "mass") && !carries(w, id, "density"))
+    throw InputError("a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
 }
 
 double shape_volume(Shape shape, Vec3 size, double radius, double length) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "runtime/property_types.hpp"
+#include "runtime/world.hpp"
 
 namespace alloy::rigid {
 
@@ -19,6 +20,11 @@ std::vector<PropertyDef> body_properties();
 std::vector<PropertyDef> joint_properties();
 /// Contact materials: friction, restitution.
 std::vector<PropertyDef> material_properties();
+
+/// Whole-object check of the rigid body (the plugin's PluginDef::check): a
+/// shape with its dimensions, a moving body with a mass, a joint between two
+/// distinct bodies with ordered limits. Throws InputError without a location.
+void check_object(const World& world, ObjectId id);
 
 /// Volume of a part's shape, m^3 (for mass = density * volume).
 double shape_volume(Shape shape, Vec3 size, double radius, double length);

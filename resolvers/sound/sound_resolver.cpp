@@ -95,7 +95,9 @@ std::vector<PropertyDef> sound_properties() {
       number("loudness", "", "gain of the part's sound (default 1)", 0.0),
       number("youngs_modulus", "Pa", "stiffness of the material, e.g. steel 2.0e11, wood 1.0e10",
              0.0),
-      number("density", "kg/m^3", "density; when given, mass = density * volume of the shape", 0.0),
+      // The rigid body registers `density` too: the definition must be the same.
+      {.name = "density", .kind = PropertyKind::Number, .unit = "kg/m^3",
+       .doc = "density; when given, mass = density * volume of the shape", .min = 0.0, .min_exclusive = true},
   };
 }
 

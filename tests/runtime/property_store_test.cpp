@@ -66,9 +66,9 @@ TEST_F(PropertyStoreTest, BadValuesAreRefusedWithTheObjectName) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message([&] { store.set(a, mass, -1.0); }).find("object 'arm': 'mass' must be at least"),
+  EXPECT_NE(message([&] { store.set(a, mass, -1.0); }).find("object 'arm': 'mass' must not be negative, got -1"),
             std::string::npos);
-  EXPECT_NE(message([&] { store.set(a, mass, std::nan("")); }).find("must be finite"), std::string::npos);
+  EXPECT_NE(message([&] { store.set(a, mass, std::nan("")); }).find("'mass' must be a finite number, got nan"), std::string::npos);
   EXPECT_NE(message([&] { store.set(a, mass, Vec3{}); }).find("expects number, got vec3"), std::string::npos);
   EXPECT_NE(message([&] { store.set(a, shape, std::string("cone")); }).find("one of: box, sphere"),
             std::string::npos);
@@ -131,6 +131,28 @@ TEST_F(PropertyStoreTest, TypedColumnAccessChecksTheKind) {
 // a column, only obtained from a ResolverAccess, and a view cannot write.
 static_assert(!std::is_constructible_v<ColumnWriter<double>, Column<double>*>);
 static_assert(!std::is_assignable_v<decltype(std::declval<ColumnView<double>>()[0]), double>);
+
+TEST_F(PropertyStoreTest, OwnersDeclareBoundsThatEveryEditObeys) {
+  const PropertyId e = registry.add({.name = "e", .kind = PropertyKind::Number, .min = 0.0, .max = 1.0});
+  const PropertyId r = registry.add({.name = "r", .kind = PropertyKind::Number, .min = 0.0, .min_exclusive = true});
+  const PropertyId size = registry.add({.name = "size", .kind = PropertyKind::Vec3, .min = 0.0, .min_exclusive = true});
+  const PropertyId axis = registry.add({.name = "axis", .kind = PropertyKind::Vec3, .nonzero = true});
+  const ObjectId a = store.create();
+  auto message = [&](PropertyId p, const PropertyValue& v) {
+    try {
+      store.set(a, p, v);
+    } catch (const InputError& err) {
+      return err.bare();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message(e, 1.0), "accepted");
+  EXPECT_EQ(message(e, 1.5), "'e' must lie between 0 and 1, got 1.5");
+  EXPECT_EQ(message(r, 0.0), "'r' must be greater than 0, got 0");
+  EXPECT_EQ(message(size, Vec3{1, 0, 1}), "'size' must be greater than 0 in every direction, got {1, 0, 1}");
+  EXPECT_EQ(message(axis, Vec3{}), "'axis' must not be the zero vector");
+  EXPECT_EQ(message(axis, Vec3{0, 0, 1}), "accepted");
+}
 
 }  // namespace
 }  // namespace alloy

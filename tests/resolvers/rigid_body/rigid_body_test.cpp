@@ -57,13 +57,20 @@ TEST(RigidBody, BadBodiesAreRefusedWithTheObjectsName) {
   {
     Sim s;
     const ObjectId b = add_box(*s, {}, {0.1, 0.1, 0.1}, 1.0, {}, "weightless");
-    s->set(b, "mass", 0.0);
     try {
-      s->start();
+      s->set(b, "mass", 0.0);  // refused at the edit: the property's bound
       FAIL() << "mass 0 accepted";
     } catch (const InputError& e) {
       EXPECT_EQ(e.where().object, "weightless");
-      EXPECT_NE(std::string(e.what()).find("mass must be > 0"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'mass' must be greater than 0, got 0"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(s->check(b));  // the refused edit left the mass as it was
+    s->remove(b, "size");
+    try {
+      s->check(b);  // the rigid body's whole-object check, run by World::check
+      FAIL() << "a box without a size passed";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("object 'weightless': a box needs a 'size'"), std::string::npos) << e.what();
     }
   }
   {
