@@ -648,6 +648,24 @@ void World::swap(std::string_view area, std::string_view from, std::string_view 
   }
 }
 
+std::vector<std::string> World::plugin_changed(std::string_view plugin) {
+  std::vector<std::string> before = active_stages();
+  for (;;) {
+    auto it = std::find_if(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == plugin; });
+    if (it == slots_.end()) break;
+    remove_with_dependents(it->get());
+  }
+  std::vector<std::string> after = active_stages();
+  std::erase_if(before, [&](const std::string& n) { return listed(after, n); });
+  for (auto& s : slots_)
+    if (s->area < 0) s->scope = global_scope(*plugins_.find(s->info.name));
+  if (started_) {
+    synced_ = false;
+    sync_structure();
+  }
+  return before;
+}
+
 void World::schedule_swap(double time, std::string area, std::string from, std::string to) {
   if (!std::isfinite(time) || time < 0) throw InputError("a swap's time must be a number of seconds >= 0");
   if (!plugins_.find(from)) throw InputError("swap: unknown plugin '" + from + "'");

@@ -172,6 +172,13 @@ class World {
   void swap(std::string_view area, std::string_view from, std::string_view to);
   /// The same at a time to come (a scene's timeline, `alloy run --swap`).
   void schedule_swap(double time, std::string area, std::string from, std::string to);
+  /// The registry's definition of `plugin` changed or is gone (a mod was
+  /// reloaded or unloaded), between steps: every stage of it, globally and in
+  /// areas, is removed with the stages that depend on it, and whatever the
+  /// registry still holds and the objects still need is instantiated again,
+  /// built from properties and primed (at once if the world has started, else
+  /// at start). Properties stay. Returns the stage instances removed.
+  std::vector<std::string> plugin_changed(std::string_view plugin);
 
   // --- stages -----------------------------------------------------------------
   /// Stages are named after their plugin, with "@area" for a stage of an area
