@@ -576,11 +576,26 @@ void World::rescope() {
   // each scoped resolver drop what it published for objects that left, and
   // rebuild it from the properties; nothing else is touched.
   activate_needed();
+  // All exits before any build, so that an object's new provider writes after
+  // its old one erased, whichever runs first. The objects that left are no
+  // longer in the resolver's scope: its access on exit reaches them and only them.
+  Scope leaving;
+  for (Slot* s : resolvers_) {
+    if (!s->scope || s->area < 0) continue;
+    const std::vector<std::uint32_t>& left = areas_[std::size_t(s->area)].left;
+    if (left.empty()) continue;
+    leaving.in_.assign(store_.slot_count(), 0);
+    for (std::uint32_t slot : left) leaving.in_[slot] = 1;
+    leaving.slots_ = left;
+    ++leaving.version_;
+    current_stage_ = &s->instance;
+    ResolverAccess access(*this, s->instance, s->writes, &leaving);
+    s->resolver->on_scope_exit(access, left);
+  }
   for (Slot* s : resolvers_) {
     if (!s->scope) continue;
     current_stage_ = &s->instance;
     ResolverAccess access(*this, s->instance, s->writes, s->scope);
-    if (s->area >= 0) s->resolver->on_scope_exit(access, areas_[std::size_t(s->area)].left);
     s->resolver->build(access);
     s->built = true;
   }

@@ -38,6 +38,20 @@ class Trespasser : public Resolver {
   std::uint32_t target = 0;
 };
 
+/// Writes `tag` for its area's objects and erases it for those that leave.
+class Eraser : public Resolver {
+ public:
+  void build(ResolverAccess& a) override {
+    auto t = a.writer<double>("tag");
+    for (std::uint32_t s : a.column<Vec3>("position").members()) t.set(s, 7.0);
+  }
+  void advance(ResolverAccess&, double) override {}
+  void on_scope_exit(ResolverAccess& a, std::span<const std::uint32_t> left) override {
+    auto t = a.writer<double>("tag");
+    for (std::uint32_t s : left) t.erase(s);
+  }
+};
+
 PluginDef tagger(const std::string& name, double value) {
   return {.info = {.name = name, .kind = StageKind::Resolver, .reads = {"position"}, .writes = {"tag"},
                    .needs = {"position"}, .provides = "tag"},
@@ -99,6 +113,34 @@ TEST_F(AreasTest, AnObjectCrossingABorderKeepsItsPropertiesAndChangesResolver) {
   w.set(a, "position", Vec3{-1, 0, 0});
   w.step();
   EXPECT_EQ(tag(w, a), 2);
+}
+
+TEST_F(AreasTest, AResolverErasesWhatItWroteForObjectsThatLeftBeforeTheNewProviderWrites) {
+  // tag.two (registered before tag.erase) takes the object over in "right": its
+  // build must come after tag.erase's exit, or the object would be left untagged.
+  registry.add({.info = {.name = "tag.erase", .kind = StageKind::Resolver, .reads = {"position"},
+                         .writes = {"tag"}, .needs = {"position"}, .provides = "tag"},
+                .create = [](PluginContext&) { return std::make_unique<Eraser>(); }});
+  registry.add({.info = {.name = "idle", .kind = StageKind::Resolver, .needs = {"nothing carries this"}},
+                .create = [](PluginContext&) { return std::make_unique<Eraser>(); }});
+  WorldDef def;
+  def.plugins = {"idle"};  // no global provider: outside the areas nothing writes tag
+  def.areas.push_back(AreaDef{.name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5},
+                              .plugins = {"tag.erase"}});
+  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
+                              .plugins = {"tag.two"}});
+  World w(registry, def);
+  const ObjectId a = body(w, "a", -3), b = body(w, "b", -2);
+  w.step();
+  EXPECT_EQ(tag(w, a), 7);
+  w.set(a, "position", Vec3{3, 0, 0});   // into "right"
+  w.set(b, "position", Vec3{30, 0, 0});  // out of every area
+  w.step();
+  EXPECT_EQ(w.area_of(a), "right");
+  EXPECT_EQ(tag(w, a), 2);
+  EXPECT_EQ(w.area_of(b), "");
+  EXPECT_THROW(w.get(b, "tag"), AccessError);  // erased: no stale value
+  EXPECT_EQ(std::get<double>(w.get(b, "mass")), 1.0);
 }
 
 TEST_F(AreasTest, ScopedViewsListOnlyTheAreasObjects) {
