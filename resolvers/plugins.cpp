@@ -1,6 +1,7 @@
 #include "resolvers/plugins.hpp"
 
 #include "resolvers/electricity/electricity_from_collisions.hpp"
+#include "resolvers/gravity/nbody_gravity.hpp"
 #include "resolvers/gravity/uniform_gravity.hpp"
 #include "resolvers/magnetism/magnetism_plugins.hpp"
 #include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
@@ -111,6 +112,7 @@ PluginDef uniform_gravity_plugin() {
               .reads = {"mass", "density", "static"},
               .writes = {"gravity"},
               .needs = {"mass", "density"},
+              .provides = "gravity",
               .doc = "uniform gravitational acceleration g (setting g, default {0,-9.81,0})"};
   def.properties = concat({{gravity_property()}, pick(rigid::body_properties(), {"mass", "density", "static"})});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
@@ -122,6 +124,30 @@ PluginDef uniform_gravity_plugin() {
   return def;
 }
 
+PluginDef nbody_gravity_plugin() {
+  PluginDef def;
+  def.info = {.name = "gravity.nbody",
+              .kind = StageKind::Resolver,
+              .reads = {"position", "mass", "density", "static"},
+              .writes = {"gravity"},
+              .needs = {"mass", "density"},
+              .provides = "gravity",
+              .doc = "Newtonian gravity between all masses in scope (settings G, default SI, and softening, m)"};
+  def.properties =
+      concat({{gravity_property()}, pick(rigid::body_properties(), {"position", "mass", "density", "static"})});
+  def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
+    const PluginSettings& s = ctx.settings();
+    s.check_known("gravity.nbody", {"G", "softening"});
+    const double G = s.number("G", kGravitationalConstant);
+    const double eps = s.number("softening", 0.0);
+    if (!(G >= 0) || !std::isfinite(G)) throw InputError(s.where, "gravity.nbody: G must be a finite number >= 0");
+    if (!(eps >= 0) || !std::isfinite(eps))
+      throw InputError(s.where, "gravity.nbody: softening must be a finite number of metres >= 0");
+    return std::make_unique<NBodyGravity>(G, eps);
+  };
+  return def;
+}
+
 }  // namespace gravity
 
 void register_native_plugins(PluginRegistry& registry) {
@@ -129,6 +155,7 @@ void register_native_plugins(PluginRegistry& registry) {
   registry.add(rigid::collisions_plugin());
   registry.add(rigid::rigid_body_from_collisions_plugin());
   registry.add(gravity::uniform_gravity_plugin());
+  registry.add(gravity::nbody_gravity_plugin());
   registry.add(rigid::rigid_body_from_gravity_plugin());
   electricity::register_electricity_plugins(registry);
   magnetism::register_magnetism_plugins(registry);

@@ -38,4 +38,9 @@ void UniformGravity::advance(ResolverAccess& access, double) {
   if (access.store().column(static_).version() != static_seen_) write(access);
 }
 
+void UniformGravity::on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) {
+  auto gravity = access.writer<Vec3>("gravity");
+  for (std::uint32_t s : left) gravity.erase(s);
+}
+
 }  // namespace alloy::gravity

@@ -6,6 +6,9 @@
 // body knowing.
 //
 // Reads   mass, density, static.   Writes  gravity (m/s^2).
+// Provides "gravity": one provider per scope; in an area of its own it acts on
+//         the area's objects only, and an object that leaves the area loses
+//         the value (on_scope_exit), so no stale g pushes it elsewhere.
 // Cost    nothing per step unless `static` was edited: the column is written in
 //         build() (after any structural change) and stays valid.
 #pragma once
@@ -26,6 +29,7 @@ class UniformGravity final : public Resolver {
   explicit UniformGravity(Vec3 g) : g_(g) {}
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
+  void on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) override;
   Vec3 g() const { return g_; }
 
  private:

@@ -45,6 +45,29 @@ TEST(UniformGravity, CostsNothingWhileNothingChanges) {
   EXPECT_EQ(gravity(s, ball), Vec3{});
 }
 
+TEST(UniformGravity, ABodyThatLeavesItsAreaKeepsNoStaleGravity) {
+  // Gravity only inside a 2 m box; no provider of gravity anywhere else.
+  WorldDef def;
+  def.plugins = {"rigid_body", "rigid_body_from_gravity"};
+  AreaDef field{.name = "field", .center = {0, 0, 0}, .half_extents = {1, 1, 1}, .plugins = {"gravity.uniform"}};
+  field.settings["gravity.uniform"].set("g", Vec3{0, -5, 0});
+  def.areas.push_back(field);
+  Sim s(def);
+  const ObjectId ball = add_sphere(*s, {0.5, 0, 0}, 0.05, 1.0, "ball");
+  s->set(ball, "velocity", Vec3{4, 0, 0});
+  s->step();
+  EXPECT_EQ(s->area_of(ball), "field");
+  EXPECT_EQ(gravity(s, ball), (Vec3{0, -5, 0}));
+  while (s->area_of(ball) == "field") s->step();
+  EXPECT_GT(s.position(ball).x, 1);
+  EXPECT_THROW(s->get(ball, "gravity"), AccessError);  // erased on the way out
+  s->step();  // the last force queued inside acts in this step
+  const double vy = s.velocity(ball).y;
+  EXPECT_LT(vy, 0);
+  s->run(20);
+  EXPECT_EQ(s.velocity(ball).y, vy);  // nothing pulls it any more
+}
+
 TEST(UniformGravity, AbsentWithoutMassAndSettingsChecked) {
   {
     Sim s;

@@ -1,0 +1,72 @@
+// The `gravity.nbody` resolver: Newtonian gravity between every pair of masses
+// in its scope (paper section 3: "in space we might substitute a more involved
+// gravity model for orbiting bodies"). Like gravity.uniform it only writes the
+// `gravity` column; rigid_body_from_gravity turns it into forces m * g, so the
+// two models are interchangeable per area and can be swapped while running.
+//
+//   a_i = sum_{j != i} G m_j (r_j - r_i) / (|r_j - r_i|^2 + eps^2)^(3/2)
+//
+// Sources  every object in scope with a mass, static ones included (a planet
+//          is an immovable source).
+// Targets  the sources that are not static: they get a `gravity` value.
+// Reads    position, mass, density, static.   Writes  gravity (m/s^2).
+// Order    it reads `position`, which the rigid body writes, so it runs after
+//          the rigid body in each advance: the accelerations are those of the
+//          positions just written, queued as forces by the interact phase and
+//          applied in the next advance. With ODE's step (v += dt F/m, then
+//          x += dt v) that is semi-implicit (symplectic) Euler, first order.
+// Cost     O(n^2) pairs by direct summation (accelerations() below, the one
+//          place a tree method would go), and nothing in a step in which no
+//          position, mass or membership changed.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "runtime/stage.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::gravity {
+
+/// The SI gravitational constant (CODATA 2018), m^3 / (kg s^2).
+inline constexpr double kGravitationalConstant = 6.67430e-11;
+
+/// Accelerations at every point from every other point's mass, by direct
+/// summation over pairs (each pair once, so the forces of a pair are equal and
+/// opposite up to rounding). `softening` is eps, m; coincident points (and
+/// eps = 0) exert nothing on each other. out[i] is overwritten.
+void accelerations(std::span<const Vec3> position, std::span<const double> mass, double G,
+                   double softening, std::span<Vec3> out);
+
+class NBodyGravity final : public Resolver {
+ public:
+  NBodyGravity(double G, double softening) : G_(G), softening_(softening) {}
+  void build(ResolverAccess& access) override;
+  void advance(ResolverAccess& access, double dt) override;
+  /// Objects that left this resolver's area lose the value it wrote for them.
+  void on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) override;
+
+  double G() const { return G_; }
+  double softening() const { return softening_; }
+  /// How many times the accelerations were computed (tests: skipped when still).
+  std::uint64_t evaluations() const { return evaluations_; }
+
+ private:
+  void resolve_ids(const WorldView& v);
+  bool inputs_changed(const WorldView& v) const;
+  void compute(ResolverAccess& access);
+
+  double G_, softening_;
+  PropertyId position_ = kNoProperty, mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty,
+             gravity_ = kNoProperty;
+  // Input counters at the last evaluation: position, mass, static (values and
+  // memberships) and the scope's version.
+  std::vector<std::uint64_t> seen_;
+  std::uint64_t evaluations_ = 0;
+  // Scratch, kept to avoid allocating each step.
+  std::vector<std::uint32_t> slots_;
+  std::vector<Vec3> x_, a_;
+  std::vector<double> m_;
+};
+
+}  // namespace alloy::gravity
