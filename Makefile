@@ -12,10 +12,12 @@ MAIN_SCENE ?= mods/rigid_demo
 ALLOY      := $(BUILD)/apps/alloy
 
 # Debian packages the build needs (the dependencies named in DESIGN.md, plus
-# the well-kept libraries used for the command line and JSON).
+# the well-kept libraries used for the command line and JSON, and the
+# viewer's panels, PNG screenshots and font).
 PACKAGES := build-essential cmake pkg-config \
             libluajit-5.1-dev libode-dev libeigen3-dev libsdl2-dev \
-            libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
+            libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
+            libimgui-dev libpng-dev fonts-dejavu-core
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

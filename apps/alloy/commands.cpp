@@ -13,6 +13,7 @@
 #include "apps/alloy/event_log.hpp"
 #include "apps/alloy/profile_report.hpp"
 #include "apps/alloy/trace_writer.hpp"
+#include "apps/viewer/view_command.hpp"
 #include "lua/scene_loader.hpp"
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
@@ -239,6 +240,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 
   CLI::App* plugins_cmd = app.add_subcommand("plugins", "List the native plugins");
 
+  viewer::ViewerOptions vo;
+  CLI::App* view_cmd = viewer::add_view_command(app, vo);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -253,6 +257,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (run_cmd->parsed()) return run(ro, out);
     if (check_cmd->parsed()) return check(check_path, out);
     if (plugins_cmd->parsed()) return list_plugins(out);
+    if (view_cmd->parsed()) return viewer::run_view(vo, out, err);
   } catch (const InputError& e) {
     err << "error: " << e.what() << "\n";
     return kExitBadInput;

@@ -1,0 +1,98 @@
+// The player's hand: every change a player makes to a running contraption
+// (pick up, carry, turn and drop a part; pin and unpin; wire two parts;
+// remove a part) as edits through the World's editing API, made between
+// steps. Bad edits are refused with a message, never thrown: the viewer shows
+// the message and the world goes on. No SDL here, so that tests can drive it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "apps/viewer/part_geometry.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::viewer {
+
+/// What an edit did: ok, or refused (and why); `message` is for the player.
+struct EditResult {
+  bool ok = true;
+  std::string message;
+  static EditResult refused(std::string why) { return {false, std::move(why)}; }
+};
+
+class Editor {
+ public:
+  /// Deeper than this, a dropped part is inside another and is moved out, m.
+  static constexpr double kOverlapTolerance = 0.003;
+
+  explicit Editor(World* world = nullptr) : world_(world) {}
+  /// A new world (after a reload): forgets what was held.
+  void attach(World* world);
+
+  /// The part under `point` (m), or a null id: moving parts before static
+  /// ones, then the smallest. `margin` (m) makes thin parts easier to hit.
+  ObjectId pick(Vec2 point, double margin = 0) const;
+
+  // --- carrying ---------------------------------------------------------------
+  /// Picks up `part` at `at`, with every part joined to it (a pinned wheel
+  /// with its pin, a rotor with its spokes); they move as one.
+  EditResult grab(ObjectId part, Vec2 at);
+  /// Where the hand is now.
+  void carry_to(Vec2 at) { target_ = at; }
+  /// Turns what is held about the hand, rad (counter-clockwise > 0).
+  void turn(double radians) { turn_ += radians; }
+  /// Puts what is held where the hand is, at rest. The viewer calls it before
+  /// every step while carrying (between steps), and once per frame.
+  void hold();
+  /// Lets go. A part dropped inside another is moved to the nearest free
+  /// place (or back where it was picked up); the message says so.
+  EditResult drop();
+  bool carrying() const { return !held_.empty(); }
+  ObjectId carried() const { return carrying() ? held_.front().id : ObjectId{}; }
+  /// Where the hand took hold, and where it is now (for drawing).
+  Vec2 hand() const { return target_; }
+
+  // --- other edits ------------------------------------------------------------
+  EditResult set_pinned(ObjectId part, bool pinned);
+  EditResult toggle_pin(ObjectId part);
+  /// Turns a part (and what is joined to it) in place about its centre.
+  EditResult rotate(ObjectId part, double radians);
+  /// A wire from part a to part b; `at_a` / `at_b` choose the terminal of a
+  /// two-terminal part (a battery's -x end is terminal 0, +x end terminal 1).
+  EditResult connect_wire(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b);
+  /// Removes a part with the joints and wires that hold it.
+  EditResult remove(ObjectId part);
+  /// Moves a part (with what is joined to it) out of any part it lies inside.
+  EditResult settle(ObjectId part);
+
+  /// Whether the object is an electrical part (a wire can end on it).
+  bool electrical(ObjectId id) const;
+  /// Whether it has two terminals (battery, coil, resistor).
+  bool two_terminal(ObjectId id) const;
+  /// Parts joined to `part` through joints, itself first.
+  std::vector<ObjectId> joined_group(ObjectId part) const;
+  /// A name no object has yet: base, base_2, base_3, ...
+  std::string unique_name(const std::string& base) const;
+
+ private:
+  struct Held {
+    ObjectId id;
+    Vec2 offset;   // from the hand, in the play area at grab time
+    double angle;  // orientation angle at grab time
+    double z;      // kept
+    bool is_joint;
+    bool moving;   // has a body: velocity is zeroed
+  };
+  bool has(ObjectId id, const char* prop) const;
+  void place(const std::vector<Held>& group, Vec2 hand, double turn);
+  double worst_overlap(const std::vector<ObjectId>& group, std::string* with) const;
+  EditResult move_out(const std::vector<Held>& group, Vec2 hand, double turn, Vec2 fallback_hand,
+                      double fallback_turn);
+
+  World* world_ = nullptr;
+  std::vector<Held> held_;
+  Vec2 grab_point_, target_;
+  double turn_ = 0;
+};
+
+}  // namespace alloy::viewer

@@ -1,0 +1,58 @@
+#include "apps/viewer/input_script.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "runtime/error.hpp"
+
+namespace alloy::viewer {
+
+std::vector<ScriptEvent> parse_script(const std::string& text, const std::string& file) {
+  static const std::map<std::string, ScriptEvent::Kind> kinds = {
+      {"press", ScriptEvent::Kind::Press},           {"move", ScriptEvent::Kind::Move},
+      {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
+      {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
+      {"wheel", ScriptEvent::Kind::Wheel}};
+  std::vector<ScriptEvent> out;
+  std::istringstream in(text);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++n;
+    if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    std::string kind;
+    ScriptEvent e;
+    e.line = n;
+    if (!(ls >> e.frame)) {
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      throw InputError(ErrorLocation{file, n, ""}, "expected a frame number first");
+    }
+    if (!(ls >> kind) || !kinds.count(kind))
+      throw InputError(ErrorLocation{file, n, ""},
+                       "expected an event: press, move, release, rpress, rrelease, key or wheel");
+    e.kind = kinds.at(kind);
+    bool ok = true;
+    switch (e.kind) {
+      case ScriptEvent::Kind::Key: ok = bool(ls >> e.key); break;
+      case ScriptEvent::Kind::Wheel: ok = bool(ls >> e.wheel); break;
+      default: ok = bool(ls >> e.at.x >> e.at.y); break;
+    }
+    if (!ok || e.frame < 0)
+      throw InputError(ErrorLocation{file, n, ""}, "bad arguments for '" + kind + "'");
+    out.push_back(e);
+  }
+  std::stable_sort(out.begin(), out.end(), [](const ScriptEvent& a, const ScriptEvent& b) { return a.frame < b.frame; });
+  return out;
+}
+
+std::vector<ScriptEvent> read_script(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(ErrorLocation{path.string(), 0, ""}, "cannot read the input script");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_script(ss.str(), path.string());
+}
+
+}  // namespace alloy::viewer

@@ -1,0 +1,36 @@
+// Scripted input: a text file of mouse and key events, each at a frame, that
+// the viewer turns into SDL events (SDL_PushEvent) before that frame, so that
+// headless runs and tests drive the viewer exactly as a player's hand does.
+//
+//   # frame  event      arguments            (positions in play-area metres)
+//   10       press      0.3 1.5              left button down at x = 0.3 m, y = 1.5 m
+//   12       move       0.8 1.6
+//   14       release    0.8 1.6
+//   20       rpress     0.5 1.0              right button (r-) variants
+//   30       key        space                a key by its SDL name: space, p, r, w, Delete, ...
+//   40       wheel      1                    mouse wheel notches (turns a carried part)
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "apps/viewer/part_geometry.hpp"
+
+namespace alloy::viewer {
+
+struct ScriptEvent {
+  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel };
+  int frame = 0;
+  Kind kind = Kind::Move;
+  Vec2 at;          ///< mouse events, m
+  std::string key;  ///< Key: SDL key name
+  int wheel = 0;    ///< Wheel: notches
+  int line = 0;     ///< line in the file, for messages
+};
+
+/// Parses a script; throws InputError with the file and line of a bad line.
+std::vector<ScriptEvent> parse_script(const std::string& text, const std::string& file);
+std::vector<ScriptEvent> read_script(const std::filesystem::path& path);
+
+}  // namespace alloy::viewer

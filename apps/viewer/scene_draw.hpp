@@ -1,0 +1,83 @@
+// Drawing the play area with Dear ImGui's draw lists (anti-aliased polygons,
+// lines and text, rendered by the SDL_Renderer backend): parts in their
+// materials' colours and true shapes, static parts hatched, pins and hinges,
+// magnet poles (north red, south green, as in the paper's figures), wires
+// coloured and animated by their current, powered parts glowing, bells
+// ringing, and optional force arrows and contact points.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <imgui.h>
+
+#include "apps/viewer/camera.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::viewer {
+
+/// Colours of the picture, shared with the tests that check pixels.
+namespace colour {
+inline constexpr ImU32 rgb(int r, int g, int b, int a = 255) { return IM_COL32(r, g, b, a); }
+inline constexpr ImU32 kBackground = rgb(238, 240, 243);
+inline constexpr ImU32 kGridMinor = rgb(230, 233, 237);
+inline constexpr ImU32 kGridMajor = rgb(212, 216, 223);
+inline constexpr ImU32 kSteel = rgb(122, 138, 160);
+inline constexpr ImU32 kIron = rgb(92, 98, 110);
+inline constexpr ImU32 kBrass = rgb(226, 186, 58);
+inline constexpr ImU32 kBronze = rgb(176, 128, 52);
+inline constexpr ImU32 kCopper = rgb(201, 110, 60);
+inline constexpr ImU32 kWood = rgb(196, 150, 98);
+inline constexpr ImU32 kRubber = rgb(62, 62, 70);
+inline constexpr ImU32 kStaticWood = rgb(150, 112, 74);  ///< floors and walls
+inline constexpr ImU32 kNorth = rgb(218, 48, 48);
+inline constexpr ImU32 kSouth = rgb(36, 160, 72);
+inline constexpr ImU32 kBattery = rgb(48, 54, 64);
+inline constexpr ImU32 kWireIdle = rgb(90, 92, 104);
+inline constexpr ImU32 kWireLive = rgb(255, 140, 0);
+inline constexpr ImU32 kPowered = rgb(255, 204, 0);
+inline constexpr ImU32 kLabel = rgb(110, 40, 160);  ///< the paper's annotations were purple
+inline constexpr ImU32 kMagneticForce = rgb(160, 50, 200);
+inline constexpr ImU32 kContactForce = rgb(230, 90, 20);
+inline constexpr ImU32 kSelected = rgb(0, 150, 220);
+}  // namespace colour
+
+/// What a part is made of, from its density (the kit writes the material's
+/// density on every part it makes).
+enum class Material { Steel, Iron, Brass, Bronze, Copper, Wood, Rubber, Other };
+Material material_of(const World& world, ObjectId id);
+/// The fill colour a part is drawn in (its material's; magnets and batteries
+/// have their own).
+ImU32 fill_colour(const World& world, ObjectId id);
+
+struct DrawOptions {
+  bool grid = true;
+  bool labels = true;
+  bool wires = true;
+  bool poles = true;
+  bool magnetic_forces = false;
+  bool contact_forces = false;
+};
+
+struct Highlight {
+  ObjectId selected, hovered, wire_start;
+  bool carrying = false;
+};
+
+/// A part that was struck and rings (drawn as fading circles).
+struct Ring {
+  ObjectId part;
+  double born = 0;      ///< animation clock at the strike, s
+  double strength = 1;  ///< 0..1
+};
+
+/// Draws the world onto `dl`. `clock` is the animation time (wall or frame
+/// clock), s: wires' current flows with it.
+void draw_world(ImDrawList* dl, World& world, const Camera& camera, const DrawOptions& options,
+                const Highlight& highlight, double clock, const std::vector<Ring>& rings);
+
+/// Where a wire ends on a part: a two-terminal part's terminal 0 at its -x
+/// end, 1 at its +x end; a node part's centre.
+Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal);
+
+}  // namespace alloy::viewer

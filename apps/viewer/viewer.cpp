@@ -1,0 +1,1173 @@
+#include "apps/viewer/viewer.hpp"
+
+#include <imgui.h>
+#include <imgui_impl_sdl.h>
+#include <imgui_impl_sdlrenderer.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <numbers>
+#include <ostream>
+#include <stdexcept>
+
+#include "apps/viewer/scene_writer.hpp"
+#include "resolvers/plugins.hpp"
+#include "resolvers/sound/sound_resolver.hpp"
+
+namespace alloy::viewer {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kHeadlessFrame = 1.0 / 60.0;  // s of simulated time per headless frame
+constexpr int kMaxStepsPerFrame = 240;         // beyond this the picture falls behind real time
+constexpr double kTurnStep = std::numbers::pi / 12;  // 15 degrees per wheel notch or key
+constexpr float kLeftWidth = 232, kRightWidth = 300, kMargin = 8;
+constexpr double kToastSeconds = 7;
+
+const char* kFontPath = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+template <class T>
+std::optional<T> get(const World& w, ObjectId id, const char* name) {
+  const auto pid = w.properties().find(name);
+  if (!pid || !w.store().has(id, *pid)) return std::nullopt;
+  const PropertyValue v = w.store().get(id, *pid);
+  if (const T* t = std::get_if<T>(&v)) return *t;
+  if constexpr (std::is_same_v<T, double>)
+    if (const auto* i = std::get_if<std::int64_t>(&v)) return double(*i);
+  return std::nullopt;
+}
+
+std::string value_text(const World& w, PropertyId p, const PropertyValue& v) {
+  char buf[160];
+  const PropertyDef& def = w.properties().def(p);
+  struct V {
+    const World& w;
+    const PropertyDef& def;
+    char* buf;
+    std::string operator()(double d) const {
+      std::snprintf(buf, 160, "%.6g %s", d, def.unit.c_str());
+      return buf;
+    }
+    std::string operator()(std::int64_t i) const { return std::to_string(i); }
+    std::string operator()(bool b) const { return b ? "true" : "false"; }
+    std::string operator()(Vec3 v) const {
+      std::snprintf(buf, 160, "(%.4g, %.4g, %.4g) %s", v.x, v.y, v.z, def.unit.c_str());
+      return buf;
+    }
+    std::string operator()(Quat q) const {
+      std::snprintf(buf, 160, "%.2f deg about z", angle_z(q) * 180 / std::numbers::pi);
+      return buf;
+    }
+    std::string operator()(const std::string& s) const { return "\"" + s + "\""; }
+    std::string operator()(ObjectId id) const { return w.store().alive(id) ? w.describe(id) : "(none)"; }
+    std::string operator()(const RefList& l) const {
+      std::string s;
+      for (ObjectId id : l) s += (s.empty() ? "" : ", ") + w.describe(id);
+      return "{" + s + "}";
+    }
+    std::string operator()(EnumValue e) const {
+      return e.index >= 0 && std::size_t(e.index) < def.enum_values.size() ? def.enum_values[std::size_t(e.index)]
+                                                                            : "?";
+    }
+  };
+  return std::visit(V{w, def, buf}, v);
+}
+
+const char* material_name(Material m) {
+  switch (m) {
+    case Material::Steel: return "steel";
+    case Material::Iron: return "iron";
+    case Material::Brass: return "brass";
+    case Material::Bronze: return "bronze";
+    case Material::Copper: return "copper";
+    case Material::Wood: return "wood";
+    case Material::Rubber: return "rubber";
+    case Material::Other: break;
+  }
+  return "other";
+}
+
+ImU32 kind_colour(StageKind k) {
+  switch (k) {
+    case StageKind::Resolver: return IM_COL32(70, 130, 220, 255);
+    case StageKind::Derived: return IM_COL32(60, 170, 100, 255);
+    case StageKind::Interaction: return IM_COL32(230, 140, 40, 255);
+  }
+  return IM_COL32(128, 128, 128, 255);
+}
+
+}  // namespace
+
+// --- set-up ---------------------------------------------------------------------
+
+Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
+  paused_ = opt_.paused;
+  time_scale_ = std::clamp(opt_.time_scale, 1.0 / 64, 64.0);
+  registry_ = std::make_unique<PluginRegistry>();
+  register_native_plugins(*registry_);
+  init_sdl();
+  init_imgui();
+  save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() + "_saved.lua";
+  if (save_path_ == "_saved.lua") save_path_ = "scene_saved.lua";
+  load();
+}
+
+Viewer::~Viewer() {
+  scene_.reset();
+  if (imgui_ready_) {
+    ImGui::SetCurrentContext(imgui_);
+    ImGui_ImplSDLRenderer_Shutdown();
+    ImGui_ImplSDL2_Shutdown();
+    ImGui::DestroyContext(imgui_);
+  }
+  if (renderer_) SDL_DestroyRenderer(renderer_);
+  if (window_) SDL_DestroyWindow(window_);
+  SDL_QuitSubSystem(SDL_INIT_VIDEO | SDL_INIT_EVENTS);
+}
+
+void Viewer::init_sdl() {
+  if (opt_.headless) {
+    // No display needed: SDL's dummy video driver gives a window whose
+    // framebuffer is plain memory, and the software renderer draws into it.
+    SDL_SetHint(SDL_HINT_VIDEODRIVER, "dummy");
+    SDL_SetHint(SDL_HINT_RENDER_DRIVER, "software");
+  }
+  // Subsystems are reference-counted: several viewers (tests) may be open at once.
+  if (SDL_InitSubSystem(SDL_INIT_VIDEO | SDL_INIT_EVENTS) != 0)
+    throw std::runtime_error(std::string("cannot open a window: ") + SDL_GetError() +
+                             " (without a display, use --headless or --screenshot)");
+  Uint32 flags = SDL_WINDOW_RESIZABLE;
+  if (opt_.headless) flags |= SDL_WINDOW_HIDDEN;
+  window_ = SDL_CreateWindow("alloy view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, opt_.width,
+                             opt_.height, flags);
+  if (!window_) throw std::runtime_error(std::string("cannot open a window: ") + SDL_GetError());
+  if (!opt_.headless)
+    renderer_ = SDL_CreateRenderer(window_, -1, SDL_RENDERER_ACCELERATED | SDL_RENDERER_PRESENTVSYNC);
+  if (!renderer_) renderer_ = SDL_CreateRenderer(window_, -1, SDL_RENDERER_SOFTWARE);
+  if (!renderer_) throw std::runtime_error(std::string("cannot draw in the window: ") + SDL_GetError());
+  SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_BLEND);
+  last_ticks_ = SDL_GetPerformanceCounter();
+}
+
+void Viewer::init_imgui() {
+  IMGUI_CHECKVERSION();
+  // A context of its own, made current whenever this viewer draws: several
+  // viewers may live in one process (tests).
+  imgui_ = ImGui::CreateContext();
+  ImGui::SetCurrentContext(imgui_);
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;  // the layout is fixed: nothing to remember between runs
+  io.LogFilename = nullptr;
+  std::error_code ec;
+  if (fs::exists(kFontPath, ec)) io.Fonts->AddFontFromFileTTF(kFontPath, 15.0f);
+  else io.Fonts->AddFontDefault();
+  ImGui::StyleColorsLight();
+  ImGuiStyle& style = ImGui::GetStyle();
+  style.WindowRounding = 6;
+  style.FrameRounding = 4;
+  style.GrabRounding = 4;
+  style.WindowBorderSize = 1;
+  style.WindowPadding = {10, 8};
+  style.ItemSpacing = {6, 5};
+  style.Colors[ImGuiCol_WindowBg] = ImVec4(0.98f, 0.98f, 0.99f, 0.94f);
+  style.Colors[ImGuiCol_TitleBgActive] = style.Colors[ImGuiCol_TitleBg] = ImVec4(0.86f, 0.88f, 0.92f, 1);
+  ImGui_ImplSDL2_InitForSDLRenderer(window_);
+  ImGui_ImplSDLRenderer_Init(renderer_);
+  imgui_ready_ = true;
+}
+
+void Viewer::load() {
+  std::unique_ptr<lua::LoadedScene> fresh;
+  std::string error;
+  try {
+    fresh = std::make_unique<lua::LoadedScene>(lua::load_scene(opt_.scene, *registry_, opt_.load));
+    fresh->world->start();  // the plugins it needs are made now and check their settings
+  } catch (const InputError& e) {
+    error = fresh ? lua::locate(*fresh, e).what() : e.what();
+  } catch (const std::exception& e) {
+    error = std::string("cannot load the scene: ") + e.what();
+  }
+  // The modification time of what was loaded, to notice edits on disk.
+  std::error_code ec;
+  scene_mtime_ = fs::last_write_time(fresh ? fresh->file : opt_.scene, ec);
+  if (!error.empty()) {
+    load_error_ = error;
+    note(error, true);
+    if (scene_) note("the world as it was goes on; fix the file and press Reset");
+    return;
+  }
+  load_error_.clear();
+  editor_.attach(nullptr);
+  scene_ = std::move(fresh);
+  World& w = *scene_->world;
+  editor_.attach(&w);
+  selected_ = hovered_ = wire_start_ = {};
+  event_counts_.clear();
+  event_log_.clear();
+  rings_.clear();
+  bars_.clear();
+  profile_steps_seen_ = 0;
+  accumulator_ = 0;
+  failing_steps_ = 0;
+  w.add_observer([this](const Event& e) {
+    auto it = std::find_if(event_counts_.begin(), event_counts_.end(), [&](auto& p) { return p.first == e.type; });
+    if (it == event_counts_.end()) event_counts_.push_back({e.type, 1});
+    else ++it->second;
+    World* wp = world();
+    if (!wp) return;
+    if (e.type == "sound") {
+      rings_.push_back({e.a, clock_, std::clamp(e.value("amplitude", 0.6) * 2, 0.35, 1.0)});
+    }
+    if (e.type == "contact_began" || e.type == "contact_ended") return;  // too many to list
+    char head[48];
+    std::snprintf(head, sizeof head, "%7.3f s  ", e.time);
+    std::string line = head + e.type;
+    if (wp->store().alive(e.a)) line += " " + wp->describe(e.a);
+    if (wp->store().alive(e.b)) line += ", " + wp->describe(e.b);
+    event_log_.push_back(line);
+    if (event_log_.size() > 8) event_log_.pop_front();
+  });
+  SDL_SetWindowTitle(window_, ("alloy view - " + scene_->name).c_str());
+}
+
+void Viewer::reset() {
+  editor_.attach(world());
+  load();
+}
+
+void Viewer::note(const std::string& message, bool error) {
+  if (message.empty()) return;
+  log_.push_back(message);
+  toasts_.push_back({message, clock_, error});
+  if (toasts_.size() > 5) toasts_.pop_front();
+}
+
+std::size_t Viewer::event_count(const std::string& type) const {
+  for (const auto& [t, n] : event_counts_)
+    if (t == type) return n;
+  return 0;
+}
+
+void Viewer::set_time_scale(double s) { time_scale_ = std::clamp(s, 1.0 / 64, 64.0); }
+
+// --- the loop --------------------------------------------------------------------
+
+int Viewer::run(std::ostream& out, std::ostream& err) {
+  if (!opt_.script.empty()) add_script(read_script(opt_.script));  // InputError: exit 2
+  std::size_t printed = 0;
+  auto flush_messages = [&] {
+    for (; printed < log_.size(); ++printed) out << "view: " << log_[printed] << "\n";
+  };
+  while (frame()) {
+    if (opt_.headless) flush_messages();
+    if (opt_.frames > 0 && frames_ >= std::uint64_t(opt_.frames)) break;
+  }
+  int code = 0;
+  if (!opt_.screenshot.empty()) {
+    try {
+      write_png(opt_.screenshot, render_image());
+      out << "view: screenshot " << opt_.screenshot << " after " << frames_ << " frames\n";
+    } catch (const std::exception& e) {
+      err << "error: " << e.what() << "\n";
+      code = 1;
+    }
+  }
+  if (!opt_.save.empty() && !save(opt_.save)) code = 1;
+  flush_messages();
+  if (!load_error_.empty()) {
+    err << "error: " << load_error_ << "\n";
+    if (code == 0) code = 2;
+  }
+  return code;
+}
+
+bool Viewer::frame() {
+  if (quit_) return false;
+  ImGui::SetCurrentContext(imgui_);
+  pump_script();
+  SDL_Event e;
+  while (SDL_PollEvent(&e)) handle(e);
+
+  double seconds = kHeadlessFrame;
+  const std::uint64_t now = SDL_GetPerformanceCounter();
+  if (!opt_.headless) seconds = std::clamp(double(now - last_ticks_) / double(SDL_GetPerformanceFrequency()), 0.0, 0.1);
+  last_ticks_ = now;
+  clock_ += seconds;
+
+  watch_scene_file();
+  simulate(seconds);
+  if (World* w = world()) {
+    if (!opt_.headless && opt_.audio && !audio_.is_open() && !audio_failed_)
+      if (const Stage* s = w->stage("sound")) {
+        (void)s;
+        std::string why;
+        double rate = 48000;
+        if (auto* snd = dynamic_cast<const sound::SoundResolver*>(s)) rate = snd->sample_rate();
+        if (!audio_.open(rate, &why)) {
+          audio_failed_ = true;
+          note("no sound: " + why);
+        }
+      }
+    audio_.pump(*w, muted_);
+  }
+  rings_.erase(std::remove_if(rings_.begin(), rings_.end(), [&](const Ring& r) { return clock_ - r.born > 1.0; }),
+               rings_.end());
+  while (!toasts_.empty() && clock_ - toasts_.front().born > kToastSeconds) toasts_.pop_front();
+  draw(false, nullptr);
+  ++frames_;
+  return !quit_;
+}
+
+void Viewer::simulate(double frame_seconds) {
+  World* w = world();
+  if (!w) return;
+  int steps = 0;
+  if (!paused_) {
+    accumulator_ += frame_seconds * time_scale_;
+    steps = int(std::floor(accumulator_ / w->dt() + 1e-9));
+    accumulator_ -= steps * w->dt();
+    if (steps > kMaxStepsPerFrame) {
+      steps = kMaxStepsPerFrame;
+      accumulator_ = 0;
+    }
+  }
+  steps += single_steps_;
+  single_steps_ = 0;
+  steps_last_frame_ = 0;
+  for (int i = 0; i < steps && world(); ++i) {
+    editor_.hold();  // what the hand holds stays in the hand, step after step
+    step_world();
+    ++steps_last_frame_;
+    if (paused_ && i + 1 < steps && steps > 1 && failing_steps_ > 0) break;
+  }
+  editor_.hold();  // and while paused, it follows the hand all the same
+
+  // Time per stage per step, averaged over recent frames.
+  const Profile& prof = w->profile();
+  const std::uint64_t dsteps = prof.steps - profile_steps_seen_;
+  if (dsteps > 0) {
+    double total = 0;
+    for (const StageTiming& t : prof.stages) {
+      auto it = std::find_if(bars_.begin(), bars_.end(), [&](const StageBar& b) { return b.name == t.name; });
+      if (it == bars_.end()) {
+        bars_.push_back({t.name, t.kind, 0, t.seconds, t.runs});
+        continue;
+      }
+      const double ms = (t.seconds - it->seconds_seen) * 1000 / double(dsteps);
+      it->ms = it->ms == 0 ? ms : 0.9 * it->ms + 0.1 * ms;
+      it->seconds_seen = t.seconds;
+      it->runs_seen = t.runs;
+      total += it->ms;
+    }
+    // Stages that left (a swap, a removed battery) leave the bars too.
+    bars_.erase(std::remove_if(bars_.begin(), bars_.end(),
+                               [&](const StageBar& b) {
+                                 return std::none_of(prof.stages.begin(), prof.stages.end(),
+                                                     [&](const StageTiming& t) { return t.name == b.name; });
+                               }),
+                bars_.end());
+    step_ms_ = total;
+    profile_steps_seen_ = prof.steps;
+  }
+}
+
+void Viewer::step_world() {
+  World* w = world();
+  try {
+    w->step();
+    failing_steps_ = 0;
+    step_error_.clear();
+  } catch (const InputError& e) {
+    // A resolver refused something an edit made (or the scene had): say
+    // where, and wait for the player to put it right.
+    const std::string msg = lua::locate(*scene_, e).what();
+    if (msg != step_error_) note(msg, true);
+    step_error_ = msg;
+    paused_ = true;
+    ++failing_steps_;
+    note("paused: the world cannot step until this is put right (remove the part, or Reset)");
+  } catch (const std::exception& e) {
+    const std::string msg = std::string("a step failed: ") + e.what();
+    if (msg != step_error_) note(msg, true);
+    step_error_ = msg;
+    if (++failing_steps_ >= 3) {
+      paused_ = true;
+      note("paused: the world failed three steps in a row");
+    }
+  }
+}
+
+void Viewer::watch_scene_file() {
+  // Twice a second is plenty for a person saving a file.
+  if (clock_ - last_watch_ < 0.5) return;
+  last_watch_ = clock_;
+  std::error_code ec;
+  const fs::path file = scene_ ? scene_->file : opt_.scene;
+  const auto t = fs::last_write_time(file, ec);
+  if (ec || t == scene_mtime_) return;
+  scene_mtime_ = t;
+  if (!scene_) {
+    note("the scene file changed: loading it again");
+    load();
+  } else {
+    note("the scene file changed on disk: Reset (Ctrl+R) loads it");
+  }
+}
+
+// --- input -----------------------------------------------------------------------
+
+void Viewer::add_script(std::vector<ScriptEvent> events) {
+  for (auto& e : events) {
+    e.frame += int(frames_);
+    script_.push_back(e);
+  }
+  std::stable_sort(script_.begin() + std::ptrdiff_t(script_next_), script_.end(),
+                   [](const ScriptEvent& a, const ScriptEvent& b) { return a.frame < b.frame; });
+}
+
+void Viewer::pump_script() {
+  while (script_next_ < script_.size() && script_[script_next_].frame <= int(frames_)) {
+    const ScriptEvent& e = script_[script_next_++];
+    switch (e.kind) {
+      case ScriptEvent::Kind::Press: push_mouse(SDL_MOUSEBUTTONDOWN, e.at); break;
+      case ScriptEvent::Kind::Move: push_mouse(SDL_MOUSEMOTION, e.at); break;
+      case ScriptEvent::Kind::Release: push_mouse(SDL_MOUSEBUTTONUP, e.at); break;
+      case ScriptEvent::Kind::RightPress: push_mouse(SDL_MOUSEBUTTONDOWN, e.at, SDL_BUTTON_RIGHT); break;
+      case ScriptEvent::Kind::RightRelease: push_mouse(SDL_MOUSEBUTTONUP, e.at, SDL_BUTTON_RIGHT); break;
+      case ScriptEvent::Kind::Wheel: push_wheel(e.wheel); break;
+      case ScriptEvent::Kind::Key: {
+        const SDL_Keycode k = SDL_GetKeyFromName(e.key.c_str());
+        if (k == SDLK_UNKNOWN) note("script line " + std::to_string(e.line) + ": unknown key '" + e.key + "'", true);
+        else push_key(k);
+        break;
+      }
+    }
+  }
+}
+
+void Viewer::push_mouse(Uint32 type, Vec2 at, Uint8 button) {
+  const ScreenPoint s = camera_.to_screen(at);
+  const int x = int(std::lround(s.x)), y = int(std::lround(s.y));
+  SDL_Event e{};
+  e.type = type;
+  if (type == SDL_MOUSEMOTION) {
+    e.motion.windowID = SDL_GetWindowID(window_);
+    e.motion.x = x;
+    e.motion.y = y;
+    e.motion.xrel = mouse_x_ < 0 ? 0 : x - int(mouse_x_);
+    e.motion.yrel = mouse_y_ < 0 ? 0 : y - int(mouse_y_);
+  } else {
+    e.button.windowID = SDL_GetWindowID(window_);
+    e.button.button = button;
+    e.button.state = type == SDL_MOUSEBUTTONDOWN ? SDL_PRESSED : SDL_RELEASED;
+    e.button.clicks = 1;
+    e.button.x = x;
+    e.button.y = y;
+  }
+  SDL_PushEvent(&e);
+}
+
+void Viewer::push_key(SDL_Keycode key, Uint16 mod) {
+  SDL_Event e{};
+  e.type = SDL_KEYDOWN;
+  e.key.windowID = SDL_GetWindowID(window_);
+  e.key.state = SDL_PRESSED;
+  e.key.keysym.sym = key;
+  e.key.keysym.scancode = SDL_GetScancodeFromKey(key);
+  e.key.keysym.mod = mod;
+  SDL_PushEvent(&e);
+  e.type = SDL_KEYUP;
+  e.key.state = SDL_RELEASED;
+  SDL_PushEvent(&e);
+}
+
+void Viewer::push_wheel(int notches) {
+  SDL_Event e{};
+  e.type = SDL_MOUSEWHEEL;
+  e.wheel.windowID = SDL_GetWindowID(window_);
+  e.wheel.y = notches;
+  e.wheel.preciseY = float(notches);
+  SDL_PushEvent(&e);
+}
+
+bool Viewer::over_panel(float x, float y) const {
+  for (const Rect& r : panels_)
+    if (x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1) return true;
+  return false;
+}
+
+void Viewer::handle(const SDL_Event& e) {
+  if (imgui_ready_) ImGui_ImplSDL2_ProcessEvent(&e);
+  const bool popup = imgui_ready_ && ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopupId);
+  switch (e.type) {
+    case SDL_QUIT: quit_ = true; break;
+    case SDL_WINDOWEVENT:
+      if (e.window.event == SDL_WINDOWEVENT_CLOSE) quit_ = true;
+      break;
+    case SDL_MOUSEMOTION: {
+      const float dx = float(e.motion.x) - mouse_x_, dy = float(e.motion.y) - mouse_y_;
+      const bool had = mouse_x_ >= 0;
+      mouse_x_ = float(e.motion.x);
+      mouse_y_ = float(e.motion.y);
+      const Vec2 at = camera_.to_world(mouse_x_, mouse_y_);
+      if (panning_ && had) camera_.centre = camera_.centre - Vec2{dx / camera_.scale, -dy / camera_.scale};
+      if (editor_.carrying()) editor_.carry_to(at);
+      hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
+      break;
+    }
+    case SDL_MOUSEBUTTONDOWN: {
+      const int b = e.button.button == SDL_BUTTON_LEFT ? 0 : e.button.button == SDL_BUTTON_RIGHT ? 1 : 2;
+      mouse_down_[b] = mouse_pressed_[b] = true;
+      mouse_x_ = float(e.button.x);
+      mouse_y_ = float(e.button.y);
+      if (over_panel(mouse_x_, mouse_y_) || popup) break;
+      on_press(camera_.to_world(mouse_x_, mouse_y_), e.button.button, Uint16(SDL_GetModState()));
+      break;
+    }
+    case SDL_MOUSEBUTTONUP: {
+      const int b = e.button.button == SDL_BUTTON_LEFT ? 0 : e.button.button == SDL_BUTTON_RIGHT ? 1 : 2;
+      mouse_down_[b] = false;
+      mouse_x_ = float(e.button.x);
+      mouse_y_ = float(e.button.y);
+      on_release(camera_.to_world(mouse_x_, mouse_y_), e.button.button);
+      break;
+    }
+    case SDL_MOUSEWHEEL: {
+      if (over_panel(mouse_x_, mouse_y_)) break;
+      const int notches = e.wheel.y;
+      if (editor_.carrying()) editor_.turn(notches * kTurnStep);
+      else camera_.zoom_at(mouse_x_, mouse_y_, std::pow(1.15, notches));
+      break;
+    }
+    case SDL_KEYDOWN:
+      if (imgui_ready_ && ImGui::GetIO().WantTextInput) break;
+      on_key(e.key.keysym.sym, e.key.keysym.mod);
+      break;
+    default: break;
+  }
+}
+
+void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
+  World* w = world();
+  if (button == SDL_BUTTON_MIDDLE || !w) {
+    panning_ = true;
+    return;
+  }
+  const ObjectId part = editor_.pick(at, 4 / camera_.scale);
+  if (button == SDL_BUTTON_RIGHT) {
+    context_part_ = part;
+    context_at_ = at;
+    open_context_ = true;
+    if (part) selected_ = part;
+    return;
+  }
+  switch (tool_) {
+    case Tool::Place: {
+      if (placing_ >= 0 && placing_ < int(palette_entries().size())) drop_part(palette_entries()[std::size_t(placing_)], at);
+      place_drag_ = false;
+      if (!(mod & KMOD_SHIFT)) {
+        tool_ = Tool::Hand;
+        placing_ = -1;
+      }
+      break;
+    }
+    case Tool::Wire: {
+      if (!part) {
+        wire_start_ = {};
+        note("a wire goes from part to part: click a battery, a coil or a conductive part");
+        break;
+      }
+      if (!wire_start_) {
+        if (!editor_.electrical(part)) {
+          note(w->describe(part) + " does not conduct: a wire cannot end on it", true);
+          break;
+        }
+        wire_start_ = part;
+        wire_start_at_ = at;
+        break;
+      }
+      const EditResult r = editor_.connect_wire(wire_start_, wire_start_at_, part, at);
+      note(r.message, !r.ok);
+      wire_start_ = {};
+      break;
+    }
+    case Tool::Hand: {
+      if (!part) {
+        selected_ = {};
+        panning_ = true;
+        break;
+      }
+      selected_ = part;
+      const EditResult r = editor_.grab(part, at);
+      if (!r.ok) note(r.message, true);
+      break;
+    }
+  }
+}
+
+void Viewer::on_release(Vec2 at, Uint8 button) {
+  panning_ = false;
+  if (button != SDL_BUTTON_LEFT) return;
+  if (tool_ == Tool::Place && place_drag_) {
+    // Dragged from the palette and let go over the play area: drop it there.
+    place_drag_ = false;
+    if (!over_panel(mouse_x_, mouse_y_) && placing_ >= 0) {
+      drop_part(palette_entries()[std::size_t(placing_)], at);
+      tool_ = Tool::Hand;
+      placing_ = -1;
+    }
+    return;
+  }
+  if (editor_.carrying()) {
+    editor_.carry_to(at);
+    const EditResult r = editor_.drop();
+    note(r.message, !r.ok);
+  }
+}
+
+void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
+  const bool ctrl = mod & (KMOD_CTRL | KMOD_GUI);
+  World* w = world();
+  const ObjectId target = hovered_ ? hovered_ : selected_;
+  switch (key) {
+    case SDLK_SPACE: paused_ = !paused_; break;
+    case SDLK_PERIOD:
+    case SDLK_n:
+      paused_ = true;
+      step_once();
+      break;
+    case SDLK_r:
+      if (ctrl) reset();
+      break;
+    case SDLK_s:
+      if (ctrl) save(save_path_);
+      break;
+    case SDLK_q:
+    case SDLK_e: {
+      const double a = key == SDLK_q ? kTurnStep : -kTurnStep;
+      if (editor_.carrying()) editor_.turn(a);
+      else if (target && w) {
+        const EditResult r = editor_.rotate(target, a);
+        if (!r.ok || !r.message.empty()) note(r.message, !r.ok);
+      }
+      break;
+    }
+    case SDLK_p:
+      if (target && w) {
+        const EditResult r = editor_.toggle_pin(target);
+        note(r.message, !r.ok);
+      }
+      break;
+    case SDLK_w:
+      tool_ = tool_ == Tool::Wire ? Tool::Hand : Tool::Wire;
+      wire_start_ = {};
+      break;
+    case SDLK_DELETE:
+    case SDLK_BACKSPACE:
+      if (selected_ && w) {
+        const EditResult r = editor_.remove(selected_);
+        note(r.message, !r.ok);
+        if (r.ok) selected_ = hovered_ = {};
+      }
+      break;
+    case SDLK_f: fit_view(); break;
+    case SDLK_EQUALS:
+    case SDLK_PLUS:
+    case SDLK_KP_PLUS: set_time_scale(time_scale_ * 2); break;
+    case SDLK_MINUS:
+    case SDLK_KP_MINUS: set_time_scale(time_scale_ / 2); break;
+    case SDLK_l: draw_options_.labels = !draw_options_.labels; break;
+    case SDLK_g: draw_options_.magnetic_forces = draw_options_.contact_forces = !draw_options_.magnetic_forces; break;
+    case SDLK_m: muted_ = !muted_; break;
+    case SDLK_ESCAPE:
+      tool_ = Tool::Hand;
+      placing_ = -1;
+      wire_start_ = {};
+      break;
+    default: break;
+  }
+}
+
+// --- edits -----------------------------------------------------------------------
+
+EditResult Viewer::drop_part(const PaletteEntry& entry, Vec2 at) {
+  World* w = world();
+  if (!w) return EditResult::refused("there is no world to put a part in");
+  try {
+    const std::string name = editor_.unique_name(entry.base);
+    const std::vector<ObjectId> ids = make_part(*w, entry, at, opt_.load, name);
+    if (ids.empty()) return EditResult::refused("the kit made nothing for " + entry.label);
+    selected_ = ids.front();
+    const EditResult r = editor_.settle(ids.front());
+    const std::string msg = r.message.empty() ? "added " + w->describe(ids.front()) : r.message;
+    note(msg, !r.ok);
+    return {r.ok, msg};
+  } catch (const std::exception& e) {
+    note(std::string("cannot add ") + entry.label + ": " + e.what(), true);
+    return EditResult::refused(e.what());
+  }
+}
+
+EditResult Viewer::swap(const std::string& area, const std::string& from, const std::string& to) {
+  World* w = world();
+  if (!w) return EditResult::refused("no world");
+  try {
+    w->swap(area, from, to);
+    const std::string msg = "swapped " + from + " for " + to + (area.empty() ? "" : " in " + area);
+    note(msg);
+    return {true, msg};
+  } catch (const std::exception& e) {
+    note(e.what(), true);
+    return EditResult::refused(e.what());
+  }
+}
+
+bool Viewer::save(const fs::path& path) {
+  World* w = world();
+  if (!w) {
+    note("nothing to save: the scene did not load", true);
+    return false;
+  }
+  try {
+    SceneMeta meta;
+    meta.name = scene_->name;
+    meta.description = scene_->description;
+    meta.seconds = scene_->seconds;
+    meta.origin = opt_.scene.string();
+    save_scene(*w, meta, path);
+    note("saved " + path.string());
+    return true;
+  } catch (const std::exception& e) {
+    note(std::string("cannot save: ") + e.what(), true);
+    return false;
+  }
+}
+
+// --- drawing ---------------------------------------------------------------------
+
+void Viewer::play_rect(float& x0, float& y0, float& x1, float& y1) const {
+  int w = opt_.width, h = opt_.height;
+  SDL_GetWindowSize(window_, &w, &h);
+  x0 = 0;
+  y0 = 0;
+  x1 = float(w);
+  y1 = float(h);
+  if (opt_.panels) {
+    x0 = kLeftWidth + 2 * kMargin;
+    x1 = float(w) - kRightWidth - 2 * kMargin;
+    y1 = float(h) - 40;
+    if (x1 - x0 < 200) {  // a narrow window: the panels float over the play area
+      x0 = 0;
+      x1 = float(w);
+    }
+  }
+}
+
+void Viewer::fit_view() {
+  float x0, y0, x1, y1;
+  play_rect(x0, y0, x1, y1);
+  Vec2 lo{1e300, 1e300}, hi{-1e300, -1e300};
+  if (World* w = world())
+    for (const Part2D& p : read_parts(*w))
+      for (Vec2 v : outline(p, 16)) {
+        lo = {std::min(lo.x, v.x), std::min(lo.y, v.y)};
+        hi = {std::max(hi.x, v.x), std::max(hi.y, v.y)};
+      }
+  if (lo.x > hi.x) {
+    lo = {-1, 0};
+    hi = {1, 1.5};
+  }
+  camera_.fit(lo, hi, x0, y0, x1, y1);
+  fitted_ = true;
+}
+
+void Viewer::remember_panel() {
+  const ImVec2 p = ImGui::GetWindowPos(), s = ImGui::GetWindowSize();
+  next_panels_.push_back({p.x, p.y, p.x + s.x, p.y + s.y});
+}
+
+Image Viewer::render_image() {
+  ImGui::SetCurrentContext(imgui_);
+  Image img;
+  draw(true, &img);
+  return img;
+}
+
+void Viewer::draw(bool capture, Image* image) {
+  if (!fitted_ && world()) fit_view();
+  ImGui_ImplSDLRenderer_NewFrame();
+  ImGui_ImplSDL2_NewFrame();
+  // The mouse as the events said (the backend asks SDL for the pointer, which
+  // knows nothing of pushed events): scripted input drives the panels too.
+  ImGuiIO& io = ImGui::GetIO();
+  io.MousePos = mouse_x_ >= 0 ? ImVec2(mouse_x_, mouse_y_) : ImVec2(-FLT_MAX, -FLT_MAX);
+  for (int i = 0; i < 3; ++i) {
+    io.MouseDown[i] = mouse_down_[i] || mouse_pressed_[i];
+    mouse_pressed_[i] = false;
+  }
+  if (opt_.headless) io.DeltaTime = float(kHeadlessFrame);
+  ImGui::NewFrame();
+
+  ImDrawList* dl = ImGui::GetBackgroundDrawList();
+  if (World* w = world()) {
+    Highlight hl{selected_, hovered_, wire_start_, editor_.carrying()};
+    draw_world(dl, *w, camera_, draw_options_, hl, clock_, rings_);
+    // The tools' feedback: a wire being drawn, a part about to be placed.
+    if (tool_ == Tool::Wire && wire_start_ && mouse_x_ >= 0 && w->store().alive(wire_start_)) {
+      const auto p = read_part(*w, wire_start_);
+      const bool two = editor_.two_terminal(wire_start_);
+      const Vec2 from = two && p ? terminal_point(*w, wire_start_, p->to_local(wire_start_at_).x > 0 ? 1 : 0)
+                                 : (p ? p->centre : wire_start_at_);
+      const ScreenPoint s = camera_.to_screen(from);
+      dl->AddLine({s.x, s.y}, {mouse_x_, mouse_y_}, colour::kWireIdle, 2.5f);
+    }
+    if (tool_ == Tool::Place && placing_ >= 0 && mouse_x_ >= 0 && !over_panel(mouse_x_, mouse_y_)) {
+      const char* label = palette_entries()[std::size_t(placing_)].label.c_str();
+      dl->AddCircle({mouse_x_, mouse_y_}, 10, colour::kSelected, 20, 2);
+      dl->AddLine({mouse_x_ - 14, mouse_y_}, {mouse_x_ + 14, mouse_y_}, colour::kSelected, 1.5f);
+      dl->AddLine({mouse_x_, mouse_y_ - 14}, {mouse_x_, mouse_y_ + 14}, colour::kSelected, 1.5f);
+      dl->AddText({mouse_x_ + 14, mouse_y_ + 6}, colour::kSelected, label);
+    }
+  }
+
+  next_panels_.clear();
+  if (opt_.panels) draw_panels();
+  panel_error();
+  panel_messages();
+  context_menu();
+  panels_ = next_panels_;
+
+  ImGui::Render();
+  // Headless, nobody sees a frame that is not captured: build it (the panels
+  // keep their state) but do not rasterise it.
+  if (opt_.headless && !capture) return;
+  const ImU32 bg = colour::kBackground;
+  SDL_SetRenderDrawColor(renderer_, bg & 0xff, (bg >> 8) & 0xff, (bg >> 16) & 0xff, 255);
+  SDL_RenderClear(renderer_);
+  ImGui_ImplSDLRenderer_RenderDrawData(ImGui::GetDrawData());
+  if (capture && image) {
+    int w = 0, h = 0;
+    SDL_GetRendererOutputSize(renderer_, &w, &h);
+    image->width = w;
+    image->height = h;
+    image->rgba.assign(std::size_t(w) * h * 4, 0);
+    if (SDL_RenderReadPixels(renderer_, nullptr, SDL_PIXELFORMAT_RGBA32, image->rgba.data(), w * 4) != 0)
+      throw std::runtime_error(std::string("cannot read the picture back: ") + SDL_GetError());
+  }
+  SDL_RenderPresent(renderer_);
+}
+
+void Viewer::draw_panels() {
+  panel_toolbar();
+  panel_palette();
+  panel_inspector();
+  panel_resolvers();
+}
+
+void Viewer::panel_toolbar() {
+  ImGui::SetNextWindowPos({kMargin, kMargin});
+  ImGui::SetNextWindowSize({kLeftWidth, 0});
+  ImGui::Begin("alloy view", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  World* w = world();
+  if (scene_) {
+    ImGui::TextColored(ImVec4(0.25f, 0.1f, 0.5f, 1), "%s", scene_->name.c_str());
+    if (w) ImGui::Text("t = %.3f s   step %llu", w->time(), (unsigned long long)w->step_count());
+  } else {
+    ImGui::TextColored(ImVec4(0.8f, 0.1f, 0.1f, 1), "scene not loaded");
+  }
+  const float bw = (kLeftWidth - 20 - 2 * 6) / 3;
+  if (ImGui::Button(paused_ ? "Run" : "Pause", {bw, 0})) paused_ = !paused_;
+  ImGui::SameLine();
+  if (ImGui::Button("Step", {bw, 0})) {
+    paused_ = true;
+    step_once();
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Reset", {bw, 0})) reset();
+  float scale = float(time_scale_);
+  ImGui::SetNextItemWidth(kLeftWidth - 20);
+  if (ImGui::SliderFloat("##scale", &scale, 1.0f / 16, 4.0f, "time x %.3g", ImGuiSliderFlags_Logarithmic))
+    set_time_scale(scale);
+  ImGui::Separator();
+  int tool = tool_ == Tool::Wire ? 1 : 0;
+  if (ImGui::RadioButton("Hand", tool == 0)) tool_ = Tool::Hand, wire_start_ = {};
+  ImGui::SameLine();
+  if (ImGui::RadioButton("Wire (W)", tool == 1)) tool_ = Tool::Wire, wire_start_ = {};
+  ImGui::Checkbox("labels", &draw_options_.labels);
+  ImGui::SameLine();
+  ImGui::Checkbox("poles", &draw_options_.poles);
+  ImGui::Checkbox("magnetic F", &draw_options_.magnetic_forces);
+  ImGui::SameLine();
+  ImGui::Checkbox("contacts", &draw_options_.contact_forces);
+  ImGui::Separator();
+  char path[512];
+  std::snprintf(path, sizeof path, "%s", save_path_.c_str());
+  ImGui::SetNextItemWidth(kLeftWidth - 70);
+  if (ImGui::InputText("##save", path, sizeof path)) save_path_ = path;
+  ImGui::SameLine();
+  if (ImGui::Button("Save")) save(save_path_);
+  ImGui::End();
+}
+
+void Viewer::panel_palette() {
+  if (palette_problems_.empty()) {
+    // Once: which entries the kit can make here (a kit without a part greys it).
+    for (const PaletteEntry& e : palette_entries()) palette_problems_.push_back(check_entry(*registry_, e, opt_.load));
+  }
+  const float top = next_panels_.empty() ? kMargin : next_panels_.back().y1 + kMargin;
+  ImGui::SetNextWindowPos({kMargin, top});
+  ImGui::SetNextWindowSize({kLeftWidth, 0});
+  ImGui::Begin("Parts", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  ImGui::TextDisabled("drag onto the board, or click then click");
+  std::string group;
+  const float bw = (kLeftWidth - 20 - 6) / 2;
+  int in_row = 0;
+  const auto& entries = palette_entries();
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const PaletteEntry& e = entries[i];
+    if (e.group != group) {
+      group = e.group;
+      ImGui::Spacing();
+      ImGui::TextDisabled("%s", group.c_str());
+      in_row = 0;
+    }
+    if (in_row++ % 2) ImGui::SameLine();
+    const bool usable = palette_problems_[i].empty();
+    const bool active = tool_ == Tool::Place && placing_ == int(i);
+    if (!usable) ImGui::BeginDisabled();
+    if (active) ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0.55f, 0.8f, 1.0f, 1));
+    ImGui::Button(e.label.c_str(), {bw, 0});
+    if (ImGui::IsItemActivated()) {
+      tool_ = Tool::Place;
+      placing_ = int(i);
+      place_drag_ = true;
+    }
+    if (active) ImGui::PopStyleColor();
+    if (!usable) ImGui::EndDisabled();
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip("%s", usable ? e.tip.c_str() : palette_problems_[i].c_str());
+  }
+  ImGui::End();
+}
+
+void Viewer::panel_inspector() {
+  int win_w = opt_.width, win_h = opt_.height;
+  SDL_GetWindowSize(window_, &win_w, &win_h);
+  ImGui::SetNextWindowPos({float(win_w) - kRightWidth - kMargin, kMargin});
+  ImGui::SetNextWindowSize({kRightWidth, 0});
+  ImGui::Begin("Part", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  World* w = world();
+  if (!w || !selected_ || !w->store().alive(selected_)) {
+    selected_ = {};
+    ImGui::TextDisabled("click a part to see it here");
+    ImGui::TextDisabled("drag: move   wheel / Q E: turn");
+    ImGui::TextDisabled("P: pin   W: wire   Del: remove");
+    ImGui::TextDisabled("right-click: menu   F: fit view");
+    ImGui::End();
+    return;
+  }
+  const ObjectId id = selected_;
+  const auto part = read_part(*w, id);
+  ImGui::TextColored(ImVec4(0.43f, 0.16f, 0.63f, 1), "%s", w->describe(id).c_str());
+  if (part) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("%s%s", material_name(material_of(*w, id)), part->is_static ? ", static" : "");
+    const double mass = get<double>(*w, id, "mass").value_or(0);
+    if (mass > 0) ImGui::Text("mass %.4g kg", mass);
+    ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y, part->angle * 180 / std::numbers::pi);
+    if (const auto v = get<Vec3>(*w, id, "velocity")) ImGui::Text("speed %.3f m/s", length(xy(*v)));
+  }
+  if (const auto emf = get<double>(*w, id, "emf")) ImGui::Text("battery %.3g V", *emf);
+  if (const auto i = get<double>(*w, id, "current")) ImGui::Text("current %.4g A", *i);
+  if (get<bool>(*w, id, "powered").value_or(false)) ImGui::TextColored(ImVec4(0.8f, 0.55f, 0, 1), "powered");
+  if (const auto q = get<double>(*w, id, "pole_strength"); q && *q != 0)
+    ImGui::Text("poles %.3g A m, north at %s end", std::abs(*q), *q > 0 ? "+x" : "-x");
+  if (part && !part->is_static) {
+    bool pinned = part->pinned;
+    if (ImGui::Checkbox("pinned to the board (P)", &pinned)) note(editor_.set_pinned(id, pinned).message);
+  }
+  if (ImGui::Button("turn +15")) note(editor_.rotate(id, kTurnStep).message);
+  ImGui::SameLine();
+  if (ImGui::Button("turn -15")) note(editor_.rotate(id, -kTurnStep).message);
+  ImGui::SameLine();
+  if (ImGui::Button("remove")) {
+    const EditResult r = editor_.remove(id);
+    note(r.message, !r.ok);
+    selected_ = hovered_ = {};
+    ImGui::End();
+    return;
+  }
+  if (editor_.electrical(id) && ImGui::Button("wire from here")) {
+    tool_ = Tool::Wire;
+    wire_start_ = id;
+    wire_start_at_ = part ? part->centre : Vec2{};
+  }
+  if (ImGui::CollapsingHeader("properties")) {
+    const PropertyRegistry& reg = w->properties();
+    if (ImGui::BeginTable("props", 2, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
+      for (PropertyId p = 0; p < reg.size(); ++p) {
+        if (!w->store().has(id, p)) continue;
+        ImGui::TableNextRow();
+        ImGui::TableNextColumn();
+        ImGui::TextUnformatted(reg.def(p).name.c_str());
+        ImGui::TableNextColumn();
+        ImGui::TextUnformatted(value_text(*w, p, w->store().get(id, p)).c_str());
+      }
+      ImGui::EndTable();
+    }
+  }
+  ImGui::End();
+}
+
+void Viewer::panel_resolvers() {
+  int win_w = opt_.width, win_h = opt_.height;
+  SDL_GetWindowSize(window_, &win_w, &win_h);
+  const float top = next_panels_.empty() ? kMargin : next_panels_.back().y1 + kMargin;
+  ImGui::SetNextWindowPos({float(win_w) - kRightWidth - kMargin, top});
+  ImGui::SetNextWindowSize({kRightWidth, 0});
+  ImGui::Begin("Stages", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  World* w = world();
+  if (!w) {
+    ImGui::End();
+    return;
+  }
+  ImGui::Text("%.3f ms per step, %d steps this frame", step_ms_, steps_last_frame_);
+  // Time bars: each stage's share of a step, coloured by kind.
+  double most = 1e-6;
+  for (const StageBar& b : bars_) most = std::max(most, b.ms);
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const float width = kRightWidth - 20;
+  for (const StageBar& b : bars_) {
+    const ImVec2 p = ImGui::GetCursorScreenPos();
+    const float h = ImGui::GetTextLineHeight();
+    dl->AddRectFilled(p, {p.x + width, p.y + h}, IM_COL32(232, 235, 240, 255), 3);
+    dl->AddRectFilled(p, {p.x + std::max(2.0f, float(b.ms / most) * width), p.y + h}, kind_colour(b.kind) & 0x90FFFFFF, 3);
+    char label[128];
+    std::snprintf(label, sizeof label, "%s  %.3f ms", b.name.c_str(), b.ms);
+    dl->AddText({p.x + 4, p.y}, IM_COL32(20, 24, 32, 255), label);
+    ImGui::Dummy({width, h + 1});
+  }
+  // Swaps: a resolver with alternatives (StageInfo::provides) can be swapped live.
+  bool any = false;
+  for (const std::string& stage : w->active_stages()) {
+    const auto at = stage.find('@');
+    const std::string plugin = stage.substr(0, at), area = at == std::string::npos ? "" : stage.substr(at + 1);
+    const PluginDef* def = registry_->find(plugin);
+    if (!def || def->info.provides.empty()) continue;
+    std::vector<std::string> alternatives;
+    for (const std::string& n : registry_->order())
+      if (const PluginDef* d = registry_->find(n); d && d->info.provides == def->info.provides && d->info.kind == def->info.kind)
+        alternatives.push_back(n);
+    if (alternatives.size() < 2) continue;
+    if (!any) {
+      ImGui::Separator();
+      ImGui::TextDisabled("swap live");
+    }
+    any = true;
+    ImGui::SetNextItemWidth(width * 0.6f);
+    const std::string label = def->info.provides + (area.empty() ? "" : " @" + area) + "##" + stage;
+    if (ImGui::BeginCombo(label.c_str(), plugin.c_str())) {
+      for (const std::string& alt : alternatives)
+        if (ImGui::Selectable(alt.c_str(), alt == plugin) && alt != plugin) swap(area, plugin, alt);
+      ImGui::EndCombo();
+    }
+  }
+  if (!event_log_.empty()) {
+    ImGui::Separator();
+    ImGui::TextDisabled("events");
+    for (const std::string& line : event_log_) ImGui::TextUnformatted(line.c_str());
+  }
+  ImGui::End();
+}
+
+void Viewer::panel_messages() {
+  // Recent messages float at the bottom of the play area, errors in red.
+  if (toasts_.empty()) return;
+  float x0, y0, x1, y1;
+  play_rect(x0, y0, x1, y1);
+  int win_w = opt_.width, win_h = opt_.height;
+  SDL_GetWindowSize(window_, &win_w, &win_h);
+  ImDrawList* dl = ImGui::GetForegroundDrawList();
+  float y = float(win_h) - 10;
+  for (auto it = toasts_.rbegin(); it != toasts_.rend(); ++it) {
+    const float age = float(clock_ - it->born);
+    const float alpha = std::clamp((float(kToastSeconds) - age) / 1.5f, 0.0f, 1.0f);
+    const ImVec2 size = ImGui::CalcTextSize(it->text.c_str(), nullptr, false, x1 - x0 - 20);
+    y -= size.y + 8;
+    const ImVec2 p{x0 + 8, y};
+    dl->AddRectFilled({p.x - 6, p.y - 3}, {p.x + size.x + 6, p.y + size.y + 3},
+                      it->error ? IM_COL32(255, 232, 232, int(235 * alpha)) : IM_COL32(250, 250, 252, int(235 * alpha)), 4);
+    dl->AddText(ImGui::GetFont(), ImGui::GetFontSize(), p,
+                it->error ? IM_COL32(170, 20, 20, int(255 * alpha)) : IM_COL32(30, 34, 44, int(255 * alpha)),
+                it->text.c_str(), nullptr, x1 - x0 - 20);
+  }
+}
+
+void Viewer::panel_error() {
+  if (load_error_.empty()) return;
+  int win_w = opt_.width, win_h = opt_.height;
+  SDL_GetWindowSize(window_, &win_w, &win_h);
+  const float w = std::min(640.0f, float(win_w) - 40);
+  ImGui::SetNextWindowPos({float(win_w) / 2, float(win_h) / 3}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowSize({w, 0});
+  ImGui::PushStyleColor(ImGuiCol_TitleBg, ImVec4(0.85f, 0.2f, 0.2f, 1));
+  ImGui::PushStyleColor(ImGuiCol_TitleBgActive, ImVec4(0.85f, 0.2f, 0.2f, 1));
+  ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.1f, 0.1f, 0.12f, 1));
+  ImGui::Begin(scene_ ? "The scene file has an error (the world as it was goes on)" : "The scene cannot be loaded",
+               nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextColored(ImVec4(0.7f, 0.05f, 0.05f, 1), "%s", load_error_.c_str());
+  ImGui::PopTextWrapPos();
+  ImGui::TextDisabled("Fix the file and save it: it is loaded again by itself.");
+  if (ImGui::Button("Load again")) reset();
+  if (scene_) {
+    ImGui::SameLine();
+    if (ImGui::Button("Dismiss")) load_error_.clear();
+  }
+  ImGui::End();
+  ImGui::PopStyleColor(3);
+}
+
+void Viewer::context_menu() {
+  if (open_context_) {
+    ImGui::OpenPopup("part menu");
+    open_context_ = false;
+  }
+  if (!ImGui::BeginPopup("part menu")) return;
+  remember_panel();
+  World* w = world();
+  if (w && context_part_ && w->store().alive(context_part_)) {
+    const ObjectId id = context_part_;
+    ImGui::TextDisabled("%s", w->describe(id).c_str());
+    const auto part = read_part(*w, id);
+    if (part && !part->is_static && ImGui::MenuItem(part->pinned ? "Unpin" : "Pin to the board", "P"))
+      note(editor_.set_pinned(id, !part->pinned).message);
+    if (ImGui::MenuItem("Turn 90 left")) note(editor_.rotate(id, std::numbers::pi / 2).message);
+    if (ImGui::MenuItem("Turn 90 right")) note(editor_.rotate(id, -std::numbers::pi / 2).message);
+    if (editor_.electrical(id) && ImGui::MenuItem("Wire from here", "W")) {
+      tool_ = Tool::Wire;
+      wire_start_ = id;
+      wire_start_at_ = context_at_;
+    }
+    if (ImGui::MenuItem("Remove", "Del")) {
+      const EditResult r = editor_.remove(id);
+      note(r.message, !r.ok);
+      selected_ = hovered_ = {};
+    }
+  } else if (w) {
+    ImGui::TextDisabled("put a part here");
+    for (const PaletteEntry& e : palette_entries())
+      if (ImGui::MenuItem(e.label.c_str())) drop_part(e, context_at_);
+  }
+  ImGui::EndPopup();
+}
+
+}  // namespace alloy::viewer

@@ -1,0 +1,208 @@
+// The viewer: an SDL2 window onto the 2D play area in which a player builds
+// and changes contraptions while they run (`alloy view SCENE`).
+//
+// One frame:
+//   input     scripted events are pushed (SDL_PushEvent), then every SDL
+//             event goes to the panels (Dear ImGui) or, over the play area,
+//             to the tools (hand, wire, place); tools edit the world through
+//             the Editor, between steps
+//   simulate  as many fixed steps as the frame's time times the time scale
+//             asks for; what the hand holds is put back before each step
+//   sound     the sound resolver's new samples go to SDL audio
+//   draw      the play area (scene_draw), then the panels; present
+//
+// Headless (`--screenshot`, `--headless`): SDL's dummy video driver and the
+// software renderer, a fixed 1/60 s per frame, no audio: the same frames on
+// every machine, with or without a display.
+//
+// Bad input never ends the viewer: a scene that fails to load is shown with
+// its file and line (and loaded again when the file changes), a refused edit
+// is a message, a step that throws is reported and the world paused.
+#pragma once
+
+#include <SDL.h>
+
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/viewer/audio_out.hpp"
+#include "apps/viewer/camera.hpp"
+#include "apps/viewer/editor.hpp"
+#include "apps/viewer/input_script.hpp"
+#include "apps/viewer/palette.hpp"
+#include "apps/viewer/png_writer.hpp"
+#include "apps/viewer/scene_draw.hpp"
+#include "apps/viewer/viewer_options.hpp"
+#include "lua/scene_loader.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::viewer {
+
+enum class Tool { Hand, Wire, Place };
+
+class Viewer {
+ public:
+  /// Opens the window (throws std::runtime_error if SDL cannot) and loads the
+  /// scene (a scene that fails is shown, not thrown).
+  explicit Viewer(ViewerOptions options);
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  /// Runs frames until the window closes or `frames` have run, then writes
+  /// the screenshot and the saved scene if asked. Returns an exit code.
+  int run(std::ostream& out, std::ostream& err);
+  /// One frame (input, simulate, sound, draw). False once the player quits.
+  bool frame();
+
+  // --- for scripts and tests ----------------------------------------------------
+  /// Pushes a mouse event at a play-area point (m) onto SDL's queue; it is
+  /// handled in the next frame exactly like the player's.
+  void push_mouse(Uint32 type, Vec2 at, Uint8 button = SDL_BUTTON_LEFT);
+  void push_key(SDL_Keycode key, Uint16 mod = KMOD_NONE);
+  void push_wheel(int notches);
+  void add_script(std::vector<ScriptEvent> events);
+  /// Draws the present state again (no input, no step) and returns the picture.
+  Image render_image();
+  /// Whether a window point lies on a panel (the play area is not there).
+  bool over_panel(float x, float y) const;
+
+  World* world() { return scene_ ? scene_->world.get() : nullptr; }
+  const lua::LoadedScene* scene() const { return scene_.get(); }
+  const Camera& camera() const { return camera_; }
+  Editor& editor() { return editor_; }
+  /// Empty if the scene loaded; else the error with file and line.
+  const std::string& load_error() const { return load_error_; }
+  /// Messages shown to the player so far (refused edits, drops, errors), oldest first.
+  const std::vector<std::string>& messages() const { return log_; }
+  /// Events the world published since the scene was loaded, by type.
+  std::size_t event_count(const std::string& type) const;
+  std::uint64_t frame_count() const { return frames_; }
+  const AudioOut& audio() const { return audio_; }
+
+  bool paused() const { return paused_; }
+  void set_paused(bool p) { paused_ = p; }
+  void step_once() { single_steps_ += 1; }
+  void set_time_scale(double s);
+  double time_scale() const { return time_scale_; }
+  /// Loads the scene file again (the contraption as the file says).
+  void reset();
+  /// Saves the world as a scene; false (with the reason in messages) if it cannot.
+  bool save(const std::filesystem::path& path);
+  /// Makes a palette part at `at` and moves it out of any part it lands in.
+  EditResult drop_part(const PaletteEntry& entry, Vec2 at);
+  /// Swaps plugin `from` for `to` in `area` ("" everywhere) between steps.
+  EditResult swap(const std::string& area, const std::string& from, const std::string& to);
+  Tool tool() const { return tool_; }
+  ObjectId selected() const { return selected_; }
+
+ private:
+  void init_sdl();
+  void init_imgui();
+  void load();
+  void note(const std::string& message, bool error = false);
+  void handle(const SDL_Event& e);
+  void on_press(Vec2 at, Uint8 button, Uint16 mod);
+  void on_release(Vec2 at, Uint8 button);
+  void on_key(SDL_Keycode key, Uint16 mod);
+  void pump_script();
+  void simulate(double frame_seconds);
+  void step_world();
+  void watch_scene_file();
+  void draw(bool capture, Image* image);
+  void draw_panels();
+  void panel_toolbar();
+  void panel_palette();
+  void panel_inspector();
+  void panel_resolvers();
+  void panel_messages();
+  void panel_error();
+  void context_menu();
+  void fit_view();
+  void play_rect(float& x0, float& y0, float& x1, float& y1) const;
+  void remember_panel();
+
+  ViewerOptions opt_;
+  SDL_Window* window_ = nullptr;
+  SDL_Renderer* renderer_ = nullptr;
+  bool imgui_ready_ = false;
+  ImGuiContext* imgui_ = nullptr;
+  std::unique_ptr<PluginRegistry> registry_;
+  std::unique_ptr<lua::LoadedScene> scene_;
+  std::string load_error_;
+  std::filesystem::file_time_type scene_mtime_{};
+  double last_watch_ = -1;
+  Editor editor_;
+  Camera camera_;
+  bool fitted_ = false;
+  AudioOut audio_;
+  bool muted_ = false;
+  bool audio_failed_ = false;
+
+  // Running.
+  bool paused_ = false;
+  int single_steps_ = 0;
+  double time_scale_ = 1;
+  double accumulator_ = 0;
+  int failing_steps_ = 0;
+  std::uint64_t frames_ = 0;
+  std::uint64_t last_ticks_ = 0;
+  double clock_ = 0;  // animation clock, s
+  bool quit_ = false;
+
+  // Input.
+  std::vector<ScriptEvent> script_;
+  std::size_t script_next_ = 0;
+  float mouse_x_ = -1, mouse_y_ = -1;
+  bool mouse_down_[3] = {false, false, false}, mouse_pressed_[3] = {false, false, false};
+  bool panning_ = false;
+  Tool tool_ = Tool::Hand;
+  int placing_ = -1;  // palette entry
+  bool place_drag_ = false;
+  ObjectId selected_, hovered_, wire_start_;
+  Vec2 wire_start_at_;
+  ObjectId context_part_;
+  Vec2 context_at_;
+  bool open_context_ = false;
+  struct Rect {
+    float x0, y0, x1, y1;
+  };
+  std::vector<Rect> panels_, next_panels_;
+  std::string save_path_;
+
+  // What happened.
+  std::vector<std::string> log_;
+  struct Toast {
+    std::string text;
+    double born;
+    bool error;
+  };
+  std::deque<Toast> toasts_;
+  std::vector<std::pair<std::string, std::size_t>> event_counts_;
+  std::deque<std::string> event_log_;
+  std::vector<Ring> rings_;
+  std::string step_error_;
+
+  // Profile per frame: exponential averages of each stage's time per step.
+  struct StageBar {
+    std::string name;
+    StageKind kind;
+    double ms = 0;
+    double seconds_seen = 0;
+    std::uint64_t runs_seen = 0;
+  };
+  std::vector<StageBar> bars_;
+  std::uint64_t profile_steps_seen_ = 0;
+  double step_ms_ = 0;
+  int steps_last_frame_ = 0;
+
+  DrawOptions draw_options_;
+  std::vector<std::string> palette_problems_;  // per entry: "" or why it cannot be made
+};
+
+}  // namespace alloy::viewer
