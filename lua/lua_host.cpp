@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "lua/budget_ticks.hpp"
 #include "lua/sandbox.hpp"
 
 namespace alloy::lua {
@@ -61,6 +62,11 @@ LuaHost::LuaHost(HostOptions options)
   prepare_state(L_);
   lua_pushlightuserdata(L_, this);
   lua_setfield(L_, LUA_REGISTRYINDEX, kHostKey);
+  // The message handler of call(), made once rather than on every call
+  // (Lua stages are called every step).
+  lua_pushlightuserdata(L_, this);
+  lua_pushcclosure(L_, &LuaHost::on_error, 1);
+  handler_ref_ = luaL_ref(L_, LUA_REGISTRYINDEX);
   if (instruction_limit_ > 0) {
     luaJIT_setmode(L_, 0, LUAJIT_MODE_ENGINE | LUAJIT_MODE_OFF);
     lua_sethook(L_, &LuaHost::on_count, LUA_MASKCOUNT, kCountStep);
@@ -72,11 +78,50 @@ LuaHost::~LuaHost() {
   if (L_) lua_close(L_);
 }
 
+LuaHost* LuaHost::from(lua_State* L) {
+  lua_getfield(L, LUA_REGISTRYINDEX, kHostKey);
+  auto* host = static_cast<LuaHost*>(lua_touserdata(L, -1));
+  lua_pop(L, 1);
+  return host;
+}
+
+void LuaHost::use_budget_ticks(int index) {
+  lua_pushvalue(L_, index);
+  if (ticks_ref_ != -2) luaL_unref(L_, LUA_REGISTRYINDEX, ticks_ref_);
+  ticks_ref_ = luaL_ref(L_, LUA_REGISTRYINDEX);
+}
+
+bool LuaHost::compile(std::string_view code, const std::string& chunkname) {
+  std::string ticked;
+  if (ticks_ref_ != -2) {
+    try {
+      ticked = add_budget_ticks(code, chunkname.empty() ? "?" : chunkname.substr(1));
+    } catch (const InputError& e) {
+      const std::string msg = e.where().file + ":" + std::to_string(e.where().line) + ": " + e.bare();
+      lua_pushlstring(L_, msg.data(), msg.size());
+      return false;
+    }
+    code = ticked;
+  }
+  // Mode "t": text only. Precompiled bytecode can crash the VM and is refused.
+  if (luaL_loadbufferx(L_, code.data(), code.size(), chunkname.c_str(), "t") != 0) return false;
+  if (ticks_ref_ == -2) return true;
+  // The instrumented chunk returns function(tick) return function(...) <code> end end:
+  // two calls give the function that runs the code, with the tick as its upvalue.
+  lua_rawgeti(L_, LUA_REGISTRYINDEX, ticks_ref_);
+  lua_insert(L_, -2);
+  if (lua_pcall(L_, 0, 1, 0) != 0) {  // only an allocation can fail here
+    lua_remove(L_, -2);
+    return false;
+  }
+  lua_insert(L_, -2);
+  if (lua_pcall(L_, 1, 1, 0) != 0) return false;
+  return true;
+}
+
 void LuaHost::load_string(std::string_view code, const std::string& display) {
   files_.insert(display);
-  const std::string chunkname = "@" + display;
-  // Mode "t": text only. Precompiled bytecode can crash the VM and is refused.
-  if (luaL_loadbufferx(L_, code.data(), code.size(), chunkname.c_str(), "t") == 0) return;
+  if (compile(code, "@" + display)) return;
   std::string message = lua_tostring(L_, -1) ? lua_tostring(L_, -1) : "cannot load the chunk";
   lua_pop(L_, 1);
   ErrorLocation where{display, 0, ""};
@@ -229,8 +274,7 @@ void LuaHost::describe_failure(lua_State* L) {
 void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
   lua_State* L = L_;
   const int func = lua_gettop(L) - nargs;
-  lua_pushlightuserdata(L, this);
-  lua_pushcclosure(L, &LuaHost::on_error, 1);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, handler_ref_);
   lua_insert(L, func);
   failure_.reset();
   if (depth_ == 0 && instruction_limit_ > 0) {

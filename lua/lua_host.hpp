@@ -53,6 +53,21 @@ class LuaHost {
   /// Same for source text in memory (tests, generated code).
   void load_string(std::string_view code, const std::string& display);
 
+  /// Compiles source text (never bytecode) under `chunkname` ("@file" or
+  /// "=name"), applying the budget ticks if they are on. Pushes the function
+  /// and returns true, or pushes the error message and returns false. For
+  /// the sandbox's load(), which must not throw.
+  bool compile(std::string_view code, const std::string& chunkname);
+
+  /// From now on every chunk this host compiles gets budget ticks
+  /// (budget_ticks.hpp) calling `tick`, the function at `index`: the way to
+  /// stop a runaway loop that the JIT compiled. The JIT stays on.
+  void use_budget_ticks(int index);
+  bool budget_ticks() const { return ticks_ref_ != -2; }
+
+  /// The host that owns `L` (any thread of it), or nullptr.
+  static LuaHost* from(lua_State* L);
+
   /// Calls the function below its `nargs` arguments, protected, with a
   /// traceback handler. On success the results replace function and arguments;
   /// on failure the stack is as before the function was pushed, and an
@@ -95,6 +110,8 @@ class LuaHost {
   std::uint64_t instructions_ = 0;  // run by the outermost call(), in steps of kCountStep
   int depth_ = 0;                   // nested call()s (a manifest read while a scene runs)
   lua_State* L_ = nullptr;
+  int handler_ref_ = -2;  // registry ref of the error handler (on_error), made once
+  int ticks_ref_ = -2;    // registry ref of the tick function, when budget ticks are on
   std::set<std::string> files_;
   std::set<std::string> library_;
   std::optional<Failure> failure_;

@@ -15,21 +15,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kEnvironments = "alloy.envs";  // registry: mod name -> environment
-constexpr const char* kLoaded = "alloy.loaded";      // registry: module name -> value
-
-const std::vector<std::string> kManifestFields = {"name",    "version", "description",
-                                                  "depends", "scene",   "main"};
-
-/// Pushes registry[key], creating an empty table there on first use.
-void push_registry_table(lua_State* L, const char* key) {
-  lua_getfield(L, LUA_REGISTRYINDEX, key);
-  if (lua_istable(L, -1)) return;
-  lua_pop(L, 1);
-  lua_newtable(L);
-  lua_pushvalue(L, -1);
-  lua_setfield(L, LUA_REGISTRYINDEX, key);
-}
+const std::vector<std::string> kManifestFields = {"name",  "version", "description", "depends",
+                                                  "scene", "main",    "runtime"};
 
 bool is_identifier(const std::string& s) {
   if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
@@ -125,6 +112,8 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
       m.scene = *s;
     else if (key == "main")
       m.main = *s;
+    else if (key == "runtime")
+      m.runtime = *s;
   }
   if (m.name.empty()) throw InputError(where, "mod.lua must give the mod's name");
   if (!is_identifier(m.name))
@@ -136,7 +125,21 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
 }
 
 ModLoader::ModLoader(LuaHost& host, std::vector<fs::path> search_path, Decorate decorate)
-    : host_(host), search_path_(std::move(search_path)), decorate_(std::move(decorate)) {}
+    : host_(host), search_path_(std::move(search_path)), decorate_(std::move(decorate)) {
+  // Caches of this loader alone: a second loader in the same state (a mod
+  // reloaded) starts from nothing and runs every file again.
+  lua_State* L = host_.state();
+  lua_newtable(L);
+  envs_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  lua_newtable(L);
+  loaded_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+}
+
+ModLoader::~ModLoader() {
+  lua_State* L = host_.state();
+  luaL_unref(L, LUA_REGISTRYINDEX, envs_ref_);
+  luaL_unref(L, LUA_REGISTRYINDEX, loaded_ref_);
+}
 
 void ModLoader::set_scene_mod(std::optional<Manifest> manifest) {
   scene_mod_ = std::move(manifest);
@@ -149,7 +152,7 @@ void ModLoader::add_scene_file(const std::string& display) {
 void ModLoader::push_environment(const std::string& mod) {
   lua_State* L = host_.state();
   const std::string key = (mod == scene_mod_name()) ? "" : mod;
-  push_registry_table(L, kEnvironments);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, envs_ref_);
   lua_getfield(L, -1, key.c_str());
   if (lua_istable(L, -1)) {
     lua_remove(L, -2);
@@ -158,7 +161,7 @@ void ModLoader::push_environment(const std::string& mod) {
   lua_pop(L, 1);
   lua::push_environment(L);
   const int env = lua_gettop(L);
-  decorate_(L, env);
+  decorate_(L, env, key);
   lua_pushlightuserdata(L, this);
   lua_pushcclosure(L, &ModLoader::require_fn, 1);
   lua_setfield(L, env, "require");
@@ -221,7 +224,7 @@ int ModLoader::require_fn(lua_State* L) {
 int ModLoader::require(lua_State* L) {
   const std::string name = luaL_checkstring(L, 1);
   lua_settop(L, 1);
-  push_registry_table(L, kLoaded);  // 2
+  lua_rawgeti(L, LUA_REGISTRYINDEX, loaded_ref_);  // 2
   lua_getfield(L, 2, name.c_str());
   if (!lua_isnil(L, -1)) return 1;
   lua_pop(L, 1);
@@ -278,6 +281,8 @@ int ModLoader::require(lua_State* L) {
 
   const bool user_code = m->name == scene_mod_name();
   file_mod_[display] = user_code ? "" : m->name;
+  if (!user_code && std::find(required_.begin(), required_.end(), m->name) == required_.end())
+    required_.push_back(m->name);
   if (!user_code) host_.mark_library(display);
   host_.load_file(file, display);  // 3: the chunk
   push_environment(m->name);

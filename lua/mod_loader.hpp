@@ -37,6 +37,10 @@ struct Manifest {
   std::vector<std::string> depends;
   std::string scene;              ///< scene file of the mod, relative to its folder ("" = none)
   std::string main = "init.lua";  ///< the file `require "<name>"` runs
+  /// The file that defines the mod's property types, stages and event
+  /// handlers, run by the world's ModRuntime in the mod's own Lua state
+  /// ("" = none: the mod only has parts and scenes).
+  std::string runtime;
   std::filesystem::path folder;
   std::string file;  ///< display name of mod.lua, for messages
 };
@@ -50,10 +54,14 @@ std::string display_path(const std::filesystem::path& p);
 
 class ModLoader {
  public:
-  /// Called for each new environment (at the given index) to add the host API.
-  using Decorate = std::function<void(lua_State*, int env)>;
+  /// Called for each new environment (at the given index) of mod `mod` ("" for
+  /// the scene's) to add the host API.
+  using Decorate = std::function<void(lua_State*, int env, const std::string& mod)>;
 
   ModLoader(LuaHost& host, std::vector<std::filesystem::path> search_path, Decorate decorate);
+  /// Frees the loader's environments and module cache (the modules stay alive
+  /// as long as something else refers to them).
+  ~ModLoader();
   ModLoader(const ModLoader&) = delete;
   ModLoader& operator=(const ModLoader&) = delete;
 
@@ -72,6 +80,12 @@ class ModLoader {
   const Manifest* find(const std::string& name);
   /// Names of every mod on the search path (for "did you mean").
   std::vector<std::string> available() const;
+  /// Display names of the files this loader ran, with the mod of each ("" for
+  /// the scene's own), in no particular order.
+  const std::map<std::string, std::string>& loaded_files() const { return file_mod_; }
+  /// Names of the mods whose files this loader ran (the scene's own excluded),
+  /// in the order they were first required.
+  const std::vector<std::string>& required_mods() const { return required_; }
 
  private:
   static int require_fn(lua_State* L);
@@ -89,6 +103,9 @@ class ModLoader {
   std::map<std::string, std::string> file_mod_;               // display name -> mod ("" = scene)
   std::vector<std::string> loading_;                          // require chain, for cycles
   std::vector<std::string> checked_;                          // mods whose depends exist
+  std::vector<std::string> required_;                         // mods run, in first-require order
+  int envs_ref_ = -2;    // registry ref: mod name -> environment (this loader's own)
+  int loaded_ref_ = -2;  // registry ref: module name -> value (this loader's own)
 };
 
 }  // namespace alloy::lua

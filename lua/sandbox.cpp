@@ -5,6 +5,7 @@
 #include <string>
 
 #include "lua/lua_bridge.hpp"
+#include "lua/lua_host.hpp"
 
 namespace alloy::lua {
 
@@ -49,7 +50,12 @@ int safe_load(lua_State* L) {
     name += (n[0] == '@' || n[0] == '=') ? n + 1 : n;
   else
     name += "(load)";
-  if (luaL_loadbufferx(L, code, size, name.c_str(), "t") != 0) {
+  // Through the host, so that a mod's loaded text gets the same budget ticks
+  // as its files.
+  LuaHost* host = LuaHost::from(L);
+  const bool ok = host ? host->compile(std::string_view(code, size), name)
+                       : luaL_loadbufferx(L, code, size, name.c_str(), "t") == 0;
+  if (!ok) {
     lua_pushnil(L);
     lua_insert(L, -2);
     return 2;  // nil, message: as load does

@@ -31,6 +31,8 @@ struct SceneSource {
 struct RecordedScene {
   SceneSource source;
   SceneRecord record;
+  std::vector<fs::path> search;  ///< the mod path the scene ran with
+  std::vector<Manifest> mods;    ///< mods it used: required ones in order, then its own
 };
 
 SceneSource resolve(LuaHost& host, const fs::path& path, bool allow_library_mod) {
@@ -102,7 +104,7 @@ RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool a
   const SceneSource& src = out.source;
 
   SceneRecorder recorder(host);
-  ModLoader mods(host, search_path(options, src), [&](lua_State* L, int env) {
+  ModLoader mods(host, search_path(options, src), [&](lua_State* L, int env, const std::string&) {
     recorder.install(L, env);
     push_alloy_api(L);
     lua_setfield(L, env, "alloy");
@@ -117,16 +119,35 @@ RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool a
   lua_setfenv(L, -2);
   host.call(0, 0, ErrorLocation{src.display, 0, ""});
   out.record = std::move(recorder.record());
+  out.search = mods.search_path();
+  for (const auto& name : mods.required_mods())
+    if (const Manifest* m = mods.find(name)) out.mods.push_back(*m);
+  if (src.mod) out.mods.push_back(*src.mod);
   return out;
+}
+
+/// Loads the runtime files of the mods the scene used, so that their property
+/// types and plugins are registered before the world is built. Null if none
+/// of them has one.
+std::shared_ptr<ModRuntime> start_mods(const RecordedScene& rec, PluginRegistry& registry,
+                                       const LoadOptions& options) {
+  auto runtime = std::make_shared<ModRuntime>(
+      registry, ModRuntimeOptions{rec.search, options.mod_budget, options.mod_log});
+  for (const Manifest& m : rec.mods) runtime->load(m);
+  if (runtime->loaded().empty()) return nullptr;
+  return runtime;
 }
 
 }  // namespace
 
 LoadedScene load_scene(const fs::path& path, PluginRegistry& registry, const LoadOptions& options) {
   RecordedScene rec = run_scene(path, options, false);
+  std::shared_ptr<ModRuntime> mods = start_mods(rec, registry, options);
   BuiltScene built = build_scene(rec.record, registry);
+  if (mods) mods->attach(*built.world);
   const RecordedWorld& w = rec.record.world;
   LoadedScene scene;
+  scene.mods = std::move(mods);
   scene.name = !w.name.empty()  ? w.name
                : rec.source.mod ? rec.source.mod->name
                                 : rec.source.file.stem().string();
@@ -143,7 +164,9 @@ LoadedScene load_scene(const fs::path& path, PluginRegistry& registry, const Loa
 
 void check(const fs::path& path, PluginRegistry& registry, const LoadOptions& options) {
   RecordedScene rec = run_scene(path, options, true);
+  std::shared_ptr<ModRuntime> mods = start_mods(rec, registry, options);  // checks their stages too
   BuiltScene built = build_scene(rec.record, registry);
+  if (mods) mods->attach(*built.world);
   LoadedScene scene;
   scene.file = rec.source.file;
   scene.sources = std::move(built.sources);

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "lua/mod_runtime.hpp"
 #include "runtime/error.hpp"
 #include "runtime/world.hpp"
 
@@ -35,12 +36,21 @@ struct LoadOptions {
   /// Lua instructions the scene (with the mods it requires) may run while
   /// loading; 0 = no limit. Stops an endless loop in a scene.
   std::uint64_t instruction_limit = 2'000'000'000;
+  /// Budgets of each mod with a runtime file the scene uses (its stages run
+  /// in the world; mod_runtime.hpp).
+  ModBudget mod_budget;
+  /// Where those mods' print() and reports go (default: stderr).
+  std::function<void(const std::string& mod, const std::string& line)> mod_log;
 };
 
 struct LoadedScene {
   std::string name;            ///< world{ name }, else the mod's name, else the file's stem
   std::filesystem::path file;  ///< the scene file that ran
   WorldDef def;
+  /// The mods with Lua stages the scene uses (its own, the ones it requires
+  /// and their dependencies), loaded and attached to `world`; null if none.
+  /// Declared before `world`, which must go first.
+  std::shared_ptr<ModRuntime> mods;
   std::unique_ptr<World> world;  ///< objects applied, not started
   double seconds = 0;            ///< suggested run length, 0 = none
   std::string description;

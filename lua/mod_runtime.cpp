@@ -1,0 +1,459 @@
+#include "lua/mod_runtime.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <lua.hpp>
+
+#include "lua/file_watcher.hpp"
+#include "lua/lua_bridge.hpp"
+#include "lua/lua_stages.hpp"
+#include "lua/native_bindings.hpp"
+
+namespace alloy::lua {
+
+namespace fs = std::filesystem;
+
+struct ModRuntime::Loaded {
+  std::shared_ptr<ModState> state;
+  std::vector<std::string> plugins;  // registered, in order
+  std::vector<bool> handler_ok;      // per handler of the program: not disabled by an error
+};
+
+namespace {
+
+bool same_property(const PropertyDef& a, const PropertyDef& b) {
+  return a.kind == b.kind && a.enum_values == b.enum_values && a.unit == b.unit && a.min == b.min &&
+         a.max == b.max && a.min_exclusive == b.min_exclusive;
+}
+
+bool is_lua_plugin(const PluginDef& def) { return def.create.target<LuaStageFactory>() != nullptr; }
+
+std::string kind_text(StageKind k) { return std::string(to_string(k)); }
+
+}  // namespace
+
+ModRuntime::ModRuntime(PluginRegistry& registry, ModRuntimeOptions options)
+    : registry_(registry), options_(std::move(options)), self_(std::make_shared<ModRuntime*>(this)) {
+  if (!options_.log)
+    options_.log = [](const std::string& mod, const std::string& line) {
+      std::fprintf(stderr, "[%s] %s\n", mod.c_str(), line.c_str());
+    };
+}
+
+ModRuntime::~ModRuntime() {
+  *self_ = nullptr;
+  for (auto it = mods_.rbegin(); it != mods_.rend(); ++it)
+    for (const auto& name : (*it)->plugins)
+      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, *(*it)->state)) registry_.remove(name);
+}
+
+ModRuntime::Loaded* ModRuntime::find(const std::string& name) const {
+  for (const auto& l : mods_)
+    if (l->state->name() == name) return l.get();
+  return nullptr;
+}
+
+std::vector<std::string> ModRuntime::loaded() const {
+  std::vector<std::string> out;
+  for (const auto& l : mods_) out.push_back(l->state->name());
+  return out;
+}
+
+void ModRuntime::load(const std::string& name) {
+  if (has(name)) return;
+  LuaHost reader;
+  for (const auto& dir : options_.mod_paths)
+    if (fs::is_regular_file(dir / name / "mod.lua")) {
+      std::vector<std::string> chain;
+      load_manifest(read_manifest(reader, dir / name), chain);
+      return;
+    }
+  std::string msg = "no mod named '" + name + "' on the mod path (";
+  for (std::size_t i = 0; i < options_.mod_paths.size(); ++i)
+    msg += (i ? ", " : "") + display_path(options_.mod_paths[i]);
+  throw InputError(msg + ")");
+}
+
+void ModRuntime::load_folder(const fs::path& folder) {
+  LuaHost reader;
+  std::vector<std::string> chain;
+  load_manifest(read_manifest(reader, folder), chain);
+}
+
+void ModRuntime::load(const Manifest& manifest) {
+  std::vector<std::string> chain;
+  load_manifest(manifest, chain);
+}
+
+void ModRuntime::load_manifest(const Manifest& m, std::vector<std::string>& chain) {
+  if (has(m.name)) return;
+  if (std::find(chain.begin(), chain.end(), m.name) != chain.end()) {
+    std::string text;
+    for (const auto& c : chain) text += c + " -> ";
+    throw InputError(ErrorLocation{m.file, 0, ""}, "mod dependency cycle: " + text + m.name);
+  }
+  chain.push_back(m.name);
+  // Dependencies first: a mod may queue on a dependency's resolver.
+  std::vector<fs::path> paths = options_.mod_paths;
+  fs::path parent = m.folder.lexically_normal();
+  if (parent.filename().empty()) parent = parent.parent_path();
+  paths.push_back(parent.parent_path().empty() ? fs::path(".") : parent.parent_path());
+  for (const auto& dep : m.depends) {
+    if (has(dep)) continue;
+    bool found = false;
+    LuaHost reader;
+    for (const auto& dir : paths)
+      if (fs::is_regular_file(dir / dep / "mod.lua")) {
+        load_manifest(read_manifest(reader, dir / dep), chain);
+        found = true;
+        break;
+      }
+    if (!found)
+      throw InputError(ErrorLocation{m.file, 0, ""},
+                       "mod '" + m.name + "' depends on '" + dep + "', which is not on the mod path");
+  }
+  chain.pop_back();
+  if (m.runtime.empty()) return;  // parts and scenes only: nothing runs in the world
+
+  auto state = std::make_shared<ModState>(m, paths, options_.budget, options_.log);
+  std::unique_ptr<Program> p = state->load_program();
+  try {
+    validate(*state, *p);
+  } catch (...) {
+    state->release(*p);
+    throw;
+  }
+  auto l = std::make_unique<Loaded>();
+  l->state = state;
+  Loaded& ref = *l;
+  mods_.push_back(std::move(l));
+  commit(ref, std::move(p), true);
+  try {
+    state->call_hook(state->program()->on_load, "on_load");
+  } catch (...) {
+    unload(m.name);
+    throw;
+  }
+  if (watcher_) watcher_->add(m.folder);
+  report({ModReport::Kind::Loaded, m.name,
+          "mod '" + m.name + "' " + m.version + " loaded: " + std::to_string(ref.plugins.size()) + " stages, " +
+              std::to_string(state->program()->handlers.size()) + " event handlers"});
+}
+
+void ModRuntime::validate(const ModState& mod, const Program& p) const {
+  const PropertyRegistry& props = registry_.properties();
+  const std::string file = display_path(mod.manifest().folder / mod.runtime_file());
+  const ErrorLocation at_file{file, 0, ""};
+  for (const auto& def : p.properties)
+    if (auto id = props.find(def.name); id && !same_property(props.def(*id), def))
+      throw InputError(at_file, "property '" + def.name + "' is already defined as " +
+                                    std::string(to_string(props.def(*id).kind)) + " (unit '" + props.def(*id).unit +
+                                    "') by '" + props.def(*id).owner + "'; mod '" + mod.name() +
+                                    "' cannot define it differently");
+  auto known_property = [&](const std::string& n) {
+    if (props.find(n)) return true;
+    return std::any_of(p.properties.begin(), p.properties.end(), [&](const PropertyDef& d) { return d.name == n; });
+  };
+  auto lua_stage = [&](const std::string& n, StageKind kind) -> bool {
+    if (const StageDecl* d = p.stage(n)) return d->info.kind == kind;
+    const PluginDef* def = registry_.find(n);
+    return def && is_lua_plugin(*def) && def->info.kind == kind;
+  };
+  for (const auto& s : p.stages) {
+    const ErrorLocation& where = s.where;
+    const std::string what = kind_text(s.info.kind) + " '" + s.info.name + "'";
+    if (const PluginDef* def = registry_.find(s.info.name); def && !registered_by(*def, mod))
+      throw InputError(where, what + ": the name is taken by " +
+                                  (is_lua_plugin(*def) ? std::string("another mod's stage") : std::string("a native plugin")));
+    for (const auto* list : {&s.info.reads, &s.info.writes, &s.info.needs})
+      for (const auto& n : *list)
+        if (!known_property(n)) {
+          std::vector<std::string> names = props.names();
+          for (const auto& d : p.properties) names.push_back(d.name);
+          std::string msg = what + ": unknown property '" + n + "'";
+          if (auto near = closest_name(n, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+          throw InputError(where, msg);
+        }
+    for (const auto& d : s.info.derived)
+      if (!native_derived_readable(d) && !lua_stage(d, StageKind::Derived))
+        throw InputError(where, what + ": derived set '" + d + "' is not one a Lua stage can read "
+                                       "(collisions, or a derived set defined in Lua)");
+    for (const auto& r : s.info.resolvers)
+      if (!registry_.find(r) && !p.stage(r)) throw InputError(where, what + ": unknown resolver '" + r + "'");
+    if (s.info.kind == StageKind::Interaction) {
+      const std::string& t = s.info.target;
+      if (!native_functions(t) && !lua_stage(t, StageKind::Resolver)) {
+        std::string msg = what + ": target '" + t + "' is not a resolver Lua can queue on (rigid_body, or a "
+                                 "resolver defined in Lua)";
+        if (const PluginDef* def = registry_.find(t); !def) {
+          std::vector<std::string> names = registry_.order();
+          for (const auto& st : p.stages) names.push_back(st.info.name);
+          if (auto near = closest_name(t, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+        }
+        throw InputError(where, msg);
+      }
+    }
+  }
+}
+
+void ModRuntime::commit(Loaded& l, std::unique_ptr<Program> p, bool first) {
+  ModState& mod = *l.state;
+  const Program* old = first ? nullptr : mod.program();
+  for (const auto& def : p->properties) registry_.properties().add(def);
+
+  std::vector<std::string> changed;  // plugins whose world stages go, and come back if still needed
+  for (const auto& name : l.plugins) {
+    const StageDecl* now = p->stage(name);
+    const StageDecl* was = old ? old->stage(name) : nullptr;
+    if (!now || (was && was->info.kind != now->info.kind)) {
+      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, mod)) registry_.remove(name);
+      changed.push_back(name);
+    }
+  }
+  std::vector<std::string> plugins;
+  for (const auto& d : p->stages) {
+    const StageDecl* was = old ? old->stage(d.info.name) : nullptr;
+    registry_.add(make_plugin(l.state, d));
+    if (!was || !was->same_shape(d)) changed.push_back(d.info.name);
+    plugins.push_back(d.info.name);
+  }
+  l.plugins = std::move(plugins);
+  l.handler_ok.assign(p->handlers.size(), true);
+  if (auto previous = mod.set_program(std::move(p))) mod.release(*previous);
+  if (world_)
+    for (const auto& name : changed) world_->plugin_changed(name);
+}
+
+void ModRuntime::attach(World& world) {
+  world_ = &world;
+  std::weak_ptr<ModRuntime*> weak = self_;
+  world.add_observer([weak](const Event& e) {
+    if (auto p = weak.lock(); p && *p) (*p)->dispatch(e);
+  });
+}
+
+ModReport ModRuntime::reload(const std::string& name) {
+  ModReport r;
+  r.mod = name;
+  Loaded* l = find(name);
+  if (!l) {
+    r.kind = ModReport::Kind::ReloadFailed;
+    r.message = "mod '" + name + "' is not loaded";
+    report(r);
+    return r;
+  }
+  ModState& mod = *l->state;
+  const Manifest before = mod.manifest();
+  const bool was_stopped = mod.stopped();
+  try {
+    LuaHost reader;
+    Manifest m = read_manifest(reader, before.folder);
+    for (const auto& dep : m.depends)
+      if (!has(dep) && std::none_of(options_.mod_paths.begin(), options_.mod_paths.end(),
+                                    [&](const fs::path& d) { return fs::is_regular_file(d / dep / "mod.lua"); }) &&
+          !fs::is_regular_file(before.folder.parent_path() / dep / "mod.lua"))
+        throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + name + "' depends on '" + dep +
+                                                           "', which is not on the mod path");
+    if (m.runtime.empty()) throw InputError(ErrorLocation{m.file, 0, ""}, "mod.lua no longer names a runtime file");
+    mod.set_manifest(m);
+    if (was_stopped) mod.resume();
+    std::unique_ptr<Program> p;
+    try {
+      p = mod.load_program();
+      validate(mod, *p);
+    } catch (...) {
+      if (p) mod.release(*p);
+      mod.set_manifest(before);
+      if (was_stopped) mod.restop();
+      throw;
+    }
+    commit(*l, std::move(p), false);
+    r.kind = ModReport::Kind::Reloaded;
+    r.message = "mod '" + name + "' reloaded: " + std::to_string(l->plugins.size()) + " stages, " +
+                std::to_string(mod.program()->handlers.size()) + " event handlers";
+    try {
+      // After a stop the state table is new: the mod starts over.
+      if (was_stopped) mod.call_hook(mod.program()->on_load, "on_load");
+      else mod.call_hook(mod.program()->on_reload, "on_reload");
+    } catch (const InputError& e) {
+      r.message += "; but " + std::string(e.what());
+      r.where = e.where();
+    }
+    if (world_) world_->view().emit(Event{.type = "mod_reloaded", .source = "mods", .text = r.message});
+  } catch (const InputError& e) {
+    r.kind = ModReport::Kind::ReloadFailed;
+    r.where = e.where();
+    r.message = "mod '" + name + "' was not reloaded, the old code keeps running: " + e.what();
+    if (world_) world_->view().emit(Event{.type = "mod_reload_failed", .source = "mods", .text = r.message});
+  }
+  report(r);
+  return r;
+}
+
+void ModRuntime::unload(const std::string& name) {
+  Loaded* l = find(name);
+  if (!l) return;
+  for (const auto& other : mods_) {
+    const auto& deps = other->state->manifest().depends;
+    if (other.get() != l && std::find(deps.begin(), deps.end(), name) != deps.end())
+      throw InputError("mod '" + name + "' cannot be unloaded: mod '" + other->state->name() + "' depends on it");
+  }
+  ModState& mod = *l->state;
+  if (mod.program() && !mod.stopped()) {
+    try {
+      mod.call_hook(mod.program()->on_unload, "on_unload");
+    } catch (const InputError& e) {
+      report({ModReport::Kind::Note, name, e.what(), e.where()});
+    }
+  }
+  std::vector<std::string> plugins = l->plugins;
+  for (const auto& p : plugins)
+    if (const PluginDef* d = registry_.find(p); d && registered_by(*d, mod)) registry_.remove(p);
+  if (world_)
+    for (const auto& p : plugins) world_->plugin_changed(p);
+  if (auto previous = mod.set_program(std::make_unique<Program>())) mod.release(*previous);
+  std::erase_if(mods_, [&](const auto& x) { return x.get() == l; });
+  report({ModReport::Kind::Unloaded, name, "mod '" + name + "' unloaded"});
+}
+
+void ModRuntime::watch() {
+  if (!watcher_) watcher_ = std::make_unique<FileWatcher>();
+  for (const auto& l : mods_) watcher_->add(l->state->manifest().folder);
+}
+
+std::vector<ModReport> ModRuntime::poll() {
+  if (watcher_) {
+    std::vector<std::string> to_reload;
+    for (const fs::path& file : watcher_->changed()) {
+      if (file.extension() != ".lua") continue;
+      for (const auto& l : mods_) {
+        std::error_code ec;
+        const fs::path folder = fs::absolute(l->state->manifest().folder, ec).lexically_normal();
+        const auto rel = file.lexically_relative(folder);
+        if (rel.empty() || *rel.begin() == "..") continue;
+        const std::string& mod = l->state->name();
+        const bool ours = rel == "mod.lua" || std::any_of(l->state->program()->files.begin(), l->state->program()->files.end(),
+                                                          [&](const std::string& f) {
+                                                            return fs::absolute(f, ec).lexically_normal() == file;
+                                                          });
+        if (ours) {
+          if (std::find(to_reload.begin(), to_reload.end(), mod) == to_reload.end()) to_reload.push_back(mod);
+        } else {
+          report({ModReport::Kind::Note, mod,
+                  display_path(file) + " changed: scene and part files take effect when the scene is loaded again"});
+        }
+      }
+    }
+    for (const auto& m : to_reload) reload(m);
+  }
+  // What went wrong in the steps since the last poll.
+  for (const auto& l : mods_) {
+    ModState& mod = *l->state;
+    if (mod.stopped() && !mod.stop_reported) {
+      mod.stop_reported = true;
+      report({ModReport::Kind::Stopped, mod.name(), mod.stop_reason()});
+    }
+    for (LuaStage* s : mod.stages())
+      if (s->disabled() && !s->reported) {
+        s->reported = true;
+        report({ModReport::Kind::StageDisabled, mod.name(), s->disabled_reason()});
+      }
+  }
+  std::vector<ModReport> out;
+  out.swap(reports_);
+  return out;
+}
+
+void ModRuntime::report(ModReport r) {
+  if (r.kind != ModReport::Kind::Loaded) options_.log(r.mod, r.message);
+  reports_.push_back(std::move(r));
+}
+
+void ModRuntime::dispatch(const Event& e) {
+  if (!world_) return;
+  const PropertyStore& store = world_->store();
+  for (const auto& lp : mods_) {
+    Loaded& l = *lp;
+    ModState& mod = *l.state;
+    if (mod.stopped() || !mod.program()) continue;
+    const auto& handlers = mod.program()->handlers;
+    for (std::size_t h = 0; h < handlers.size(); ++h) {
+      if (!l.handler_ok[h] || (handlers[h].first != "*" && handlers[h].first != e.type)) continue;
+      lua_State* L = mod.state();
+      StackGuard guard(L);
+      lua_rawgeti(L, LUA_REGISTRYINDEX, handlers[h].second);
+      lua_createtable(L, 0, 10);
+      lua_pushstring(L, e.type.c_str());
+      lua_setfield(L, -2, "type");
+      lua_pushstring(L, e.source.c_str());
+      lua_setfield(L, -2, "source");
+      lua_pushnumber(L, double(e.step));
+      lua_setfield(L, -2, "step");
+      lua_pushnumber(L, e.time);
+      lua_setfield(L, -2, "time");
+      for (auto [key, id] : {std::pair<const char*, ObjectId>{"a", e.a}, {"b", e.b}})
+        if (store.alive(id)) {
+          lua_pushnumber(L, id.index);
+          lua_setfield(L, -2, key);
+          lua_pushstring(L, store.describe(id).c_str());
+          lua_setfield(L, -2, (std::string(key) + "_name").c_str());
+        }
+      if (!e.text.empty()) {
+        lua_pushstring(L, e.text.c_str());
+        lua_setfield(L, -2, "text");
+      }
+      lua_createtable(L, 0, int(e.values.size()));
+      for (const auto& [k, v] : e.values) {
+        lua_pushnumber(L, v);
+        lua_setfield(L, -2, k.c_str());
+      }
+      lua_setfield(L, -2, "values");
+      mod.push_state();
+      mod.begin_call(e.step);
+      try {
+        mod.host().call(2, 0, ErrorLocation{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""});
+        mod.end_call();
+      } catch (const InputError& err) {
+        mod.end_call();
+        if (mod.stopped()) break;
+        l.handler_ok[h] = false;
+        report({ModReport::Kind::StageDisabled, mod.name(),
+                "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
+                    "' failed and is disabled until the mod is reloaded: " + err.what(),
+                err.where()});
+      }
+    }
+  }
+}
+
+std::vector<std::string> ModRuntime::plugins_of(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l ? l->plugins : std::vector<std::string>{};
+}
+
+std::size_t ModRuntime::handlers_of(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l && l->state->program() ? l->state->program()->handlers.size() : 0;
+}
+
+std::vector<std::string> ModRuntime::files_of(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l && l->state->program() ? l->state->program()->files : std::vector<std::string>{};
+}
+
+bool ModRuntime::stopped(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l && l->state->stopped();
+}
+
+std::string ModRuntime::stop_reason(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l ? l->state->stop_reason() : "";
+}
+
+std::size_t ModRuntime::memory_of(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l ? l->state->memory_used() : 0;
+}
+
+}  // namespace alloy::lua

@@ -1,0 +1,143 @@
+// The mods of a running world: what an app that runs a World uses to load
+// mods with Lua stages, to hot-reload them while the world runs, and to
+// unload them.
+//
+//   PluginRegistry registry;  register_native_plugins(registry);
+//   lua::ModRuntime mods(registry, {.mod_paths = {"mods"}});
+//   mods.load("magic");                 // property types and plugins registered
+//   World world(registry);  ...  mods.attach(world);
+//   mods.watch();                       // inotify, or polling where there is none
+//   for (;;) { world.step(); for (auto& r : mods.poll()) log(r); }
+//
+// (load_scene does the loading and attaching for the mods a scene uses, and
+// hands the runtime over in LoadedScene::mods.)
+//
+// Each mod runs in its own Lua state with its own memory budget, and a budget
+// of ticks and time per step (mod_state.hpp). Its stages are ordinary plugins
+// in the registry (lua_stages.hpp): areas, swaps, priming and skipping apply
+// to them as to native ones.
+//
+// Reload is a transaction (Defold's ResScriptRecreate): the mod's files are
+// run again in a fresh environment and what they define is checked against
+// the registry; only if all is well is it swapped in. Objects keep every
+// property, the mod keeps its state table, live stages take the new functions
+// (stages whose declarations changed are re-created: built from properties
+// and primed), and `mod.on_reload(state)` is called. If anything fails, the
+// old code keeps running and the report says why, with file and line.
+//
+// Unload removes everything the mod registered: its plugins (and the world's
+// stages of them, with the stages that depend on them), its event handlers,
+// its Lua state. Property types stay registered: objects may still carry
+// them, and a property type is a name and a kind, not behaviour; reloading the
+// mod registers the same definitions again (a changed kind is refused).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lua/mod_state.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::lua {
+
+class FileWatcher;
+
+struct ModRuntimeOptions {
+  /// Folders searched for mods by name.
+  std::vector<std::filesystem::path> mod_paths;
+  /// Each mod's budgets.
+  ModBudget budget;
+  /// Where a mod's print() and the runtime's reports go (default: stderr).
+  std::function<void(const std::string& mod, const std::string& line)> log;
+};
+
+/// What happened to a mod: for the CLI, the viewer and tests.
+struct ModReport {
+  enum class Kind { Loaded, Reloaded, ReloadFailed, Unloaded, StageDisabled, Stopped, Note };
+  Kind kind = Kind::Note;
+  std::string mod;
+  std::string message;  ///< complete on its own (file:line: ...)
+  ErrorLocation where;  ///< of a failure
+};
+
+class ModRuntime {
+ public:
+  ModRuntime(PluginRegistry& registry, ModRuntimeOptions options = {});
+  /// Unloads every mod (its plugins leave the registry). Worlds that use the
+  /// mods' stages must be destroyed first.
+  ~ModRuntime();
+  ModRuntime(const ModRuntime&) = delete;
+  ModRuntime& operator=(const ModRuntime&) = delete;
+
+  /// Loads the mod `name` from the mod paths, after its dependencies (a mod
+  /// without a runtime file loads as nothing). Loading a loaded mod does
+  /// nothing. Throws InputError (file, line), registering nothing.
+  void load(const std::string& name);
+  /// Loads the mod in `folder` (its name is the folder's).
+  void load_folder(const std::filesystem::path& folder);
+  /// Loads a mod whose manifest was already read (by the scene loader).
+  void load(const Manifest& manifest);
+
+  /// The world whose stages the mods' plugins make: events and handlers go
+  /// through it, and reloads tell it which plugins changed. One world.
+  void attach(World& world);
+  World* world() const { return world_; }
+
+  /// Reloads `name` from disk as a transaction; never throws for the mod's
+  /// errors (the report says). Between steps only.
+  ModReport reload(const std::string& name);
+  /// Unregisters everything the mod registered and closes its Lua state.
+  /// Between steps only. Throws InputError if another loaded mod depends on it.
+  void unload(const std::string& name);
+
+  /// Starts watching the loaded mods' folders for changed files (inotify,
+  /// else polling twice a second).
+  void watch();
+  bool watching() const { return watcher_ != nullptr; }
+  /// Between steps: reloads the mods whose files changed since the last poll
+  /// (when watching), and returns what happened since the last call,
+  /// including stages disabled and mods stopped in the steps since.
+  std::vector<ModReport> poll();
+
+  // --- introspection -----------------------------------------------------------------
+  /// Loaded mods, in load order.
+  std::vector<std::string> loaded() const;
+  bool has(const std::string& name) const { return find(name) != nullptr; }
+  /// The plugins a mod registered, in registration order.
+  std::vector<std::string> plugins_of(const std::string& name) const;
+  /// The event handlers a mod registered.
+  std::size_t handlers_of(const std::string& name) const;
+  /// The files of a mod's program (what a reload runs again).
+  std::vector<std::string> files_of(const std::string& name) const;
+  /// Whether a mod is stopped for its budget, and why.
+  bool stopped(const std::string& name) const;
+  std::string stop_reason(const std::string& name) const;
+  /// Bytes a mod's Lua state holds.
+  std::size_t memory_of(const std::string& name) const;
+  PluginRegistry& registry() { return registry_; }
+
+ private:
+  struct Loaded;
+  Loaded* find(const std::string& name) const;
+  void load_manifest(const Manifest& manifest, std::vector<std::string>& chain);
+  /// Checks `p` against the registry as `mod` would register it.
+  void validate(const ModState& mod, const Program& p) const;
+  /// Registers `p` for `mod`, replacing its current program, and tells the
+  /// world which plugins changed.
+  void commit(Loaded& l, std::unique_ptr<Program> p, bool first);
+  void dispatch(const Event& e);
+  void report(ModReport r);
+
+  PluginRegistry& registry_;
+  ModRuntimeOptions options_;
+  std::vector<std::unique_ptr<Loaded>> mods_;
+  World* world_ = nullptr;
+  std::shared_ptr<ModRuntime*> self_;  // the world's observer holds a weak_ptr
+  std::unique_ptr<FileWatcher> watcher_;
+  std::vector<ModReport> reports_;
+};
+
+}  // namespace alloy::lua

@@ -1,0 +1,694 @@
+#include "lua/mod_state.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <lua.hpp>
+
+#include "lua/alloy_api.hpp"
+#include "lua/lua_bridge.hpp"
+#include "lua/lua_stages.hpp"
+#include "lua/sandbox.hpp"
+#include "runtime/property_types.hpp"
+
+namespace alloy::lua {
+
+extern const char* const kStagePreludeSource;  // stage_prelude.lua, embedded by CMake
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::int32_t kQuantum = 1000;  // ticks between two checks of the budgets
+
+std::string millions(std::uint64_t n) {
+  if (n % 1000000 == 0) return std::to_string(n / 1000000) + " million";
+  return std::to_string(n);
+}
+
+/// The innermost frame of a file (not the prelude, not C): where the mod was.
+ErrorLocation mod_location(lua_State* L) {
+  lua_Debug ar;
+  for (int level = 0; lua_getstack(L, level, &ar); ++level) {
+    if (!lua_getinfo(L, "Sl", &ar)) continue;
+    if (ar.source && ar.source[0] == '@' && ar.currentline > 0) return {ar.source + 1, ar.currentline, ""};
+  }
+  return {};
+}
+
+bool valid_name(const std::string& s, bool dots) {
+  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
+  return std::all_of(s.begin(), s.end(), [&](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || (dots && c == '.');
+  });
+}
+
+}  // namespace
+
+std::string_view to_string(ArgKind kind) {
+  switch (kind) {
+    case ArgKind::Number: return "number";
+    case ArgKind::Object: return "object";
+    case ArgKind::Vec3: return "vec3";
+  }
+  return "?";
+}
+
+bool StageDecl::same_shape(const StageDecl& o) const {
+  const StageInfo& a = info;
+  const StageInfo& b = o.info;
+  return a.name == b.name && a.kind == b.kind && a.reads == b.reads && a.writes == b.writes &&
+         a.needs == b.needs && a.derived == b.derived && a.resolvers == b.resolvers &&
+         a.target == b.target && a.provides == b.provides && functions == o.functions &&
+         provides == o.provides && settings == o.settings;
+}
+
+const StageDecl* Program::stage(std::string_view name) const {
+  for (const auto& s : stages)
+    if (s.info.name == name) return &s;
+  return nullptr;
+}
+
+// --- the `mod` table: what a runtime file defines -----------------------------------
+
+struct Collector {
+  ModState& mod;
+  Program& program;
+  int mod_ref = -2;  // the `mod` table of this load
+
+  static Collector* from(lua_State* L) {
+    auto* box = static_cast<Collector**>(lua_touserdata(L, lua_upvalueindex(1)));
+    if (!box || !*box)
+      throw InputError("mod.property, mod.resolver, mod.derived, mod.interaction and mod.on "
+                       "can only be called while the mod's files load");
+    return *box;
+  }
+
+  ErrorLocation here(lua_State* L) const { return mod.host().user_location(L); }
+
+  void check_fields(lua_State* L, int t, const std::vector<std::string>& allowed, const std::string& what) {
+    for (lua_pushnil(L); lua_next(L, t); lua_pop(L, 1)) {
+      if (lua_type(L, -2) != LUA_TSTRING) throw InputError(here(L), what + " takes named fields only");
+      const std::string key = lua_tostring(L, -2);
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+        std::string msg = what + " has no field '" + key + "'";
+        if (auto near = closest_name(key, allowed); !near.empty()) msg += " (did you mean '" + near + "'?)";
+        throw InputError(here(L), msg);
+      }
+    }
+  }
+
+  std::optional<std::string> string_field(lua_State* L, int t, const char* key, const std::string& what) {
+    lua_getfield(L, t, key);
+    std::optional<std::string> out;
+    if (lua_type(L, -1) == LUA_TSTRING) out = lua_tostring(L, -1);
+    else if (!lua_isnil(L, -1))
+      throw InputError(here(L), what + ": '" + key + "' must be a string, not a " + luaL_typename(L, -1));
+    lua_pop(L, 1);
+    return out;
+  }
+
+  std::optional<double> number_field(lua_State* L, int t, const char* key, const std::string& what) {
+    lua_getfield(L, t, key);
+    std::optional<double> out;
+    if (lua_type(L, -1) == LUA_TNUMBER) out = lua_tonumber(L, -1);
+    else if (!lua_isnil(L, -1)) throw InputError(here(L), what + ": '" + key + "' must be a number");
+    lua_pop(L, 1);
+    return out;
+  }
+
+  std::vector<std::string> list_field(lua_State* L, int t, const char* key, const std::string& what) {
+    lua_getfield(L, t, key);
+    std::vector<std::string> out;
+    if (lua_istable(L, -1)) {
+      const int n = int(lua_objlen(L, -1));
+      for (int i = 1; i <= n; ++i) {
+        lua_rawgeti(L, -1, i);
+        if (lua_type(L, -1) != LUA_TSTRING)
+          throw InputError(here(L), what + ": '" + key + "' must be a list of names");
+        out.emplace_back(lua_tostring(L, -1));
+        lua_pop(L, 1);
+      }
+      // A table with named fields where a list is expected is a mistake.
+      lua_pushnil(L);
+      while (lua_next(L, -2)) {
+        lua_pop(L, 1);
+        if (lua_type(L, -1) != LUA_TNUMBER)
+          throw InputError(here(L), what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
+      }
+    } else if (!lua_isnil(L, -1)) {
+      throw InputError(here(L), what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
+    }
+    lua_pop(L, 1);
+    return out;
+  }
+
+  /// The string keys of the table in field `key`, sorted; the values stay on the Lua side.
+  std::vector<std::string> keys_of(lua_State* L, int t, const char* key, const std::string& what) {
+    lua_getfield(L, t, key);
+    std::vector<std::string> out;
+    if (lua_istable(L, -1)) {
+      for (lua_pushnil(L); lua_next(L, -2); lua_pop(L, 1)) {
+        if (lua_type(L, -2) != LUA_TSTRING || !valid_name(lua_tostring(L, -2), false))
+          throw InputError(here(L), what + ": the keys of '" + key + "' must be names");
+        out.emplace_back(lua_tostring(L, -2));
+      }
+    } else if (!lua_isnil(L, -1)) {
+      throw InputError(here(L), what + ": '" + key + "' must be a table");
+    }
+    lua_pop(L, 1);
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+  void property(lua_State* L) {
+    luaL_checktype(L, 1, LUA_TTABLE);
+    const std::string what = "mod.property";
+    check_fields(L, 1, {"name", "kind", "unit", "doc", "min", "max", "min_exclusive", "values"}, what);
+    PropertyDef def;
+    def.name = string_field(L, 1, "name", what).value_or("");
+    if (!valid_name(def.name, false))
+      throw InputError(here(L), what + " needs a name made of letters, digits and _ (name = \"mana\")");
+    const std::string kind = string_field(L, 1, "kind", what).value_or("number");
+    auto k = kind_from_string(kind);
+    if (!k) throw InputError(here(L), what + " '" + def.name + "': unknown kind '" + kind +
+                                          "' (number, integer, bool, vec3, quat, string, ref, reflist, enum)");
+    def.kind = *k;
+    def.unit = string_field(L, 1, "unit", what).value_or("");
+    def.doc = string_field(L, 1, "doc", what).value_or("");
+    def.min = number_field(L, 1, "min", what);
+    def.max = number_field(L, 1, "max", what);
+    lua_getfield(L, 1, "min_exclusive");
+    def.min_exclusive = lua_toboolean(L, -1);
+    lua_pop(L, 1);
+    def.enum_values = list_field(L, 1, "values", what);
+    if (def.kind == PropertyKind::Enum && def.enum_values.empty())
+      throw InputError(here(L), what + " '" + def.name + "': an enum needs its values, e.g. values = {\"a\", \"b\"}");
+    def.owner = mod.name();
+    for (const auto& p : program.properties)
+      if (p.name == def.name) throw InputError(here(L), what + " '" + def.name + "' is defined twice");
+    program.properties.push_back(std::move(def));
+  }
+
+  void stage(lua_State* L, StageKind kind) {
+    luaL_checktype(L, 1, LUA_TTABLE);
+    const char* fn_name = kind == StageKind::Resolver ? "resolver" : kind == StageKind::Derived ? "derived" : "interaction";
+    std::string what = std::string("mod.") + fn_name;
+    std::vector<std::string> allowed = {"name", "doc", "reads", "needs", "settings"};
+    switch (kind) {
+      case StageKind::Resolver:
+        allowed.insert(allowed.end(), {"writes", "functions", "build", "advance"});
+        break;
+      case StageKind::Derived:
+        allowed.insert(allowed.end(), {"derived", "resolvers", "provides", "update"});
+        break;
+      case StageKind::Interaction:
+        allowed.insert(allowed.end(), {"derived", "target", "apply"});
+        break;
+    }
+    check_fields(L, 1, allowed, what);
+    StageDecl d;
+    d.where = here(L);
+    d.info.kind = kind;
+    d.info.name = string_field(L, 1, "name", what).value_or("");
+    if (!valid_name(d.info.name, true))
+      throw InputError(d.where, what + " needs a name made of letters, digits, _ and . (name = \"" +
+                                    mod.name() + ".thing\")");
+    what += " '" + d.info.name + "'";
+    d.info.doc = string_field(L, 1, "doc", what).value_or("");
+    d.info.reads = list_field(L, 1, "reads", what);
+    d.info.needs = list_field(L, 1, "needs", what);
+    d.info.writes = list_field(L, 1, "writes", what);
+    d.info.derived = list_field(L, 1, "derived", what);
+    d.info.resolvers = list_field(L, 1, "resolvers", what);
+    d.info.target = string_field(L, 1, "target", what).value_or("");
+    if (kind == StageKind::Interaction && d.info.target.empty())
+      throw InputError(d.where, what + " needs the one resolver it queues on (target = \"rigid_body\")");
+    d.settings = keys_of(L, 1, "settings", what);
+
+    if (kind == StageKind::Resolver) {
+      for (const auto& f : keys_of(L, 1, "functions", what)) {
+        lua_getfield(L, 1, "functions");
+        lua_getfield(L, -1, f.c_str());
+        FunctionDecl fd{f, {}};
+        if (!lua_istable(L, -1))
+          throw InputError(d.where, what + ": interaction function '" + f +
+                                        "' must list its arguments after the object, e.g. {\"number\"}");
+        const int n = int(lua_objlen(L, -1));
+        for (int i = 1; i <= n; ++i) {
+          lua_rawgeti(L, -1, i);
+          const std::string k = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "";
+          lua_pop(L, 1);
+          if (k == "number") fd.args.push_back(ArgKind::Number);
+          else if (k == "object") fd.args.push_back(ArgKind::Object);
+          else if (k == "vec3") fd.args.push_back(ArgKind::Vec3);
+          else
+            throw InputError(d.where, what + ": argument " + std::to_string(i) + " of '" + f +
+                                          "' must be \"number\", \"object\" or \"vec3\"");
+        }
+        lua_pop(L, 2);
+        if (fd.args.size() > 4) throw InputError(d.where, what + ": '" + f + "' takes at most 4 arguments after the object");
+        d.functions.push_back(std::move(fd));
+      }
+    }
+    if (kind == StageKind::Derived) {
+      for (const auto& o : keys_of(L, 1, "provides", what)) {
+        lua_getfield(L, 1, "provides");
+        lua_getfield(L, -1, o.c_str());
+        const std::string k = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "";
+        lua_pop(L, 2);
+        if (k != "number" && k != "vec3")
+          throw InputError(d.where, what + ": output '" + o + "' must be \"number\" or \"vec3\"");
+        d.provides.push_back({o, k == "vec3" ? PropertyKind::Vec3 : PropertyKind::Number});
+      }
+      if (d.provides.empty())
+        throw InputError(d.where, what + " provides nothing: list its outputs, e.g. provides = { charge = \"number\" }");
+    }
+    const char* body = kind == StageKind::Resolver ? "advance" : kind == StageKind::Derived ? "update" : "apply";
+    lua_getfield(L, 1, body);
+    if (!lua_isfunction(L, -1))
+      throw InputError(d.where, what + " needs its function: " + body + " = function(w" +
+                                    (kind == StageKind::Resolver ? ", dt" : "") + ") ... end");
+    lua_pop(L, 1);
+    if (kind == StageKind::Resolver) {
+      lua_getfield(L, 1, "build");
+      if (!lua_isnil(L, -1) && !lua_isfunction(L, -1)) throw InputError(d.where, what + ": 'build' must be a function");
+      lua_pop(L, 1);
+    }
+    for (const auto& s : program.stages)
+      if (s.info.name == d.info.name) throw InputError(d.where, what + " is defined twice");
+    lua_pushvalue(L, 1);
+    d.def_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+    program.stages.push_back(std::move(d));
+  }
+
+  void on(lua_State* L) {
+    const std::string type = luaL_checkstring(L, 1);
+    if (type.empty()) throw InputError(here(L), "mod.on needs an event type, or \"*\" for every event");
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    lua_pushvalue(L, 2);
+    program.handlers.emplace_back(type, luaL_ref(L, LUA_REGISTRYINDEX));
+  }
+};
+
+namespace {
+
+int mod_property(lua_State* L) {
+  return catch_exceptions(L, [&] { return Collector::from(L)->property(L), 0; });
+}
+int mod_resolver(lua_State* L) {
+  return catch_exceptions(L, [&] { return Collector::from(L)->stage(L, StageKind::Resolver), 0; });
+}
+int mod_derived(lua_State* L) {
+  return catch_exceptions(L, [&] { return Collector::from(L)->stage(L, StageKind::Derived), 0; });
+}
+int mod_interaction(lua_State* L) {
+  return catch_exceptions(L, [&] { return Collector::from(L)->stage(L, StageKind::Interaction), 0; });
+}
+int mod_on(lua_State* L) {
+  return catch_exceptions(L, [&] { return Collector::from(L)->on(L), 0; });
+}
+
+}  // namespace
+
+// --- ModState -----------------------------------------------------------------------
+
+ModState::ModState(Manifest manifest, std::vector<fs::path> search_path, ModBudget budget, Log log)
+    : manifest_(std::move(manifest)),
+      search_path_(std::move(search_path)),
+      budget_(budget),
+      log_(std::move(log)) {
+  make_state();
+}
+
+ModState::~ModState() {
+  if (program_) release(*program_);
+}
+
+std::string ModState::runtime_file() const { return manifest_.runtime; }
+
+void ModState::make_state() {
+  host_ = std::make_unique<LuaHost>(HostOptions{budget_.memory_bytes, 0});
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+
+  abi_budget_ = new (lua_newuserdata(L, sizeof(abi::Budget))) abi::Budget{};
+  lua_pushvalue(L, -1);
+  budget_ud_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  const int budget_ud = lua_gettop(L);
+
+  // The prelude is host code: no ticks, the state's own globals, and the FFI.
+  const std::string_view src = kStagePreludeSource;
+  if (luaL_loadbufferx(L, src.data(), src.size(), "=alloy.prelude", "t") != 0)
+    throw std::runtime_error(std::string("the stage prelude does not compile: ") + lua_tostring(L, -1));
+  const int chunk = lua_gettop(L);
+  lua_pushcfunction(L, luaopen_ffi);
+  lua_call(L, 0, 1);
+  lua_pushlightuserdata(L, const_cast<abi::Api*>(&stage_api()));
+  lua_pushvalue(L, budget_ud);
+  lua_pushlightuserdata(L, this);
+  lua_pushcclosure(L, &ModState::over_budget, 1);
+  push_stage_host_functions(L);
+  lua_pushstring(L, abi::kCdef);
+  lua_pushstring(L, manifest_.name.c_str());
+  (void)chunk;
+  host_->call(7, 1, ErrorLocation{"alloy.prelude", 0, ""});
+  prelude_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref_);
+  lua_getfield(L, -1, "tick");
+  host_->use_budget_ticks(-1);
+  lua_pop(L, 2);
+
+  lua_newtable(L);
+  state_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+}
+
+int ModState::prelude_ref(const char* fn) const {
+  lua_State* L = host_->state();
+  auto& cache = prelude_fns_;  // looked up once each
+  for (const auto& [name, ref] : cache)
+    if (name == fn) return ref;
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref_);
+  lua_getfield(L, -1, fn);
+  const int ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  lua_pop(L, 1);
+  cache.emplace_back(fn, ref);
+  return ref;
+}
+
+void ModState::push_state() { lua_rawgeti(host_->state(), LUA_REGISTRYINDEX, state_ref_); }
+
+void ModState::resume() {
+  if (!stopped_) return;
+  saved_reason_ = stop_reason_;
+  saved_message_ = stop_message_;
+  stopped_ = false;
+  stop_reported = false;
+  stop_reason_.clear();
+  stop_message_.clear();
+  abi_budget_->stopped = 0;
+  lua_State* L = host_->state();
+  luaL_unref(L, LUA_REGISTRYINDEX, state_ref_);
+  lua_newtable(L);
+  state_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  lua_gc(L, LUA_GCCOLLECT, 0);
+}
+
+void ModState::restop() {
+  stopped_ = true;
+  stop_reported = true;
+  stop_reason_ = saved_reason_;
+  stop_message_ = saved_message_;
+  abi_budget_->stopped = 1;
+}
+
+void ModState::install_environment(lua_State* L, int env, const std::string& mod, int box_ref,
+                                   Collector& c) {
+  env = abs_index(L, env);
+  push_alloy_api(L);
+  lua_setfield(L, env, "alloy");
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref_);
+  const int m = lua_gettop(L);
+  for (const char* name : {"pairs", "vec3", "quat"}) {
+    lua_getfield(L, m, name);
+    lua_setfield(L, env, name);
+  }
+  lua_getfield(L, env, "math");  // the environment's own copy
+  lua_getfield(L, m, "random");
+  lua_setfield(L, -2, "random");
+  lua_getfield(L, m, "randomseed");
+  lua_setfield(L, -2, "randomseed");
+  lua_pop(L, 2);
+  lua_pushlightuserdata(L, this);
+  lua_pushcclosure(L, &ModState::print_fn, 1);
+  lua_setfield(L, env, "print");
+  if (!mod.empty()) return;  // a dependency's files: no `mod` table
+
+  lua_createtable(L, 0, 8);
+  lua_pushstring(L, manifest_.name.c_str());
+  lua_setfield(L, -2, "name");
+  lua_pushstring(L, manifest_.version.c_str());
+  lua_setfield(L, -2, "version");
+  const luaL_Reg fns[] = {{"property", mod_property},
+                          {"resolver", mod_resolver},
+                          {"derived", mod_derived},
+                          {"interaction", mod_interaction},
+                          {"on", mod_on}};
+  for (const auto& f : fns) {
+    lua_rawgeti(L, LUA_REGISTRYINDEX, box_ref);
+    lua_pushcclosure(L, f.func, 1);
+    lua_setfield(L, -2, f.name);
+  }
+  lua_pushvalue(L, -1);
+  if (c.mod_ref != -2) luaL_unref(L, LUA_REGISTRYINDEX, c.mod_ref);
+  c.mod_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  lua_setfield(L, env, "mod");
+}
+
+int ModState::print_fn(lua_State* L) {
+  auto* self = static_cast<ModState*>(lua_touserdata(L, lua_upvalueindex(1)));
+  std::string line;
+  const int n = lua_gettop(L);
+  for (int i = 1; i <= n; ++i) {
+    lua_getglobal(L, "tostring");
+    lua_pushvalue(L, i);
+    lua_call(L, 1, 1);
+    const char* s = lua_tostring(L, -1);
+    if (i > 1) line += "\t";
+    line += s ? s : "?";
+    lua_pop(L, 1);
+  }
+  self->log(line);
+  return 0;
+}
+
+std::unique_ptr<Program> ModState::load_program() {
+  auto prog = std::make_unique<Program>();
+  const std::string runtime = runtime_file();
+  if (runtime.empty()) return prog;
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+
+  const fs::path file = manifest_.folder / runtime;
+  const std::string display = display_path(file);
+  if (!fs::is_regular_file(file))
+    throw InputError(ErrorLocation{manifest_.file, 0, ""}, "mod '" + manifest_.name + "' names its runtime file '" +
+                                                               runtime + "', but there is no file " + display);
+  Collector c{*this, *prog};
+  auto** box = static_cast<Collector**>(lua_newuserdata(L, sizeof(Collector*)));
+  *box = &c;
+  const int box_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  ModLoader loader(*host_, search_path_, [&](lua_State* L, int env, const std::string& mod) {
+    install_environment(L, env, mod, box_ref, c);
+  });
+  loader.set_scene_mod(manifest_);
+
+  const bool was_stopped = stopped_;
+  auto cleanup = [&] {
+    *box = nullptr;  // the mod's functions refuse to define anything after this
+    luaL_unref(L, LUA_REGISTRYINDEX, box_ref);
+    if (c.mod_ref != -2) luaL_unref(L, LUA_REGISTRYINDEX, c.mod_ref);
+  };
+  try {
+    host_->load_file(file, display);
+    loader.add_scene_file(display);
+    loader.push_environment(manifest_.name);
+    lua_setfenv(L, -2);
+    begin_loading();
+    try {
+      host_->call(0, 0, ErrorLocation{display, 0, ""});
+    } catch (...) {
+      end_call();
+      throw;
+    }
+    end_call();
+    if (stopped_ && !was_stopped) throw InputError(stop_reason_);  // stopped inside a pcall
+    // The hooks the file set on `mod`.
+    lua_rawgeti(L, LUA_REGISTRYINDEX, c.mod_ref);
+    for (auto [key, ref] : {std::pair<const char*, int*>{"on_load", &prog->on_load},
+                            {"on_reload", &prog->on_reload},
+                            {"on_unload", &prog->on_unload}}) {
+      lua_getfield(L, -1, key);
+      if (lua_isfunction(L, -1)) *ref = luaL_ref(L, LUA_REGISTRYINDEX);
+      else if (!lua_isnil(L, -1))
+        throw InputError(ErrorLocation{display, 0, ""}, std::string("mod.") + key + " must be a function");
+      else lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+  } catch (...) {
+    cleanup();
+    release(*prog);
+    if (!was_stopped) {
+      stopped_ = false;
+      stop_reported = false;
+      abi_budget_->stopped = 0;
+      stop_reason_.clear();
+    }
+    throw;
+  }
+  cleanup();
+  for (const auto& [f, mod] : loader.loaded_files())
+    if (mod.empty()) prog->files.push_back(f);
+  std::sort(prog->files.begin(), prog->files.end());
+  return prog;
+}
+
+void ModState::release(Program& p) {
+  lua_State* L = host_->state();
+  for (auto& s : p.stages) luaL_unref(L, LUA_REGISTRYINDEX, s.def_ref), s.def_ref = -2;
+  for (auto& [type, ref] : p.handlers) luaL_unref(L, LUA_REGISTRYINDEX, ref), ref = -2;
+  for (int* r : {&p.on_load, &p.on_reload, &p.on_unload})
+    if (*r != -2) luaL_unref(L, LUA_REGISTRYINDEX, *r), *r = -2;
+}
+
+std::unique_ptr<Program> ModState::set_program(std::unique_ptr<Program> p) {
+  std::swap(program_, p);
+  // Live stages whose declarations did not change take the new functions.
+  for (LuaStage* s : stages_)
+    if (const StageDecl* d = program_->stage(s->name()); d && p) {
+      const StageDecl* old = p->stage(s->name());
+      if (old && old->same_shape(*d)) s->rebind(*d);
+    }
+  return p;
+}
+
+void ModState::call_hook(int ref, const char* what) {
+  if (ref == -2) return;
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, ref);
+  push_state();
+  begin_loading();
+  try {
+    host_->call(1, 0, ErrorLocation{display_path(manifest_.folder / runtime_file()), 0, ""});
+  } catch (const InputError& e) {
+    end_call();
+    throw InputError(e.where(), std::string(what) + ": " + e.bare());
+  }
+  end_call();
+  if (stopped_) throw InputError(stop_reason_);
+}
+
+void ModState::detach(LuaStage* s) { std::erase(stages_, s); }
+
+// --- budgets ------------------------------------------------------------------------
+
+void ModState::begin_call(std::uint64_t step) {
+  if (step != step_) {
+    step_ = step;
+    step_ticks_ = 0;
+    step_seconds_ = 0;
+  }
+  tick_limit_ = budget_.ticks_per_step;
+  call_start_ = std::chrono::steady_clock::now();
+  deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>(std::max(0.0, budget_.seconds_per_step - step_seconds_)));
+  granted_ = stopped_ ? 0 : kQuantum;
+  abi_budget_->ticks = granted_;
+  abi_budget_->stopped = stopped_ ? 1 : 0;
+}
+
+void ModState::begin_loading() {
+  step_ = ~0ull - 1;  // a call outside the steps: its own account
+  step_ticks_ = 0;
+  step_seconds_ = 0;
+  tick_limit_ = budget_.ticks_to_load;
+  call_start_ = std::chrono::steady_clock::now();
+  deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>(budget_.seconds_to_load));
+  granted_ = stopped_ ? 0 : kQuantum;
+  abi_budget_->ticks = granted_;
+  loading_ = true;
+}
+
+void ModState::charge() {
+  const std::int64_t spent = std::int64_t(granted_) - std::int64_t(abi_budget_->ticks);
+  if (spent > 0) step_ticks_ += std::uint64_t(spent);
+  granted_ = abi_budget_->ticks;
+}
+
+void ModState::end_call() {
+  charge();
+  step_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - call_start_).count();
+  if (loading_) {
+    loading_ = false;
+    step_ = ~0ull;
+  }
+}
+
+void ModState::stop(lua_State* L, const std::string& why) {
+  const ErrorLocation where = mod_location(L);
+  if (!stopped_) {
+    stopped_ = true;
+    stop_message_ = "mod '" + manifest_.name + "' stopped: " + why;
+    stop_reason_ = InputError::format(where, stop_message_);
+  }
+  abi_budget_->stopped = 1;
+  abi_budget_->ticks = 0;
+  granted_ = 0;
+  push_error_table(L, where, stop_message_);
+  raise_error_table(L);
+}
+
+int ModState::over_budget(lua_State* L) {
+  auto* self = static_cast<ModState*>(lua_touserdata(L, lua_upvalueindex(1)));
+  self->charge();
+  // Already stopped: fail again, so that a pcall around a loop cannot
+  // swallow the stop and loop on.
+  if (self->stopped_) self->stop(L, "");
+  if (self->step_ticks_ > self->tick_limit_)
+    self->stop(L, "it ran more than " + millions(self->tick_limit_) + " ticks (loop iterations and calls) " +
+                      (self->loading_ ? "while loading" : "in one step") + " (a runaway loop?)");
+  if (std::chrono::steady_clock::now() > self->deadline_) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g ms", 1000 * (self->loading_ ? self->budget_.seconds_to_load : self->budget_.seconds_per_step));
+    self->stop(L, std::string("it ran longer than ") + buf + (self->loading_ ? " while loading" : " in one step"));
+  }
+  const std::size_t limit = self->budget_.memory_bytes;
+  if (limit > 0 && self->host_->memory().used() > limit / 10 * 9) {
+    lua_gc(L, LUA_GCCOLLECT, 0);
+    if (self->host_->memory().used() > limit / 10 * 9)
+      self->stop(L, "it holds more than 90% of its memory budget of " + std::to_string(limit >> 20) +
+                        " MiB (an allocation bomb?)");
+  }
+  self->granted_ = kQuantum;
+  self->abi_budget_->ticks = kQuantum;
+  return 0;
+}
+
+bool ModState::run_stage(int record_ref, const char* phase, double dt, double time, std::uint64_t step,
+                         const ErrorLocation& fallback, InputError* error) {
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("run"));
+  lua_rawgeti(L, LUA_REGISTRYINDEX, record_ref);
+  lua_pushstring(L, phase);
+  lua_pushnumber(L, dt);
+  lua_pushnumber(L, time);
+  lua_pushnumber(L, double(step));
+  const std::size_t refusals = host_->memory().refusals();
+  begin_call(step);
+  try {
+    host_->call(5, 0, fallback);
+  } catch (const InputError& e) {
+    end_call();
+    if (host_->memory().refusals() != refusals && !stopped_) {
+      // The allocator refused: the mod is out of memory, not just wrong.
+      stopped_ = true;
+      stop_message_ = "mod '" + manifest_.name + "' stopped: it ran out of its memory budget of " +
+                      std::to_string(budget_.memory_bytes >> 20) + " MiB";
+      stop_reason_ = InputError::format(e.where(), stop_message_);
+      abi_budget_->stopped = 1;
+    }
+    *error = e;
+    return false;
+  }
+  end_call();
+  if (stopped_) {
+    *error = InputError(stop_reason_);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace alloy::lua

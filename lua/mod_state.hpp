@@ -1,0 +1,206 @@
+// One loaded mod at run time: its own Lua state (so its own memory budget,
+// and nothing shared with another mod but plain data through the world),
+// the host prelude in that state, the budget of ticks and time per step, the
+// mod's state table (which outlives reloads), and its current Program: the
+// property types, stages and event handlers one run of its runtime file
+// defined.
+//
+// Loading is a transaction (Defold's ResScriptRecreate): load_program() runs
+// the mod's files in a fresh environment of the same state and collects what
+// they define, touching nothing else; the caller validates the Program, and
+// only then swaps it in (set_program) or throws it away. A failed attempt
+// leaves the running Program, its functions and the state table untouched.
+//
+// Internal to lua/: apps use ModRuntime (mod_runtime.hpp).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lua/lua_host.hpp"
+#include "lua/mod_loader.hpp"
+#include "lua/stage_abi.hpp"
+#include "runtime/stage.hpp"
+
+namespace alloy::lua {
+
+class LuaStage;
+
+/// What a mod may spend. The tick budget counts loop iterations and function
+/// calls of the mod's code (budget_ticks.hpp): deterministic, the same on
+/// every machine. The time budget is a wall-clock backstop for what ticks do
+/// not see (a long string operation in a library function).
+struct ModBudget {
+  std::size_t memory_bytes = 32u << 20;        ///< the mod's Lua state, all included
+  std::uint64_t ticks_per_step = 20'000'000;   ///< over all its stages and handlers in one step
+  double seconds_per_step = 0.25;              ///< same, wall clock
+  std::uint64_t ticks_to_load = 200'000'000;   ///< running its files and on_load / on_reload
+  double seconds_to_load = 5;
+};
+
+/// The kind of one argument of an interaction function, after the object.
+enum class ArgKind : std::uint8_t { Number, Object, Vec3 };
+std::string_view to_string(ArgKind kind);
+/// Doubles one argument takes in a queued command.
+inline int width(ArgKind k) { return k == ArgKind::Vec3 ? 3 : 1; }
+
+/// An interaction function: a name and the arguments after the object.
+struct FunctionDecl {
+  std::string name;
+  std::vector<ArgKind> args;
+  friend bool operator==(const FunctionDecl&, const FunctionDecl&) = default;
+};
+
+/// An output column of a Lua derived set (number or vec3 per object).
+struct OutputDecl {
+  std::string name;
+  PropertyKind kind = PropertyKind::Number;
+  friend bool operator==(const OutputDecl&, const OutputDecl&) = default;
+};
+
+/// A stage a mod defined: what it declares, and where its functions are.
+struct StageDecl {
+  StageInfo info;
+  std::vector<FunctionDecl> functions;  ///< a resolver's interaction functions
+  std::vector<OutputDecl> provides;     ///< a derived set's outputs
+  std::vector<std::string> settings;    ///< setting keys it accepts (defaults in its table)
+  int def_ref = -2;                     ///< registry ref of the mod's table (functions, settings)
+  ErrorLocation where;                  ///< the line that defined it
+  /// Same declarations: live instances can take the new functions as they are.
+  bool same_shape(const StageDecl& o) const;
+};
+
+/// Everything one run of a mod's runtime file defined.
+struct Program {
+  std::vector<PropertyDef> properties;
+  std::vector<StageDecl> stages;
+  std::vector<std::pair<std::string, int>> handlers;  ///< event type ("*": all), function ref
+  int on_load = -2, on_reload = -2, on_unload = -2;   ///< function refs, or -2
+  std::vector<std::string> files;                     ///< display names of the files it ran
+  const StageDecl* stage(std::string_view name) const;
+};
+
+class ModState : public std::enable_shared_from_this<ModState> {
+ public:
+  using Log = std::function<void(const std::string& mod, const std::string& line)>;
+
+  ModState(Manifest manifest, std::vector<std::filesystem::path> search_path, ModBudget budget,
+           Log log);
+  ~ModState();
+  ModState(const ModState&) = delete;
+  ModState& operator=(const ModState&) = delete;
+
+  const std::string& name() const { return manifest_.name; }
+  const Manifest& manifest() const { return manifest_; }
+  void set_manifest(Manifest m) { manifest_ = std::move(m); }
+  LuaHost& host() { return *host_; }
+  lua_State* state() const { return host_->state(); }
+  const ModBudget& budget() const { return budget_; }
+  /// The runtime file, or "" if the mod has none.
+  std::string runtime_file() const;
+
+  // --- programs -------------------------------------------------------------------
+  /// Runs the mod's runtime file in a fresh environment and returns what it
+  /// defined. Throws InputError (file, line) and leaves the running program
+  /// alone. The manifest is read again by the caller when it changed.
+  std::unique_ptr<Program> load_program();
+  /// Frees the Lua references a program holds.
+  void release(Program& program);
+  /// The running program (nullptr before the first successful load).
+  const Program* program() const { return program_.get(); }
+  /// Makes `p` the running program, rebinds every live stage whose
+  /// declarations did not change, and returns the old one (to be released).
+  std::unique_ptr<Program> set_program(std::unique_ptr<Program> p);
+  /// Calls on_load / on_reload / on_unload of the running program with the
+  /// state table, under the load budget. Throws InputError.
+  void call_hook(int ref, const char* what);
+
+  /// Pushes the mod's state table (the same table across reloads).
+  void push_state();
+  /// Lifts a budget stop before a reload, with a new, empty state table (the
+  /// old one may be half-updated: the mod was stopped in the middle of its
+  /// work) and a full collection. restop() puts the stop back if the reload
+  /// fails.
+  void resume();
+  void restop();
+
+  // --- calls into the mod ------------------------------------------------------------
+  /// Opens a call of the mod's code in world step `step` (loading: no step).
+  void begin_call(std::uint64_t step);
+  void begin_loading();
+  /// Closes it; accounts its ticks and time to the step.
+  void end_call();
+  /// Stopped for a budget (until reloaded): its stages and handlers are skipped.
+  bool stopped() const { return stopped_; }
+  const std::string& stop_reason() const { return stop_reason_; }
+  /// Set by the runtime when it has reported the stop (once).
+  bool stop_reported = false;
+
+  /// A registry ref of the prelude's function `fn` (new_stage, bind, run).
+  int prelude_ref(const char* fn) const;
+  /// Runs phase `phase` of the stage whose prelude record is `record_ref`,
+  /// within the mod's budget for step `step`. Returns false and fills
+  /// `error` if the mod's code failed or the mod was stopped.
+  bool run_stage(int record_ref, const char* phase, double dt, double time, std::uint64_t step,
+                 const ErrorLocation& fallback, InputError* error);
+
+  // --- live stages -----------------------------------------------------------------
+  void attach(LuaStage* s) { stages_.push_back(s); }
+  void detach(LuaStage* s);
+  const std::vector<LuaStage*>& stages() const { return stages_; }
+
+  void log(const std::string& line) const {
+    if (log_) log_(manifest_.name, line);
+  }
+
+  /// Bytes the mod's Lua state holds.
+  std::size_t memory_used() const { return host_->memory().used(); }
+  /// Ticks the mod ran in its last step with a call (for tests and profiles).
+  std::uint64_t ticks_last_step() const { return step_ticks_; }
+
+ private:
+  void make_state();
+  void install_environment(lua_State* L, int env, const std::string& mod, int box_ref,
+                           struct Collector& c);
+  static int over_budget(lua_State* L);
+  static int print_fn(lua_State* L);
+  [[noreturn]] void stop(lua_State* L, const std::string& why);
+  void charge();  // moves spent ticks from the counter to the step's total
+
+  Manifest manifest_;
+  std::vector<std::filesystem::path> search_path_;
+  ModBudget budget_;
+  Log log_;
+  std::unique_ptr<LuaHost> host_;
+  abi::Budget* abi_budget_ = nullptr;  // userdata in the state (the ticks read it)
+  int budget_ud_ref_ = -2;
+  int prelude_ref_ = -2;
+  mutable std::vector<std::pair<std::string, int>> prelude_fns_;  // refs of its entry points
+  int state_ref_ = -2;
+  std::unique_ptr<Program> program_;
+  std::vector<LuaStage*> stages_;
+
+  // Budget accounting.
+  bool loading_ = false;
+  bool stopped_ = false;
+  std::string stop_reason_;   // with where it was
+  std::string stop_message_;  // without
+  std::string saved_reason_, saved_message_;  // of a stop lifted for a reload
+  std::uint64_t step_ = ~0ull;
+  std::uint64_t step_ticks_ = 0;
+  double step_seconds_ = 0;
+  std::int32_t granted_ = 0;
+  std::uint64_t tick_limit_ = 0;
+  std::chrono::steady_clock::time_point call_start_, deadline_;
+};
+
+/// The stage definitions of `ModState::load_program` are parsed here; the
+/// error names the line of the definition.
+struct Collector;
+
+}  // namespace alloy::lua

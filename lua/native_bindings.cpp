@@ -1,0 +1,48 @@
+#include "lua/native_bindings.hpp"
+
+#include "resolvers/rigid_body/rigid_body.hpp"
+
+namespace alloy::lua {
+
+namespace {
+
+const std::vector<FunctionDecl> kRigidBody = {
+    {"add_force", {ArgKind::Vec3}},
+    {"add_torque", {ArgKind::Vec3}},
+    {"add_force_at", {ArgKind::Vec3, ArgKind::Vec3}},
+};
+
+class RigidBodyTarget final : public NativeTarget {
+ public:
+  explicit RigidBodyTarget(rigid::RigidBodyResolver& rigid) : rigid_(rigid) {}
+  void call(std::int32_t fn, ObjectId object, const double* a) override {
+    const Vec3 v{a[0], a[1], a[2]};
+    switch (fn) {
+      case 0: rigid_.add_force(object, v); return;
+      case 1: rigid_.add_torque(object, v); return;
+      case 2: rigid_.add_force(object, v, Vec3{a[3], a[4], a[5]}); return;
+    }
+    throw AccessError("rigid_body has no interaction function #" + std::to_string(fn));
+  }
+
+ private:
+  rigid::RigidBodyResolver& rigid_;
+};
+
+}  // namespace
+
+const std::vector<FunctionDecl>* native_functions(std::string_view resolver) {
+  if (resolver == "rigid_body") return &kRigidBody;
+  return nullptr;
+}
+
+std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx) {
+  if (ctx.info().target == "rigid_body")
+    return std::make_unique<RigidBodyTarget>(ctx.target<rigid::RigidBodyResolver>());
+  throw InputError("Lua interactions cannot queue on the native resolver '" + ctx.info().target +
+                   "' (Lua can reach: rigid_body)");
+}
+
+bool native_derived_readable(std::string_view set) { return set == "collisions"; }
+
+}  // namespace alloy::lua

@@ -1,0 +1,42 @@
+// What Lua stages may reach of the native plugins: a small, declared set of
+// interaction functions per native resolver (the rigid body's add_force and
+// add_torque), and the native derived sets they may read (collisions). Each
+// binding is a few lines over the resolver's own C++ interaction functions;
+// Lua never holds a pointer to a native stage.
+//
+//   rigid_body   add_force(i, f)          force at the centre of mass, N
+//                add_torque(i, t)         torque, N m, world frame
+//                add_force_at(i, f, p)    force at the world point p, N
+//   collisions   w:contacts("began" | "ongoing" | "ended" | "touching")
+#pragma once
+
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "lua/mod_state.hpp"
+#include "runtime/plugin_registry.hpp"
+
+namespace alloy::lua {
+
+/// A native resolver's interaction functions, bound for one Lua interaction.
+class NativeTarget {
+ public:
+  virtual ~NativeTarget() = default;
+  /// Queues function `fn` (an index into native_functions()) for `object`
+  /// with its packed arguments. Throws AccessError or InputError.
+  virtual void call(std::int32_t fn, ObjectId object, const double* args) = 0;
+};
+
+/// The interaction functions Lua may call on the native resolver `resolver`,
+/// or nullptr if it exposes none.
+const std::vector<FunctionDecl>* native_functions(std::string_view resolver);
+
+/// Binds the target of the interaction being created by `ctx` (its info's
+/// target must have native_functions()).
+std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx);
+
+/// Native derived sets a Lua stage may declare in `derived`.
+bool native_derived_readable(std::string_view set);
+
+}  // namespace alloy::lua

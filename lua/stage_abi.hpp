@@ -1,0 +1,146 @@
+// The data a Lua stage's host code (stage_prelude.lua) shares with C++ through
+// LuaJIT's FFI: plain C structs, declared once here and once, identically, in
+// the prelude's ffi.cdef (static_asserts below keep the two in step).
+//
+// Only the prelude sees these. A mod gets Lua proxies built on them that
+// check every index and every value; it never holds a pointer. All pointers
+// here are valid during one call of one stage: C++ fills them when the stage
+// asks for a column (fetch) and clears them when the call returns.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "runtime/math.hpp"
+#include "runtime/object_id.hpp"
+
+namespace alloy::lua::abi {
+
+/// What a column holds, as the prelude reads it.
+enum ColumnKind : std::int32_t {
+  kNumber = 0,
+  kInteger = 1,
+  kBool = 2,
+  kVec3 = 3,
+  kQuat = 4,
+  kEnum = 5,
+  kRef = 6,
+  kOther = 7,  ///< string, reflist: read through a slow C call
+};
+
+/// One column as a stage sees it in one call.
+struct Column {
+  /// The values, one per object slot (the column's own storage, or a Lua
+  /// derived set's output). Which member is valid follows `kind`.
+  union {
+    const double* num;
+    const std::int64_t* integer;
+    const std::uint8_t* boolean;
+    const Vec3* vec3;
+    const Quat* quat;
+    const std::int32_t* enumv;
+    const ObjectId* ref;
+    const void* any;
+  };
+  const std::uint32_t* members;  ///< slots of the objects carrying it (in the stage's area), ascending
+  double* out_num;               ///< a derived set's own outputs, writable by it alone
+  Vec3* out_vec3;
+  std::uint8_t* out_present;
+  std::uint32_t n;      ///< slots while fetched in the current call, 0 otherwise
+  std::uint32_t count;  ///< members while fetched, 0 otherwise
+};
+
+/// The stage's current call: numbers it reads, scratch for the arguments of
+/// an interaction function, and lists handed out for the call.
+struct Call {
+  double dt = 0, time = 0, step = 0;
+  double args[12] = {};  ///< arguments of the interaction function being queued
+  const double* cmd = nullptr;  ///< a resolver's queued commands of one function
+  const void* contacts = nullptr;  ///< Contact[contact_count]
+  std::uint32_t cmd_count = 0, cmd_stride = 0;
+  std::uint32_t contact_count = 0;
+  std::uint32_t slots = 0;  ///< object slots in the world
+  std::int32_t in_call = 0;  ///< 1 while the stage runs
+  std::uint32_t epoch = 0;   ///< moves at every call: lists of an older call are refused
+};
+
+/// A contact pair of the collisions derived set, copied for Lua.
+struct Contact {
+  std::uint32_t a, b;          ///< slots, a < b
+  std::int32_t points;         ///< contact points (0 for ended pairs)
+  std::int32_t began;          ///< 1 if the pair began at the set's last update
+  double speed;                ///< approach speed along the normal, m/s
+  double depth;                ///< deepest penetration, m
+  double impulse;              ///< normal impulse of the rigid body's last advance, N*s
+  double total_impulse;        ///< normal impulse since the pair began, N*s
+  Vec3 normal;                 ///< of the first point, from b towards a
+  Vec3 point;                  ///< the first point, m
+};
+
+/// A mod's budget as its ticks see it (budget_ticks.hpp).
+struct Budget {
+  std::int32_t ticks = 0;    ///< ticks left before the host checks the budgets
+  std::int32_t stopped = 0;  ///< 1 once the mod is stopped: every tick fails
+};
+
+/// Entry points of the fast path, called by the prelude through the FFI.
+/// `stage` is the C++ stage (LuaStage*); `slot` a Lua number checked here.
+/// Each returns 0 on success, else the stage holds a message (last_error).
+/// None throws: they are called from inside the Lua VM.
+struct Api {
+  std::int32_t (*fetch)(void* stage, std::int32_t column) noexcept;
+  std::int32_t (*set_scalar)(void* stage, std::int32_t column, double slot, double v) noexcept;
+  std::int32_t (*set_vec3)(void* stage, std::int32_t column, double slot, double x, double y,
+                           double z) noexcept;
+  std::int32_t (*set_quat)(void* stage, std::int32_t column, double slot, double w, double x,
+                           double y, double z) noexcept;
+  std::int32_t (*has)(void* stage, std::int32_t column, double slot) noexcept;  ///< 1, 0, or -1 on error
+  std::int32_t (*queue)(void* stage, std::int32_t function, double slot, std::int32_t nargs) noexcept;
+  std::int32_t (*commands)(void* stage, std::int32_t function) noexcept;
+  std::int32_t (*contacts)(void* stage, std::int32_t which) noexcept;
+};
+
+static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
+static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
+static_assert(offsetof(Call, args) == 24 && offsetof(Call, cmd) == 120 && offsetof(Call, in_call) == 152);
+static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 && sizeof(Contact) == 96);
+
+/// The prelude's ffi.cdef of the structs above.
+inline constexpr const char* kCdef = R"C(
+typedef struct alloy_vec3 { double x, y, z; } alloy_vec3;
+typedef struct alloy_quat { double w, x, y, z; } alloy_quat;
+typedef struct alloy_ref { uint32_t index, generation; } alloy_ref;
+typedef struct alloy_column {
+  union { const double* num; const int64_t* integer; const uint8_t* boolean;
+          const alloy_vec3* vec3; const alloy_quat* quat; const int32_t* enumv;
+          const alloy_ref* ref; const void* any; };
+  const uint32_t* members;
+  double* out_num; alloy_vec3* out_vec3; uint8_t* out_present;
+  uint32_t n, count;
+} alloy_column;
+typedef struct alloy_call {
+  double dt, time, step;
+  double args[12];
+  const double* cmd; const void* contacts;
+  uint32_t cmd_count, cmd_stride, contact_count, slots;
+  int32_t in_call; uint32_t epoch;
+} alloy_call;
+typedef struct alloy_contact {
+  uint32_t a, b; int32_t points, began;
+  double speed, depth, impulse, total_impulse;
+  alloy_vec3 normal, point;
+} alloy_contact;
+typedef struct alloy_budget { int32_t ticks, stopped; } alloy_budget;
+typedef struct alloy_api {
+  int32_t (*fetch)(void*, int32_t);
+  int32_t (*set_scalar)(void*, int32_t, double, double);
+  int32_t (*set_vec3)(void*, int32_t, double, double, double, double);
+  int32_t (*set_quat)(void*, int32_t, double, double, double, double, double);
+  int32_t (*has)(void*, int32_t, double);
+  int32_t (*queue)(void*, int32_t, double, int32_t);
+  int32_t (*commands)(void*, int32_t);
+  int32_t (*contacts)(void*, int32_t);
+} alloy_api;
+)C";
+
+}  // namespace alloy::lua::abi

@@ -1,0 +1,538 @@
+-- The host side of Lua stages, run once in each mod's Lua state. It is the
+-- only Lua code that holds the FFI: it turns the C structs of stage_abi.hpp
+-- into the objects a mod's stage works with (w, columns, interaction
+-- functions), checks every index and value on the way, and gives the mod's
+-- environment its deterministic pairs and random generator, its vec3 and
+-- quat, and the budget tick. Nothing here is reachable from a mod: mods get
+-- closures over these locals, never the locals themselves.
+--
+-- Called with: ffi, the api (lightuserdata), the budget (userdata), the
+-- over-budget check (C function), a table of host C functions, the cdef,
+-- the mod's name.
+local ffi, api_ud, budget_ud, over_budget, host, cdef, mod_name = ...
+
+ffi.cdef(cdef)
+local api = ffi.cast("alloy_api*", api_ud)
+local budget = ffi.cast("alloy_budget*", budget_ud)
+local column_ptr = ffi.typeof("alloy_column*")
+local call_ptr = ffi.typeof("alloy_call*")
+local contact_ptr = ffi.typeof("const alloy_contact*")
+local cmd_ptr = ffi.typeof("const double*")
+
+local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
+local floor, sqrt, huge = math.floor, math.sqrt, math.huge
+local sort, concat = table.sort, table.concat
+local format = string.format
+
+local M = {}
+
+-- The tick: one counter decrement per loop iteration and function call of the
+-- mod's code (budget_ticks.hpp). The host refills it, or raises, when it runs out.
+function M.tick()
+  local t = budget.ticks - 1
+  budget.ticks = t
+  if t < 0 then over_budget() end
+end
+
+---------------------------------------------------------------------------
+-- vec3 and quat: immutable values with arithmetic.
+
+local vec3_t = ffi.typeof("const alloy_vec3")
+local quat_t = ffi.typeof("const alloy_quat")
+local is_vec3 = function(v) return ffi.istype("alloy_vec3", v) end
+
+local function vec3(x, y, z) return vec3_t(x or 0, y or 0, z or 0) end
+
+local function to_vec3(v, what)
+  if is_vec3(v) then return v end
+  if type(v) == "table" then
+    local x, y, z = v.x or v[1], v.y or v[2], v.z or v[3] or 0
+    if type(x) == "number" and type(y) == "number" and type(z) == "number" then return vec3_t(x, y, z) end
+  end
+  error((what or "value") .. " must be a vec3 (vec3(x, y, z) or {x, y, z}), got " .. type(v), 3)
+end
+
+local vec3_methods = {
+  length = function(a) return sqrt(a.x * a.x + a.y * a.y + a.z * a.z) end,
+  length2 = function(a) return a.x * a.x + a.y * a.y + a.z * a.z end,
+  dot = function(a, b) return a.x * b.x + a.y * b.y + a.z * b.z end,
+  cross = function(a, b) return vec3_t(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x) end,
+  normalized = function(a)
+    local l = sqrt(a.x * a.x + a.y * a.y + a.z * a.z)
+    if l == 0 then return a end
+    return vec3_t(a.x / l, a.y / l, a.z / l)
+  end,
+  unpack = function(a) return a.x, a.y, a.z end,
+}
+ffi.metatype("alloy_vec3", {
+  __add = function(a, b) return vec3_t(a.x + b.x, a.y + b.y, a.z + b.z) end,
+  __sub = function(a, b) return vec3_t(a.x - b.x, a.y - b.y, a.z - b.z) end,
+  __unm = function(a) return vec3_t(-a.x, -a.y, -a.z) end,
+  __mul = function(a, b)
+    if type(a) == "number" then return vec3_t(a * b.x, a * b.y, a * b.z) end
+    if type(b) == "number" then return vec3_t(a.x * b, a.y * b, a.z * b) end
+    error("vec3 * vec3 is not defined: use a:dot(b) or a:cross(b)", 2)
+  end,
+  __div = function(a, s) return vec3_t(a.x / s, a.y / s, a.z / s) end,
+  __eq = function(a, b) return is_vec3(a) and is_vec3(b) and a.x == b.x and a.y == b.y and a.z == b.z end,
+  __tostring = function(a) return format("{%g, %g, %g}", a.x, a.y, a.z) end,
+  __index = vec3_methods,
+})
+
+local quat_methods = {
+  -- Rotates a vec3 by this unit quaternion.
+  rotate = function(q, v)
+    local ux, uy, uz = q.x, q.y, q.z
+    local tx, ty, tz = 2 * (uy * v.z - uz * v.y), 2 * (uz * v.x - ux * v.z), 2 * (ux * v.y - uy * v.x)
+    return vec3_t(v.x + q.w * tx + (uy * tz - uz * ty), v.y + q.w * ty + (uz * tx - ux * tz),
+                  v.z + q.w * tz + (ux * ty - uy * tx))
+  end,
+  -- The angle about +z of a rotation in the play area, rad.
+  angle_z = function(q) return 2 * math.atan2(q.z, q.w) end,
+}
+ffi.metatype("alloy_quat", {
+  __mul = function(a, b)
+    return quat_t(a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+                  a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w)
+  end,
+  __eq = function(a, b)
+    return ffi.istype("alloy_quat", a) and ffi.istype("alloy_quat", b) and a.w == b.w and a.x == b.x and
+      a.y == b.y and a.z == b.z
+  end,
+  __tostring = function(q) return format("{%g, %g, %g, %g}", q.w, q.x, q.y, q.z) end,
+  __index = quat_methods,
+})
+local function quat(w, x, y, z) return quat_t(w or 1, x or 0, y or 0, z or 0) end
+local function quat_z(angle) return quat_t(math.cos(angle / 2), 0, 0, math.sin(angle / 2)) end
+
+M.vec3 = setmetatable({ new = vec3, zero = vec3_t(0, 0, 0) }, {
+  __call = function(_, x, y, z) return vec3_t(x or 0, y or 0, z or 0) end,
+  __metatable = "vec3",
+  __newindex = function() error("vec3 is read-only", 2) end,
+})
+M.quat = setmetatable({ new = quat, identity = quat_t(1, 0, 0, 0), from_angle_z = quat_z }, {
+  __call = function(_, w, x, y, z) return quat(w, x, y, z) end,
+  __metatable = "quat",
+  __newindex = function() error("quat is read-only", 2) end,
+})
+
+---------------------------------------------------------------------------
+-- Determinism: pairs in sorted key order, and a seeded generator per mod.
+
+local key_rank = { number = 1, string = 2, boolean = 3 }
+local function key_less(a, b)
+  local ta, tb = type(a), type(b)
+  if ta ~= tb then return key_rank[ta] < key_rank[tb] end
+  if ta == "boolean" then return (not a) and b end
+  return a < b
+end
+
+-- pairs(t): every key of t in a fixed order (numbers ascending, then strings,
+-- then false, true), the same on every run. Keys of other types (tables,
+-- functions) have no such order: iterate a list of them instead.
+function M.pairs(t)
+  if type(t) ~= "table" then error("bad argument #1 to 'pairs' (table expected, got " .. type(t) .. ")", 2) end
+  local keys, n = {}, 0
+  for k in next, t do
+    if not key_rank[type(k)] then
+      error("pairs: a key of type " .. type(k) .. " has no deterministic order; keep such keys in a list", 2)
+    end
+    n = n + 1
+    keys[n] = k
+  end
+  sort(keys, key_less)
+  local i = 0
+  return function()
+    i = i + 1
+    local k = keys[i]
+    if k == nil then return nil end
+    return k, t[k]
+  end, t, nil
+end
+
+-- xorshift64* seeded from the mod's name (FNV-1a): the same numbers on every run.
+local rng = ffi.new("uint64_t[1]")
+local function seed(s)
+  local h = 14695981039346656037ULL
+  s = tostring(s)
+  for i = 1, #s do h = bit.bxor(h, s:byte(i)) * 1099511628211ULL end
+  if h == 0ULL then h = 88172645463325252ULL end
+  rng[0] = h
+end
+seed(mod_name)
+local function next_u53()
+  local x = rng[0]
+  x = bit.bxor(x, bit.rshift(x, 12))
+  x = bit.bxor(x, bit.lshift(x, 25))
+  x = bit.bxor(x, bit.rshift(x, 27))
+  rng[0] = x
+  return tonumber(bit.rshift(x * 2685821657736338717ULL, 11))
+end
+-- math.random as in Lua: () in [0, 1), (m) in [1, m], (m, n) in [m, n].
+function M.random(m, n)
+  local r = next_u53() / 9007199254740992
+  if m == nil then return r end
+  if n == nil then m, n = 1, m end
+  if type(m) ~= "number" or type(n) ~= "number" or m > n then error("bad argument to 'random' (interval is empty)", 2) end
+  m, n = floor(m), floor(n)
+  return m + floor(r * (n - m + 1))
+end
+function M.randomseed(s) seed(s) end
+
+---------------------------------------------------------------------------
+-- Stages. A stage record per C++ stage instance: its w (what the mod's
+-- functions get), the proxies of its columns, and its current definition.
+
+local function not_in_call(what)
+  error(what .. " can only be used while the stage that got it runs", 3)
+end
+
+local function fail(rec, level)
+  error(host.last_error(rec.handle), level + 1)
+end
+
+local function fail_index(rec, name, i)
+  error("column '" .. name .. "': no object in slot " .. tostring(i), 3)
+end
+
+local readers = {}  -- kind -> function(info, i) -> value
+readers[0] = function(info, i) return info.num[i] end
+readers[1] = function(info, i) return tonumber(info.integer[i]) end
+readers[2] = function(info, i) return info.boolean[i] ~= 0 end
+readers[3] = function(info, i) local p = info.vec3[i] return vec3_t(p.x, p.y, p.z) end
+readers[4] = function(info, i) local p = info.quat[i] return quat_t(p.w, p.x, p.y, p.z) end
+readers[6] = function(info, i)
+  local r = info.ref[i]
+  if r.index == 0xffffffff then return nil end
+  return r.index
+end
+
+local function check_finite(v, name)
+  if type(v) ~= "number" then error("'" .. name .. "' takes numbers, got " .. type(v), 3) end
+  if v ~= v or v == huge or v == -huge then error("'" .. name .. "' must be finite, got " .. tostring(v), 3) end
+end
+
+-- The read-only proxy of column k; with `writable`, also its writer.
+local function column_proxy(rec, k, c)
+  local info, handle, name, kind = rec.infos + k, rec.handle, c.name, c.kind
+  local read = readers[kind]
+  if kind == 5 then
+    local names = c.values
+    read = function(info, i) return names[info.enumv[i] + 1] end
+  elseif kind == 7 then
+    read = function(_, i) return host.slow_get(handle, k, i) end
+  end
+  local methods = {
+    each = function()
+      local j = -1
+      return function()
+        j = j + 1
+        if j < info.count then return info.members[j] end
+      end
+    end,
+    count = function() return info.count end,
+    has = function(_, i)
+      if info.n == 0 then not_in_call("column '" .. name .. "'") end
+      local r = api.has(handle, k, i)
+      if r < 0 then fail(rec, 2) end
+      return r == 1
+    end,
+    name = name,
+  }
+  local write
+  if c.output then
+    -- A derived set's own output: written straight into the set's arrays.
+    if kind == 3 then
+      write = function(_, i, v)
+        if not (i >= 0 and i < info.n) then fail_index(rec, name, i) end
+        v = to_vec3(v, "'" .. name .. "'")
+        check_finite(v.x, name) check_finite(v.y, name) check_finite(v.z, name)
+        info.out_vec3[i] = v
+        info.out_present[i] = 1
+      end
+    else
+      write = function(_, i, v)
+        if not (i >= 0 and i < info.n) then fail_index(rec, name, i) end
+        check_finite(v, name)
+        info.out_num[i] = v
+        info.out_present[i] = 1
+      end
+    end
+  elseif c.writable then
+    if kind == 3 then
+      write = function(_, i, v)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        v = to_vec3(v, "'" .. name .. "'")
+        if api.set_vec3(handle, k, i, v.x, v.y, v.z) ~= 0 then fail(rec, 2) end
+      end
+    elseif kind == 4 then
+      write = function(_, i, q)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        if not ffi.istype("alloy_quat", q) then error("'" .. name .. "' takes a quat", 2) end
+        if api.set_quat(handle, k, i, q.w, q.x, q.y, q.z) ~= 0 then fail(rec, 2) end
+      end
+    elseif kind == 2 then
+      write = function(_, i, v)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        if type(v) ~= "boolean" then error("'" .. name .. "' takes true or false", 2) end
+        if api.set_scalar(handle, k, i, v and 1 or 0) ~= 0 then fail(rec, 2) end
+      end
+    elseif kind == 5 then
+      local index = {}
+      for j, n in ipairs(c.values) do index[n] = j - 1 end
+      write = function(_, i, v)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        local e = index[v]
+        if e == nil then error("'" .. name .. "' has no value '" .. tostring(v) .. "'", 2) end
+        if api.set_scalar(handle, k, i, e) ~= 0 then fail(rec, 2) end
+      end
+    elseif kind == 0 or kind == 1 then
+      write = function(_, i, v)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        if type(v) ~= "number" then error("'" .. name .. "' takes a number, got " .. type(v), 2) end
+        if api.set_scalar(handle, k, i, v) ~= 0 then fail(rec, 2) end
+      end
+    else
+      write = function(_, i, v)
+        if info.n == 0 then not_in_call("column '" .. name .. "'") end
+        host.slow_set(handle, k, i, v)
+      end
+    end
+  end
+  local function index(_, i)
+    if type(i) == "number" then
+      if i >= 0 and i < info.n then return read(info, i) end
+      if info.n == 0 then not_in_call("column '" .. name .. "'") end
+      error("column '" .. name .. "': no object in slot " .. tostring(i), 2)
+    end
+    return methods[i]
+  end
+  local reader = setmetatable({}, {
+    __index = index,
+    __newindex = function() error("column '" .. name .. "' is read-only here (declare it in writes)", 2) end,
+    __len = function() return info.count end,
+    __metatable = "column",
+    __tostring = function() return "column '" .. name .. "'" end,
+  })
+  if not write then return reader end
+  local writer = setmetatable({}, {
+    __index = index,
+    __newindex = write,
+    __len = function() return info.count end,
+    __metatable = "column",
+    __tostring = function() return "column '" .. name .. "' (writable)" end,
+  })
+  return reader, writer
+end
+
+-- Packs one argument of an interaction function into call.args at offset o.
+local packers = {
+  number = function(call, o, v, what)
+    if type(v) ~= "number" then error(what .. " takes a number, got " .. type(v), 3) end
+    call.args[o] = v
+    return o + 1
+  end,
+  object = function(call, o, v, what)
+    if type(v) ~= "number" then error(what .. " takes an object (a slot number), got " .. type(v), 3) end
+    call.args[o] = v
+    return o + 1
+  end,
+  vec3 = function(call, o, v, what)
+    v = to_vec3(v, what)
+    call.args[o], call.args[o + 1], call.args[o + 2] = v.x, v.y, v.z
+    return o + 3
+  end,
+  none = function(call, o) return o end,
+}
+
+-- The function that queues interaction function `index` of the stage's target.
+local function target_function(rec, index, fname, kinds)
+  local call, handle = rec.call, rec.handle
+  local n = #kinds
+  if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
+  local p1, p2, p3, p4 = packers[kinds[1] or "none"], packers[kinds[2] or "none"], packers[kinds[3] or "none"], packers[kinds[4] or "none"]
+  local what = "'" .. fname .. "'"
+  return function(i, a1, a2, a3, a4)
+    if call.in_call == 0 then not_in_call(what) end
+    if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+    local o = p1(call, 0, a1, what)
+    o = p2(call, o, a2, what)
+    o = p3(call, o, a3, what)
+    o = p4(call, o, a4, what)
+    if api.queue(handle, index, i, o) ~= 0 then fail(rec, 1) end
+  end
+end
+
+-- Iterator over a resolver's queued commands of one function: slot, args...
+local function command_iterator(rec, fname, f)
+  local call = rec.call
+  if call.in_call == 0 then not_in_call("w:commands") end
+  if api.commands(rec.handle, f.index) ~= 0 then fail(rec, 2) end
+  local recs, count, stride, epoch = call.cmd, call.cmd_count, call.cmd_stride, call.epoch
+  local offsets, kinds, n = {}, f.kinds, #f.kinds
+  local o = 1
+  for j = 1, n do
+    offsets[j] = o
+    o = o + (kinds[j] == "vec3" and 3 or 1)
+  end
+  local function arg(b, j)
+    local off = offsets[j]
+    if kinds[j] == "vec3" then return vec3_t(b[off], b[off + 1], b[off + 2]) end
+    return b[off]
+  end
+  local j = -1
+  return function()
+    j = j + 1
+    if j >= count then return nil end
+    if call.epoch ~= epoch then error("commands can only be read in the call that got them", 2) end
+    local b = recs + j * stride
+    if n == 0 then return b[0] end
+    if n == 1 then return b[0], arg(b, 1) end
+    if n == 2 then return b[0], arg(b, 1), arg(b, 2) end
+    if n == 3 then return b[0], arg(b, 1), arg(b, 2), arg(b, 3) end
+    return b[0], arg(b, 1), arg(b, 2), arg(b, 3), arg(b, 4)
+  end
+end
+
+local contact_kinds = { began = 0, ongoing = 1, ended = 2, touching = 3 }
+
+local function frozen(t, what)
+  return setmetatable({}, {
+    __index = t,
+    __newindex = function(_, k) error(what .. " is read-only (cannot set '" .. tostring(k) .. "')", 2) end,
+    __metatable = what,
+    __len = function() return #t end,
+  })
+end
+
+-- decl (from C++): name, kind, columns = { {name, kind, writable, output, values, set}, ... },
+-- functions (a resolver's own, for w:commands), target = { name, functions },
+-- contacts (bool), settings, area. state: the mod's state table.
+function M.new_stage(handle, infos_ud, call_ud, decl, state)
+  local rec = {
+    handle = handle,
+    infos = ffi.cast(column_ptr, infos_ud),
+    call = ffi.cast(call_ptr, call_ud),
+    keep = { infos_ud, call_ud },  -- the C++ side writes into these: keep them alive with the record
+    decl = decl,
+    def = {},
+  }
+  local reads, writes, outputs, derived = {}, {}, {}, {}
+  for k, c in ipairs(decl.columns) do
+    local reader, writer = column_proxy(rec, k - 1, c)
+    local entry = { k = k - 1, reader = reader, writer = writer, c = c }
+    if c.set then
+      derived[c.set] = derived[c.set] or {}
+      derived[c.set][c.name] = entry
+    elseif c.output then
+      outputs[c.name] = entry
+    else
+      reads[c.name] = entry
+      if c.writable then writes[c.name] = entry end
+    end
+  end
+  local call, handle_ = rec.call, handle
+  local function fetch(e)
+    if call.in_call == 0 then not_in_call("w") end
+    if rec.infos[e.k].n == 0 then
+      if api.fetch(handle_, e.k) ~= 0 then fail(rec, 3) end
+    end
+  end
+  local function live(what)
+    if call.in_call == 0 then not_in_call(what) end
+  end
+  local sname = decl.name
+  local w = {}
+  w.state = state
+  w.settings = frozen(decl.settings or {}, "settings")
+  w.area = decl.area
+  w.stage = sname
+  function w:read(name)
+    local e = reads[name]
+    if not e then error("stage '" .. sname .. "' reads '" .. tostring(name) .. "' without declaring it (add it to reads)", 2) end
+    fetch(e)
+    return e.reader
+  end
+  function w:write(name)
+    local e = writes[name]
+    if not e then
+      if decl.kind ~= "resolver" then error("only a resolver may write properties; '" .. sname .. "' is a " .. decl.kind, 2) end
+      error("resolver '" .. sname .. "' writes '" .. tostring(name) .. "' without declaring it (add it to writes)", 2)
+    end
+    fetch(e)
+    return e.writer
+  end
+  function w:each(name) return w:read(name):each() end
+  function w:count(name) return w:read(name):count() end
+  function w:output(name)
+    local e = outputs[name]
+    if not e then error("derived set '" .. sname .. "' has no output '" .. tostring(name) .. "' (declare it in provides)", 2) end
+    fetch(e)
+    return e.writer
+  end
+  function w:derived(set, name)
+    local s = derived[set]
+    if not s then error("stage '" .. sname .. "' reads derived set '" .. tostring(set) .. "' without declaring it (add it to derived)", 2) end
+    local e = s[name]
+    if not e then error("derived set '" .. set .. "' has no output '" .. tostring(name) .. "'", 2) end
+    fetch(e)
+    return e.reader
+  end
+  function w:name(i) live("w:name") return host.name(handle_, i) end
+  function w:find(name) live("w:find") return host.find(handle_, name) end
+  function w:alive(i) live("w:alive") return host.alive(handle_, i) end
+  function w:emit(type_, fields) live("w:emit") return host.emit(handle_, type_, fields) end
+  if decl.functions then
+    local by_name = {}
+    for _, f in ipairs(decl.functions) do by_name[f.name] = f end
+    function w:commands(fname)
+      local f = by_name[fname]
+      if not f then error("resolver '" .. sname .. "' has no interaction function '" .. tostring(fname) .. "'", 2) end
+      return command_iterator(rec, fname, f)
+    end
+  end
+  if decl.contacts then
+    function w:contacts(which)
+      local kind = contact_kinds[which or "touching"]
+      if not kind then error("w:contacts takes 'began', 'ongoing', 'ended' or 'touching'", 2) end
+      if call.in_call == 0 then not_in_call("w:contacts") end
+      if api.contacts(handle_, kind) ~= 0 then fail(rec, 2) end
+      local list, count, epoch = ffi.cast(contact_ptr, call.contacts), call.contact_count, call.epoch
+      local j = -1
+      return function()
+        j = j + 1
+        if j >= count then return nil end
+        if call.epoch ~= epoch then error("contacts can only be read in the call that got them", 2) end
+        local c = list[j]
+        return c.a, c.b, {
+          speed = c.speed, depth = c.depth, impulse = c.impulse, total_impulse = c.total_impulse,
+          points = c.points, began = c.began ~= 0,
+          normal = vec3_t(c.normal.x, c.normal.y, c.normal.z), point = vec3_t(c.point.x, c.point.y, c.point.z),
+        }
+      end
+    end
+  end
+  if decl.target then
+    local t = {}
+    for _, f in ipairs(decl.target.functions) do
+      t[f.name] = target_function(rec, f.index, f.name, f.kinds)
+    end
+    w.target = frozen(t, "target '" .. decl.target.name .. "'")
+  end
+  rec.w = setmetatable(w, { __metatable = "stage view" })
+  return rec
+end
+
+-- The stage's functions (a table with advance / build / update / apply).
+function M.bind(rec, def) rec.def = def end
+
+-- One call of the stage's function `phase`, with the step's numbers.
+function M.run(rec, phase, dt, time, step)
+  local f = rec.def[phase]
+  if f == nil then return end
+  local w = rec.w
+  w.dt, w.time, w.step = dt, time, step
+  f(w, dt)
+end
+
+return M
