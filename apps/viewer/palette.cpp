@@ -54,7 +54,7 @@ kit.pin { name = "$NAME_pin", part = "$NAME", friction = 0.02 })",
        "a bronze bell, pinned: it rings when struck"},
       {"magnet", "magnetic", "magnet", R"(kit.magnet { name = "$NAME", at = { $X, $Y } })",
        "a neodymium bar magnet, north (red) at its right end"},
-      {"armature", "magnetic", "armature", R"(kit.armature { name = "$NAME", at = { $X, $Y } })",
+      {"armature", "magnetic", "armature", R"(kit.armature { name = "$NAME", at = { $X, $Y }, length = 0.05 })",
        "a soft-iron bar: magnets and coils pull on it"},
   };
   return entries;

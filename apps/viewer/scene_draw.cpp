@@ -178,7 +178,11 @@ Material material_of(const World& world, ObjectId id) {
 
 ImU32 fill_colour(const World& world, ObjectId id) {
   if (has(world, id, "emf")) return colour::kBattery;
+  if (has(world, id, "inductance")) return colour::kCopper;  // a coil: its winding is what shows
   const bool is_static = get<bool>(world, id, "static").value_or(false);
+  // A static part has no mass, so often no density: a conductive one is metal.
+  if (is_static && !has(world, id, "density") && get<bool>(world, id, "conductive").value_or(false))
+    return colour::kBrass;
   switch (material_of(world, id)) {
     case Material::Steel: return colour::kSteel;
     case Material::Iron: return colour::kIron;
@@ -270,7 +274,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
           text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? -hx * 0.6 : hx * 0.6, 0}))), IM_COL32_WHITE, "-", letter);
         }
       }
-      if (p.is_static) draw_hatch(dl, cam, p, scale_rgb(base, 0.8f));
+      if (p.is_static) draw_hatch(dl, cam, p, scale_rgb(base, 0.72f, 150));
 
       ImU32 edge = scale_rgb(base, 0.55f);
       float width = 1.5f;
@@ -426,10 +430,12 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       if (p.is_static && p.half.x * px > 300) continue;  // floors and walls speak for themselves
       const std::string name = world.describe(p.id);
       if (name.empty() || name[0] == '#') continue;
-      const ScreenPoint s = cam.to_screen(p.centre);
-      const float up = float(std::max(p.shape == Shape2D::Box ? std::max(p.half.x, p.half.y) * 0.3 : p.radius, 0.01) * px) + 12;
+      // Just above the part's highest point, like the paper's annotations.
+      double top = -1e300;
+      for (Vec2 v : outline(p, 16)) top = std::max(top, v.y);
+      const ScreenPoint s = cam.to_screen({p.centre.x, top});
       const ImVec2 sz = ImGui::GetFont()->CalcTextSizeA(13, 1e9f, 0, name.c_str());
-      dl->AddText(ImGui::GetFont(), 13, {s.x - sz.x / 2, s.y - up - sz.y}, colour::kLabel, name.c_str());
+      dl->AddText(ImGui::GetFont(), 13, {s.x - sz.x / 2, s.y - 3 - sz.y}, colour::kLabel, name.c_str());
     }
   }
   (void)kPi;

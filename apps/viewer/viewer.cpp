@@ -977,7 +977,10 @@ void Viewer::panel_inspector() {
   ImGui::TextColored(ImVec4(0.43f, 0.16f, 0.63f, 1), "%s", w->describe(id).c_str());
   if (part) {
     ImGui::SameLine();
-    ImGui::TextDisabled("%s%s", material_name(material_of(*w, id)), part->is_static ? ", static" : "");
+    const char* what = get<double>(*w, id, "emf")          ? "battery"
+                       : get<double>(*w, id, "inductance") ? "coil"
+                                                            : material_name(material_of(*w, id));
+    ImGui::TextDisabled("%s%s%s", what, part->is_static ? ", static" : "", part->pinned ? ", pinned" : "");
     const double mass = get<double>(*w, id, "mass").value_or(0);
     if (mass > 0) ImGui::Text("mass %.4g kg", mass);
     ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y, part->angle * 180 / std::numbers::pi);

@@ -9,6 +9,7 @@
 
 #include "apps/viewer/view_command.hpp"
 #include "apps/viewer/viewer.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
 #include "viewer_support.hpp"
 
 namespace alloy::viewer {
@@ -291,6 +292,81 @@ TEST(Viewer, PinningByKeyHoldsThePartInTheAir) {
   const Vec2 before = test::position_of(*v.world(), "plank");
   for (int i = 0; i < 30; ++i) v.frame();
   EXPECT_NEAR(test::position_of(*v.world(), "plank").y, before.y, 1e-6);
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+// --- the doorbell (mods/doorbell), once it is in the tree -------------------------
+
+namespace alloy::viewer {
+namespace {
+
+const fs::path kDoorbell = test::source("mods/doorbell");
+
+bool have_doorbell() { return fs::exists(kDoorbell / "mod.lua"); }
+
+TEST(ViewerDoorbell, TheCoilsPolesAreRedAndGreenAndTheBellIsBronze) {
+  if (!have_doorbell()) GTEST_SKIP() << "mods/doorbell is not here yet";
+  Viewer v(test::headless(kDoorbell));
+  v.frame();
+  ASSERT_TRUE(v.load_error().empty()) << v.load_error();
+  World& w = *v.world();
+  const ObjectId coil = w.find("coil");
+  ASSERT_TRUE(bool(coil));
+  // Run until the coil is an electromagnet with poles.
+  for (int i = 0; i < 600 && std::abs(std::get<double>(w.get(coil, "pole_strength"))) < 0.5; ++i) v.frame();
+  v.set_paused(true);
+  const double q = std::get<double>(w.get(coil, "pole_strength"));
+  ASSERT_GT(std::abs(q), 0.5) << "the coil never came on";
+  const Image img = v.render_image();
+  auto* forces = dynamic_cast<magnetism::MagneticForces*>(w.stage(magnetism::MagneticForces::kName));
+  ASSERT_NE(forces, nullptr);
+  const magnetism::MagneticBody* body = forces->find(coil);
+  ASSERT_NE(body, nullptr);
+  ASSERT_EQ(body->pole_count, 2u);
+  const magnetism::Pole north = forces->poles()[body->first_pole], south = forces->poles()[body->first_pole + 1];
+  EXPECT_GT(north.strength, 0);
+  const ScreenPoint n = v.camera().to_screen(xy(north.position)), s = v.camera().to_screen(xy(south.position));
+  EXPECT_GT(share_of_colour(img, n, colour::kNorth, 1, 12), 0.5) << "north: " << describe_pixel(img, n);
+  EXPECT_GT(share_of_colour(img, s, colour::kSouth, 1, 12), 0.5) << "south: " << describe_pixel(img, s);
+  // The bell, a little off its centre (the radius line marks the centre).
+  const auto bell = read_part(w, w.find("bell"));
+  ASSERT_TRUE(bell);
+  const ScreenPoint b = v.camera().to_screen(bell->centre + Vec2{-bell->radius * 0.4, bell->radius * 0.4});
+  EXPECT_GT(share_of_colour(img, b, colour::kBronze, 2, 12), 0.5) << "bell: " << describe_pixel(img, b);
+}
+
+TEST(ViewerDoorbell, DroppingTheSwitchBarAcrossTheContactsRingsTheBell) {
+  if (!have_doorbell()) GTEST_SKIP() << "mods/doorbell is not here yet";
+  Viewer v(test::headless(kDoorbell));
+  v.set_paused(true);
+  v.frame();
+  World& w = *v.world();
+  const auto bar = read_part(w, w.find("switch_bar"));
+  ASSERT_TRUE(bar);
+  const Vec2 home = bar->centre;
+  // Pick the bar up and hold it off to the side: the doorbell is open.
+  v.push_mouse(SDL_MOUSEMOTION, home);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, home);
+  v.frame();
+  ASSERT_EQ(v.editor().carried(), w.find("switch_bar"));
+  const Vec2 aside = home + Vec2{-0.12, 0.06};
+  v.push_mouse(SDL_MOUSEMOTION, aside);
+  v.set_paused(false);
+  for (int i = 0; i < 60; ++i) v.frame();  // a second: the scene's own timeline lets go of nothing held
+  EXPECT_EQ(v.event_count("sound"), 0u) << "open: the bell is silent";
+  EXPECT_EQ(v.event_count("circuit_closed"), 0u);
+  // Across the two contacts, a centimetre above them, and let go.
+  v.push_mouse(SDL_MOUSEMOTION, home + Vec2{0, 0.01});
+  v.push_mouse(SDL_MOUSEBUTTONUP, home + Vec2{0, 0.01});
+  v.frame();
+  EXPECT_FALSE(v.editor().carrying());
+  for (int i = 0; i < 120 && v.event_count("sound") == 0; ++i) v.frame();
+  EXPECT_GT(v.event_count("circuit_closed"), 0u);
+  EXPECT_GT(v.event_count("sound"), 0u) << "the bell rings";
+  for (int i = 0; i < 30; ++i) v.frame();
+  EXPECT_GT(v.audio().peak(), 0.0f) << "and it is heard: samples reached the audio output";
 }
 
 }  // namespace
