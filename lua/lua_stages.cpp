@@ -699,7 +699,7 @@ LuaResolver::LuaResolver(std::shared_ptr<ModState> mod, const StageDecl& decl, P
     : LuaStage(std::move(mod), decl, ctx), functions_(decl.functions), queue_(decl.functions.size()) {}
 
 void LuaResolver::build(ResolverAccess& access) {
-  if (runnable()) invoke(access, &access, "build", 0);
+  if (runnable()) invoke(access, &access, "build", access.dt());
 }
 
 void LuaResolver::advance(ResolverAccess& access, double dt) {
@@ -744,7 +744,7 @@ void LuaDerivedSet::update(const WorldView& world) {
     if (outputs_[o].kind == PropertyKind::Vec3) out.vec3.assign(slots, Vec3{});
     else out.num.assign(slots, 0.0);
   }
-  const bool ok = runnable() && invoke(world, nullptr, "update", 0);
+  const bool ok = runnable() && invoke(world, nullptr, "update", world.dt());
   for (Output& out : data_) {
     out.members.clear();
     if (!ok) std::fill(out.present.begin(), out.present.end(), 0);  // no half-made data
@@ -782,7 +782,7 @@ LuaInteraction::LuaInteraction(std::shared_ptr<ModState> mod, const StageDecl& d
     : LuaStage(std::move(mod), decl, ctx) {}
 
 void LuaInteraction::apply(const WorldView& world) {
-  if (runnable()) invoke(world, nullptr, "apply", 0);
+  if (runnable()) invoke(world, nullptr, "apply", world.dt());
 }
 
 // --- plugins ------------------------------------------------------------------------
