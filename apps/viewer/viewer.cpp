@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "apps/viewer/scene_writer.hpp"
+#include "lua/mod_runtime.hpp"
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 
@@ -106,8 +107,6 @@ ImU32 kind_colour(StageKind k) {
 Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
   paused_ = opt_.paused;
   time_scale_ = std::clamp(opt_.time_scale, 1.0 / 64, 64.0);
-  registry_ = std::make_unique<PluginRegistry>();
-  register_native_plugins(*registry_);
   init_sdl();
   init_imgui();
   save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() + "_saved.lua";
@@ -180,10 +179,17 @@ void Viewer::init_imgui() {
 }
 
 void Viewer::load() {
-  std::unique_ptr<lua::LoadedScene> fresh;
+  // Each load has a registry of its own: a scene's mods register their
+  // plugins in it, and unregister them when the scene goes, which must not
+  // touch the plugins of the scene that replaces it.
+  auto fresh_registry = std::make_unique<PluginRegistry>();
+  register_native_plugins(*fresh_registry);
+  std::unique_ptr<lua::LoadedScene> fresh;  // declared after its registry: destroyed first
+  lua::LoadOptions options = opt_.load;
+  options.mod_log = [this](const std::string& mod, const std::string& line) { note(mod + ": " + line); };
   std::string error;
   try {
-    fresh = std::make_unique<lua::LoadedScene>(lua::load_scene(opt_.scene, *registry_, opt_.load));
+    fresh = std::make_unique<lua::LoadedScene>(lua::load_scene(opt_.scene, *fresh_registry, options));
     fresh->world->start();  // the plugins it needs are made now and check their settings
   } catch (const InputError& e) {
     error = fresh ? lua::locate(*fresh, e).what() : e.what();
@@ -201,7 +207,10 @@ void Viewer::load() {
   }
   load_error_.clear();
   editor_.attach(nullptr);
+  scene_.reset();  // the old world and its mods go before their registry
+  registry_ = std::move(fresh_registry);
   scene_ = std::move(fresh);
+  if (scene_->mods) scene_->mods->watch();  // a mod saved on disk is reloaded while the world runs
   World& w = *scene_->world;
   editor_.attach(&w);
   selected_ = hovered_ = wire_start_ = {};
@@ -298,7 +307,9 @@ bool Viewer::frame() {
   clock_ += seconds;
 
   watch_scene_file();
+  poll_mods();
   simulate(seconds);
+  poll_mods();
   if (World* w = world()) {
     if (!opt_.headless && opt_.audio && !audio_.is_open() && !audio_failed_)
       if (const Stage* s = w->stage("sound")) {
@@ -397,6 +408,17 @@ void Viewer::step_world() {
       paused_ = true;
       note("paused: the world failed three steps in a row");
     }
+  }
+}
+
+void Viewer::poll_mods() {
+  // Between steps: mods whose files changed are reloaded (a failed reload
+  // keeps the old code), and stages that erred or ran over budget are reported.
+  if (!scene_ || !scene_->mods) return;
+  for (const lua::ModReport& r : scene_->mods->poll()) {
+    using K = lua::ModReport::Kind;
+    const bool bad = r.kind == K::ReloadFailed || r.kind == K::StageDisabled || r.kind == K::Stopped;
+    note(r.message.empty() ? "mod " + r.mod : r.message, bad);
   }
 }
 
@@ -916,7 +938,9 @@ void Viewer::panel_toolbar() {
 void Viewer::panel_palette() {
   if (palette_problems_.empty()) {
     // Once: which entries the kit can make here (a kit without a part greys it).
-    for (const PaletteEntry& e : palette_entries()) palette_problems_.push_back(check_entry(*registry_, e, opt_.load));
+    PluginRegistry scratch;
+    register_native_plugins(scratch);
+    for (const PaletteEntry& e : palette_entries()) palette_problems_.push_back(check_entry(scratch, e, opt_.load));
   }
   const float top = next_panels_.empty() ? kMargin : next_panels_.back().y1 + kMargin;
   ImGui::SetNextWindowPos({kMargin, top});

@@ -114,6 +114,7 @@ class Viewer {
   void simulate(double frame_seconds);
   void step_world();
   void watch_scene_file();
+  void poll_mods();
   void draw(bool capture, Image* image);
   void draw_panels();
   void panel_toolbar();
@@ -132,8 +133,8 @@ class Viewer {
   SDL_Renderer* renderer_ = nullptr;
   bool imgui_ready_ = false;
   ImGuiContext* imgui_ = nullptr;
-  std::unique_ptr<PluginRegistry> registry_;
-  std::unique_ptr<lua::LoadedScene> scene_;
+  std::unique_ptr<PluginRegistry> registry_;  // the scene's (its mods register here)
+  std::unique_ptr<lua::LoadedScene> scene_;   // declared after: destroyed first
   std::string load_error_;
   std::filesystem::file_time_type scene_mtime_{};
   double last_watch_ = -1;

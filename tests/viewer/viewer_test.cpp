@@ -371,3 +371,34 @@ TEST(ViewerDoorbell, DroppingTheSwitchBarAcrossTheContactsRingsTheBell) {
 
 }  // namespace
 }  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(Viewer, AModThatErrsIsReportedAndTheWorldGoesOn) {
+  const fs::path dir = test::temp_dir() / "jinx";
+  fs::create_directories(dir);
+  std::ofstream(dir / "mod.lua") << "return { name = \"jinx\", version = \"0.1.0\", depends = { \"kit\" },\n"
+                                    "         runtime = \"runtime.lua\", scene = \"scene.lua\" }\n";
+  std::ofstream(dir / "runtime.lua")
+      << "mod.property { name = \"jinx\", doc = \"bad luck\" }\n"
+         "mod.resolver { name = \"jinx.luck\", reads = { \"jinx\" }, writes = {}, needs = { \"jinx\" },\n"
+         "  advance = function(w, dt) error(\"the jinx broke\") end }\n";
+  std::ofstream(dir / "scene.lua")
+      << "local kit = require \"kit\"\n"
+         "world { settings = { [\"gravity.uniform\"] = { g = { 0, -9.81, 0 } } } }\n"
+         "kit.floor { name = \"floor\", at = { 0, -0.05 }, size = { 2, 0.1 } }\n"
+         "kit.disk { name = \"ball\", material = \"rubber\", at = { 0, 1 }, radius = 0.05, props = { jinx = 1 } }\n";
+  Viewer v(test::headless(dir));
+  ASSERT_TRUE(v.load_error().empty()) << v.load_error();
+  for (int i = 0; i < 30; ++i) v.frame();
+  bool told = false;
+  for (const auto& m : v.messages()) told |= m.find("jinx broke") != std::string::npos;
+  EXPECT_TRUE(told) << "the mod's error is shown";
+  EXPECT_FALSE(v.paused()) << "and the world goes on";
+  EXPECT_GT(v.world()->time(), 0.4);
+  EXPECT_LT(test::position_of(*v.world(), "ball").y, 0.9) << "the ball falls all the same";
+}
+
+}  // namespace
+}  // namespace alloy::viewer
