@@ -221,6 +221,12 @@ void World::step() {
   const double t1 = now_seconds();
   advance_phase();
   store_.refresh();
+  // The advance moved bodies: put them in the areas of their new positions at
+  // once, so that the derived sets, the interactions and the next advance see
+  // each body under the stages of the area it is in. Handed over a step late,
+  // a body that crossed would get its next force from its old area's resolver
+  // at a position outside that area.
+  if (assign_areas()) rescope();
   const double t2 = now_seconds();
   derive_phase();
   const double t3 = now_seconds();

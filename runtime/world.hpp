@@ -163,7 +163,8 @@ class World {
   WorldView view() const { return WorldView(*this); }
 
   // --- areas and swaps ---------------------------------------------------------
-  /// The area an object is in, or "" (none). Updated at the start of each step.
+  /// The area an object is in, or "" (none). Updated after each advance (where
+  /// the resolvers left it) and at the start of each step (where edits put it).
   std::string area_of(ObjectId id) const;
   /// Replaces plugin `from` with `to` (another implementation of the same
   /// kind) in `area`, or globally when `area` is empty, between steps. The new

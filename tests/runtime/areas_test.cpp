@@ -52,6 +52,16 @@ class Eraser : public Resolver {
   }
 };
 
+/// Moves every object with a position along +x at 1 m/s.
+class Mover : public Resolver {
+ public:
+  void build(ResolverAccess&) override {}
+  void advance(ResolverAccess& a, double dt) override {
+    auto x = a.writer<Vec3>("position");
+    for (std::uint32_t s : x.members()) x.set(s, x[s] + Vec3{dt, 0, 0});
+  }
+};
+
 PluginDef tagger(const std::string& name, double value) {
   return {.info = {.name = name, .kind = StageKind::Resolver, .reads = {"position"}, .writes = {"tag"},
                    .needs = {"position"}, .provides = "tag"},
@@ -141,6 +151,24 @@ TEST_F(AreasTest, AResolverErasesWhatItWroteForObjectsThatLeftBeforeTheNewProvid
   EXPECT_EQ(w.area_of(b), "");
   EXPECT_THROW(w.get(b, "tag"), AccessError);  // erased: no stale value
   EXPECT_EQ(std::get<double>(w.get(b, "mass")), 1.0);
+}
+
+TEST_F(AreasTest, ABodyMovedAcrossABorderIsHandedOverInTheStepItCrossed) {
+  registry.add({.info = {.name = "mover", .kind = StageKind::Resolver, .writes = {"position"}, .needs = {"position"}},
+                .create = [](PluginContext&) { return std::make_unique<Mover>(); }});
+  WorldDef def;
+  def.dt = 0.25;
+  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
+                              .plugins = {"tag.two"}});
+  World w(registry, def);
+  const ObjectId a = body(w, "a", -0.625);
+  w.step();  // to -0.375
+  EXPECT_EQ(w.area_of(a), "");
+  EXPECT_EQ(tag(w, a), 1);
+  w.run(2);  // to -0.125, then 0.125: inside "right" at the end of this step
+  EXPECT_EQ(std::get<Vec3>(w.get(a, "position")).x, 0.125);
+  EXPECT_EQ(w.area_of(a), "right");
+  EXPECT_EQ(tag(w, a), 2);  // what the interactions of this step read
 }
 
 TEST_F(AreasTest, ScopedViewsListOnlyTheAreasObjects) {
