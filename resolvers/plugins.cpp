@@ -132,18 +132,23 @@ PluginDef nbody_gravity_plugin() {
               .writes = {"gravity"},
               .needs = {"mass", "density"},
               .provides = "gravity",
-              .doc = "Newtonian gravity between all masses in scope (settings G, default SI, and softening, m)"};
+              .doc = "Newtonian gravity of every mass on the bodies in scope (settings G, default SI; softening, m; "
+                     "sources = \"world\" or \"area\")"};
   def.properties =
       concat({{gravity_property()}, pick(rigid::body_properties(), {"position", "mass", "density", "static"})});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     const PluginSettings& s = ctx.settings();
-    s.check_known("gravity.nbody", {"G", "softening"});
+    s.check_known("gravity.nbody", {"G", "softening", "sources"});
     const double G = s.number("G", kGravitationalConstant);
     const double eps = s.number("softening", 0.0);
+    const std::string sources = s.string("sources", "world");
+    if (sources != "world" && sources != "area")
+      throw InputError(s.where, "gravity.nbody: sources must be \"world\" (every mass attracts) or \"area\" "
+                                "(only the masses in the area), got \"" + sources + "\"");
     if (!(G >= 0) || !std::isfinite(G)) throw InputError(s.where, "gravity.nbody: G must be a finite number >= 0");
     if (!(eps >= 0) || !std::isfinite(eps))
       throw InputError(s.where, "gravity.nbody: softening must be a finite number of metres >= 0");
-    return std::make_unique<NBodyGravity>(G, eps);
+    return std::make_unique<NBodyGravity>(G, eps, sources == "area");
   };
   return def;
 }

@@ -5,24 +5,20 @@
 
 namespace alloy::gravity {
 
-void accelerations(std::span<const Vec3> position, std::span<const double> mass, double G,
-                   double softening, std::span<Vec3> out) {
-  const std::size_t n = position.size();
+void accelerations(std::span<const Vec3> at, std::span<const Vec3> source, std::span<const double> mass,
+                   double G, double softening, std::span<Vec3> out) {
   const double eps2 = softening * softening;
-  std::fill(out.begin(), out.begin() + std::ptrdiff_t(n), Vec3{});
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 xi = position[i];
-    const double gmi = G * mass[i];
-    Vec3 ai = out[i];
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const Vec3 d = position[j] - xi;
+  const std::size_t ns = source.size();
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const Vec3 x = at[i];
+    Vec3 a{};
+    for (std::size_t j = 0; j < ns; ++j) {
+      const Vec3 d = source[j] - x;
       const double s2 = dot(d, d) + eps2;
-      if (!(s2 > 0)) continue;  // coincident points, no softening: no direction to pull in
-      const double inv = 1.0 / (s2 * std::sqrt(s2));  // 1 / s^3
-      ai += (G * mass[j] * inv) * d;
-      out[j] -= (gmi * inv) * d;
+      if (d == Vec3{} || !(s2 > 0)) continue;  // itself, or a coincident point: no direction to pull in
+      a += (G * mass[j] / (s2 * std::sqrt(s2))) * d;
     }
-    out[i] = ai;
+    out[i] = a;
   }
 }
 
@@ -43,36 +39,50 @@ bool NBodyGravity::inputs_changed(const WorldView& v) const {
 }
 
 void NBodyGravity::compute(ResolverAccess& access) {
+  const PropertyStore& store = access.store();
+  // Scoped views: the targets. Unscoped ones: the sources, unless they are
+  // the area's own (an area chooses the model, not which masses exist).
   const auto position = access.column<Vec3>(position_);
   const auto mass = access.column<double>(mass_);
   const auto density = access.column<double>(density_);
   const auto is_static = access.column<std::uint8_t>(static_);
+  const ColumnView<Vec3> all_position(&store.typed<Vec3>(position_), &store);
+  const ColumnView<double> all_mass(&store.typed<double>(mass_), &store);
+  const ColumnView<double> all_density(&store.typed<double>(density_), &store);
   auto gravity = access.writer<Vec3>(gravity_);
 
-  // Every mass in scope. Member lists are refreshed between phases, so a mass
-  // the rigid body has just written from density (in the same build round) is
-  // in the density list only; has() is always current.
-  slots_.clear();
-  std::set_union(mass.members().begin(), mass.members().end(), density.members().begin(),
-                 density.members().end(), std::back_inserter(slots_));
-  std::erase_if(slots_, [&](std::uint32_t s) { return !mass.has(s) || !(mass[s] > 0); });
-  const std::size_t n = slots_.size();
-  x_.resize(n), m_.resize(n), a_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    x_[i] = position.value_or(slots_[i], {});  // the rigid body's default too
-    m_[i] = mass[slots_[i]];
-  }
-  accelerations(x_, m_, G_, softening_, a_);
-  ++evaluations_;
+  // Member lists are refreshed between phases, so a mass the rigid body has
+  // just written from density (in the same build round) is in the density
+  // list only; has() is always current.
+  auto masses = [&](const ColumnView<double>& m, const ColumnView<double>& d, std::vector<std::uint32_t>& out) {
+    out.clear();
+    std::set_union(m.members().begin(), m.members().end(), d.members().begin(), d.members().end(),
+                   std::back_inserter(out));
+    std::erase_if(out, [&](std::uint32_t s) { return !m.has(s) || !(m[s] > 0); });
+  };
+  masses(mass, density, targets_);
+  std::erase_if(targets_, [&](std::uint32_t s) { return is_static.value_or(s, 0) != 0; });
 
   // Objects that carried gravity and no longer qualify (made static, mass
   // removed) get none, as with gravity.uniform.
   for (std::uint32_t s : gravity.members())
     if (!mass.has(s) || is_static.value_or(s, 0)) gravity.set(s, Vec3{});
-  for (std::size_t i = 0; i < n; ++i)
-    if (!is_static.value_or(slots_[i], 0)) gravity.set(slots_[i], a_[i]);
 
-  const PropertyStore& store = access.store();
+  if (!targets_.empty()) {
+    if (area_sources_) masses(mass, density, masses_);
+    else masses(all_mass, all_density, masses_);
+    source_x_.resize(masses_.size()), source_m_.resize(masses_.size());
+    for (std::size_t i = 0; i < masses_.size(); ++i) {
+      source_x_[i] = all_position.value_or(masses_[i], {});  // the rigid body's default too
+      source_m_[i] = all_mass[masses_[i]];
+    }
+    target_x_.resize(targets_.size()), a_.resize(targets_.size());
+    for (std::size_t i = 0; i < targets_.size(); ++i) target_x_[i] = position.value_or(targets_[i], {});
+    accelerations(target_x_, source_x_, source_m_, G_, softening_, a_);
+    ++evaluations_;
+    for (std::size_t i = 0; i < targets_.size(); ++i) gravity.set(targets_[i], a_[i]);
+  }
+
   const ColumnBase &x = store.column(position_), &m = store.column(mass_), &d = store.column(density_),
                    &st = store.column(static_);
   seen_ = {x.version(), x.membership_version(), m.version(), m.membership_version(),

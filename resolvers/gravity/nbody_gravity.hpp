@@ -6,9 +6,14 @@
 //
 //   a_i = sum_{j != i} G m_j (r_j - r_i) / (|r_j - r_i|^2 + eps^2)^(3/2)
 //
-// Sources  every object in scope with a mass, static ones included (a planet
-//          is an immovable source).
-// Targets  the sources that are not static: they get a `gravity` value.
+// Sources  every object with a mass, static ones included (a planet is an
+//          immovable source): by default in the whole world, since an area
+//          chooses how its bodies' gravity is computed, not which masses
+//          exist (a probe on the planet's tower, in an area of its own, is
+//          still pulled by the planet); with `sources = "area"`, only those in
+//          the stage's own scope (an isolated system).
+// Targets  the non-static objects with a mass in the stage's scope: they get
+//          a `gravity` value.
 // Reads    position, mass, density, static.   Writes  gravity (m/s^2).
 // Order    it reads `position`, which the rigid body writes, so it runs after
 //          the rigid body in each advance: the accelerations are those of the
@@ -31,16 +36,18 @@ namespace alloy::gravity {
 /// The SI gravitational constant (CODATA 2018), m^3 / (kg s^2).
 inline constexpr double kGravitationalConstant = 6.67430e-11;
 
-/// Accelerations at every point from every other point's mass, by direct
-/// summation over pairs (each pair once, so the forces of a pair are equal and
-/// opposite up to rounding). `softening` is eps, m; coincident points (and
-/// eps = 0) exert nothing on each other. out[i] is overwritten.
-void accelerations(std::span<const Vec3> position, std::span<const double> mass, double G,
-                   double softening, std::span<Vec3> out);
+/// Accelerations at the points `at` from the point masses (`source`, `mass`),
+/// by direct summation: O(at.size() * source.size()), the one place a tree
+/// method would go. `softening` is eps, m. A source at the point itself (or
+/// coincident, with eps = 0) exerts nothing. out[i] is overwritten.
+void accelerations(std::span<const Vec3> at, std::span<const Vec3> source, std::span<const double> mass,
+                   double G, double softening, std::span<Vec3> out);
 
 class NBodyGravity final : public Resolver {
  public:
-  NBodyGravity(double G, double softening) : G_(G), softening_(softening) {}
+  /// `area_sources`: only masses in the stage's own scope attract (else every mass).
+  NBodyGravity(double G, double softening, bool area_sources = false)
+      : G_(G), softening_(softening), area_sources_(area_sources) {}
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
   /// Objects that left this resolver's area lose the value it wrote for them.
@@ -57,6 +64,7 @@ class NBodyGravity final : public Resolver {
   void compute(ResolverAccess& access);
 
   double G_, softening_;
+  bool area_sources_;
   PropertyId position_ = kNoProperty, mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty,
              gravity_ = kNoProperty;
   // Input counters at the last evaluation: position, mass, static (values and
@@ -64,9 +72,9 @@ class NBodyGravity final : public Resolver {
   std::vector<std::uint64_t> seen_;
   std::uint64_t evaluations_ = 0;
   // Scratch, kept to avoid allocating each step.
-  std::vector<std::uint32_t> slots_;
-  std::vector<Vec3> x_, a_;
-  std::vector<double> m_;
+  std::vector<std::uint32_t> masses_, targets_;
+  std::vector<Vec3> source_x_, target_x_, a_;
+  std::vector<double> source_m_;
 };
 
 }  // namespace alloy::gravity

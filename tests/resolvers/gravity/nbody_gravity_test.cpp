@@ -24,14 +24,14 @@ WorldDef nbody_world(double G, double softening = 0) {
   return def;
 }
 
-TEST(NBodyAccelerations, PairsAreEqualAndOppositeAndCoincidentPointsExertNothing) {
+TEST(NBodyAccelerations, DirectSumWithoutSelfPullAndCoincidentPointsExertNothing) {
   const std::vector<Vec3> x = {{0, 0, 0}, {3, 4, 0}, {-1, 2, 5}, {0, 0, 0}};
   const std::vector<double> m = {2, 5, 1, 3};
   std::vector<Vec3> a(x.size());
-  gravity::accelerations(x, m, 0.5, 0, a);
+  gravity::accelerations(x, x, m, 0.5, 0, a);
   Vec3 momentum_rate{};
   for (std::size_t i = 0; i < x.size(); ++i) momentum_rate += m[i] * a[i];
-  EXPECT_NEAR(length(momentum_rate), 0, 1e-14);
+  EXPECT_NEAR(length(momentum_rate), 0, 1e-14);  // every pair equal and opposite
   // Points 0 and 3 coincide: each feels only bodies 1 and 2.
   const auto pull = [&](std::size_t i, std::size_t j) {
     const Vec3 d = x[j] - x[i];
@@ -42,6 +42,11 @@ TEST(NBodyAccelerations, PairsAreEqualAndOppositeAndCoincidentPointsExertNothing
   EXPECT_NEAR(a[0].y, expect0.y, 1e-15);
   EXPECT_NEAR(a[0].z, expect0.z, 1e-15);
   EXPECT_EQ(a[0], a[3]);
+  // Points that are not sources: the field of the sources there.
+  std::vector<Vec3> probe(1);
+  gravity::accelerations(std::vector<Vec3>{{0, 10, 0}}, std::vector<Vec3>{{0, 0, 0}}, std::vector<double>{4},
+                         2.0, 0, probe);
+  EXPECT_EQ(probe[0], (Vec3{0, -2.0 * 4 / 100, 0}));
 }
 
 TEST(NBodyGravity, TwoBodiesFeelNewtonsForceEqualAndOpposite) {
@@ -78,6 +83,29 @@ TEST(NBodyGravity, AStaticMassPullsAndFeelsNothing) {
   s->run(10);
   EXPECT_EQ(s.position(sun), (Vec3{0, 0, 0}));
   EXPECT_LT(s.position(rock).y, 10);
+}
+
+TEST(NBodyGravity, InAnAreaEveryMassPullsUnlessSourcesAreTheAreas) {
+  // A sun outside the area, a rock inside it: the area's N-body stage
+  // computes the rock's gravity, from the sun too unless sources = "area".
+  for (const char* sources : {"world", "area"}) {
+    WorldDef def;
+    AreaDef box{.name = "box", .center = {0, 10, 0}, .half_extents = {1, 1, 1}, .plugins = {"gravity.nbody"}};
+    box.settings["gravity.nbody"].set("G", 1.0);
+    box.settings["gravity.nbody"].set("sources", std::string(sources));
+    def.areas.push_back(box);
+    Sim s(def);
+    const ObjectId sun = add_sphere(*s, {0, 0, 0}, 1, 100, "sun");
+    s->set(sun, "static", true);
+    const ObjectId rock = add_sphere(*s, {0, 10, 0}, 0.1, 1, "rock");
+    const ObjectId pebble = add_sphere(*s, {0, 10.5, 0}, 0.05, 0.5, "pebble");
+    s->start();
+    ASSERT_TRUE(s->has_stage("gravity.nbody@box"));
+    const double from_pebble = 0.5 / (0.5 * 0.5);
+    const double expect = std::string(sources) == "world" ? from_pebble - 100.0 / 100 : from_pebble;
+    EXPECT_NEAR(gravity(s, rock).y, expect, 1e-12) << sources;
+    EXPECT_EQ(s->area_of(pebble), "box");
+  }
 }
 
 TEST(NBodyGravity, ComputesNothingWhileNothingMoves) {
