@@ -317,7 +317,8 @@ void ModRuntime::unload(const std::string& name) {
 }
 
 void ModRuntime::watch() {
-  if (!watcher_) watcher_ = std::make_unique<FileWatcher>();
+  if (!watcher_)
+    watcher_ = std::make_unique<FileWatcher>(options_.poll_files ? FileWatcher::Mode::Polling : FileWatcher::Mode::Auto);
   for (const auto& l : mods_) watcher_->add(l->state->manifest().folder);
 }
 

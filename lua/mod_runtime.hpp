@@ -52,6 +52,8 @@ struct ModRuntimeOptions {
   ModBudget budget;
   /// Where a mod's print() and the runtime's reports go (default: stderr).
   std::function<void(const std::string& mod, const std::string& line)> log;
+  /// watch() scans modification times instead of using inotify.
+  bool poll_files = false;
 };
 
 /// What happened to a mod: for the CLI, the viewer and tests.
