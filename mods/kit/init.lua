@@ -15,7 +15,8 @@ local registry = require "kit.registry"
 local materials = require "kit.materials"
 
 for name, m in pairs(materials) do registry.add_material(name, m) end
-for _, group in ipairs({ require "kit.parts.bodies", require "kit.parts.joints" }) do
+for _, group in ipairs({ require "kit.parts.bodies", require "kit.parts.joints", require "kit.parts.electric",
+                         require "kit.parts.magnetic", require "kit.parts.acoustic" }) do
   for name, spec in pairs(group) do registry.define(name, spec) end
 end
 

@@ -4,6 +4,6 @@
 return {
   name = "kit",
   version = "0.1.0",
-  description = "Construction-kit parts: materials, bars, disks, floors, walls, pins, hinges, glue",
+  description = "Construction-kit parts: materials, bars, disks, floors, walls, pins, hinges, glue, batteries, contacts, wires, coils, magnets, armatures, bells",
   depends = {},
 }

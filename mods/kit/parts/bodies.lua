@@ -1,7 +1,10 @@
 -- Bodies of the kit: bars and disks that move in the play area, and static
 -- floors and walls. Each is a function from arguments to properties; mass
--- comes from the material's density and the part's volume.
+-- comes from the material's density and the part's volume. A part of a
+-- conductive material conducts; one of a ferromagnetic material may be soft
+-- iron (`magnetic`).
 local geometry = require "kit.geometry"
+local physics = require "kit.physics"
 
 local bodies = {}
 
@@ -11,7 +14,30 @@ local function motion_args(list)
   list[#list + 1] = { "velocity", "vec", doc = "initial velocity, m/s" }
   list[#list + 1] = { "spin", "number", doc = "initial angular velocity about +z, rad/s" }
   list[#list + 1] = { "pinned", "boolean", default = false, doc = "held in place on the play area" }
+  list[#list + 1] = { "magnetic", "boolean",
+                      doc = "soft iron, magnetised by nearby magnets and coils; default: the material's soft_magnetic (iron)" }
   return list
+end
+
+--- The electrical and magnetic properties a material gives a part.
+--- `length` is the part's extent along its x axis, `volume` its volume.
+local function material_props(a, p, length, volume)
+  local m = a.material
+  if m.conductive then p.conductive = true end
+  local magnetic = a.magnetic
+  if magnetic == nil then magnetic = m.soft_magnetic == true end
+  if magnetic then
+    if not m.susceptibility then
+      error("material '" .. (m.name or "this material") .. "' is not ferromagnetic (it has no susceptibility): it cannot be magnetic", 0)
+    end
+    p.magnet = "soft_iron"
+    p.susceptibility = m.susceptibility
+    if m.saturation_magnetization then
+      -- The pole strength at saturation: Ms V spread over the pole separation.
+      p.saturation_pole = m.saturation_magnetization * volume / (physics.magnetic_length_ratio * length)
+    end
+  end
+  return p
 end
 
 local function moving_body(a, shape_props, volume)
@@ -41,7 +67,24 @@ bodies.bar = {
   }),
   build = function(a)
     local size = { a.length, a.width, a.depth or a.width }
-    return moving_body(a, { shape = "box", size = size }, geometry.box_volume(size))
+    local volume = geometry.box_volume(size)
+    return material_props(a, moving_body(a, { shape = "box", size = size }, volume), a.length, volume)
+  end,
+}
+
+bodies.armature = {
+  doc = "a soft-iron bar (an armature, a striker): magnets and coils pull on it",
+  args = motion_args({
+    { "material", "material", default = "iron" },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "length", "positive", required = true, doc = "along the bar, m: the field along this axis magnetises it" },
+    { "width", "positive", default = 0.01, doc = "across the bar in the plane, m" },
+    { "depth", "positive", doc = "thickness out of the plane, m; default: the width" },
+  }),
+  build = function(a)
+    if a.magnetic == false then error("an armature is magnetic: leave out 'magnetic' or use kit.bar", 0) end
+    a.magnetic = true
+    return bodies.bar.build(a)
   end,
 }
 
@@ -53,7 +96,8 @@ bodies.disk = {
     { "radius", "positive", required = true, doc = "m" },
   }),
   build = function(a)
-    return moving_body(a, { shape = "sphere", radius = a.radius }, geometry.sphere_volume(a.radius))
+    local volume = geometry.sphere_volume(a.radius)
+    return material_props(a, moving_body(a, { shape = "sphere", radius = a.radius }, volume), 2 * a.radius, volume)
   end,
 }
 
@@ -77,6 +121,7 @@ local function static_body(a)
     static = true,
     friction = m.friction,
     restitution = m.restitution,
+    conductive = m.conductive or nil,
   }
 end
 

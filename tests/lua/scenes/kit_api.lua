@@ -5,9 +5,9 @@ local kit = require "kit"
 assert(kit.material("steel").density == 7850, "steel density")
 assert(kit.material("rubber").restitution > kit.material("copper").restitution, "rubber bounces more than copper")
 local names = table.concat(kit.materials(), ",")
-assert(names == "brass,copper,rubber,steel,wood", names)
+assert(names == "brass,bronze,copper,felt,iron,rubber,steel,wood", names)
 local parts = table.concat(kit.parts(), ",")
-assert(parts == "bar,disk,floor,glue,hinge,pin,wall", parts)
+assert(parts == "armature,bar,battery,bell,coil,contact,disk,floor,glue,hinge,magnet,pin,wall,wire", parts)
 
 -- The kit is read-only for everyone who requires it.
 assert(not pcall(function() kit.bar = nil end), "kit must be read-only")

@@ -1,0 +1,102 @@
+-- Electrical parts of the kit: batteries, contacts and wires. The electricity
+-- resolver (docs/electricity.md) reads what they carry: a battery is an emf
+-- with an internal resistance between terminal 0 (-, its -x end) and terminal
+-- 1 (+, its +x end); conductive parts that touch connect; a wire is a
+-- resistance between two parts' terminals.
+local physics = require "kit.physics"
+local mount = require "kit.mount"
+local mount_args, mounted = mount.args, mount.place
+
+local electric = {}
+
+electric.battery = {
+  doc = "a battery lying along its x axis: terminal 0 (-) at its -x end, terminal 1 (+) at its +x end",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    -- A 6 V lantern battery (IEC 4R25: four cells in series, 67 x 67 x 115 mm,
+    -- about 0.6 kg), the classic doorbell supply.
+    { "emf", "number", default = 6, doc = "V, from terminal 0 to terminal 1" },
+    -- Fresh alkaline cells are 0.1-0.2 ohm each at an ampere; zinc-carbon
+    -- ones two or three times that (Energizer and Duracell data sheets,
+    -- "internal resistance" application notes). Four alkaline cells: ~0.5 ohm.
+    { "internal_resistance", "nonnegative", default = 0.5, doc = "ohm" },
+    { "size", "extent", default = { 0.115, 0.067 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.067, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.6, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    local p = {
+      shape = "box",
+      size = { a.size[1], a.size[2], a.size[3] or a.depth },
+      emf = a.emf,
+      internal_resistance = a.internal_resistance,
+      -- Its terminal caps conduct: a bar laid on an end touches that terminal.
+      conductive = true,
+      friction = 0.4,
+      restitution = 0.3,
+    }
+    return mounted(a, p, a.mass)
+  end,
+}
+
+electric.contact = {
+  doc = "a conductive block fixed to the board (a switch contact, an interrupter's contact screw)",
+  args = mount_args({
+    { "material", "material", default = "brass" },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "size", "extent", default = { 0.02, 0.01 }, doc = "{width, height} in the plane, m" },
+    { "depth", "positive", default = 0.02, doc = "out of the plane, m" },
+  }),
+  build = function(a)
+    local m = a.material
+    if not m.conductive then error("a contact must be of a conductive material ('" .. (m.name or "this material") .. "' is not)", 0) end
+    local size = { a.size[1], a.size[2], a.size[3] or a.depth }
+    local p = {
+      shape = "box",
+      size = size,
+      conductive = true,
+      friction = m.friction,
+      restitution = m.restitution,
+    }
+    return mounted(a, p, m.density * size[1] * size[2] * size[3])
+  end,
+}
+
+electric.wire = {
+  doc = "an insulated wire from a terminal of one part to a terminal of another",
+  args = {
+    { "from", "object", required = true, doc = "the part one end is attached to" },
+    { "to", "object", required = true, doc = "the part the other end is attached to" },
+    { "from_terminal", "nonnegative", default = 0,
+      doc = "0 or 1: a battery's - or +, a coil's -x or +x end; any for a bar or contact" },
+    { "to_terminal", "nonnegative", default = 0, doc = "0 or 1" },
+    { "length", "positive", doc = "m; default: 1.5 x the distance between the two parts' centres, for slack" },
+    -- 0.5 mm copper (24 AWG), bell wire's usual size.
+    { "diameter", "positive", default = 0.5e-3, doc = "of the conductor, m" },
+    { "material", "material", default = "copper" },
+  },
+  build = function(a, kit)
+    for _, key in ipairs({ "from_terminal", "to_terminal" }) do
+      if a[key] ~= 0 and a[key] ~= 1 then error("kit.wire '" .. key .. "' must be 0 or 1, got " .. tostring(a[key]), 0) end
+    end
+    local m = a.material
+    if not m.resistivity then error("a wire must be of a material with a resistivity ('" .. (m.name or "this material") .. "' has none)", 0) end
+    local len = a.length
+    if not len then
+      local p, q = kit.placed(a.from), kit.placed(a.to)
+      if not (p and q) then
+        error("kit.wire needs 'length': '" .. (p and a.to or a.from) .. "' was not made by the kit, so where it is is unknown", 0)
+      end
+      len = 1.5 * math.sqrt((p[1] - q[1]) ^ 2 + (p[2] - q[2]) ^ 2 + (p[3] - q[3]) ^ 2)
+    end
+    return {
+      wire_from = a.from,
+      wire_to = a.to,
+      wire_from_terminal = a.from_terminal,
+      wire_to_terminal = a.to_terminal,
+      resistance = physics.wire_resistance(m.resistivity, len, a.diameter),
+    }
+  end,
+}
+
+return electric
