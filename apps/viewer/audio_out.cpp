@@ -49,7 +49,8 @@ void AudioOut::pump(World& world, bool muted) {
   if (!device_ || muted || samples.empty()) return;
   // More than a quarter of a second queued (slow motion, a stall): start
   // afresh rather than lag behind the picture.
-  if (SDL_GetQueuedAudioSize(device_) > Uint32(rate_ * sizeof(float) / 4)) SDL_ClearQueuedAudio(device_);
+  if (SDL_GetQueuedAudioSize(device_) > Uint32(rate_ * sizeof(float) / 4))
+    SDL_ClearQueuedAudio(device_);
   SDL_QueueAudio(device_, samples.data(), Uint32(samples.size() * sizeof(float)));
 }
 

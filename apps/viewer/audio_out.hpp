@@ -3,10 +3,10 @@
 // hands over what the frame's steps made, and SDL plays it from a queue.
 #pragma once
 
+#include <SDL.h>
+
 #include <cstdint>
 #include <string>
-
-#include <SDL.h>
 
 #include "runtime/world.hpp"
 

@@ -13,8 +13,8 @@ struct ScreenPoint {
 };
 
 struct Camera {
-  Vec2 centre{0, 1};   ///< the play-area point at the middle of the view, m
-  double scale = 150;  ///< pixels per metre
+  Vec2 centre{0, 1};               ///< the play-area point at the middle of the view, m
+  double scale = 150;              ///< pixels per metre
   float mid_x = 640, mid_y = 400;  ///< where `centre` is drawn, px
 
   ScreenPoint to_screen(Vec2 w) const {

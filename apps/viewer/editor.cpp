@@ -49,8 +49,8 @@ ObjectId Editor::pick(Vec2 point, double margin) const {
   for (const Part2D& p : read_parts(*world_)) {
     if (!contains(p, point, margin)) continue;
     const double a = area(p);
-    const bool better = !best || (best_static && !p.is_static) ||
-                        (best_static == p.is_static && a < best_area);
+    const bool better =
+        !best || (best_static && !p.is_static) || (best_static == p.is_static && a < best_area);
     if (better) {
       best = p.id;
       best_static = p.is_static;
@@ -87,7 +87,8 @@ std::vector<ObjectId> Editor::joined_group(ObjectId part) const {
 }
 
 EditResult Editor::grab(ObjectId part, Vec2 at) {
-  if (!world_ || !world_->store().alive(part)) return EditResult::refused("nothing to pick up there");
+  if (!world_ || !world_->store().alive(part))
+    return EditResult::refused("nothing to pick up there");
   const auto p0 = read_part(*world_, part);
   if (!p0) return EditResult::refused(world_->describe(part) + " is not a part that can be moved");
   held_.clear();
@@ -191,8 +192,8 @@ EditResult Editor::move_out(const std::vector<Held>& group, Vec2 hand, double tu
     if (worst_overlap(ids, nullptr) <= kOverlapTolerance) {
       char cm[32];
       std::snprintf(cm, sizeof cm, "%.1f cm", c.r * 100);
-      return {true, world_->describe(ids.front()) + " was dropped inside " + inside + ": moved " + cm +
-                        " to where it fits"};
+      return {true, world_->describe(ids.front()) + " was dropped inside " + inside + ": moved " +
+                        cm + " to where it fits"};
     }
   }
   place(group, fallback_hand, fallback_turn);
@@ -240,7 +241,8 @@ EditResult Editor::set_pinned(ObjectId part, bool pinned) {
   return guarded([&] {
     const auto p = read_part(*world_, part);
     if (!p) return EditResult::refused("nothing to pin there");
-    if (p->is_static) return EditResult::refused(world_->describe(part) + " is fixed already (static)");
+    if (p->is_static)
+      return EditResult::refused(world_->describe(part) + " is fixed already (static)");
     if (!has(part, "mass") && !has(part, "density"))
       return EditResult::refused(world_->describe(part) + " has no mass: it does not move anyway");
     world_->set(part, "pinned", pinned);
@@ -248,7 +250,8 @@ EditResult Editor::set_pinned(ObjectId part, bool pinned) {
       world_->set(part, "velocity", Vec3{});
       world_->set(part, "angular_velocity", Vec3{});
     }
-    return EditResult{true, world_->describe(part) + (pinned ? " pinned to the board" : " unpinned")};
+    return EditResult{true,
+                      world_->describe(part) + (pinned ? " pinned to the board" : " unpinned")};
   });
 }
 
@@ -259,7 +262,8 @@ EditResult Editor::toggle_pin(ObjectId part) {
 
 bool Editor::electrical(ObjectId id) const {
   if (has(id, "wire_from") || has(id, "wire_to")) return false;
-  return has(id, "emf") || has(id, "inductance") || get<bool>(*world_, id, "conductive").value_or(false);
+  return has(id, "emf") || has(id, "inductance") ||
+         get<bool>(*world_, id, "conductive").value_or(false);
 }
 
 bool Editor::two_terminal(ObjectId id) const {
@@ -278,12 +282,16 @@ std::string Editor::unique_name(const std::string& base) const {
 EditResult Editor::connect_wire(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b) {
   if (!world_) return EditResult::refused("no world");
   const PropertyStore& store = world_->store();
-  if (!store.alive(a) || !store.alive(b)) return EditResult::refused("a wire needs a part at each end");
-  if (a == b) return EditResult::refused("a wire from " + world_->describe(a) + " to itself joins nothing: not made");
+  if (!store.alive(a) || !store.alive(b))
+    return EditResult::refused("a wire needs a part at each end");
+  if (a == b)
+    return EditResult::refused("a wire from " + world_->describe(a) +
+                               " to itself joins nothing: not made");
   for (ObjectId id : {a, b})
     if (!electrical(id))
-      return EditResult::refused(world_->describe(id) +
-                                 " does not conduct (a wire ends on a battery, a coil or a conductive part)");
+      return EditResult::refused(
+          world_->describe(id) +
+          " does not conduct (a wire ends on a battery, a coil or a conductive part)");
   if (!world_->properties().find("wire_from"))
     return EditResult::refused("no electricity plugin is registered: wires cannot be made");
   return guarded([&] {
@@ -307,7 +315,8 @@ EditResult Editor::connect_wire(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b) {
 }
 
 EditResult Editor::remove(ObjectId part) {
-  if (!world_ || !world_->store().alive(part)) return EditResult::refused("nothing to remove there");
+  if (!world_ || !world_->store().alive(part))
+    return EditResult::refused("nothing to remove there");
   return guarded([&] {
     const std::string name = world_->describe(part);
     if (carrying())
@@ -324,7 +333,8 @@ EditResult Editor::remove(ObjectId part) {
       if (!o || o == part) continue;
       for (PropertyId p = 0; p < reg.size(); ++p) {
         const PropertyKind kind = reg.def(p).kind;
-        if ((kind != PropertyKind::Ref && kind != PropertyKind::RefList) || !store.has(o, p)) continue;
+        if ((kind != PropertyKind::Ref && kind != PropertyKind::RefList) || !store.has(o, p))
+          continue;
         const PropertyValue v = store.get(o, p);
         bool refers = false;
         if (const ObjectId* r = std::get_if<ObjectId>(&v)) refers = *r == part;
@@ -352,7 +362,9 @@ EditResult Editor::remove(ObjectId part) {
     for (ObjectId o : doomed) world_->destroy(o);
     world_->destroy(part);
     return EditResult{true, "removed " + name +
-                                (doomed.empty() ? "" : " and " + std::to_string(doomed.size()) + " joint(s) or wire(s)")};
+                                (doomed.empty() ? ""
+                                                : " and " + std::to_string(doomed.size()) +
+                                                      " joint(s) or wire(s)")};
   });
 }
 

@@ -81,7 +81,7 @@ class Editor {
     double angle;  // orientation angle at grab time
     double z;      // kept
     bool is_joint;
-    bool moving;   // has a body: velocity is zeroed
+    bool moving;  // has a body: velocity is zeroed
   };
   bool has(ObjectId id, const char* prop) const;
   void place(const std::vector<Held>& group, Vec2 hand, double turn);

@@ -11,9 +11,12 @@ namespace alloy::viewer {
 
 std::vector<ScriptEvent> parse_script(const std::string& text, const std::string& file) {
   static const std::map<std::string, ScriptEvent::Kind> kinds = {
-      {"press", ScriptEvent::Kind::Press},           {"move", ScriptEvent::Kind::Move},
-      {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
-      {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
+      {"press", ScriptEvent::Kind::Press},
+      {"move", ScriptEvent::Kind::Move},
+      {"release", ScriptEvent::Kind::Release},
+      {"rpress", ScriptEvent::Kind::RightPress},
+      {"rrelease", ScriptEvent::Kind::RightRelease},
+      {"key", ScriptEvent::Kind::Key},
       {"wheel", ScriptEvent::Kind::Wheel}};
   std::vector<ScriptEvent> out;
   std::istringstream in(text);
@@ -35,15 +38,22 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
     e.kind = kinds.at(kind);
     bool ok = true;
     switch (e.kind) {
-      case ScriptEvent::Kind::Key: ok = bool(ls >> e.key); break;
-      case ScriptEvent::Kind::Wheel: ok = bool(ls >> e.wheel); break;
-      default: ok = bool(ls >> e.at.x >> e.at.y); break;
+      case ScriptEvent::Kind::Key:
+        ok = bool(ls >> e.key);
+        break;
+      case ScriptEvent::Kind::Wheel:
+        ok = bool(ls >> e.wheel);
+        break;
+      default:
+        ok = bool(ls >> e.at.x >> e.at.y);
+        break;
     }
     if (!ok || e.frame < 0)
       throw InputError(ErrorLocation{file, n, ""}, "bad arguments for '" + kind + "'");
     out.push_back(e);
   }
-  std::stable_sort(out.begin(), out.end(), [](const ScriptEvent& a, const ScriptEvent& b) { return a.frame < b.frame; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const ScriptEvent& a, const ScriptEvent& b) { return a.frame < b.frame; });
   return out;
 }
 

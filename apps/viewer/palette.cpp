@@ -1,10 +1,11 @@
 #include "apps/viewer/palette.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <unistd.h>
 
 #include "apps/viewer/scene_writer.hpp"
 
@@ -30,23 +31,29 @@ const std::vector<PaletteEntry>& palette_entries() {
        R"(kit.bar { name = "$NAME", material = "wood", at = { $X, $Y }, length = 0.6, width = 0.05 })",
        "a 60 cm wooden plank"},
       {"steel disk", "disks", "steel_disk",
-       R"(kit.disk { name = "$NAME", material = "steel", at = { $X, $Y }, radius = 0.05 })", "r = 5 cm"},
+       R"(kit.disk { name = "$NAME", material = "steel", at = { $X, $Y }, radius = 0.05 })",
+       "r = 5 cm"},
       {"rubber ball", "disks", "ball",
-       R"(kit.disk { name = "$NAME", material = "rubber", at = { $X, $Y }, radius = 0.08 })", "r = 8 cm, bouncy"},
+       R"(kit.disk { name = "$NAME", material = "rubber", at = { $X, $Y }, radius = 0.08 })",
+       "r = 8 cm, bouncy"},
       {"wooden wheel", "disks", "wheel",
-       R"(kit.disk { name = "$NAME", material = "wood", at = { $X, $Y }, radius = 0.15 })", "r = 15 cm"},
+       R"(kit.disk { name = "$NAME", material = "wood", at = { $X, $Y }, radius = 0.15 })",
+       "r = 15 cm"},
       {"pinned wheel", "disks", "wheel",
        R"(kit.disk { name = "$NAME", material = "wood", at = { $X, $Y }, radius = 0.15 }
 kit.pin { name = "$NAME_pin", part = "$NAME", friction = 0.02 })",
        "a wheel on a pin through its centre: it turns, and stays"},
       {"shelf", "fixed", "shelf",
-       R"(kit.floor { name = "$NAME", at = { $X, $Y }, size = { 0.8, 0.05 } })", "a static wooden shelf"},
+       R"(kit.floor { name = "$NAME", at = { $X, $Y }, size = { 0.8, 0.05 } })",
+       "a static wooden shelf"},
       {"ramp", "fixed", "ramp",
        R"(kit.floor { name = "$NAME", at = { $X, $Y }, size = { 0.8, 0.05 }, angle = -0.3 })",
        "a static shelf tilted by 17 degrees"},
-      {"battery", "electric", "battery", R"(kit.battery { name = "$NAME", at = { $X, $Y }, pinned = true })",
+      {"battery", "electric", "battery",
+       R"(kit.battery { name = "$NAME", at = { $X, $Y }, pinned = true })",
        "6 V, pinned; - at its left end, + at its right"},
-      {"contact", "electric", "contact", R"(kit.contact { name = "$NAME", at = { $X, $Y }, pinned = true })",
+      {"contact", "electric", "contact",
+       R"(kit.contact { name = "$NAME", at = { $X, $Y }, pinned = true })",
        "a brass contact block, pinned: touching parts connect through it"},
       {"coil", "electric", "coil", R"(kit.coil { name = "$NAME", at = { $X, $Y }, pinned = true })",
        "an electromagnet on an iron core, pinned: 500 turns"},
@@ -54,7 +61,8 @@ kit.pin { name = "$NAME_pin", part = "$NAME", friction = 0.02 })",
        "a bronze bell, pinned: it rings when struck"},
       {"magnet", "magnetic", "magnet", R"(kit.magnet { name = "$NAME", at = { $X, $Y } })",
        "a neodymium bar magnet, north (red) at its right end"},
-      {"armature", "magnetic", "armature", R"(kit.armature { name = "$NAME", at = { $X, $Y }, length = 0.05 })",
+      {"armature", "magnetic", "armature",
+       R"(kit.armature { name = "$NAME", at = { $X, $Y }, length = 0.05 })",
        "a soft-iron bar: magnets and coils pull on it"},
   };
   return entries;
@@ -122,7 +130,8 @@ std::vector<ObjectId> make_part(World& world, const PaletteEntry& entry, Vec2 at
       for (PropertyId p = 0; p < reg.size(); ++p) {
         if (p == name_id || !src.has(o, p)) continue;
         PropertyValue v = src.get(o, p);
-        if (ObjectId* r = std::get_if<ObjectId>(&v)) *r = made.count(r->index) ? made[r->index] : ObjectId{};
+        if (ObjectId* r = std::get_if<ObjectId>(&v))
+          *r = made.count(r->index) ? made[r->index] : ObjectId{};
         if (RefList* l = std::get_if<RefList>(&v))
           for (ObjectId& r : *l) r = made.count(r.index) ? made[r.index] : ObjectId{};
         world.set(made[s], p, v);
@@ -133,11 +142,13 @@ std::vector<ObjectId> make_part(World& world, const PaletteEntry& entry, Vec2 at
     throw;
   }
   // The part itself first: the object named as asked.
-  std::stable_partition(out.begin(), out.end(), [&](ObjectId id) { return world.describe(id) == name; });
+  std::stable_partition(out.begin(), out.end(),
+                        [&](ObjectId id) { return world.describe(id) == name; });
   return out;
 }
 
-std::string check_entry(PluginRegistry& registry, const PaletteEntry& entry, const lua::LoadOptions& options) {
+std::string check_entry(PluginRegistry& registry, const PaletteEntry& entry,
+                        const lua::LoadOptions& options) {
   try {
     run_entry(registry, entry, {0, 0}, options, "probe");
     return "";

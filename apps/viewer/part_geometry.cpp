@@ -31,9 +31,12 @@ std::optional<std::string> enum_name(const World& w, ObjectId id, const char* na
 
 double Part2D::half_extent_x() const {
   switch (shape) {
-    case Shape2D::Box: return half.x;
-    case Shape2D::Disk: return radius;
-    case Shape2D::Capsule: return half_length + radius;
+    case Shape2D::Box:
+      return half.x;
+    case Shape2D::Disk:
+      return radius;
+    case Shape2D::Capsule:
+      return half_length + radius;
   }
   return 0;
 }
@@ -91,7 +94,10 @@ std::vector<Vec2> outline(const Part2D& p, int segments) {
   constexpr double pi = std::numbers::pi;
   switch (p.shape) {
     case Shape2D::Box:
-      local = {{-p.half.x, -p.half.y}, {p.half.x, -p.half.y}, {p.half.x, p.half.y}, {-p.half.x, p.half.y}};
+      local = {{-p.half.x, -p.half.y},
+               {p.half.x, -p.half.y},
+               {p.half.x, p.half.y},
+               {-p.half.x, p.half.y}};
       break;
     case Shape2D::Disk:
       for (int i = 0; i < segments; ++i) {
@@ -121,7 +127,8 @@ bool contains(const Part2D& p, Vec2 point, double margin) {
   switch (p.shape) {
     case Shape2D::Box:
       return std::abs(l.x) <= p.half.x + margin && std::abs(l.y) <= p.half.y + margin;
-    case Shape2D::Disk: return length(l) <= p.radius + margin;
+    case Shape2D::Disk:
+      return length(l) <= p.radius + margin;
     case Shape2D::Capsule: {
       const double cx = std::clamp(l.x, -p.half_length, p.half_length);
       return length(Vec2{l.x - cx, l.y}) <= p.radius + margin;
@@ -165,9 +172,12 @@ double overlap_depth(const Part2D& a, const Part2D& b) {
 
 double area(const Part2D& p) {
   switch (p.shape) {
-    case Shape2D::Box: return 4 * p.half.x * p.half.y;
-    case Shape2D::Disk: return std::numbers::pi * p.radius * p.radius;
-    case Shape2D::Capsule: return std::numbers::pi * p.radius * p.radius + 4 * p.half_length * p.radius;
+    case Shape2D::Box:
+      return 4 * p.half.x * p.half.y;
+    case Shape2D::Disk:
+      return std::numbers::pi * p.radius * p.radius;
+    case Shape2D::Capsule:
+      return std::numbers::pi * p.radius * p.radius + 4 * p.half_length * p.radius;
   }
   return 0;
 }

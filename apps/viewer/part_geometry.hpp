@@ -20,13 +20,19 @@ struct Vec2 {
   friend constexpr Vec2 operator*(double s, Vec2 a) { return {a.x * s, a.y * s}; }
   friend constexpr bool operator==(Vec2, Vec2) = default;
 };
-constexpr double dot(Vec2 a, Vec2 b) { return a.x * b.x + a.y * b.y; }
-inline double length(Vec2 a) { return std::sqrt(dot(a, a)); }
+constexpr double dot(Vec2 a, Vec2 b) {
+  return a.x * b.x + a.y * b.y;
+}
+inline double length(Vec2 a) {
+  return std::sqrt(dot(a, a));
+}
 inline Vec2 rotate(Vec2 v, double angle) {
   const double c = std::cos(angle), s = std::sin(angle);
   return {c * v.x - s * v.y, s * v.x + c * v.y};
 }
-inline Vec2 xy(Vec3 v) { return {v.x, v.y}; }
+inline Vec2 xy(Vec3 v) {
+  return {v.x, v.y};
+}
 
 enum class Shape2D { Box, Disk, Capsule };
 
@@ -34,10 +40,10 @@ enum class Shape2D { Box, Disk, Capsule };
 struct Part2D {
   ObjectId id;
   Shape2D shape = Shape2D::Box;
-  Vec2 centre;        ///< position, m
-  double angle = 0;   ///< about +z, rad
-  Vec2 half;          ///< box: half extents along the part's x and y, m
-  double radius = 0;  ///< disk and capsule, m
+  Vec2 centre;             ///< position, m
+  double angle = 0;        ///< about +z, rad
+  Vec2 half;               ///< box: half extents along the part's x and y, m
+  double radius = 0;       ///< disk and capsule, m
   double half_length = 0;  ///< capsule: half the straight part, along the part's x, m
   bool is_static = false;
   bool pinned = false;

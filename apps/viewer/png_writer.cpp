@@ -10,7 +10,8 @@
 namespace alloy::viewer {
 
 void write_png(const std::filesystem::path& path, const Image& image) {
-  if (image.width <= 0 || image.height <= 0 || image.rgba.size() != std::size_t(image.width) * image.height * 4)
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgba.size() != std::size_t(image.width) * image.height * 4)
     throw std::runtime_error("cannot write '" + path.string() + "': empty picture");
   png_image img{};
   img.version = PNG_IMAGE_VERSION;

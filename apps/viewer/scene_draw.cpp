@@ -38,7 +38,9 @@ std::optional<std::string> enum_name(const World& w, ObjectId id, const char* na
   return values[std::size_t(e.index)];
 }
 
-ImVec2 iv(ScreenPoint p) { return {p.x, p.y}; }
+ImVec2 iv(ScreenPoint p) {
+  return {p.x, p.y};
+}
 
 ImU32 scale_rgb(ImU32 c, float k, int alpha = -1) {
   ImVec4 v = ImGui::ColorConvertU32ToFloat4(c);
@@ -62,7 +64,8 @@ void fill(ImDrawList* dl, const Camera& cam, const std::vector<Vec2>& poly, ImU3
   dl->AddConvexPolyFilled(pts.data(), int(pts.size()), c);
 }
 
-void stroke(ImDrawList* dl, const Camera& cam, const std::vector<Vec2>& poly, ImU32 c, float thickness) {
+void stroke(ImDrawList* dl, const Camera& cam, const std::vector<Vec2>& poly, ImU32 c,
+            float thickness) {
   std::vector<ImVec2> pts;
   pts.reserve(poly.size());
   for (Vec2 v : poly) pts.push_back(iv(cam.to_screen(v)));
@@ -150,7 +153,8 @@ void draw_hatch(ImDrawList* dl, const Camera& cam, const Part2D& p, ImU32 c) {
   for (double k = -hw - hh + step / 2; k < hw + hh; k += step) {
     const double x0 = std::max(-hw, -hh + k), x1 = std::min(hw, hh + k);
     if (x1 <= x0) continue;
-    dl->AddLine(iv(cam.to_screen(p.to_world({x0, x0 - k}))), iv(cam.to_screen(p.to_world({x1, x1 - k}))), c, 1.0f);
+    dl->AddLine(iv(cam.to_screen(p.to_world({x0, x0 - k}))),
+                iv(cam.to_screen(p.to_world({x1, x1 - k}))), c, 1.0f);
   }
 }
 
@@ -171,7 +175,8 @@ Material material_of(const World& world, ObjectId id) {
   for (const Known& k : known)
     if (std::abs(*d - k.density) < 1) return k.m;
   // Not a kit material: the nearest one by density, so that iron looks like steel.
-  if (*d > 7000) return *d < 8200 ? Material::Steel : *d < 8700 ? Material::Brass : Material::Copper;
+  if (*d > 7000)
+    return *d < 8200 ? Material::Steel : *d < 8700 ? Material::Brass : Material::Copper;
   if (*d < 1000) return Material::Wood;
   return Material::Other;
 }
@@ -184,14 +189,22 @@ ImU32 fill_colour(const World& world, ObjectId id) {
   if (is_static && !has(world, id, "density") && get<bool>(world, id, "conductive").value_or(false))
     return colour::kBrass;
   switch (material_of(world, id)) {
-    case Material::Steel: return colour::kSteel;
-    case Material::Iron: return colour::kIron;
-    case Material::Brass: return colour::kBrass;
-    case Material::Bronze: return colour::kBronze;
-    case Material::Copper: return colour::kCopper;
-    case Material::Wood: return is_static ? colour::kStaticWood : colour::kWood;
-    case Material::Rubber: return colour::kRubber;
-    case Material::Other: break;
+    case Material::Steel:
+      return colour::kSteel;
+    case Material::Iron:
+      return colour::kIron;
+    case Material::Brass:
+      return colour::kBrass;
+    case Material::Bronze:
+      return colour::kBronze;
+    case Material::Copper:
+      return colour::kCopper;
+    case Material::Wood:
+      return is_static ? colour::kStaticWood : colour::kWood;
+    case Material::Rubber:
+      return colour::kRubber;
+    case Material::Other:
+      break;
   }
   if (is_static) return colour::kStaticWood;
   // Something the kit does not make: a colour from its friction and restitution.
@@ -202,8 +215,9 @@ ImU32 fill_colour(const World& world, ObjectId id) {
 Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal) {
   const auto p = read_part(world, part);
   if (!p) return xy(get<Vec3>(world, part, "position").value_or(Vec3{}));
-  const bool two = has(world, part, "emf") || has(world, part, "inductance") ||
-                   (get<bool>(world, part, "conductive").value_or(false) && has(world, part, "resistance"));
+  const bool two =
+      has(world, part, "emf") || has(world, part, "inductance") ||
+      (get<bool>(world, part, "conductive").value_or(false) && has(world, part, "resistance"));
   if (!two) return p->centre;
   const double x = p->half_extent_x() * 0.8;
   return p->to_world({terminal == 1 ? x : -x, 0});
@@ -218,7 +232,8 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
 
   const std::vector<Part2D> parts = read_parts(world);
   const float px = float(cam.scale);  // pixels per metre
-  auto* forces = dynamic_cast<magnetism::MagneticForces*>(world.stage(magnetism::MagneticForces::kName));
+  auto* forces =
+      dynamic_cast<magnetism::MagneticForces*>(world.stage(magnetism::MagneticForces::kName));
 
   // Static parts first (the scenery), then moving ones on top.
   for (int pass = 0; pass < 2; ++pass) {
@@ -239,11 +254,14 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         const bool north_right = q > 0;
         fill(dl, cam, slice(p, 0, hx), north_right ? colour::kNorth : colour::kSouth);
         fill(dl, cam, slice(p, -hx, 0), north_right ? colour::kSouth : colour::kNorth);
-        const float letter = std::clamp(float(std::min(hx, p.shape == Shape2D::Box ? p.half.y : p.radius) * px * 1.3),
-                                        0.f, 18.f);
+        const float letter = std::clamp(
+            float(std::min(hx, p.shape == Shape2D::Box ? p.half.y : p.radius) * px * 1.3), 0.f,
+            18.f);
         if (letter >= 8) {
-          text_centred(dl, iv(cam.to_screen(p.to_world({hx / 2, 0}))), IM_COL32_WHITE, north_right ? "N" : "S", letter);
-          text_centred(dl, iv(cam.to_screen(p.to_world({-hx / 2, 0}))), IM_COL32_WHITE, north_right ? "S" : "N", letter);
+          text_centred(dl, iv(cam.to_screen(p.to_world({hx / 2, 0}))), IM_COL32_WHITE,
+                       north_right ? "N" : "S", letter);
+          text_centred(dl, iv(cam.to_screen(p.to_world({-hx / 2, 0}))), IM_COL32_WHITE,
+                       north_right ? "S" : "N", letter);
         }
       } else if (magnet == "electromagnet" || has(world, id, "inductance")) {
         // A coil: windings across the core; its ends take the pole colours while it is on.
@@ -251,14 +269,17 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
           const int turns = std::clamp(int(hx * 2 * px / 5), 3, 40);
           for (int i = 0; i <= turns; ++i) {
             const double x = -hx * 0.85 + 1.7 * hx * i / turns;
-            dl->AddLine(iv(cam.to_screen(p.to_world({x, -p.half.y}))), iv(cam.to_screen(p.to_world({x + 0.2 * hx / turns, p.half.y}))),
+            dl->AddLine(iv(cam.to_screen(p.to_world({x, -p.half.y}))),
+                        iv(cam.to_screen(p.to_world({x + 0.2 * hx / turns, p.half.y}))),
                         scale_rgb(base, 0.62f), 1.2f);
           }
         }
         if (q != 0) {
           const float a = float(std::clamp(std::abs(q) / 5.0, 0.2, 0.85));
-          fill(dl, cam, slice(p, hx * 0.7, hx), with_alpha(q > 0 ? colour::kNorth : colour::kSouth, a));
-          fill(dl, cam, slice(p, -hx, -hx * 0.7), with_alpha(q > 0 ? colour::kSouth : colour::kNorth, a));
+          fill(dl, cam, slice(p, hx * 0.7, hx),
+               with_alpha(q > 0 ? colour::kNorth : colour::kSouth, a));
+          fill(dl, cam, slice(p, -hx, -hx * 0.7),
+               with_alpha(q > 0 ? colour::kSouth : colour::kNorth, a));
         }
       } else if (has(world, id, "emf")) {
         // A battery: a dark cell with a brass cap at its + end (terminal 1, +x).
@@ -266,12 +287,17 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         const bool plus_right = emf >= 0;
         const double cap = hx * 0.18;
         const double hy = p.shape == Shape2D::Box ? p.half.y : p.radius;
-        fill(dl, cam, local_quad(p, plus_right ? hx - cap : -hx, plus_right ? hx : -hx + cap, -hy, hy), colour::kBrass);
-        fill(dl, cam, local_quad(p, -hx * 0.5, hx * 0.5, -hy * 0.35, hy * 0.35), scale_rgb(colour::kBattery, 1.6f));
+        fill(dl, cam,
+             local_quad(p, plus_right ? hx - cap : -hx, plus_right ? hx : -hx + cap, -hy, hy),
+             colour::kBrass);
+        fill(dl, cam, local_quad(p, -hx * 0.5, hx * 0.5, -hy * 0.35, hy * 0.35),
+             scale_rgb(colour::kBattery, 1.6f));
         const float letter = std::clamp(float(hy * px * 1.4), 0.f, 18.f);
         if (letter >= 8) {
-          text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? hx * 0.6 : -hx * 0.6, 0}))), IM_COL32_WHITE, "+", letter);
-          text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? -hx * 0.6 : hx * 0.6, 0}))), IM_COL32_WHITE, "-", letter);
+          text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? hx * 0.6 : -hx * 0.6, 0}))),
+                       IM_COL32_WHITE, "+", letter);
+          text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? -hx * 0.6 : hx * 0.6, 0}))),
+                       IM_COL32_WHITE, "-", letter);
         }
       }
       if (p.is_static) draw_hatch(dl, cam, p, scale_rgb(base, 0.72f, 150));
@@ -289,8 +315,9 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       stroke(dl, cam, poly, edge, width);
       if (p.shape == Shape2D::Disk) {
         // A radius line shows a disk's rotation.
-        dl->AddLine(iv(cam.to_screen(p.centre)), iv(cam.to_screen(p.to_world({p.radius * 0.85, 0}))),
-                    scale_rgb(base, 0.55f), 1.5f);
+        dl->AddLine(iv(cam.to_screen(p.centre)),
+                    iv(cam.to_screen(p.to_world({p.radius * 0.85, 0}))), scale_rgb(base, 0.55f),
+                    1.5f);
       }
       if (p.pinned) {
         // A pin head through the part into the board.
@@ -316,7 +343,8 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         dl->AddRectFilled({c.x - 4, c.y - 4}, {c.x + 4, c.y + 4}, IM_COL32(60, 60, 70, 255));
         dl->AddRect({c.x - 4, c.y - 4}, {c.x + 4, c.y + 4}, IM_COL32_WHITE, 0, 0, 1.5f);
       } else {
-        dl->AddCircleFilled(c, 6.5f, to_board ? IM_COL32(40, 40, 48, 255) : IM_COL32(250, 250, 250, 255), 20);
+        dl->AddCircleFilled(
+            c, 6.5f, to_board ? IM_COL32(40, 40, 48, 255) : IM_COL32(250, 250, 250, 255), 20);
         dl->AddCircle(c, 6.5f, to_board ? IM_COL32_WHITE : IM_COL32(40, 40, 48, 255), 20, 2);
         dl->AddCircleFilled(c, 2.0f, to_board ? IM_COL32_WHITE : IM_COL32(40, 40, 48, 255), 8);
       }
@@ -332,11 +360,14 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         const auto a = get<ObjectId>(world, w, "wire_from");
         const auto b = get<ObjectId>(world, w, "wire_to");
         if (!a || !b || !store.alive(*a) || !store.alive(*b)) continue;
-        const Vec2 pa = terminal_point(world, *a, get<std::int64_t>(world, w, "wire_from_terminal").value_or(0));
-        const Vec2 pb = terminal_point(world, *b, get<std::int64_t>(world, w, "wire_to_terminal").value_or(0));
+        const Vec2 pa = terminal_point(
+            world, *a, get<std::int64_t>(world, w, "wire_from_terminal").value_or(0));
+        const Vec2 pb =
+            terminal_point(world, *b, get<std::int64_t>(world, w, "wire_to_terminal").value_or(0));
         const double span = length(pb - pa);
         const Vec2 mid = (pa + pb) * 0.5 + Vec2{0, -0.25 * span - 0.02};
-        const ImVec2 sa = iv(cam.to_screen(pa)), sb = iv(cam.to_screen(pb)), sm = iv(cam.to_screen(mid));
+        const ImVec2 sa = iv(cam.to_screen(pa)), sb = iv(cam.to_screen(pb)),
+                     sm = iv(cam.to_screen(mid));
         const double current = get<double>(world, w, "current").value_or(0);
         const bool live = get<bool>(world, w, "powered").value_or(false);
         dl->AddBezierQuadratic(sa, sm, sb, IM_COL32(255, 255, 255, 200), 5.0f, 24);
@@ -347,14 +378,16 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         }
         if (live) {
           // Charges: dots every ~25 px moving at a speed that grows with log |I|.
-          const float speed = float(0.25 * std::clamp(std::log10(std::abs(current) * 1000 + 1), 0.3, 4.0));
+          const float speed =
+              float(0.25 * std::clamp(std::log10(std::abs(current) * 1000 + 1), 0.3, 4.0));
           float phase = float(std::fmod(clock * speed, 1.0));
           if (current < 0) phase = 1 - phase;
           const int dots = std::clamp(int(span * px / 25), 2, 40);
           for (int i = 0; i < dots; ++i) {
             const float t = std::fmod((i + phase) / dots, 1.0f);
             const float u = 1 - t;
-            const ImVec2 q{u * u * sa.x + 2 * u * t * sm.x + t * t * sb.x, u * u * sa.y + 2 * u * t * sm.y + t * t * sb.y};
+            const ImVec2 q{u * u * sa.x + 2 * u * t * sm.x + t * t * sb.x,
+                           u * u * sa.y + 2 * u * t * sm.y + t * t * sb.y};
             dl->AddCircleFilled(q, 2.2f, IM_COL32(255, 248, 200, 255), 8);
           }
         }
@@ -384,14 +417,16 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       const float len = arrow_length(n);
       if (len <= 0) continue;
       const ImVec2 from = iv(cam.to_screen(p->centre));
-      arrow(dl, from, {from.x + float(f.x / n) * len, from.y - float(f.y / n) * len}, colour::kMagneticForce, 2.5f);
+      arrow(dl, from, {from.x + float(f.x / n) * len, from.y - float(f.y / n) * len},
+            colour::kMagneticForce, 2.5f);
     }
   }
 
   if (opt.contact_forces) {
     if (auto* contacts = dynamic_cast<rigid::CollisionSet*>(world.stage("collisions"))) {
       const double dt = world.dt();
-      for (const std::span<const rigid::ContactPair> list : {contacts->began(), contacts->ongoing()}) {
+      for (const std::span<const rigid::ContactPair> list :
+           {contacts->began(), contacts->ongoing()}) {
         for (const rigid::ContactPair& pair : list) {
           const auto points = contacts->points(pair);
           if (points.empty()) continue;
@@ -403,7 +438,9 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
           const ImVec2 c = iv(cam.to_screen(at));
           dl->AddCircleFilled(c, 2.5f, colour::kContactForce, 8);
           const float len = arrow_length(n);
-          if (len > 0) arrow(dl, c, {c.x + float(normal.x) * len, c.y - float(normal.y) * len}, colour::kContactForce, 2);
+          if (len > 0)
+            arrow(dl, c, {c.x + float(normal.x) * len, c.y - float(normal.y) * len},
+                  colour::kContactForce, 2);
         }
       }
     }
@@ -435,7 +472,8 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       for (Vec2 v : outline(p, 16)) top = std::max(top, v.y);
       const ScreenPoint s = cam.to_screen({p.centre.x, top});
       const ImVec2 sz = ImGui::GetFont()->CalcTextSizeA(13, 1e9f, 0, name.c_str());
-      dl->AddText(ImGui::GetFont(), 13, {s.x - sz.x / 2, s.y - 3 - sz.y}, colour::kLabel, name.c_str());
+      dl->AddText(ImGui::GetFont(), 13, {s.x - sz.x / 2, s.y - 3 - sz.y}, colour::kLabel,
+                  name.c_str());
     }
   }
   (void)kPi;

@@ -6,10 +6,10 @@
 // ringing, and optional force arrows and contact points.
 #pragma once
 
+#include <imgui.h>
+
 #include <string>
 #include <vector>
-
-#include <imgui.h>
 
 #include "apps/viewer/camera.hpp"
 #include "runtime/world.hpp"
@@ -18,7 +18,9 @@ namespace alloy::viewer {
 
 /// Colours of the picture, shared with the tests that check pixels.
 namespace colour {
-inline constexpr ImU32 rgb(int r, int g, int b, int a = 255) { return IM_COL32(r, g, b, a); }
+inline constexpr ImU32 rgb(int r, int g, int b, int a = 255) {
+  return IM_COL32(r, g, b, a);
+}
 inline constexpr ImU32 kBackground = rgb(238, 240, 243);
 inline constexpr ImU32 kGridMinor = rgb(230, 233, 237);
 inline constexpr ImU32 kGridMajor = rgb(212, 216, 223);

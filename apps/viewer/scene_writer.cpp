@@ -1,5 +1,7 @@
 #include "apps/viewer/scene_writer.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -11,7 +13,6 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
-#include <unistd.h>
 
 namespace alloy::viewer {
 
@@ -33,12 +34,23 @@ std::string quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\0': out += "\\0"; break;
-      default: out += c;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\0':
+        out += "\\0";
+        break;
+      default:
+        out += c;
     }
   }
   return out + "\"";
@@ -46,16 +58,22 @@ std::string quoted(const std::string& s) {
 
 bool is_identifier(const std::string& s) {
   static const std::set<std::string> keywords = {
-      "and", "break", "do", "else", "elseif", "end", "false", "for", "function", "goto", "if",
-      "in", "local", "nil", "not", "or", "repeat", "return", "then", "true", "until", "while"};
+      "and",      "break",  "do",   "else", "elseif", "end",  "false", "for",
+      "function", "goto",   "if",   "in",   "local",  "nil",  "not",   "or",
+      "repeat",   "return", "then", "true", "until",  "while"};
   if (s.empty() || keywords.count(s)) return false;
   if (!(std::isalpha((unsigned char)s[0]) || s[0] == '_')) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum((unsigned char)c) || c == '_'; });
+  return std::all_of(s.begin(), s.end(),
+                     [](char c) { return std::isalnum((unsigned char)c) || c == '_'; });
 }
 
-std::string key(const std::string& k) { return is_identifier(k) ? k : "[" + quoted(k) + "]"; }
+std::string key(const std::string& k) {
+  return is_identifier(k) ? k : "[" + quoted(k) + "]";
+}
 
-std::string vec(Vec3 v) { return "{ " + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + " }"; }
+std::string vec(Vec3 v) {
+  return "{ " + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + " }";
+}
 
 }  // namespace
 
@@ -107,7 +125,8 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
     const ObjectId id = store.id_at(s);
     if (!id) continue;
     objects << "object {\n";
-    if (auto it = names.find(s); it != names.end()) objects << "  name = " << quoted(it->second) << ",\n";
+    if (auto it = names.find(s); it != names.end())
+      objects << "  name = " << quoted(it->second) << ",\n";
     for (PropertyId p : props) {
       if (!store.has(id, p)) continue;
       const PropertyDef& def = reg.def(p);
@@ -120,15 +139,24 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
           text = number(d);
           break;
         }
-        case PropertyKind::Integer: text = std::to_string(std::get<std::int64_t>(v)); break;
-        case PropertyKind::Bool: text = std::get<bool>(v) ? "true" : "false"; break;
-        case PropertyKind::Vec3: text = vec(std::get<Vec3>(v)); break;
+        case PropertyKind::Integer:
+          text = std::to_string(std::get<std::int64_t>(v));
+          break;
+        case PropertyKind::Bool:
+          text = std::get<bool>(v) ? "true" : "false";
+          break;
+        case PropertyKind::Vec3:
+          text = vec(std::get<Vec3>(v));
+          break;
         case PropertyKind::Quat: {
           const Quat q = std::get<Quat>(v);
-          text = "{ " + number(q.w) + ", " + number(q.x) + ", " + number(q.y) + ", " + number(q.z) + " }";
+          text = "{ " + number(q.w) + ", " + number(q.x) + ", " + number(q.y) + ", " + number(q.z) +
+                 " }";
           break;
         }
-        case PropertyKind::String: text = quoted(std::get<std::string>(v)); break;
+        case PropertyKind::String:
+          text = quoted(std::get<std::string>(v));
+          break;
         case PropertyKind::Ref: {
           const ObjectId r = std::get<ObjectId>(v);
           if (!store.alive(r)) continue;  // null: absent means the play area
@@ -157,8 +185,8 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
 
   const WorldDef& def = world.def();
   std::ostringstream out;
-  out << "-- Saved by `alloy view`" << (meta.origin.empty() ? "" : " from " + meta.origin) << " at t = "
-      << number(world.time()) << " s (step " << world.step_count() << ").\n"
+  out << "-- Saved by `alloy view`" << (meta.origin.empty() ? "" : " from " + meta.origin)
+      << " at t = " << number(world.time()) << " s (step " << world.step_count() << ").\n"
       << "-- Every object is written property by property, as it was at that moment.\n\n";
   out << "world {\n";
   if (!meta.name.empty()) out << "  name = " << quoted(meta.name) << ",\n";
@@ -170,18 +198,25 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
     for (const auto& p : def.plugins) out << " " << quoted(p) << ",";
     out << " },\n";
   }
-  auto settings_table = [](const std::map<std::string, PluginSettings, std::less<>>& all, const std::string& indent) {
+  auto settings_table = [](const std::map<std::string, PluginSettings, std::less<>>& all,
+                           const std::string& indent) {
     std::string t = "{\n";
     for (const auto& [plugin, settings] : all) {
       t += indent + "  [" + quoted(plugin) + "] = {";
       for (const auto& [k, v] : settings.values()) {
         std::string text;
-        if (const double* d = std::get_if<double>(&v)) text = number(*d);
-        else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) text = std::to_string(*i);
-        else if (const bool* b = std::get_if<bool>(&v)) text = *b ? "true" : "false";
-        else if (const Vec3* p = std::get_if<Vec3>(&v)) text = vec(*p);
-        else if (const std::string* s = std::get_if<std::string>(&v)) text = quoted(*s);
-        else continue;
+        if (const double* d = std::get_if<double>(&v))
+          text = number(*d);
+        else if (const std::int64_t* i = std::get_if<std::int64_t>(&v))
+          text = std::to_string(*i);
+        else if (const bool* b = std::get_if<bool>(&v))
+          text = *b ? "true" : "false";
+        else if (const Vec3* p = std::get_if<Vec3>(&v))
+          text = vec(*p);
+        else if (const std::string* s = std::get_if<std::string>(&v))
+          text = quoted(*s);
+        else
+          continue;
         t += " " + key(k) + " = " + text + ",";
       }
       t += " },\n";
@@ -191,21 +226,25 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
   if (!def.settings.empty()) out << "  settings = " << settings_table(def.settings, "  ") << ",\n";
   if (!def.use.empty()) {
     out << "  use = {";
-    for (const auto& [what, plugin] : def.use) out << " " << key(what) << " = " << quoted(plugin) << ",";
+    for (const auto& [what, plugin] : def.use)
+      out << " " << key(what) << " = " << quoted(plugin) << ",";
     out << " },\n";
   }
   if (!def.areas.empty()) {
     out << "  areas = {\n";
     for (const AreaDef& a : def.areas) {
       out << "    { name = " << quoted(a.name);
-      if (a.radius > 0) out << ", center = " << vec(a.center) << ", radius = " << number(a.radius);
-      else if (!(a.half_extents == Vec3{})) out << ", center = " << vec(a.center) << ", half_extents = " << vec(a.half_extents);
+      if (a.radius > 0)
+        out << ", center = " << vec(a.center) << ", radius = " << number(a.radius);
+      else if (!(a.half_extents == Vec3{}))
+        out << ", center = " << vec(a.center) << ", half_extents = " << vec(a.half_extents);
       if (!a.plugins.empty()) {
         out << ", plugins = {";
         for (const auto& p : a.plugins) out << " " << quoted(p) << ",";
         out << " }";
       }
-      if (!a.settings.empty()) out << ",\n      settings = " << settings_table(a.settings, "      ");
+      if (!a.settings.empty())
+        out << ",\n      settings = " << settings_table(a.settings, "      ");
       out << " },\n";
     }
     out << "  },\n";
@@ -223,11 +262,13 @@ void write_file_whole(const fs::path& path, const std::string& data) {
   const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
-    throw std::runtime_error("cannot write '" + path.string() + "': no folder '" + dir.string() + "'");
+    throw std::runtime_error("cannot write '" + path.string() + "': no folder '" + dir.string() +
+                             "'");
   const fs::path tmp = dir / ("." + path.filename().string() + ".tmp" + std::to_string(::getpid()));
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp.string() + "': " + std::strerror(errno));
+    if (!out)
+      throw std::runtime_error("cannot write '" + tmp.string() + "': " + std::strerror(errno));
     out.write(data.data(), std::streamsize(data.size()));
     out.flush();
     if (!out) {

@@ -63,15 +63,18 @@ std::string value_text(const World& w, PropertyId p, const PropertyValue& v) {
       return buf;
     }
     std::string operator()(const std::string& s) const { return "\"" + s + "\""; }
-    std::string operator()(ObjectId id) const { return w.store().alive(id) ? w.describe(id) : "(none)"; }
+    std::string operator()(ObjectId id) const {
+      return w.store().alive(id) ? w.describe(id) : "(none)";
+    }
     std::string operator()(const RefList& l) const {
       std::string s;
       for (ObjectId id : l) s += (s.empty() ? "" : ", ") + w.describe(id);
       return "{" + s + "}";
     }
     std::string operator()(EnumValue e) const {
-      return e.index >= 0 && std::size_t(e.index) < def.enum_values.size() ? def.enum_values[std::size_t(e.index)]
-                                                                            : "?";
+      return e.index >= 0 && std::size_t(e.index) < def.enum_values.size()
+                 ? def.enum_values[std::size_t(e.index)]
+                 : "?";
     }
   };
   return std::visit(V{w, def, buf}, v);
@@ -79,23 +82,34 @@ std::string value_text(const World& w, PropertyId p, const PropertyValue& v) {
 
 const char* material_name(Material m) {
   switch (m) {
-    case Material::Steel: return "steel";
-    case Material::Iron: return "iron";
-    case Material::Brass: return "brass";
-    case Material::Bronze: return "bronze";
-    case Material::Copper: return "copper";
-    case Material::Wood: return "wood";
-    case Material::Rubber: return "rubber";
-    case Material::Other: break;
+    case Material::Steel:
+      return "steel";
+    case Material::Iron:
+      return "iron";
+    case Material::Brass:
+      return "brass";
+    case Material::Bronze:
+      return "bronze";
+    case Material::Copper:
+      return "copper";
+    case Material::Wood:
+      return "wood";
+    case Material::Rubber:
+      return "rubber";
+    case Material::Other:
+      break;
   }
   return "other";
 }
 
 ImU32 kind_colour(StageKind k) {
   switch (k) {
-    case StageKind::Resolver: return IM_COL32(70, 130, 220, 255);
-    case StageKind::Derived: return IM_COL32(60, 170, 100, 255);
-    case StageKind::Interaction: return IM_COL32(230, 140, 40, 255);
+    case StageKind::Resolver:
+      return IM_COL32(70, 130, 220, 255);
+    case StageKind::Derived:
+      return IM_COL32(60, 170, 100, 255);
+    case StageKind::Interaction:
+      return IM_COL32(230, 140, 40, 255);
   }
   return IM_COL32(128, 128, 128, 255);
 }
@@ -109,7 +123,8 @@ Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
   time_scale_ = std::clamp(opt_.time_scale, 1.0 / 64, 64.0);
   init_sdl();
   init_imgui();
-  save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() + "_saved.lua";
+  save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() +
+               "_saved.lua";
   if (save_path_ == "_saved.lua") save_path_ = "scene_saved.lua";
   load();
 }
@@ -140,13 +155,15 @@ void Viewer::init_sdl() {
                              " (without a display, use --headless or --screenshot)");
   Uint32 flags = SDL_WINDOW_RESIZABLE;
   if (opt_.headless) flags |= SDL_WINDOW_HIDDEN;
-  window_ = SDL_CreateWindow("alloy view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, opt_.width,
-                             opt_.height, flags);
+  window_ = SDL_CreateWindow("alloy view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED,
+                             opt_.width, opt_.height, flags);
   if (!window_) throw std::runtime_error(std::string("cannot open a window: ") + SDL_GetError());
   if (!opt_.headless)
-    renderer_ = SDL_CreateRenderer(window_, -1, SDL_RENDERER_ACCELERATED | SDL_RENDERER_PRESENTVSYNC);
+    renderer_ =
+        SDL_CreateRenderer(window_, -1, SDL_RENDERER_ACCELERATED | SDL_RENDERER_PRESENTVSYNC);
   if (!renderer_) renderer_ = SDL_CreateRenderer(window_, -1, SDL_RENDERER_SOFTWARE);
-  if (!renderer_) throw std::runtime_error(std::string("cannot draw in the window: ") + SDL_GetError());
+  if (!renderer_)
+    throw std::runtime_error(std::string("cannot draw in the window: ") + SDL_GetError());
   SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_BLEND);
   last_ticks_ = SDL_GetPerformanceCounter();
 }
@@ -161,8 +178,10 @@ void Viewer::init_imgui() {
   io.IniFilename = nullptr;  // the layout is fixed: nothing to remember between runs
   io.LogFilename = nullptr;
   std::error_code ec;
-  if (fs::exists(kFontPath, ec)) io.Fonts->AddFontFromFileTTF(kFontPath, 15.0f);
-  else io.Fonts->AddFontDefault();
+  if (fs::exists(kFontPath, ec))
+    io.Fonts->AddFontFromFileTTF(kFontPath, 15.0f);
+  else
+    io.Fonts->AddFontDefault();
   ImGui::StyleColorsLight();
   ImGuiStyle& style = ImGui::GetStyle();
   style.WindowRounding = 6;
@@ -172,7 +191,8 @@ void Viewer::init_imgui() {
   style.WindowPadding = {10, 8};
   style.ItemSpacing = {6, 5};
   style.Colors[ImGuiCol_WindowBg] = ImVec4(0.98f, 0.98f, 0.99f, 0.94f);
-  style.Colors[ImGuiCol_TitleBgActive] = style.Colors[ImGuiCol_TitleBg] = ImVec4(0.86f, 0.88f, 0.92f, 1);
+  style.Colors[ImGuiCol_TitleBgActive] = style.Colors[ImGuiCol_TitleBg] =
+      ImVec4(0.86f, 0.88f, 0.92f, 1);
   ImGui_ImplSDL2_InitForSDLRenderer(window_);
   ImGui_ImplSDLRenderer_Init(renderer_);
   imgui_ready_ = true;
@@ -186,10 +206,13 @@ void Viewer::load() {
   register_native_plugins(*fresh_registry);
   std::unique_ptr<lua::LoadedScene> fresh;  // declared after its registry: destroyed first
   lua::LoadOptions options = opt_.load;
-  options.mod_log = [this](const std::string& mod, const std::string& line) { note(mod + ": " + line); };
+  options.mod_log = [this](const std::string& mod, const std::string& line) {
+    note(mod + ": " + line);
+  };
   std::string error;
   try {
-    fresh = std::make_unique<lua::LoadedScene>(lua::load_scene(opt_.scene, *fresh_registry, options));
+    fresh =
+        std::make_unique<lua::LoadedScene>(lua::load_scene(opt_.scene, *fresh_registry, options));
     fresh->world->start();  // the plugins it needs are made now and check their settings
   } catch (const InputError& e) {
     error = fresh ? lua::locate(*fresh, e).what() : e.what();
@@ -222,9 +245,12 @@ void Viewer::load() {
   accumulator_ = 0;
   failing_steps_ = 0;
   w.add_observer([this](const Event& e) {
-    auto it = std::find_if(event_counts_.begin(), event_counts_.end(), [&](auto& p) { return p.first == e.type; });
-    if (it == event_counts_.end()) event_counts_.push_back({e.type, 1});
-    else ++it->second;
+    auto it = std::find_if(event_counts_.begin(), event_counts_.end(),
+                           [&](auto& p) { return p.first == e.type; });
+    if (it == event_counts_.end())
+      event_counts_.push_back({e.type, 1});
+    else
+      ++it->second;
     World* wp = world();
     if (!wp) return;
     if (e.type == "sound") {
@@ -260,7 +286,9 @@ std::size_t Viewer::event_count(const std::string& type) const {
   return 0;
 }
 
-void Viewer::set_time_scale(double s) { time_scale_ = std::clamp(s, 1.0 / 64, 64.0); }
+void Viewer::set_time_scale(double s) {
+  time_scale_ = std::clamp(s, 1.0 / 64, 64.0);
+}
 
 // --- the loop --------------------------------------------------------------------
 
@@ -302,7 +330,9 @@ bool Viewer::frame() {
 
   double seconds = kHeadlessFrame;
   const std::uint64_t now = SDL_GetPerformanceCounter();
-  if (!opt_.headless) seconds = std::clamp(double(now - last_ticks_) / double(SDL_GetPerformanceFrequency()), 0.0, 0.1);
+  if (!opt_.headless)
+    seconds =
+        std::clamp(double(now - last_ticks_) / double(SDL_GetPerformanceFrequency()), 0.0, 0.1);
   last_ticks_ = now;
   clock_ += seconds;
 
@@ -324,7 +354,8 @@ bool Viewer::frame() {
       }
     audio_.pump(*w, muted_);
   }
-  rings_.erase(std::remove_if(rings_.begin(), rings_.end(), [&](const Ring& r) { return clock_ - r.born > 1.0; }),
+  rings_.erase(std::remove_if(rings_.begin(), rings_.end(),
+                              [&](const Ring& r) { return clock_ - r.born > 1.0; }),
                rings_.end());
   while (!toasts_.empty() && clock_ - toasts_.front().born > kToastSeconds) toasts_.pop_front();
   draw(false, nullptr);
@@ -362,7 +393,8 @@ void Viewer::simulate(double frame_seconds) {
   if (dsteps > 0) {
     double total = 0;
     for (const StageTiming& t : prof.stages) {
-      auto it = std::find_if(bars_.begin(), bars_.end(), [&](const StageBar& b) { return b.name == t.name; });
+      auto it = std::find_if(bars_.begin(), bars_.end(),
+                             [&](const StageBar& b) { return b.name == t.name; });
       if (it == bars_.end()) {
         bars_.push_back({t.name, t.kind, 0, t.seconds, t.runs});
         continue;
@@ -376,8 +408,9 @@ void Viewer::simulate(double frame_seconds) {
     // Stages that left (a swap, a removed battery) leave the bars too.
     bars_.erase(std::remove_if(bars_.begin(), bars_.end(),
                                [&](const StageBar& b) {
-                                 return std::none_of(prof.stages.begin(), prof.stages.end(),
-                                                     [&](const StageTiming& t) { return t.name == b.name; });
+                                 return std::none_of(
+                                     prof.stages.begin(), prof.stages.end(),
+                                     [&](const StageTiming& t) { return t.name == b.name; });
                                }),
                 bars_.end());
     step_ms_ = total;
@@ -417,7 +450,8 @@ void Viewer::poll_mods() {
   if (!scene_ || !scene_->mods) return;
   for (const lua::ModReport& r : scene_->mods->poll()) {
     using K = lua::ModReport::Kind;
-    const bool bad = r.kind == K::ReloadFailed || r.kind == K::StageDisabled || r.kind == K::Stopped;
+    const bool bad =
+        r.kind == K::ReloadFailed || r.kind == K::StageDisabled || r.kind == K::Stopped;
     note(r.message.empty() ? "mod " + r.mod : r.message, bad);
   }
 }
@@ -454,16 +488,30 @@ void Viewer::pump_script() {
   while (script_next_ < script_.size() && script_[script_next_].frame <= int(frames_)) {
     const ScriptEvent& e = script_[script_next_++];
     switch (e.kind) {
-      case ScriptEvent::Kind::Press: push_mouse(SDL_MOUSEBUTTONDOWN, e.at); break;
-      case ScriptEvent::Kind::Move: push_mouse(SDL_MOUSEMOTION, e.at); break;
-      case ScriptEvent::Kind::Release: push_mouse(SDL_MOUSEBUTTONUP, e.at); break;
-      case ScriptEvent::Kind::RightPress: push_mouse(SDL_MOUSEBUTTONDOWN, e.at, SDL_BUTTON_RIGHT); break;
-      case ScriptEvent::Kind::RightRelease: push_mouse(SDL_MOUSEBUTTONUP, e.at, SDL_BUTTON_RIGHT); break;
-      case ScriptEvent::Kind::Wheel: push_wheel(e.wheel); break;
+      case ScriptEvent::Kind::Press:
+        push_mouse(SDL_MOUSEBUTTONDOWN, e.at);
+        break;
+      case ScriptEvent::Kind::Move:
+        push_mouse(SDL_MOUSEMOTION, e.at);
+        break;
+      case ScriptEvent::Kind::Release:
+        push_mouse(SDL_MOUSEBUTTONUP, e.at);
+        break;
+      case ScriptEvent::Kind::RightPress:
+        push_mouse(SDL_MOUSEBUTTONDOWN, e.at, SDL_BUTTON_RIGHT);
+        break;
+      case ScriptEvent::Kind::RightRelease:
+        push_mouse(SDL_MOUSEBUTTONUP, e.at, SDL_BUTTON_RIGHT);
+        break;
+      case ScriptEvent::Kind::Wheel:
+        push_wheel(e.wheel);
+        break;
       case ScriptEvent::Kind::Key: {
         const SDL_Keycode k = SDL_GetKeyFromName(e.key.c_str());
-        if (k == SDLK_UNKNOWN) note("script line " + std::to_string(e.line) + ": unknown key '" + e.key + "'", true);
-        else push_key(k);
+        if (k == SDLK_UNKNOWN)
+          note("script line " + std::to_string(e.line) + ": unknown key '" + e.key + "'", true);
+        else
+          push_key(k);
         break;
       }
     }
@@ -525,7 +573,9 @@ void Viewer::handle(const SDL_Event& e) {
   if (imgui_ready_) ImGui_ImplSDL2_ProcessEvent(&e);
   const bool popup = imgui_ready_ && ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopupId);
   switch (e.type) {
-    case SDL_QUIT: quit_ = true; break;
+    case SDL_QUIT:
+      quit_ = true;
+      break;
     case SDL_WINDOWEVENT:
       if (e.window.event == SDL_WINDOWEVENT_CLOSE) quit_ = true;
       break;
@@ -535,13 +585,16 @@ void Viewer::handle(const SDL_Event& e) {
       mouse_x_ = float(e.motion.x);
       mouse_y_ = float(e.motion.y);
       const Vec2 at = camera_.to_world(mouse_x_, mouse_y_);
-      if (panning_ && had) camera_.centre = camera_.centre - Vec2{dx / camera_.scale, -dy / camera_.scale};
+      if (panning_ && had)
+        camera_.centre = camera_.centre - Vec2{dx / camera_.scale, -dy / camera_.scale};
       if (editor_.carrying()) editor_.carry_to(at);
       hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
       break;
     }
     case SDL_MOUSEBUTTONDOWN: {
-      const int b = e.button.button == SDL_BUTTON_LEFT ? 0 : e.button.button == SDL_BUTTON_RIGHT ? 1 : 2;
+      const int b = e.button.button == SDL_BUTTON_LEFT    ? 0
+                    : e.button.button == SDL_BUTTON_RIGHT ? 1
+                                                          : 2;
       mouse_down_[b] = mouse_pressed_[b] = true;
       mouse_x_ = float(e.button.x);
       mouse_y_ = float(e.button.y);
@@ -550,7 +603,9 @@ void Viewer::handle(const SDL_Event& e) {
       break;
     }
     case SDL_MOUSEBUTTONUP: {
-      const int b = e.button.button == SDL_BUTTON_LEFT ? 0 : e.button.button == SDL_BUTTON_RIGHT ? 1 : 2;
+      const int b = e.button.button == SDL_BUTTON_LEFT    ? 0
+                    : e.button.button == SDL_BUTTON_RIGHT ? 1
+                                                          : 2;
       mouse_down_[b] = false;
       mouse_x_ = float(e.button.x);
       mouse_y_ = float(e.button.y);
@@ -560,15 +615,18 @@ void Viewer::handle(const SDL_Event& e) {
     case SDL_MOUSEWHEEL: {
       if (over_panel(mouse_x_, mouse_y_)) break;
       const int notches = e.wheel.y;
-      if (editor_.carrying()) editor_.turn(notches * kTurnStep);
-      else camera_.zoom_at(mouse_x_, mouse_y_, std::pow(1.15, notches));
+      if (editor_.carrying())
+        editor_.turn(notches * kTurnStep);
+      else
+        camera_.zoom_at(mouse_x_, mouse_y_, std::pow(1.15, notches));
       break;
     }
     case SDL_KEYDOWN:
       if (imgui_ready_ && ImGui::GetIO().WantTextInput) break;
       on_key(e.key.keysym.sym, e.key.keysym.mod);
       break;
-    default: break;
+    default:
+      break;
   }
 }
 
@@ -588,7 +646,8 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
   }
   switch (tool_) {
     case Tool::Place: {
-      if (placing_ >= 0 && placing_ < int(palette_entries().size())) drop_part(palette_entries()[std::size_t(placing_)], at);
+      if (placing_ >= 0 && placing_ < int(palette_entries().size()))
+        drop_part(palette_entries()[std::size_t(placing_)], at);
       place_drag_ = false;
       if (!(mod & KMOD_SHIFT)) {
         tool_ = Tool::Hand;
@@ -655,7 +714,9 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
   World* w = world();
   const ObjectId target = hovered_ ? hovered_ : selected_;
   switch (key) {
-    case SDLK_SPACE: paused_ = !paused_; break;
+    case SDLK_SPACE:
+      paused_ = !paused_;
+      break;
     case SDLK_PERIOD:
     case SDLK_n:
       paused_ = true;
@@ -670,7 +731,8 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
     case SDLK_q:
     case SDLK_e: {
       const double a = key == SDLK_q ? kTurnStep : -kTurnStep;
-      if (editor_.carrying()) editor_.turn(a);
+      if (editor_.carrying())
+        editor_.turn(a);
       else if (target && w) {
         const EditResult r = editor_.rotate(target, a);
         if (!r.ok || !r.message.empty()) note(r.message, !r.ok);
@@ -695,21 +757,34 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
         if (r.ok) selected_ = hovered_ = {};
       }
       break;
-    case SDLK_f: fit_view(); break;
+    case SDLK_f:
+      fit_view();
+      break;
     case SDLK_EQUALS:
     case SDLK_PLUS:
-    case SDLK_KP_PLUS: set_time_scale(time_scale_ * 2); break;
+    case SDLK_KP_PLUS:
+      set_time_scale(time_scale_ * 2);
+      break;
     case SDLK_MINUS:
-    case SDLK_KP_MINUS: set_time_scale(time_scale_ / 2); break;
-    case SDLK_l: draw_options_.labels = !draw_options_.labels; break;
-    case SDLK_g: draw_options_.magnetic_forces = draw_options_.contact_forces = !draw_options_.magnetic_forces; break;
-    case SDLK_m: muted_ = !muted_; break;
+    case SDLK_KP_MINUS:
+      set_time_scale(time_scale_ / 2);
+      break;
+    case SDLK_l:
+      draw_options_.labels = !draw_options_.labels;
+      break;
+    case SDLK_g:
+      draw_options_.magnetic_forces = draw_options_.contact_forces = !draw_options_.magnetic_forces;
+      break;
+    case SDLK_m:
+      muted_ = !muted_;
+      break;
     case SDLK_ESCAPE:
       tool_ = Tool::Hand;
       placing_ = -1;
       wire_start_ = {};
       break;
-    default: break;
+    default:
+      break;
   }
 }
 
@@ -841,8 +916,9 @@ void Viewer::draw(bool capture, Image* image) {
     if (tool_ == Tool::Wire && wire_start_ && mouse_x_ >= 0 && w->store().alive(wire_start_)) {
       const auto p = read_part(*w, wire_start_);
       const bool two = editor_.two_terminal(wire_start_);
-      const Vec2 from = two && p ? terminal_point(*w, wire_start_, p->to_local(wire_start_at_).x > 0 ? 1 : 0)
-                                 : (p ? p->centre : wire_start_at_);
+      const Vec2 from =
+          two && p ? terminal_point(*w, wire_start_, p->to_local(wire_start_at_).x > 0 ? 1 : 0)
+                   : (p ? p->centre : wire_start_at_);
       const ScreenPoint s = camera_.to_screen(from);
       dl->AddLine({s.x, s.y}, {mouse_x_, mouse_y_}, colour::kWireIdle, 2.5f);
     }
@@ -876,7 +952,8 @@ void Viewer::draw(bool capture, Image* image) {
     image->width = w;
     image->height = h;
     image->rgba.assign(std::size_t(w) * h * 4, 0);
-    if (SDL_RenderReadPixels(renderer_, nullptr, SDL_PIXELFORMAT_RGBA32, image->rgba.data(), w * 4) != 0)
+    if (SDL_RenderReadPixels(renderer_, nullptr, SDL_PIXELFORMAT_RGBA32, image->rgba.data(),
+                             w * 4) != 0)
       throw std::runtime_error(std::string("cannot read the picture back: ") + SDL_GetError());
   }
   SDL_RenderPresent(renderer_);
@@ -892,7 +969,8 @@ void Viewer::draw_panels() {
 void Viewer::panel_toolbar() {
   ImGui::SetNextWindowPos({kMargin, kMargin});
   ImGui::SetNextWindowSize({kLeftWidth, 0});
-  ImGui::Begin("alloy view", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("alloy view", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   World* w = world();
   if (scene_) {
@@ -912,7 +990,8 @@ void Viewer::panel_toolbar() {
   if (ImGui::Button("Reset", {bw, 0})) reset();
   float scale = float(time_scale_);
   ImGui::SetNextItemWidth(kLeftWidth - 20);
-  if (ImGui::SliderFloat("##scale", &scale, 1.0f / 16, 4.0f, "time x %.3g", ImGuiSliderFlags_Logarithmic))
+  if (ImGui::SliderFloat("##scale", &scale, 1.0f / 16, 4.0f, "time x %.3g",
+                         ImGuiSliderFlags_Logarithmic))
     set_time_scale(scale);
   ImGui::Separator();
   int tool = tool_ == Tool::Wire ? 1 : 0;
@@ -940,12 +1019,14 @@ void Viewer::panel_palette() {
     // Once: which entries the kit can make here (a kit without a part greys it).
     PluginRegistry scratch;
     register_native_plugins(scratch);
-    for (const PaletteEntry& e : palette_entries()) palette_problems_.push_back(check_entry(scratch, e, opt_.load));
+    for (const PaletteEntry& e : palette_entries())
+      palette_problems_.push_back(check_entry(scratch, e, opt_.load));
   }
   const float top = next_panels_.empty() ? kMargin : next_panels_.back().y1 + kMargin;
   ImGui::SetNextWindowPos({kMargin, top});
   ImGui::SetNextWindowSize({kLeftWidth, 0});
-  ImGui::Begin("Parts", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("Parts", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   ImGui::TextDisabled("drag onto the board, or click then click");
   std::string group;
@@ -984,7 +1065,8 @@ void Viewer::panel_inspector() {
   SDL_GetWindowSize(window_, &win_w, &win_h);
   ImGui::SetNextWindowPos({float(win_w) - kRightWidth - kMargin, kMargin});
   ImGui::SetNextWindowSize({kRightWidth, 0});
-  ImGui::Begin("Part", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("Part", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   World* w = world();
   if (!w || !selected_ || !w->store().alive(selected_)) {
@@ -1003,21 +1085,25 @@ void Viewer::panel_inspector() {
     ImGui::SameLine();
     const char* what = get<double>(*w, id, "emf")          ? "battery"
                        : get<double>(*w, id, "inductance") ? "coil"
-                                                            : material_name(material_of(*w, id));
-    ImGui::TextDisabled("%s%s%s", what, part->is_static ? ", static" : "", part->pinned ? ", pinned" : "");
+                                                           : material_name(material_of(*w, id));
+    ImGui::TextDisabled("%s%s%s", what, part->is_static ? ", static" : "",
+                        part->pinned ? ", pinned" : "");
     const double mass = get<double>(*w, id, "mass").value_or(0);
     if (mass > 0) ImGui::Text("mass %.4g kg", mass);
-    ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y, part->angle * 180 / std::numbers::pi);
+    ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y,
+                part->angle * 180 / std::numbers::pi);
     if (const auto v = get<Vec3>(*w, id, "velocity")) ImGui::Text("speed %.3f m/s", length(xy(*v)));
   }
   if (const auto emf = get<double>(*w, id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = get<double>(*w, id, "current")) ImGui::Text("current %.4g A", *i);
-  if (get<bool>(*w, id, "powered").value_or(false)) ImGui::TextColored(ImVec4(0.8f, 0.55f, 0, 1), "powered");
+  if (get<bool>(*w, id, "powered").value_or(false))
+    ImGui::TextColored(ImVec4(0.8f, 0.55f, 0, 1), "powered");
   if (const auto q = get<double>(*w, id, "pole_strength"); q && *q != 0)
     ImGui::Text("poles %.3g A m, north at %s end", std::abs(*q), *q > 0 ? "+x" : "-x");
   if (part && !part->is_static) {
     bool pinned = part->pinned;
-    if (ImGui::Checkbox("pinned to the board (P)", &pinned)) note(editor_.set_pinned(id, pinned).message);
+    if (ImGui::Checkbox("pinned to the board (P)", &pinned))
+      note(editor_.set_pinned(id, pinned).message);
   }
   if (ImGui::Button("turn +15")) note(editor_.rotate(id, kTurnStep).message);
   ImGui::SameLine();
@@ -1058,7 +1144,8 @@ void Viewer::panel_resolvers() {
   const float top = next_panels_.empty() ? kMargin : next_panels_.back().y1 + kMargin;
   ImGui::SetNextWindowPos({float(win_w) - kRightWidth - kMargin, top});
   ImGui::SetNextWindowSize({kRightWidth, 0});
-  ImGui::Begin("Stages", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("Stages", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   World* w = world();
   if (!w) {
@@ -1075,7 +1162,8 @@ void Viewer::panel_resolvers() {
     const ImVec2 p = ImGui::GetCursorScreenPos();
     const float h = ImGui::GetTextLineHeight();
     dl->AddRectFilled(p, {p.x + width, p.y + h}, IM_COL32(232, 235, 240, 255), 3);
-    dl->AddRectFilled(p, {p.x + std::max(2.0f, float(b.ms / most) * width), p.y + h}, kind_colour(b.kind) & 0x90FFFFFF, 3);
+    dl->AddRectFilled(p, {p.x + std::max(2.0f, float(b.ms / most) * width), p.y + h},
+                      kind_colour(b.kind) & 0x90FFFFFF, 3);
     char label[128];
     std::snprintf(label, sizeof label, "%s  %.3f ms", b.name.c_str(), b.ms);
     dl->AddText({p.x + 4, p.y}, IM_COL32(20, 24, 32, 255), label);
@@ -1085,12 +1173,14 @@ void Viewer::panel_resolvers() {
   bool any = false;
   for (const std::string& stage : w->active_stages()) {
     const auto at = stage.find('@');
-    const std::string plugin = stage.substr(0, at), area = at == std::string::npos ? "" : stage.substr(at + 1);
+    const std::string plugin = stage.substr(0, at),
+                      area = at == std::string::npos ? "" : stage.substr(at + 1);
     const PluginDef* def = registry_->find(plugin);
     if (!def || def->info.provides.empty()) continue;
     std::vector<std::string> alternatives;
     for (const std::string& n : registry_->order())
-      if (const PluginDef* d = registry_->find(n); d && d->info.provides == def->info.provides && d->info.kind == def->info.kind)
+      if (const PluginDef* d = registry_->find(n);
+          d && d->info.provides == def->info.provides && d->info.kind == def->info.kind)
         alternatives.push_back(n);
     if (alternatives.size() < 2) continue;
     if (!any) {
@@ -1130,9 +1220,12 @@ void Viewer::panel_messages() {
     y -= size.y + 8;
     const ImVec2 p{x0 + 8, y};
     dl->AddRectFilled({p.x - 6, p.y - 3}, {p.x + size.x + 6, p.y + size.y + 3},
-                      it->error ? IM_COL32(255, 232, 232, int(235 * alpha)) : IM_COL32(250, 250, 252, int(235 * alpha)), 4);
+                      it->error ? IM_COL32(255, 232, 232, int(235 * alpha))
+                                : IM_COL32(250, 250, 252, int(235 * alpha)),
+                      4);
     dl->AddText(ImGui::GetFont(), ImGui::GetFontSize(), p,
-                it->error ? IM_COL32(170, 20, 20, int(255 * alpha)) : IM_COL32(30, 34, 44, int(255 * alpha)),
+                it->error ? IM_COL32(170, 20, 20, int(255 * alpha))
+                          : IM_COL32(30, 34, 44, int(255 * alpha)),
                 it->text.c_str(), nullptr, x1 - x0 - 20);
   }
 }
@@ -1147,8 +1240,10 @@ void Viewer::panel_error() {
   ImGui::PushStyleColor(ImGuiCol_TitleBg, ImVec4(0.85f, 0.2f, 0.2f, 1));
   ImGui::PushStyleColor(ImGuiCol_TitleBgActive, ImVec4(0.85f, 0.2f, 0.2f, 1));
   ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.1f, 0.1f, 0.12f, 1));
-  ImGui::Begin(scene_ ? "The scene file has an error (the world as it was goes on)" : "The scene cannot be loaded",
-               nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin(scene_ ? "The scene file has an error (the world as it was goes on)"
+                      : "The scene cannot be loaded",
+               nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   ImGui::PushTextWrapPos(0);
   ImGui::TextColored(ImVec4(0.7f, 0.05f, 0.05f, 1), "%s", load_error_.c_str());
@@ -1175,7 +1270,8 @@ void Viewer::context_menu() {
     const ObjectId id = context_part_;
     ImGui::TextDisabled("%s", w->describe(id).c_str());
     const auto part = read_part(*w, id);
-    if (part && !part->is_static && ImGui::MenuItem(part->pinned ? "Unpin" : "Pin to the board", "P"))
+    if (part && !part->is_static &&
+        ImGui::MenuItem(part->pinned ? "Unpin" : "Pin to the board", "P"))
       note(editor_.set_pinned(id, !part->pinned).message);
     if (ImGui::MenuItem("Turn 90 left")) note(editor_.rotate(id, std::numbers::pi / 2).message);
     if (ImGui::MenuItem("Turn 90 right")) note(editor_.rotate(id, -std::numbers::pi / 2).message);

@@ -1,9 +1,10 @@
 // Tests for apps/viewer/editor: the player's edits on a world, without SDL.
+#include "apps/viewer/editor.hpp"
+
 #include <gtest/gtest.h>
 
 #include <numbers>
 
-#include "apps/viewer/editor.hpp"
 #include "viewer_support.hpp"
 
 namespace alloy::viewer {
@@ -93,7 +94,8 @@ TEST_F(EditorTest, WiresGoFromConductorToConductorNeverToThemselves) {
   EditResult self = editor.connect_wire(a, {0, 2.5}, a, {0, 2.5});
   EXPECT_FALSE(self.ok);
   EXPECT_NE(self.message.find("itself"), std::string::npos);
-  EXPECT_FALSE(editor.connect_wire(a, {0, 2.5}, id("plank"), {0.9, 0.6}).ok) << "wood does not conduct";
+  EXPECT_FALSE(editor.connect_wire(a, {0, 2.5}, id("plank"), {0.9, 0.6}).ok)
+      << "wood does not conduct";
   const EditResult ok = editor.connect_wire(bat, {-0.96, 2.5}, a, {0, 2.5});
   ASSERT_TRUE(ok.ok) << ok.message;
   const ObjectId wire = w.find("wire");

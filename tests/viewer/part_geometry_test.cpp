@@ -1,11 +1,12 @@
 // Tests for apps/viewer/part_geometry and camera: shapes read from
 // properties, hit tests, overlap depth, and the metres-to-pixels mapping.
+#include "apps/viewer/part_geometry.hpp"
+
 #include <gtest/gtest.h>
 
 #include <numbers>
 
 #include "apps/viewer/camera.hpp"
-#include "apps/viewer/part_geometry.hpp"
 #include "viewer_support.hpp"
 
 namespace alloy::viewer {

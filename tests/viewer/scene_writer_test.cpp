@@ -1,12 +1,13 @@
 // Tests for apps/viewer/scene_writer: a world saved as Lua loads again as the
 // same scene (same objects, same properties), at the start and mid-run.
+#include "apps/viewer/scene_writer.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 
-#include "apps/viewer/scene_writer.hpp"
 #include "viewer_support.hpp"
 
 namespace alloy::viewer {
@@ -14,7 +15,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string name_or_slot(const World& w, ObjectId id) { return w.describe(id); }
+std::string name_or_slot(const World& w, ObjectId id) {
+  return w.describe(id);
+}
 
 /// Every object of `a` is in `b` under the same name with the same
 /// properties (references compared by name); and nothing more.
@@ -41,7 +44,8 @@ void expect_same_scene(const World& a, const World& b) {
         EXPECT_NEAR(qa->x, qb.x, 1e-15) << name << "." << prop;
         EXPECT_NEAR(qa->y, qb.y, 1e-15) << name << "." << prop;
       } else if (const ObjectId* ra = std::get_if<ObjectId>(&va)) {
-        EXPECT_EQ(name_or_slot(a, *ra), name_or_slot(b, std::get<ObjectId>(vb))) << name << "." << prop;
+        EXPECT_EQ(name_or_slot(a, *ra), name_or_slot(b, std::get<ObjectId>(vb)))
+            << name << "." << prop;
       } else if (std::holds_alternative<RefList>(va)) {
         const RefList la = std::get<RefList>(va), lb = std::get<RefList>(vb);
         ASSERT_EQ(la.size(), lb.size());
@@ -85,7 +89,8 @@ TEST(SceneWriter, AlloyRunLoadsTheSavedFile) {
   const fs::path file = test::temp_dir() / "for_run.lua";
   save_scene(original.world(), {"rigid_demo", "", 0, ""}, file);
 #ifdef ALLOY_BINARY
-  const std::string cmd = std::string(ALLOY_BINARY) + " run " + file.string() + " --seconds 0.5 --quiet";
+  const std::string cmd =
+      std::string(ALLOY_BINARY) + " run " + file.string() + " --seconds 0.5 --quiet";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
 #endif
 }
@@ -124,7 +129,8 @@ TEST(SceneWriter, FilesAreWrittenWholeOrNotAtAll) {
   std::getline(in, s);
   EXPECT_EQ(s, "second");
   for (const auto& e : fs::directory_iterator(dir))
-    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos)
+        << "left behind: " << e.path();
 }
 
 }  // namespace

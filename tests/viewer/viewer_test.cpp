@@ -1,6 +1,8 @@
 // Tests for apps/viewer/viewer: the whole viewer, headless (SDL's dummy video
 // driver, software renderer), driven by synthesised SDL events exactly as a
 // player's mouse drives it.
+#include "apps/viewer/viewer.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <sstream>
 
 #include "apps/viewer/view_command.hpp"
-#include "apps/viewer/viewer.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "viewer_support.hpp"
 
@@ -26,7 +27,8 @@ double share_of_colour(const Image& img, ScreenPoint at, ImU32 c, int r = 3, int
       if (x < 0 || y < 0 || x >= img.width || y >= img.height) continue;
       const std::uint8_t* p = img.at(x, y);
       ++n;
-      if (std::abs(p[0] - cr) <= tol && std::abs(p[1] - cg) <= tol && std::abs(p[2] - cb) <= tol) ++hits;
+      if (std::abs(p[0] - cr) <= tol && std::abs(p[1] - cg) <= tol && std::abs(p[2] - cb) <= tol)
+        ++hits;
     }
   return n ? double(hits) / n : 0;
 }
@@ -34,8 +36,8 @@ double share_of_colour(const Image& img, ScreenPoint at, ImU32 c, int r = 3, int
 std::string describe_pixel(const Image& img, ScreenPoint at) {
   const std::uint8_t* p = img.at(int(at.x), int(at.y));
   std::ostringstream s;
-  s << "pixel at (" << int(at.x) << ", " << int(at.y) << ") is rgb(" << int(p[0]) << ", " << int(p[1]) << ", "
-    << int(p[2]) << ")";
+  s << "pixel at (" << int(at.x) << ", " << int(at.y) << ") is rgb(" << int(p[0]) << ", "
+    << int(p[1]) << ", " << int(p[2]) << ")";
   return s.str();
 }
 
@@ -55,7 +57,8 @@ TEST(Viewer, ScreenshotShowsTheFloorAndTheBallInTheirColours) {
   const ScreenPoint ball = v.camera().to_screen({0.27, 1.52});
   EXPECT_GT(share_of_colour(img, ball, colour::kRubber, 2), 0.8) << describe_pixel(img, ball);
   const ScreenPoint pendulum = v.camera().to_screen({2.0, 1.8});
-  EXPECT_GT(share_of_colour(img, pendulum, colour::kSteel, 1), 0.6) << describe_pixel(img, pendulum);
+  EXPECT_GT(share_of_colour(img, pendulum, colour::kSteel, 1), 0.6)
+      << describe_pixel(img, pendulum);
   const ScreenPoint wheel = v.camera().to_screen({2.4 - 0.07, 0.5 + 0.07});
   EXPECT_GT(share_of_colour(img, wheel, colour::kWood, 2), 0.8) << describe_pixel(img, wheel);
 }
@@ -205,11 +208,13 @@ TEST(Viewer, ASceneWithAnErrorIsShownWithFileAndLine) {
 
 TEST(Viewer, FixingTheFileLoadsItAndABrokenResetKeepsTheWorld) {
   const fs::path file = test::temp_dir() / "scene.lua";
-  std::ofstream(file) << "local kit = require \"kit\"\nkit.disk { name = \"d\", at = {0, 1}, radius = }\n";
+  std::ofstream(file)
+      << "local kit = require \"kit\"\nkit.disk { name = \"d\", at = {0, 1}, radius = }\n";
   Viewer v(test::headless(file));
   v.frame();
   EXPECT_NE(v.load_error().find("scene.lua:2"), std::string::npos) << v.load_error();
-  std::ofstream(file, std::ios::trunc) << "local kit = require \"kit\"\nkit.disk { name = \"d\", at = {0, 1}, radius = 0.1 }\n";
+  std::ofstream(file, std::ios::trunc)
+      << "local kit = require \"kit\"\nkit.disk { name = \"d\", at = {0, 1}, radius = 0.1 }\n";
   fs::last_write_time(file, fs::last_write_time(file) + std::chrono::seconds(5));
   for (int i = 0; i < 40; ++i) v.frame();  // the file is looked at twice a second
   ASSERT_NE(v.world(), nullptr) << v.load_error();
@@ -244,7 +249,8 @@ TEST(Viewer, EveryPaletteEntryTheKitCanMakeCanBeDropped) {
   EXPECT_NE(shelf.message.find("inside"), std::string::npos) << shelf.message;
   v.set_paused(false);
   for (int i = 0; i < 60; ++i) v.frame();
-  for (const Part2D& p : read_parts(*v.world())) EXPECT_TRUE(std::isfinite(p.centre.x) && std::isfinite(p.centre.y));
+  for (const Part2D& p : read_parts(*v.world()))
+    EXPECT_TRUE(std::isfinite(p.centre.x) && std::isfinite(p.centre.y));
 }
 
 TEST(Viewer, PauseStepAndTimeScale) {
@@ -304,7 +310,9 @@ namespace {
 
 const fs::path kDoorbell = test::source("mods/doorbell");
 
-bool have_doorbell() { return fs::exists(kDoorbell / "mod.lua"); }
+bool have_doorbell() {
+  return fs::exists(kDoorbell / "mod.lua");
+}
 
 TEST(ViewerDoorbell, TheCoilsPolesAreRedAndGreenAndTheBellIsBronze) {
   if (!have_doorbell()) GTEST_SKIP() << "mods/doorbell is not here yet";
@@ -315,26 +323,34 @@ TEST(ViewerDoorbell, TheCoilsPolesAreRedAndGreenAndTheBellIsBronze) {
   const ObjectId coil = w.find("coil");
   ASSERT_TRUE(bool(coil));
   // Run until the coil is an electromagnet with poles.
-  for (int i = 0; i < 600 && std::abs(std::get<double>(w.get(coil, "pole_strength"))) < 0.5; ++i) v.frame();
+  for (int i = 0; i < 600 && std::abs(std::get<double>(w.get(coil, "pole_strength"))) < 0.5; ++i)
+    v.frame();
   v.set_paused(true);
   const double q = std::get<double>(w.get(coil, "pole_strength"));
   ASSERT_GT(std::abs(q), 0.5) << "the coil never came on";
   const Image img = v.render_image();
-  auto* forces = dynamic_cast<magnetism::MagneticForces*>(w.stage(magnetism::MagneticForces::kName));
+  auto* forces =
+      dynamic_cast<magnetism::MagneticForces*>(w.stage(magnetism::MagneticForces::kName));
   ASSERT_NE(forces, nullptr);
   const magnetism::MagneticBody* body = forces->find(coil);
   ASSERT_NE(body, nullptr);
   ASSERT_EQ(body->pole_count, 2u);
-  const magnetism::Pole north = forces->poles()[body->first_pole], south = forces->poles()[body->first_pole + 1];
+  const magnetism::Pole north = forces->poles()[body->first_pole],
+                        south = forces->poles()[body->first_pole + 1];
   EXPECT_GT(north.strength, 0);
-  const ScreenPoint n = v.camera().to_screen(xy(north.position)), s = v.camera().to_screen(xy(south.position));
-  EXPECT_GT(share_of_colour(img, n, colour::kNorth, 1, 12), 0.5) << "north: " << describe_pixel(img, n);
-  EXPECT_GT(share_of_colour(img, s, colour::kSouth, 1, 12), 0.5) << "south: " << describe_pixel(img, s);
+  const ScreenPoint n = v.camera().to_screen(xy(north.position)),
+                    s = v.camera().to_screen(xy(south.position));
+  EXPECT_GT(share_of_colour(img, n, colour::kNorth, 1, 12), 0.5)
+      << "north: " << describe_pixel(img, n);
+  EXPECT_GT(share_of_colour(img, s, colour::kSouth, 1, 12), 0.5)
+      << "south: " << describe_pixel(img, s);
   // The bell, a little off its centre (the radius line marks the centre).
   const auto bell = read_part(w, w.find("bell"));
   ASSERT_TRUE(bell);
-  const ScreenPoint b = v.camera().to_screen(bell->centre + Vec2{-bell->radius * 0.4, bell->radius * 0.4});
-  EXPECT_GT(share_of_colour(img, b, colour::kBronze, 2, 12), 0.5) << "bell: " << describe_pixel(img, b);
+  const ScreenPoint b =
+      v.camera().to_screen(bell->centre + Vec2{-bell->radius * 0.4, bell->radius * 0.4});
+  EXPECT_GT(share_of_colour(img, b, colour::kBronze, 2, 12), 0.5)
+      << "bell: " << describe_pixel(img, b);
 }
 
 TEST(ViewerDoorbell, DroppingTheSwitchBarAcrossTheContactsRingsTheBell) {
@@ -354,7 +370,8 @@ TEST(ViewerDoorbell, DroppingTheSwitchBarAcrossTheContactsRingsTheBell) {
   const Vec2 aside = home + Vec2{-0.12, 0.06};
   v.push_mouse(SDL_MOUSEMOTION, aside);
   v.set_paused(false);
-  for (int i = 0; i < 60; ++i) v.frame();  // a second: the scene's own timeline lets go of nothing held
+  for (int i = 0; i < 60; ++i)
+    v.frame();  // a second: the scene's own timeline lets go of nothing held
   EXPECT_EQ(v.event_count("sound"), 0u) << "open: the bell is silent";
   EXPECT_EQ(v.event_count("circuit_closed"), 0u);
   // Across the two contacts, a centimetre above them, and let go.
@@ -378,17 +395,20 @@ namespace {
 TEST(Viewer, AModThatErrsIsReportedAndTheWorldGoesOn) {
   const fs::path dir = test::temp_dir() / "jinx";
   fs::create_directories(dir);
-  std::ofstream(dir / "mod.lua") << "return { name = \"jinx\", version = \"0.1.0\", depends = { \"kit\" },\n"
-                                    "         runtime = \"runtime.lua\", scene = \"scene.lua\" }\n";
+  std::ofstream(dir / "mod.lua")
+      << "return { name = \"jinx\", version = \"0.1.0\", depends = { \"kit\" },\n"
+         "         runtime = \"runtime.lua\", scene = \"scene.lua\" }\n";
   std::ofstream(dir / "runtime.lua")
       << "mod.property { name = \"jinx\", doc = \"bad luck\" }\n"
-         "mod.resolver { name = \"jinx.luck\", reads = { \"jinx\" }, writes = {}, needs = { \"jinx\" },\n"
+         "mod.resolver { name = \"jinx.luck\", reads = { \"jinx\" }, writes = {}, needs = { "
+         "\"jinx\" },\n"
          "  advance = function(w, dt) error(\"the jinx broke\") end }\n";
   std::ofstream(dir / "scene.lua")
       << "local kit = require \"kit\"\n"
          "world { settings = { [\"gravity.uniform\"] = { g = { 0, -9.81, 0 } } } }\n"
          "kit.floor { name = \"floor\", at = { 0, -0.05 }, size = { 2, 0.1 } }\n"
-         "kit.disk { name = \"ball\", material = \"rubber\", at = { 0, 1 }, radius = 0.05, props = { jinx = 1 } }\n";
+         "kit.disk { name = \"ball\", material = \"rubber\", at = { 0, 1 }, radius = 0.05, props = "
+         "{ jinx = 1 } }\n";
   Viewer v(test::headless(dir));
   ASSERT_TRUE(v.load_error().empty()) << v.load_error();
   for (int i = 0; i < 30; ++i) v.frame();
