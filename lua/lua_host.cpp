@@ -92,6 +92,11 @@ void LuaHost::use_budget_ticks(int index) {
 }
 
 bool LuaHost::compile(std::string_view code, const std::string& chunkname) {
+  if (!code.empty() && code[0] == '\x1b') {  // LUA_SIGNATURE: bytecode, which can crash the VM
+    lua_pushfstring(L_, "%s: attempt to load a binary chunk: only source text can be loaded",
+                    chunkname.empty() ? "?" : chunkname.c_str() + 1);
+    return false;
+  }
   std::string ticked;
   if (ticks_ref_ != -2) {
     try {

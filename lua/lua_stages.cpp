@@ -279,6 +279,15 @@ LuaStage::~LuaStage() {
   luaL_unref(mod_->state(), LUA_REGISTRYINDEX, record_ref_);
 }
 
+void LuaStage::reset_state() {
+  lua_State* L = mod_->state();
+  StackGuard guard(L);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, mod_->prelude_ref("set_state"));
+  lua_rawgeti(L, LUA_REGISTRYINDEX, record_ref_);
+  mod_->push_state();
+  mod_->host().call(2, 0, where_);
+}
+
 void LuaStage::rebind(const StageDecl& decl) {
   lua_State* L = mod_->state();
   StackGuard guard(L);
@@ -314,10 +323,10 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   view_ = nullptr;
   access_ = nullptr;
   if (ok) return true;
+  // Published as events now; reported (and logged) by ModRuntime::poll.
   if (mod_->stopped()) {
-    if (!mod_->stop_reported) {
-      mod_->stop_reported = true;
-      mod_->log(mod_->stop_reason());
+    if (!mod_->stop_event_sent) {
+      mod_->stop_event_sent = true;
       view.emit(Event{.type = "mod_stopped", .text = mod_->stop_reason()});
     }
     return false;
@@ -325,7 +334,6 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   disabled_ = true;
   reason_ = "stage '" + instance_ + "' of mod '" + mod_->name() + "' failed and is disabled until the mod is reloaded: " +
             failure.what();
-  mod_->log(reason_);
   view.emit(Event{.type = "stage_disabled", .text = reason_});
   return false;
 }

@@ -65,6 +65,8 @@ class LuaStage {
   /// and run again if disabled.
   void rebind(const StageDecl& decl);
 
+  /// The mod's state table was replaced (a stopped mod starting over).
+  void reset_state();
   /// Set once the runtime has reported this stage's failure.
   bool reported = false;
 

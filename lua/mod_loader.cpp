@@ -129,6 +129,9 @@ ModLoader::ModLoader(LuaHost& host, std::vector<fs::path> search_path, Decorate 
   // Caches of this loader alone: a second loader in the same state (a mod
   // reloaded) starts from nothing and runs every file again.
   lua_State* L = host_.state();
+  box_ = static_cast<ModLoader**>(lua_newuserdata(L, sizeof(ModLoader*)));
+  *box_ = this;
+  box_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
   lua_newtable(L);
   envs_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
   lua_newtable(L);
@@ -137,6 +140,8 @@ ModLoader::ModLoader(LuaHost& host, std::vector<fs::path> search_path, Decorate 
 
 ModLoader::~ModLoader() {
   lua_State* L = host_.state();
+  *box_ = nullptr;
+  luaL_unref(L, LUA_REGISTRYINDEX, box_ref_);
   luaL_unref(L, LUA_REGISTRYINDEX, envs_ref_);
   luaL_unref(L, LUA_REGISTRYINDEX, loaded_ref_);
 }
@@ -162,7 +167,7 @@ void ModLoader::push_environment(const std::string& mod) {
   lua::push_environment(L);
   const int env = lua_gettop(L);
   decorate_(L, env, key);
-  lua_pushlightuserdata(L, this);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, box_ref_);
   lua_pushcclosure(L, &ModLoader::require_fn, 1);
   lua_setfield(L, env, "require");
   lua_pushvalue(L, env);
@@ -217,7 +222,9 @@ void ModLoader::check_depends(const Manifest& m) {
 }
 
 int ModLoader::require_fn(lua_State* L) {
-  auto* self = static_cast<ModLoader*>(lua_touserdata(L, lua_upvalueindex(1)));
+  auto** box = static_cast<ModLoader**>(lua_touserdata(L, lua_upvalueindex(1)));
+  ModLoader* self = box ? *box : nullptr;
+  if (!self) return luaL_error(L, "require: the files this function came from were unloaded");
   return catch_exceptions(L, [&] { return self->require(L); });
 }
 

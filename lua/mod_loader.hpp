@@ -60,8 +60,11 @@ class ModLoader {
 
   ModLoader(LuaHost& host, std::vector<std::filesystem::path> search_path, Decorate decorate);
   /// Frees the loader's environments and module cache (the modules stay alive
-  /// as long as something else refers to them).
+  /// as long as something else refers to them). A `require` kept by a script
+  /// fails cleanly afterwards.
   ~ModLoader();
+  /// Replaces the decoration of environments made from now on.
+  void set_decorate(Decorate decorate) { decorate_ = std::move(decorate); }
   ModLoader(const ModLoader&) = delete;
   ModLoader& operator=(const ModLoader&) = delete;
 
@@ -104,6 +107,8 @@ class ModLoader {
   std::vector<std::string> loading_;                          // require chain, for cycles
   std::vector<std::string> checked_;                          // mods whose depends exist
   std::vector<std::string> required_;                         // mods run, in first-require order
+  ModLoader** box_ = nullptr;  // userdata holding `this`, the upvalue of require; nulled at destruction
+  int box_ref_ = -2;
   int envs_ref_ = -2;    // registry ref: mod name -> environment (this loader's own)
   int loaded_ref_ = -2;  // registry ref: module name -> value (this loader's own)
 };

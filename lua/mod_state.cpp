@@ -357,7 +357,20 @@ void ModState::make_state() {
   lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref_);
   lua_getfield(L, -1, "tick");
   host_->use_budget_ticks(-1);
-  lua_pop(L, 2);
+  lua_pop(L, 1);
+  // This state's string metatable is the mod's own: its methods ("x"):find(p)
+  // get the guarded pattern functions too (the metatable stays hidden).
+  lua_getfield(L, -1, "string");
+  const int guarded = lua_gettop(L);
+  lua_pushliteral(L, "");
+  lua_getmetatable(L, -1);
+  lua_getfield(L, -1, "__index");  // the real string table
+  for (lua_pushnil(L); lua_next(L, guarded); lua_pop(L, 1)) {
+    lua_pushvalue(L, -2);
+    lua_pushvalue(L, -2);
+    lua_rawset(L, -5);
+  }
+  lua_pop(L, 5);
 
   lua_newtable(L);
   state_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
@@ -384,6 +397,7 @@ void ModState::resume() {
   saved_message_ = stop_message_;
   stopped_ = false;
   stop_reported = false;
+  stop_event_sent = false;
   stop_reason_.clear();
   stop_message_.clear();
   abi_budget_->stopped = 0;
@@ -391,19 +405,21 @@ void ModState::resume() {
   luaL_unref(L, LUA_REGISTRYINDEX, state_ref_);
   lua_newtable(L);
   state_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  for (LuaStage* s : stages_) s->reset_state();
   lua_gc(L, LUA_GCCOLLECT, 0);
 }
 
 void ModState::restop() {
   stopped_ = true;
   stop_reported = true;
+  stop_event_sent = true;
   stop_reason_ = saved_reason_;
   stop_message_ = saved_message_;
   abi_budget_->stopped = 1;
 }
 
 void ModState::install_environment(lua_State* L, int env, const std::string& mod, int box_ref,
-                                   Collector& c) {
+                                   Collector* c) {
   env = abs_index(L, env);
   push_alloy_api(L);
   lua_setfield(L, env, "alloy");
@@ -413,6 +429,14 @@ void ModState::install_environment(lua_State* L, int env, const std::string& mod
     lua_getfield(L, m, name);
     lua_setfield(L, env, name);
   }
+  lua_getfield(L, env, "string");  // the environment's own copy: guarded patterns
+  lua_getfield(L, m, "string");
+  for (lua_pushnil(L); lua_next(L, -2); lua_pop(L, 1)) {
+    lua_pushvalue(L, -2);
+    lua_pushvalue(L, -2);
+    lua_rawset(L, -6);
+  }
+  lua_pop(L, 2);
   lua_getfield(L, env, "math");  // the environment's own copy
   lua_getfield(L, m, "random");
   lua_setfield(L, -2, "random");
@@ -422,7 +446,7 @@ void ModState::install_environment(lua_State* L, int env, const std::string& mod
   lua_pushlightuserdata(L, this);
   lua_pushcclosure(L, &ModState::print_fn, 1);
   lua_setfield(L, env, "print");
-  if (!mod.empty()) return;  // a dependency's files: no `mod` table
+  if (!mod.empty() || !c) return;  // a dependency's files: no `mod` table
 
   lua_createtable(L, 0, 8);
   lua_pushstring(L, manifest_.name.c_str());
@@ -440,8 +464,8 @@ void ModState::install_environment(lua_State* L, int env, const std::string& mod
     lua_setfield(L, -2, f.name);
   }
   lua_pushvalue(L, -1);
-  if (c.mod_ref != -2) luaL_unref(L, LUA_REGISTRYINDEX, c.mod_ref);
-  c.mod_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  if (c->mod_ref != -2) luaL_unref(L, LUA_REGISTRYINDEX, c->mod_ref);
+  c->mod_ref = luaL_ref(L, LUA_REGISTRYINDEX);
   lua_setfield(L, env, "mod");
 }
 
@@ -478,10 +502,10 @@ std::unique_ptr<Program> ModState::load_program() {
   auto** box = static_cast<Collector**>(lua_newuserdata(L, sizeof(Collector*)));
   *box = &c;
   const int box_ref = luaL_ref(L, LUA_REGISTRYINDEX);
-  ModLoader loader(*host_, search_path_, [&](lua_State* L, int env, const std::string& mod) {
-    install_environment(L, env, mod, box_ref, c);
+  auto loader = std::make_shared<ModLoader>(*host_, search_path_, [&](lua_State* L, int env, const std::string& mod) {
+    install_environment(L, env, mod, box_ref, &c);
   });
-  loader.set_scene_mod(manifest_);
+  loader->set_scene_mod(manifest_);
 
   const bool was_stopped = stopped_;
   auto cleanup = [&] {
@@ -491,8 +515,8 @@ std::unique_ptr<Program> ModState::load_program() {
   };
   try {
     host_->load_file(file, display);
-    loader.add_scene_file(display);
-    loader.push_environment(manifest_.name);
+    loader->add_scene_file(display);
+    loader->push_environment(manifest_.name);
     lua_setfenv(L, -2);
     begin_loading();
     try {
@@ -521,15 +545,21 @@ std::unique_ptr<Program> ModState::load_program() {
     if (!was_stopped) {
       stopped_ = false;
       stop_reported = false;
+      stop_event_sent = false;
       abi_budget_->stopped = 0;
       stop_reason_.clear();
     }
     throw;
   }
   cleanup();
-  for (const auto& [f, mod] : loader.loaded_files())
+  for (const auto& [f, mod] : loader->loaded_files())
     if (mod.empty()) prog->files.push_back(f);
   std::sort(prog->files.begin(), prog->files.end());
+  // Later requires (inside a stage) make environments without a `mod` table.
+  loader->set_decorate([this](lua_State* L, int env, const std::string& mod) {
+    install_environment(L, env, mod, -2, nullptr);
+  });
+  prog->loader = std::move(loader);
   return prog;
 }
 
@@ -539,6 +569,7 @@ void ModState::release(Program& p) {
   for (auto& [type, ref] : p.handlers) luaL_unref(L, LUA_REGISTRYINDEX, ref), ref = -2;
   for (int* r : {&p.on_load, &p.on_reload, &p.on_unload})
     if (*r != -2) luaL_unref(L, LUA_REGISTRYINDEX, *r), *r = -2;
+  p.loader.reset();
 }
 
 std::unique_ptr<Program> ModState::set_program(std::unique_ptr<Program> p) {

@@ -82,6 +82,9 @@ struct Program {
   std::vector<std::pair<std::string, int>> handlers;  ///< event type ("*": all), function ref
   int on_load = -2, on_reload = -2, on_unload = -2;   ///< function refs, or -2
   std::vector<std::string> files;                     ///< display names of the files it ran
+  /// The loader that ran them: `require` in the mod's functions goes on
+  /// using its module cache for as long as the program runs.
+  std::shared_ptr<ModLoader> loader;
   const StageDecl* stage(std::string_view name) const;
 };
 
@@ -138,7 +141,9 @@ class ModState : public std::enable_shared_from_this<ModState> {
   /// Stopped for a budget (until reloaded): its stages and handlers are skipped.
   bool stopped() const { return stopped_; }
   const std::string& stop_reason() const { return stop_reason_; }
-  /// Set by the runtime when it has reported the stop (once).
+  /// Set when the stop has been published as an event (once), and when the
+  /// runtime has reported it (once).
+  bool stop_event_sent = false;
   bool stop_reported = false;
 
   /// A registry ref of the prelude's function `fn` (new_stage, bind, run).
@@ -166,7 +171,7 @@ class ModState : public std::enable_shared_from_this<ModState> {
  private:
   void make_state();
   void install_environment(lua_State* L, int env, const std::string& mod, int box_ref,
-                           struct Collector& c);
+                           struct Collector* c);
   static int over_budget(lua_State* L);
   static int print_fn(lua_State* L);
   [[noreturn]] void stop(lua_State* L, const std::string& why);
