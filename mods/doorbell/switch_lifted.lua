@@ -7,7 +7,13 @@ world {
   description = "the doorbell rung from 0.5 s to 3 s, then the switch bar is lifted away",
   dt = 1 / 240,
   seconds = 6,
-  settings = { ["gravity.uniform"] = { g = { 0, -9.81, 0 } } },
+  settings = {
+    ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
+    -- ODE's exact solver: a light contact finger on a hinge with stops,
+    -- against a heavy lever, is what the iterative one handles worst (at
+    -- rest the finger creeps off its contact).
+    rigid_body = { solver = "step" },
+  },
 }
 
 require "doorbell.layout" ()

@@ -5,7 +5,13 @@ world {
   description = "the doorbell with its switch bar never let go: silence",
   dt = 1 / 240,
   seconds = 10,
-  settings = { ["gravity.uniform"] = { g = { 0, -9.81, 0 } } },
+  settings = {
+    ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
+    -- ODE's exact solver: a light contact finger on a hinge with stops,
+    -- against a heavy lever, is what the iterative one handles worst (at
+    -- rest the finger creeps off its contact).
+    rigid_body = { solver = "step" },
+  },
 }
 
 require "doorbell.layout" ()
