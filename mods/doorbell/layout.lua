@@ -49,7 +49,7 @@ local defaults = {
   -- copper on a 50 x 30 mm bobbin with an iron core.
   coil_gap = 0.005, coil_length = 0.05, coil_diameter = 0.03, turns = 800, wire_diameter = 0.5e-3,
   -- The bell above the hammer: a bronze dome of 30 mm radius.
-  bell_gap = 0.007, bell_radius = 0.03,
+  bell_gap = 0.0065, bell_radius = 0.03,
 }
 
 return function(options)
