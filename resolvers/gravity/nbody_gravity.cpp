@@ -28,14 +28,12 @@ void NBodyGravity::resolve_ids(const WorldView& v) {
   static_ = v.property("static"), gravity_ = v.property("gravity");
 }
 
-bool NBodyGravity::inputs_changed(const WorldView& v) const {
+NBodyGravity::Counters NBodyGravity::counters(const WorldView& v) const {
   const PropertyStore& store = v.store();
   const ColumnBase &x = store.column(position_), &m = store.column(mass_), &d = store.column(density_),
                    &s = store.column(static_);
-  const std::uint64_t now[] = {x.version(), x.membership_version(), m.version(), m.membership_version(),
-                               d.membership_version(), s.version(), s.membership_version(),
-                               v.scope() ? v.scope()->version() : 0};
-  return seen_.size() != std::size(now) || !std::equal(seen_.begin(), seen_.end(), std::begin(now));
+  return {x.version(), x.membership_version(), m.version(), m.membership_version(), d.membership_version(),
+          s.version(), s.membership_version(), v.scope() ? v.scope()->version() : 0};
 }
 
 void NBodyGravity::compute(ResolverAccess& access) {
@@ -83,11 +81,8 @@ void NBodyGravity::compute(ResolverAccess& access) {
     for (std::size_t i = 0; i < targets_.size(); ++i) gravity.set(targets_[i], a_[i]);
   }
 
-  const ColumnBase &x = store.column(position_), &m = store.column(mass_), &d = store.column(density_),
-                   &st = store.column(static_);
-  seen_ = {x.version(), x.membership_version(), m.version(), m.membership_version(),
-           d.membership_version(), st.version(), st.membership_version(),
-           access.scope() ? access.scope()->version() : 0};
+  seen_ = counters(access);
+  evaluated_ = true;
 }
 
 void NBodyGravity::build(ResolverAccess& access) {
@@ -97,7 +92,7 @@ void NBodyGravity::build(ResolverAccess& access) {
 
 void NBodyGravity::advance(ResolverAccess& access, double) {
   resolve_ids(access);
-  if (inputs_changed(access)) compute(access);
+  if (!evaluated_ || counters(access) != seen_) compute(access);
 }
 
 void NBodyGravity::on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) {

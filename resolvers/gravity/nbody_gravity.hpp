@@ -25,6 +25,7 @@
 //          position, mass or membership changed.
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -60,16 +61,17 @@ class NBodyGravity final : public Resolver {
 
  private:
   void resolve_ids(const WorldView& v);
-  bool inputs_changed(const WorldView& v) const;
+  /// Position, mass, density and static counters (values and memberships) and the scope's version.
+  using Counters = std::array<std::uint64_t, 8>;
+  Counters counters(const WorldView& v) const;
   void compute(ResolverAccess& access);
 
   double G_, softening_;
   bool area_sources_;
   PropertyId position_ = kNoProperty, mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty,
              gravity_ = kNoProperty;
-  // Input counters at the last evaluation: position, mass, static (values and
-  // memberships) and the scope's version.
-  std::vector<std::uint64_t> seen_;
+  Counters seen_{};  // counters() at the last evaluation
+  bool evaluated_ = false;
   std::uint64_t evaluations_ = 0;
   // Scratch, kept to avoid allocating each step.
   std::vector<std::uint32_t> masses_, targets_;

@@ -157,8 +157,8 @@ TEST(SpaceScene, TheProbeLeavesThePlanetAreaAndOrbitsTenTimesKeepingItsEnergy) {
 
 // The figures of docs/gravity.md (not run by ctest: 2 s, and the criterion is
 // checked at the scene's own dt above):
-//   build-space/tests/resolvers/gravity/space_scene_tests --gtest_also_run_disabled_tests \
-//     --gtest_filter='SpaceScene.DISABLED_Figures*'
+//   build-space/tests/resolvers/gravity/space_scene_tests
+//     --gtest_also_run_disabled_tests --gtest_filter='SpaceScene.DISABLED_Figures*'
 TEST(SpaceScene, DISABLED_Figures) {
   std::printf("%-8s %-14s %-14s %-14s %-14s %-14s\n", "dt", "drift/orbit", "worst of 10", "swing in orbit",
               "period-Kepler", "apsis turn/orbit");
