@@ -44,9 +44,11 @@ void EventLog::close() {
 void Narrator::narrate(const World& world, const Event& e) {
   ++counts_[e.type];
   auto key = std::make_tuple(e.type, e.a, e.b);
+  // At most one line per event type and pair every `quiet_` seconds: a
+  // resting contact that flickers, or a doorbell that buzzes at 20 Hz, still
+  // shows up a few times a second instead of flooding or going silent.
   auto it = last_.find(key);
   if (it != last_.end() && e.time - it->second < quiet_) {
-    it->second = e.time;
     ++folded_;
     return;
   }

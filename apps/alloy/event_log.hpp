@@ -29,8 +29,9 @@ class EventLog {
 };
 
 /// Human narration: one line per event, "step 240  t=1.000 s  contact began: ball - floor".
-/// Repeats of the same event on the same pair within `quiet` seconds are
-/// folded (resting contacts flicker), and counted in the summary.
+/// Repeats of the same event on the same pair within `quiet` seconds of the
+/// last line narrated for them are folded (resting contacts flicker), and
+/// counted in the summary.
 class Narrator {
  public:
   Narrator(std::ostream& out, double quiet = 0.25) : out_(out), quiet_(quiet) {}
