@@ -33,9 +33,9 @@ struct Record {
 };
 
 struct RunOptions {
-  std::optional<double> dt;         ///< overrides the scene's step
-  double emf_scale = 1;             ///< the battery's emf times this
-  std::optional<double> seconds;    ///< default: the scene's
+  std::optional<double> dt;       ///< overrides the scene's step
+  double emf_scale = 1;           ///< the battery's emf times this
+  std::optional<double> seconds;  ///< default: the scene's
 };
 
 struct RunResult {
@@ -69,7 +69,9 @@ inline RunResult run_scene(const std::string& scene, const RunOptions& options =
     world.set(battery, "emf", std::get<double>(world.get(battery, "emf")) * options.emf_scale);
   RunResult r;
   world.add_observer([&](const Event& e) {
-    Record rec{e.step, e.time, e.type, e.a ? world.describe(e.a) : "", e.b ? world.describe(e.b) : "", e.values};
+    Record rec{
+        e.step,  e.time, e.type, e.a ? world.describe(e.a) : "", e.b ? world.describe(e.b) : "",
+        e.values};
     r.events.push_back(std::move(rec));
   });
   r.dt = world.dt();
@@ -102,8 +104,9 @@ inline std::vector<Cycle> cycles(const RunResult& r, const std::string& striker 
       c.closed = e.step, c.on = c.left = c.broken = 0;  // the chain starts again here
     } else if (e.type == "electromagnet_on" && e.a == "coil" && c.closed && !c.on) {
       c.on = e.step;
-    } else if (e.type == "contact_ended" && ((e.a == striker && e.b == contact) || (e.a == contact && e.b == striker)) &&
-               c.on && !c.left) {
+    } else if (e.type == "contact_ended" &&
+               ((e.a == striker && e.b == contact) || (e.a == contact && e.b == striker)) && c.on &&
+               !c.left) {
       c.left = e.step;
     } else if (e.type == "circuit_opened" && e.a == "coil" && c.left && !c.broken) {
       c.broken = e.step;

@@ -3,13 +3,13 @@
 // check what the paper (4.1) says a doorbell does, then check it again with
 // the step halved and the battery 10 % weaker and stronger.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "apps/alloy/commands.hpp"
 #include "tests/doorbell/doorbell_support.hpp"
@@ -21,13 +21,15 @@ namespace {
 constexpr const char* kScene = "mods/doorbell";
 constexpr const char* kOpen = "mods/doorbell/switch_open.lua";
 constexpr const char* kLifted = "mods/doorbell/switch_lifted.lua";
-constexpr double kSwitchDropped = 0.5;  // the scenes' timeline: at(0.5, "switch_bar", { pinned = false })
-constexpr double kSwitchLifted = 3.0;   // switch_lifted.lua: at(3.0, "switch_bar", { pinned = true, ... })
+constexpr double kSwitchDropped =
+    0.5;  // the scenes' timeline: at(0.5, "switch_bar", { pinned = false })
+constexpr double kSwitchLifted =
+    3.0;  // switch_lifted.lua: at(3.0, "switch_bar", { pinned = true, ... })
 
 std::string describe(const Cycle& c) {
   std::ostringstream s;
-  s << "closed " << c.closed << ", magnet on " << c.on << ", striker left " << c.left << ", broken " << c.broken
-    << ", struck " << c.struck << " (" << c.closures << " closures)";
+  s << "closed " << c.closed << ", magnet on " << c.on << ", striker left " << c.left << ", broken "
+    << c.broken << ", struck " << c.struck << " (" << c.closures << " closures)";
   return s.str();
 }
 
@@ -39,7 +41,8 @@ void expect_rings_steadily(const RunResult& r, std::size_t min_strikes, double m
   const auto t = r.strikes();
   ASSERT_GE(t.size(), min_strikes);
   const Intervals iv = intervals(t);
-  EXPECT_LT(iv.spread(), max_spread) << "intervals from " << iv.min << " to " << iv.max << " s, mean " << iv.mean;
+  EXPECT_LT(iv.spread(), max_spread)
+      << "intervals from " << iv.min << " to " << iv.max << " s, mean " << iv.mean;
   const auto cs = cycles(r);
   ASSERT_EQ(cs.size(), t.size());
   for (std::size_t i = 0; i < cs.size(); ++i) {
@@ -143,7 +146,8 @@ struct Wav {
 
 std::uint32_t u32(const std::string& s, std::size_t at) {
   return std::uint32_t(std::uint8_t(s[at])) | std::uint32_t(std::uint8_t(s[at + 1])) << 8 |
-         std::uint32_t(std::uint8_t(s[at + 2])) << 16 | std::uint32_t(std::uint8_t(s[at + 3])) << 24;
+         std::uint32_t(std::uint8_t(s[at + 2])) << 16 |
+         std::uint32_t(std::uint8_t(s[at + 3])) << 24;
 }
 std::uint16_t u16(const std::string& s, std::size_t at) {
   return std::uint16_t(std::uint8_t(s[at]) | std::uint8_t(s[at + 1]) << 8);
@@ -174,12 +178,13 @@ Wav read_wav(const std::filesystem::path& path) {
 
 TEST(DoorbellSound, TheWavHasTheBellsPitchAfterEachStrikeAndSilenceBefore) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("alloy_doorbell_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("alloy_doorbell_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string wav = (dir / "bell.wav").string(), events = (dir / "bell.jsonl").string();
   const std::string scene = source(kScene).string();
-  const char* argv[] = {"alloy", "run", scene.c_str(), "--seconds", "3", "--quiet", "--audio", wav.c_str(), "--events",
-                        events.c_str()};
+  const char* argv[] = {"alloy",   "run",     scene.c_str(), "--seconds", "3",
+                        "--quiet", "--audio", wav.c_str(),   "--events",  events.c_str()};
   std::ostringstream out, err;
   ASSERT_EQ(app::run_cli(int(std::size(argv)), argv, out, err), app::kExitOk) << err.str();
 
@@ -207,15 +212,17 @@ TEST(DoorbellSound, TheWavHasTheBellsPitchAfterEachStrikeAndSilenceBefore) {
   // neighbourhood (10 % either side, between the bell's own partials).
   const double end = double(w.samples.size()) / w.rate;
   for (std::size_t i = 0; i < strikes.size(); ++i) {
-    const double t0 = strikes[i], t1 = std::min({i + 1 < strikes.size() ? strikes[i + 1] : end, t0 + 0.05, end});
+    const double t0 = strikes[i],
+                 t1 = std::min({i + 1 < strikes.size() ? strikes[i + 1] : end, t0 + 0.05, end});
     if (t1 - t0 < 0.02) continue;  // the run ends right after it
     const auto x = sound::test::window(w.samples, w.rate, t0, t1);
     const double at = sound::test::goertzel(x, pitch, w.rate);
     const double low = sound::test::goertzel(x, 0.9 * pitch, w.rate);
     const double high = sound::test::goertzel(x, 1.1 * pitch, w.rate);
     EXPECT_GT(at, 0.01) << "strike " << i << " at " << t0 << " s";
-    EXPECT_GT(at, 30 * std::max(low, high)) << "strike " << i << " at " << t0 << " s: " << at << " at the pitch, "
-                                            << low << " and " << high << " beside it";
+    EXPECT_GT(at, 30 * std::max(low, high))
+        << "strike " << i << " at " << t0 << " s: " << at << " at the pitch, " << low << " and "
+        << high << " beside it";
   }
   fs::remove_all(dir);
 }

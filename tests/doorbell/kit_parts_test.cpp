@@ -3,10 +3,10 @@
 // these tests redo the arithmetic by hand (mods/kit/README.md, "How the
 // numbers come out") and check the refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <numbers>
-#include <unistd.h>
 
 #include "tests/doorbell/doorbell_support.hpp"
 
@@ -88,24 +88,28 @@ TEST_F(KitParts, ACoilsWindingAndCoreGiveItsResistanceInductanceAndPull) {
   const double a_eff = mean_area + chi / (1 + nd * chi) * pi * 0.018 * 0.018 / 4;
   EXPECT_EQ(kind(w(), "coil", "magnet"), "electromagnet");
   EXPECT_DOUBLE_EQ(get<double>(w(), "coil", "turns"), N);
-  EXPECT_NEAR(get<double>(w(), "coil", "resistance"), 1.68e-8 * N * pi * (ri + ro) / (pi * d * d / 4), 1e-9);
+  EXPECT_NEAR(get<double>(w(), "coil", "resistance"),
+              1.68e-8 * N * pi * (ri + ro) / (pi * d * d / 4), 1e-9);
   EXPECT_NEAR(get<double>(w(), "coil", "inductance"), mu0 * N * N * a_eff / L, 1e-9);
   EXPECT_NEAR(get<double>(w(), "coil", "coil_factor"), a_eff / (0.85 * L), 1e-9);
   // The figures the kit's README quotes.
   EXPECT_NEAR(get<double>(w(), "coil", "resistance"), 3.23, 0.005);
   EXPECT_NEAR(get<double>(w(), "coil", "inductance"), 0.0163, 0.0001);
   EXPECT_NEAR(get<double>(w(), "coil", "coil_factor"), 0.061, 0.0005);
-  EXPECT_FALSE(has(w(), "coil", "conductive")) << "its winding is enamelled: touching it connects nothing";
+  EXPECT_FALSE(has(w(), "coil", "conductive"))
+      << "its winding is enamelled: touching it connects nothing";
   // Without the core: the winding's own area, far less pull per ampere-turn.
   EXPECT_NEAR(get<double>(w(), "air_coil", "coil_factor"), mean_area / (0.85 * L), 1e-12);
-  EXPECT_GT(get<double>(w(), "coil", "coil_factor"), 4 * get<double>(w(), "air_coil", "coil_factor"));
+  EXPECT_GT(get<double>(w(), "coil", "coil_factor"),
+            4 * get<double>(w(), "air_coil", "coil_factor"));
 }
 
 TEST_F(KitParts, TooManyTurnsForTheBobbinAreRefused) {
-  const std::filesystem::path f =
-      std::filesystem::temp_directory_path() / ("alloy_kit_coil_" + std::to_string(::getpid()) + ".lua");
-  std::ofstream(f) << "local kit = require \"kit\"\nworld {}\n"
-                      "kit.coil { name = \"fat\", at = { 0, 0 }, turns = 500, wire_diameter = 0.7e-3 }\n";
+  const std::filesystem::path f = std::filesystem::temp_directory_path() /
+                                  ("alloy_kit_coil_" + std::to_string(::getpid()) + ".lua");
+  std::ofstream(f)
+      << "local kit = require \"kit\"\nworld {}\n"
+         "kit.coil { name = \"fat\", at = { 0, 0 }, turns = 500, wire_diameter = 0.7e-3 }\n";
   try {
     lua::load_scene(f, registry);
     ADD_FAILURE() << "accepted";
@@ -118,11 +122,13 @@ TEST_F(KitParts, TooManyTurnsForTheBobbinAreRefused) {
 }
 
 TEST_F(KitParts, MagnetsPoleStrengthComesFromTheirRemanence) {
-  const double q = 1.2 / mu0 * 0.01 * 0.01 / 0.85;  // M = Br / mu0 over the cross-section, poles 0.85 L apart
+  const double q =
+      1.2 / mu0 * 0.01 * 0.01 / 0.85;  // M = Br / mu0 over the cross-section, poles 0.85 L apart
   EXPECT_EQ(kind(w(), "magnet", "magnet"), "permanent");
   EXPECT_NEAR(get<double>(w(), "magnet", "pole_strength"), q, 1e-9);
   EXPECT_NEAR(get<double>(w(), "magnet", "pole_strength"), 112.3, 0.1);
-  EXPECT_NEAR(get<double>(w(), "ferrite", "pole_strength"), -q / 3, 1e-9) << "north at -x: negative";
+  EXPECT_NEAR(get<double>(w(), "ferrite", "pole_strength"), -q / 3, 1e-9)
+      << "north at -x: negative";
   EXPECT_DOUBLE_EQ(get<double>(w(), "ferrite", "density"), 4900);
 }
 
@@ -134,7 +140,8 @@ TEST_F(KitParts, IronIsSoftIronSteelOnlyWhenAsked) {
   EXPECT_DOUBLE_EQ(get<double>(w(), "armature", "susceptibility"), 5000);
   EXPECT_DOUBLE_EQ(get<double>(w(), "magnetic_steel", "susceptibility"), 300);
   // Ms V / (0.85 L): an iron bar 100 x 20 x 20 mm.
-  EXPECT_NEAR(get<double>(w(), "iron_bar", "saturation_pole"), 1.71e6 * 0.1 * 0.02 * 0.02 / (0.85 * 0.1), 1e-9);
+  EXPECT_NEAR(get<double>(w(), "iron_bar", "saturation_pole"),
+              1.71e6 * 0.1 * 0.02 * 0.02 / (0.85 * 0.1), 1e-9);
   EXPECT_FALSE(has(w(), "steel_bar", "magnet")) << "a steel bar is magnetic only when asked";
   EXPECT_TRUE(get<bool>(w(), "steel_bar", "conductive"));
   EXPECT_FALSE(has(w(), "wooden_bar", "conductive"));
@@ -150,7 +157,8 @@ TEST_F(KitParts, BellsRingWithTheirMetalsStiffnessAndDamping) {
   EXPECT_FALSE(has(w(), "bell", "pitch")) << "the sound resolver computes it";
   EXPECT_DOUBLE_EQ(get<double>(w(), "tuned_bell", "pitch"), 1200);
   EXPECT_DOUBLE_EQ(get<double>(w(), "tuned_bell", "decay"), 2);
-  EXPECT_NEAR(get<double>(w(), "tuned_bell", "mass"), 8600 * 4.0 / 3.0 * pi * 0.05 * 0.05 * 0.05, 1e-9);
+  EXPECT_NEAR(get<double>(w(), "tuned_bell", "mass"), 8600 * 4.0 / 3.0 * pi * 0.05 * 0.05 * 0.05,
+              1e-9);
 }
 
 TEST_F(KitParts, TheSceneRunsAndTheBatteryDrivesItsCircuit) {
@@ -158,7 +166,8 @@ TEST_F(KitParts, TheSceneRunsAndTheBatteryDrivesItsCircuit) {
   // end: a loop of two copper wires (81 milliohm) and the battery's 0.5 ohm.
   World& world = *scene.world;
   world.run(2);
-  const double r = get<double>(w(), "lead", "resistance") + get<double>(w(), "long_lead", "resistance") + 0.5;
+  const double r =
+      get<double>(w(), "lead", "resistance") + get<double>(w(), "long_lead", "resistance") + 0.5;
   EXPECT_NEAR(get<double>(w(), "battery", "current"), 6 / r, 1e-9);
 }
 
