@@ -16,9 +16,11 @@ namespace {
 
 const abi::Api kApi = {
     &LuaStage::api_fetch, &LuaStage::api_set_scalar, &LuaStage::api_set_vec3,
-    &LuaStage::api_set_quat, &LuaStage::api_has,        &LuaStage::api_queue,
+    &LuaStage::api_set_quat, &LuaStage::api_has,        &LuaStage::api_grow,
     &LuaStage::api_commands, &LuaStage::api_contacts,
 };
+
+constexpr std::size_t kCommandBuffer = 8192;  // doubles: grows when a call queues more
 
 abi::ColumnKind abi_kind(PropertyKind k) {
   switch (k) {
@@ -311,8 +313,22 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   call_->slots = std::uint32_t(view.store().slot_count());
   call_->in_call = 1;
   ++call_->epoch;
+  if (kind_ == StageKind::Interaction) {
+    if (commands_.size() < kCommandBuffer) commands_.resize(kCommandBuffer);
+    call_->buf = commands_.data();
+    call_->buf_len = 0;
+    call_->buf_cap = double(commands_.size());
+  }
   InputError failure("");
-  const bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
+  bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
+  // The commands are performed when the call succeeded, all of them; a
+  // failed call queues nothing.
+  if (ok && kind_ == StageKind::Interaction && !perform_commands()) {
+    ok = false;
+    failure = InputError(ErrorLocation{where_.file, 0, ""}, last_error_);
+  }
+  call_->buf = nullptr;
+  call_->buf_len = call_->buf_cap = 0;
   for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
   call_->in_call = 0;
   call_->cmd = nullptr;
@@ -389,30 +405,40 @@ void LuaStage::fetch(std::size_t k) {
   }
 }
 
-std::int32_t LuaStage::queue_command(std::int32_t fn, std::uint32_t slot, std::int32_t nargs) {
-  if (fn < 0 || std::size_t(fn) >= target_functions_.size()) return error("no such interaction function");
-  const FunctionDecl& f = target_functions_[std::size_t(fn)];
-  if (nargs != widths(f.args)) return error("'" + f.name + "' takes " + std::to_string(f.args.size()) + " arguments after the object");
-  int o = 0;
-  for (ArgKind a : f.args) {
-    for (int i = 0; i < width(a); ++i)
-      if (!std::isfinite(call_->args[o + i]))
-        return error("'" + f.name + "' of " + view_->store().describe(view_->store().id_at(slot)) +
-                     ": arguments must be finite, got " + number_text(call_->args[o + i]));
-    if (a == ArgKind::Object) {
-      std::uint32_t other;
-      if (!check_slot(call_->args[o], other)) return 1;
-    }
-    o += width(a);
-  }
-  const ObjectId id = view_->store().id_at(slot);
+bool LuaStage::perform_commands() {
+  const double* b = commands_.data();
+  const auto n = std::size_t(call_->buf_len);
+  const PropertyStore& store = view_->store();
   if (native_target_) {
-    native_target_->call(fn, id, call_->args);
-    return 0;
+    if (std::string problem = native_target_->perform(b, n, store); !problem.empty()) return error(problem), false;
+    return true;
   }
-  std::string problem = lua_target_->push(fn, slot, call_->args, nargs);
-  if (!problem.empty()) return error(problem);
-  return 0;
+  for (std::size_t o = 0; o < n;) {
+    const auto fn = std::size_t(b[o]);
+    if (fn >= target_functions_.size()) return error("a command of an unknown interaction function"), false;
+    const FunctionDecl& f = target_functions_[fn];
+    const std::size_t stride = 2 + std::size_t(widths(f.args));
+    if (o + stride > n) return error("a truncated command"), false;
+    // The prelude checked kinds, ranges and finiteness where the mod's line
+    // was known; what remains is whether the objects still exist.
+    const ObjectId id = store.id_at(std::uint32_t(b[o + 1]));
+    if (!id) return error("'" + f.name + "' on the object in slot " + number_text(b[o + 1]) + ", which was destroyed"), false;
+    std::size_t a = o + 2;
+    for (ArgKind k : f.args) {
+      if (k == ArgKind::Object && !store.id_at(std::uint32_t(b[a])))
+        return error("'" + f.name + "' of " + store.describe(id) + ": no object in slot " + number_text(b[a])), false;
+      a += std::size_t(width(k));
+    }
+    if (native_target_) {
+      native_target_->call(std::int32_t(fn), id, b + o + 2);
+    } else if (std::string problem = lua_target_->push(std::int32_t(fn), id.index, b + o + 2,
+                                                       std::int32_t(stride - 2));
+               !problem.empty()) {
+      return error(problem), false;
+    }
+    o += stride;
+  }
+  return true;
 }
 
 // --- the FFI entry points -------------------------------------------------------------
@@ -529,15 +555,16 @@ std::int32_t LuaStage::api_has(void* p, std::int32_t k, double slot) noexcept {
   }
 }
 
-std::int32_t LuaStage::api_queue(void* p, std::int32_t fn, double slot, std::int32_t nargs) noexcept {
+std::int32_t LuaStage::api_grow(void* p) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
     if (!st->view_ || st->kind_ != StageKind::Interaction) return st->error("only an interaction may queue commands, while it runs");
-    std::uint32_t s;
-    if (!st->check_slot(slot, s)) return 1;
-    return st->queue_command(fn, s, nargs);
+    st->commands_.resize(st->commands_.size() * 2);
+    st->call_->buf = st->commands_.data();
+    st->call_->buf_cap = double(st->commands_.size());
+    return 0;
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->error(std::string("cannot queue more commands: ") + e.what());
   }
 }
 

@@ -78,8 +78,7 @@ class LuaStage {
   static std::int32_t api_set_quat(void* stage, std::int32_t column, double slot, double w, double x,
                                    double y, double z) noexcept;
   static std::int32_t api_has(void* stage, std::int32_t column, double slot) noexcept;
-  static std::int32_t api_queue(void* stage, std::int32_t function, double slot,
-                                std::int32_t nargs) noexcept;
+  static std::int32_t api_grow(void* stage) noexcept;
   static std::int32_t api_commands(void* stage, std::int32_t function) noexcept;
   static std::int32_t api_contacts(void* stage, std::int32_t which) noexcept;
   static int host_last_error(lua_State* L);
@@ -113,8 +112,10 @@ class LuaStage {
     last_error_ = std::move(message);
     return 1;
   }
-  /// The number of queued-argument doubles of `fn`.
-  virtual std::int32_t queue_command(std::int32_t fn, std::uint32_t slot, std::int32_t nargs);
+  /// Performs the commands an interaction appended during its call (on its
+  /// target's interaction functions). Returns false with last_error_ set if
+  /// one is refused (an object that died).
+  bool perform_commands();
   virtual void fill_outputs(std::size_t k, abi::Column& info) {}
   virtual std::int32_t commands(std::int32_t fn) { return error("only a resolver has commands"); }
 
@@ -144,6 +145,7 @@ class LuaStage {
   std::unique_ptr<NativeTarget> native_target_;
   LuaResolver* lua_target_ = nullptr;
   std::vector<FunctionDecl> target_functions_;
+  std::vector<double> commands_;  // the call's command buffer (abi::Call::buf)
   // The collisions derived set, if declared.
   const rigid::CollisionSet* collisions_ = nullptr;
   std::vector<abi::Contact> contacts_;

@@ -356,7 +356,7 @@ void ModState::make_state() {
 
   lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref_);
   lua_getfield(L, -1, "tick");
-  host_->use_budget_ticks(-1);
+  if (budget_.ticks) host_->use_budget_ticks(-1);
   lua_pop(L, 1);
   // This state's string metatable is the mod's own: its methods ("x"):find(p)
   // get the guarded pattern functions too (the metatable stays hidden).

@@ -41,6 +41,10 @@ struct ModBudget {
   double seconds_per_step = 0.25;              ///< same, wall clock
   std::uint64_t ticks_to_load = 200'000'000;   ///< running its files and on_load / on_reload
   double seconds_to_load = 5;
+  /// Instrument the mod's code with budget ticks. Without them nothing stops
+  /// a runaway loop: only for trusted code, and to measure what they cost
+  /// (bench/lua_stage.cpp).
+  bool ticks = true;
 };
 
 /// The kind of one argument of an interaction function, after the object.

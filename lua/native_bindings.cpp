@@ -24,6 +24,23 @@ class RigidBodyTarget final : public NativeTarget {
     }
     throw AccessError("rigid_body has no interaction function #" + std::to_string(fn));
   }
+  std::string perform(const double* b, std::size_t n, const PropertyStore& store) override {
+    for (std::size_t o = 0; o < n;) {
+      const auto fn = std::int32_t(b[o]);
+      const auto slot = std::uint32_t(b[o + 1]);
+      const ObjectId id = store.id_at(slot);
+      if (!id) return "'" + kRigidBody[std::size_t(fn < 0 || fn > 2 ? 0 : fn)].name + "' on the object in slot " +
+                      std::to_string(slot) + ", which was destroyed";
+      const Vec3 v{b[o + 2], b[o + 3], b[o + 4]};
+      switch (fn) {
+        case 0: rigid_.add_force(slot, v), o += 5; break;  // the fast path: the slot is alive
+        case 1: rigid_.add_torque(id, v), o += 5; break;
+        case 2: rigid_.add_force(id, v, Vec3{b[o + 5], b[o + 6], b[o + 7]}), o += 8; break;
+        default: return "a command of an unknown interaction function";
+      }
+    }
+    return "";
+  }
 
  private:
   rigid::RigidBodyResolver& rigid_;

@@ -11,11 +11,13 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
 #include "lua/mod_state.hpp"
 #include "runtime/plugin_registry.hpp"
+#include "runtime/property_store.hpp"
 
 namespace alloy::lua {
 
@@ -26,6 +28,10 @@ class NativeTarget {
   /// Queues function `fn` (an index into native_functions()) for `object`
   /// with its packed arguments. Throws AccessError or InputError.
   virtual void call(std::int32_t fn, ObjectId object, const double* args) = 0;
+  /// Performs a call's command records {function, slot, arguments...}
+  /// [b, b + n), checked by the prelude except for the objects being alive.
+  /// Returns "" or what was refused.
+  virtual std::string perform(const double* b, std::size_t n, const PropertyStore& store) = 0;
 };
 
 /// The interaction functions Lua may call on the native resolver `resolver`,

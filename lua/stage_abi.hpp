@@ -54,7 +54,14 @@ struct Column {
 /// an interaction function, and lists handed out for the call.
 struct Call {
   double dt = 0, time = 0, step = 0;
-  double args[12] = {};  ///< arguments of the interaction function being queued
+  /// Doubles used / available in buf. Doubles, not integers: the prelude
+  /// reads and writes them back in hot loops, and a uint32 field doing that
+  /// makes LuaJIT's traces type-unstable (they never compile).
+  double buf_len = 0, buf_cap = 0;
+  /// An interaction's commands of this call, appended by the prelude as
+  /// records {function, slot, arguments...} and performed by C++ when the
+  /// call returns (all of them, or none if the call failed).
+  double* buf = nullptr;
   const double* cmd = nullptr;  ///< a resolver's queued commands of one function
   const void* contacts = nullptr;  ///< Contact[contact_count]
   std::uint32_t cmd_count = 0, cmd_stride = 0;
@@ -95,14 +102,15 @@ struct Api {
   std::int32_t (*set_quat)(void* stage, std::int32_t column, double slot, double w, double x,
                            double y, double z) noexcept;
   std::int32_t (*has)(void* stage, std::int32_t column, double slot) noexcept;  ///< 1, 0, or -1 on error
-  std::int32_t (*queue)(void* stage, std::int32_t function, double slot, std::int32_t nargs) noexcept;
+  std::int32_t (*grow)(void* stage) noexcept;  ///< more room in Call::buf
   std::int32_t (*commands)(void* stage, std::int32_t function) noexcept;
   std::int32_t (*contacts)(void* stage, std::int32_t which) noexcept;
 };
 
 static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
 static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
-static_assert(offsetof(Call, args) == 24 && offsetof(Call, cmd) == 120 && offsetof(Call, in_call) == 152);
+static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 && offsetof(Call, in_call) == 80 &&
+              sizeof(Call) == 88);
 static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 && sizeof(Contact) == 96);
 
 /// The prelude's ffi.cdef of the structs above.
@@ -120,8 +128,8 @@ typedef struct alloy_column {
 } alloy_column;
 typedef struct alloy_call {
   double dt, time, step;
-  double args[12];
-  const double* cmd; const void* contacts;
+  double buf_len, buf_cap;
+  double* buf; const double* cmd; const void* contacts;
   uint32_t cmd_count, cmd_stride, contact_count, slots;
   int32_t in_call; uint32_t epoch;
 } alloy_call;
@@ -137,7 +145,7 @@ typedef struct alloy_api {
   int32_t (*set_vec3)(void*, int32_t, double, double, double, double);
   int32_t (*set_quat)(void*, int32_t, double, double, double, double, double);
   int32_t (*has)(void*, int32_t, double);
-  int32_t (*queue)(void*, int32_t, double, int32_t);
+  int32_t (*grow)(void*);
   int32_t (*commands)(void*, int32_t);
   int32_t (*contacts)(void*, int32_t);
 } alloy_api;

@@ -39,41 +39,45 @@ end
 
 local vec3_t = ffi.typeof("const alloy_vec3")
 local quat_t = ffi.typeof("const alloy_quat")
-local is_vec3 = function(v) return ffi.istype("alloy_vec3", v) end
+local vec3_ct, quat_ct = ffi.typeof("alloy_vec3"), ffi.typeof("alloy_quat")  -- istype ignores const
+local istype = ffi.istype
+local is_vec3 = function(v) return istype(vec3_ct, v) end
+local is_quat = function(v) return istype(quat_ct, v) end
 
-local function vec3(x, y, z) return vec3_t(x or 0, y or 0, z or 0) end
+local function vec3(x, y, z) local r = vec3_t(x or 0, y or 0, z or 0) return r end
 
 local function to_vec3(v, what)
   if is_vec3(v) then return v end
   if type(v) == "table" then
     local x, y, z = v.x or v[1], v.y or v[2], v.z or v[3] or 0
-    if type(x) == "number" and type(y) == "number" and type(z) == "number" then return vec3_t(x, y, z) end
+    if type(x) == "number" and type(y) == "number" and type(z) == "number" then local r = vec3_t(x, y, z) return r end
   end
   error((what or "value") .. " must be a vec3 (vec3(x, y, z) or {x, y, z}), got " .. type(v), 3)
 end
 
 local vec3_methods = {
-  length = function(a) return sqrt(a.x * a.x + a.y * a.y + a.z * a.z) end,
+  length = function(a) local l = sqrt(a.x * a.x + a.y * a.y + a.z * a.z) return l end,
   length2 = function(a) return a.x * a.x + a.y * a.y + a.z * a.z end,
   dot = function(a, b) return a.x * b.x + a.y * b.y + a.z * b.z end,
-  cross = function(a, b) return vec3_t(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x) end,
+  cross = function(a, b) local r = vec3_t(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x) return r end,
   normalized = function(a)
     local l = sqrt(a.x * a.x + a.y * a.y + a.z * a.z)
     if l == 0 then return a end
-    return vec3_t(a.x / l, a.y / l, a.z / l)
+    local r = vec3_t(a.x / l, a.y / l, a.z / l)
+    return r
   end,
   unpack = function(a) return a.x, a.y, a.z end,
 }
 ffi.metatype("alloy_vec3", {
-  __add = function(a, b) return vec3_t(a.x + b.x, a.y + b.y, a.z + b.z) end,
-  __sub = function(a, b) return vec3_t(a.x - b.x, a.y - b.y, a.z - b.z) end,
-  __unm = function(a) return vec3_t(-a.x, -a.y, -a.z) end,
+  __add = function(a, b) local r = vec3_t(a.x + b.x, a.y + b.y, a.z + b.z) return r end,
+  __sub = function(a, b) local r = vec3_t(a.x - b.x, a.y - b.y, a.z - b.z) return r end,
+  __unm = function(a) local r = vec3_t(-a.x, -a.y, -a.z) return r end,
   __mul = function(a, b)
-    if type(a) == "number" then return vec3_t(a * b.x, a * b.y, a * b.z) end
-    if type(b) == "number" then return vec3_t(a.x * b, a.y * b, a.z * b) end
+    if type(a) == "number" then local r = vec3_t(a * b.x, a * b.y, a * b.z) return r end
+    if type(b) == "number" then local r = vec3_t(a.x * b, a.y * b, a.z * b) return r end
     error("vec3 * vec3 is not defined: use a:dot(b) or a:cross(b)", 2)
   end,
-  __div = function(a, s) return vec3_t(a.x / s, a.y / s, a.z / s) end,
+  __div = function(a, s) local r = vec3_t(a.x / s, a.y / s, a.z / s) return r end,
   __eq = function(a, b) return is_vec3(a) and is_vec3(b) and a.x == b.x and a.y == b.y and a.z == b.z end,
   __tostring = function(a) return format("{%g, %g, %g}", a.x, a.y, a.z) end,
   __index = vec3_methods,
@@ -84,34 +88,36 @@ local quat_methods = {
   rotate = function(q, v)
     local ux, uy, uz = q.x, q.y, q.z
     local tx, ty, tz = 2 * (uy * v.z - uz * v.y), 2 * (uz * v.x - ux * v.z), 2 * (ux * v.y - uy * v.x)
-    return vec3_t(v.x + q.w * tx + (uy * tz - uz * ty), v.y + q.w * ty + (uz * tx - ux * tz),
-                  v.z + q.w * tz + (ux * ty - uy * tx))
+    local r = vec3_t(v.x + q.w * tx + (uy * tz - uz * ty), v.y + q.w * ty + (uz * tx - ux * tz),
+                     v.z + q.w * tz + (ux * ty - uy * tx))
+    return r
   end,
   -- The angle about +z of a rotation in the play area, rad.
   angle_z = function(q) return 2 * math.atan2(q.z, q.w) end,
 }
 ffi.metatype("alloy_quat", {
   __mul = function(a, b)
-    return quat_t(a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-                  a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w)
+    local r = quat_t(a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+                     a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w)
+    return r
   end,
   __eq = function(a, b)
-    return ffi.istype("alloy_quat", a) and ffi.istype("alloy_quat", b) and a.w == b.w and a.x == b.x and
+    return is_quat(a) and is_quat(b) and a.w == b.w and a.x == b.x and
       a.y == b.y and a.z == b.z
   end,
   __tostring = function(q) return format("{%g, %g, %g, %g}", q.w, q.x, q.y, q.z) end,
   __index = quat_methods,
 })
-local function quat(w, x, y, z) return quat_t(w or 1, x or 0, y or 0, z or 0) end
-local function quat_z(angle) return quat_t(math.cos(angle / 2), 0, 0, math.sin(angle / 2)) end
+local function quat(w, x, y, z) local r = quat_t(w or 1, x or 0, y or 0, z or 0) return r end
+local function quat_z(angle) local r = quat_t(math.cos(angle / 2), 0, 0, math.sin(angle / 2)) return r end
 
 M.vec3 = setmetatable({ new = vec3, zero = vec3_t(0, 0, 0) }, {
-  __call = function(_, x, y, z) return vec3_t(x or 0, y or 0, z or 0) end,
+  __call = function(_, x, y, z) local r = vec3_t(x or 0, y or 0, z or 0) return r end,
   __metatable = "vec3",
   __newindex = function() error("vec3 is read-only", 2) end,
 })
 M.quat = setmetatable({ new = quat, identity = quat_t(1, 0, 0, 0), from_angle_z = quat_z }, {
-  __call = function(_, w, x, y, z) return quat(w, x, y, z) end,
+  __call = function(_, w, x, y, z) local r = quat(w, x, y, z) return r end,
   __metatable = "quat",
   __newindex = function() error("quat is read-only", 2) end,
 })
@@ -232,8 +238,8 @@ local readers = {}  -- kind -> function(info, i) -> value
 readers[0] = function(info, i) return info.num[i] end
 readers[1] = function(info, i) return tonumber(info.integer[i]) end
 readers[2] = function(info, i) return info.boolean[i] ~= 0 end
-readers[3] = function(info, i) local p = info.vec3[i] return vec3_t(p.x, p.y, p.z) end
-readers[4] = function(info, i) local p = info.quat[i] return quat_t(p.w, p.x, p.y, p.z) end
+readers[3] = function(info, i) local p = info.vec3[i] local r = vec3_t(p.x, p.y, p.z) return r end
+readers[4] = function(info, i) local p = info.quat[i] local r = quat_t(p.w, p.x, p.y, p.z) return r end
 readers[6] = function(info, i)
   local r = info.ref[i]
   if r.index == 0xffffffff then return nil end
@@ -247,26 +253,30 @@ end
 
 -- The read-only proxy of column k; with `writable`, also its writer.
 local function column_proxy(rec, k, c)
-  local info, handle, name, kind = rec.infos + k, rec.handle, c.name, c.kind
+  local info, handle, ptr, name, kind = rec.infos + k, rec.handle, rec.ptr, c.name, c.kind
   local read = readers[kind]
   if kind == 5 then
     local names = c.values
-    read = function(info, i) return names[info.enumv[i] + 1] end
+    read = function(info, i) local v = names[info.enumv[i] + 1] return v end
   elseif kind == 7 then
-    read = function(_, i) return host.slow_get(handle, k, i) end
+    read = function(_, i) local v = host.slow_get(handle, k, i) return v end
+  end
+  -- for i in col:each(): the slots of the members; the position is kept in
+  -- a small table (a closure per loop would keep the caller out of the JIT).
+  local function step(st)
+    local j = st[1] + 1
+    st[1] = j
+    if j < info.count then
+      local m = info.members[j]
+      return m
+    end
   end
   local methods = {
-    each = function()
-      local j = -1
-      return function()
-        j = j + 1
-        if j < info.count then return info.members[j] end
-      end
-    end,
+    each = function() return step, { -1 }, nil end,
     count = function() return info.count end,
     has = function(_, i)
       if info.n == 0 then not_in_call("column '" .. name .. "'") end
-      local r = api.has(handle, k, i)
+      local r = api.has(ptr, k, i)
       if r < 0 then fail(rec, 2) end
       return r == 1
     end,
@@ -296,19 +306,19 @@ local function column_proxy(rec, k, c)
       write = function(_, i, v)
         if info.n == 0 then not_in_call("column '" .. name .. "'") end
         v = to_vec3(v, "'" .. name .. "'")
-        if api.set_vec3(handle, k, i, v.x, v.y, v.z) ~= 0 then fail(rec, 2) end
+        if api.set_vec3(ptr, k, i, v.x, v.y, v.z) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 4 then
       write = function(_, i, q)
         if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        if not ffi.istype("alloy_quat", q) then error("'" .. name .. "' takes a quat", 2) end
-        if api.set_quat(handle, k, i, q.w, q.x, q.y, q.z) ~= 0 then fail(rec, 2) end
+        if not is_quat(q) then error("'" .. name .. "' takes a quat", 2) end
+        if api.set_quat(ptr, k, i, q.w, q.x, q.y, q.z) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 2 then
       write = function(_, i, v)
         if info.n == 0 then not_in_call("column '" .. name .. "'") end
         if type(v) ~= "boolean" then error("'" .. name .. "' takes true or false", 2) end
-        if api.set_scalar(handle, k, i, v and 1 or 0) ~= 0 then fail(rec, 2) end
+        if api.set_scalar(ptr, k, i, v and 1 or 0) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 5 then
       local index = {}
@@ -317,13 +327,13 @@ local function column_proxy(rec, k, c)
         if info.n == 0 then not_in_call("column '" .. name .. "'") end
         local e = index[v]
         if e == nil then error("'" .. name .. "' has no value '" .. tostring(v) .. "'", 2) end
-        if api.set_scalar(handle, k, i, e) ~= 0 then fail(rec, 2) end
+        if api.set_scalar(ptr, k, i, e) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 0 or kind == 1 then
       write = function(_, i, v)
         if info.n == 0 then not_in_call("column '" .. name .. "'") end
         if type(v) ~= "number" then error("'" .. name .. "' takes a number, got " .. type(v), 2) end
-        if api.set_scalar(handle, k, i, v) ~= 0 then fail(rec, 2) end
+        if api.set_scalar(ptr, k, i, v) ~= 0 then fail(rec, 2) end
       end
     else
       write = function(_, i, v)
@@ -334,7 +344,10 @@ local function column_proxy(rec, k, c)
   end
   local function index(_, i)
     if type(i) == "number" then
-      if i >= 0 and i < info.n then return read(info, i) end
+      if i >= 0 and i < info.n then
+        local v = read(info, i)
+        return v
+      end
       if info.n == 0 then not_in_call("column '" .. name .. "'") end
       error("column '" .. name .. "': no object in slot " .. tostring(i), 2)
     end
@@ -358,41 +371,63 @@ local function column_proxy(rec, k, c)
   return reader, writer
 end
 
--- Packs one argument of an interaction function into call.args at offset o.
+-- Packs one argument of an interaction function into the command buffer b
+-- at offset o, checked here where the mod's line is known (the slot's object
+-- being alive is checked by C++ when the commands are performed).
+local function finite(x) return x - x == 0 end  -- false for NaN and infinities
 local packers = {
-  number = function(call, o, v, what)
+  number = function(b, o, v, what)
     if type(v) ~= "number" then error(what .. " takes a number, got " .. type(v), 3) end
-    call.args[o] = v
+    if not finite(v) then error(what .. ": arguments must be finite, got " .. tostring(v), 3) end
+    b[o] = v
     return o + 1
   end,
-  object = function(call, o, v, what)
+  object = function(b, o, v, what)
     if type(v) ~= "number" then error(what .. " takes an object (a slot number), got " .. type(v), 3) end
-    call.args[o] = v
+    b[o] = v
     return o + 1
   end,
-  vec3 = function(call, o, v, what)
+  vec3 = function(b, o, v, what)
     v = to_vec3(v, what)
-    call.args[o], call.args[o + 1], call.args[o + 2] = v.x, v.y, v.z
+    local x, y, z = v.x, v.y, v.z
+    if not (finite(x) and finite(y) and finite(z)) then
+      error(what .. ": arguments must be finite, got " .. tostring(v), 3)
+    end
+    b[o], b[o + 1], b[o + 2] = x, y, z
     return o + 3
   end,
-  none = function(call, o) return o end,
+  none = function(b, o) return o end,
 }
+local width = { number = 1, object = 1, vec3 = 3 }
 
--- The function that queues interaction function `index` of the stage's target.
+-- The function that queues interaction function `index` of the stage's target:
+-- it appends {index, slot, arguments...} to the call's command buffer.
 local function target_function(rec, index, fname, kinds)
-  local call, handle = rec.call, rec.handle
+  local call, ptr = rec.call, rec.ptr
   local n = #kinds
   if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
+  local stride = 2
+  for j = 1, n do stride = stride + width[kinds[j]] end
   local p1, p2, p3, p4 = packers[kinds[1] or "none"], packers[kinds[2] or "none"], packers[kinds[3] or "none"], packers[kinds[4] or "none"]
   local what = "'" .. fname .. "'"
   return function(i, a1, a2, a3, a4)
     if call.in_call == 0 then not_in_call(what) end
     if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
-    local o = p1(call, 0, a1, what)
-    o = p2(call, o, a2, what)
-    o = p3(call, o, a3, what)
-    o = p4(call, o, a4, what)
-    if api.queue(handle, index, i, o) ~= 0 then fail(rec, 1) end
+    if not (i >= 0 and i < call.slots and i == floor(i)) then
+      error(what .. ": no object in slot " .. tostring(i), 2)
+    end
+    local o = call.buf_len
+    if o + stride > call.buf_cap then
+      if api.grow(ptr) ~= 0 then fail(rec, 1) end
+    end
+    local b = call.buf
+    b[o] = index
+    b[o + 1] = i
+    o = p1(b, o + 2, a1, what)
+    o = p2(b, o, a2, what)
+    o = p3(b, o, a3, what)
+    o = p4(b, o, a4, what)
+    call.buf_len = o
   end
 end
 
@@ -400,7 +435,7 @@ end
 local function command_iterator(rec, fname, f)
   local call = rec.call
   if call.in_call == 0 then not_in_call("w:commands") end
-  if api.commands(rec.handle, f.index) ~= 0 then fail(rec, 2) end
+  if api.commands(rec.ptr, f.index) ~= 0 then fail(rec, 2) end
   local recs, count, stride, epoch = call.cmd, call.cmd_count, call.cmd_stride, call.epoch
   local offsets, kinds, n = {}, f.kinds, #f.kinds
   local o = 1
@@ -410,7 +445,7 @@ local function command_iterator(rec, fname, f)
   end
   local function arg(b, j)
     local off = offsets[j]
-    if kinds[j] == "vec3" then return vec3_t(b[off], b[off + 1], b[off + 2]) end
+    if kinds[j] == "vec3" then local r = vec3_t(b[off], b[off + 1], b[off + 2]) return r end
     return b[off]
   end
   local j = -1
@@ -443,7 +478,8 @@ end
 -- contacts (bool), settings, area. state: the mod's state table.
 function M.new_stage(handle, infos_ud, call_ud, decl, state)
   local rec = {
-    handle = handle,
+    handle = handle,  -- a lightuserdata, for the host's C functions
+    ptr = ffi.cast("void*", handle),  -- the same as a cdata, for FFI calls (the JIT compiles only these)
     infos = ffi.cast(column_ptr, infos_ud),
     call = ffi.cast(call_ptr, call_ud),
     keep = { infos_ud, call_ud },  -- the C++ side writes into these: keep them alive with the record
@@ -464,11 +500,11 @@ function M.new_stage(handle, infos_ud, call_ud, decl, state)
       if c.writable then writes[c.name] = entry end
     end
   end
-  local call, handle_ = rec.call, handle
+  local call, handle_, ptr = rec.call, handle, rec.ptr
   local function fetch(e)
     if call.in_call == 0 then not_in_call("w") end
     if rec.infos[e.k].n == 0 then
-      if api.fetch(handle_, e.k) ~= 0 then fail(rec, 3) end
+      if api.fetch(ptr, e.k) ~= 0 then fail(rec, 3) end
     end
   end
   local function live(what)
@@ -495,8 +531,14 @@ function M.new_stage(handle, infos_ud, call_ud, decl, state)
     fetch(e)
     return e.writer
   end
-  function w:each(name) return w:read(name):each() end
-  function w:count(name) return w:read(name):count() end
+  function w:each(name)
+    local f, st, c = w:read(name):each()
+    return f, st, c
+  end
+  function w:count(name)
+    local n = w:read(name):count()
+    return n
+  end
   function w:output(name)
     local e = outputs[name]
     if not e then error("derived set '" .. sname .. "' has no output '" .. tostring(name) .. "' (declare it in provides)", 2) end
@@ -529,7 +571,7 @@ function M.new_stage(handle, infos_ud, call_ud, decl, state)
       local kind = contact_kinds[which or "touching"]
       if not kind then error("w:contacts takes 'began', 'ongoing', 'ended' or 'touching'", 2) end
       if call.in_call == 0 then not_in_call("w:contacts") end
-      if api.contacts(handle_, kind) ~= 0 then fail(rec, 2) end
+      if api.contacts(ptr, kind) ~= 0 then fail(rec, 2) end
       local list, count, epoch = ffi.cast(contact_ptr, call.contacts), call.contact_count, call.epoch
       local j = -1
       return function()
