@@ -366,12 +366,22 @@ std::vector<ModReport> ModRuntime::poll() {
 }
 
 void ModRuntime::report(ModReport r) {
-  if (r.kind != ModReport::Kind::Loaded) options_.log(r.mod, r.message);
+  // Loads are quiet; stage failures and stops were logged when their event
+  // was published (dispatch), as they happened.
+  if (r.kind != ModReport::Kind::Loaded && r.kind != ModReport::Kind::StageDisabled &&
+      r.kind != ModReport::Kind::Stopped)
+    options_.log(r.mod, r.message);
   reports_.push_back(std::move(r));
 }
 
 void ModRuntime::dispatch(const Event& e) {
   if (!world_) return;
+  if (e.type == "stage_disabled" || e.type == "mod_stopped") {
+    const std::string plugin = e.source.substr(0, e.source.find('@'));
+    for (const auto& l : mods_)
+      if (std::find(l->plugins.begin(), l->plugins.end(), plugin) != l->plugins.end())
+        options_.log(l->state->name(), e.text);
+  }
   const PropertyStore& store = world_->store();
   for (const auto& lp : mods_) {
     Loaded& l = *lp;
@@ -418,10 +428,10 @@ void ModRuntime::dispatch(const Event& e) {
         mod.end_call();
         if (mod.stopped()) break;
         l.handler_ok[h] = false;
-        report({ModReport::Kind::StageDisabled, mod.name(),
-                "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
-                    "' failed and is disabled until the mod is reloaded: " + err.what(),
-                err.where()});
+        const std::string text = "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
+                                 "' failed and is disabled until the mod is reloaded: " + err.what();
+        options_.log(mod.name(), text);
+        report({ModReport::Kind::StageDisabled, mod.name(), text, err.where()});
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "apps/alloy/trace_writer.hpp"
 #include "apps/viewer/view_command.hpp"
 #include "lua/scene_loader.hpp"
+#include "lua/watch_loop.hpp"
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 #include "resolvers/sound/wav_writer.hpp"
@@ -36,6 +38,7 @@ struct RunOptions {
   std::string events;
   bool profile = false;
   bool quiet = false;
+  bool watch = false;
 };
 
 constexpr double kDefaultSeconds = 5.0;  // when neither the scene nor the user says
@@ -144,6 +147,12 @@ int run(const RunOptions& opt, std::ostream& out) {
     steps = std::uint64_t(std::llround(seconds / world.dt()));
   }
 
+  // --watch: real time, mods reloaded as their files change; without a
+  // length, until Ctrl-C.
+  if (opt.watch && !opt.steps && !opt.seconds) steps = std::numeric_limits<std::uint64_t>::max();
+  std::optional<lua::WatchLoop> watch;
+  if (opt.watch) watch.emplace(scene.mods.get(), out);
+
   for (const std::string& spec : opt.swaps) schedule_swap(world, spec);
   if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
@@ -173,6 +182,7 @@ int run(const RunOptions& opt, std::ostream& out) {
     for (std::uint64_t i = 0; i < steps; ++i) {
       world.step();
       if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
+      if (watch && !watch->between_steps(world)) break;
     }
   } catch (const InputError& e) {
     // A resolver refused an object (or a setting) only once the world ran:
@@ -233,6 +243,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                       "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
+  run_cmd->add_flag("--watch", ro.watch,
+                    "Run in real time and reload mods whose files change (until Ctrl-C without --steps/--seconds)");
 
   std::string check_path;
   CLI::App* check_cmd = app.add_subcommand("check", "Load and validate a scene or a mod without running it");

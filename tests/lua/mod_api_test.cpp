@@ -402,3 +402,30 @@ function mod.on_load(state) state.touches = 0 end
 
 }  // namespace
 }  // namespace alloy::test
+
+namespace alloy::test {
+namespace {
+
+TEST(ModCheck, CheckingAModFolderChecksItsRuntimeToo) {
+  // `alloy check mods/x` runs the mod's main file and its runtime file, so a
+  // bad stage definition is found before anything runs.
+  TempMods mods;
+  mods.mod("broken", "mod.property { name = \"level\" }\n\nmod.resolver { name = \"broken.r\", writes = { \"levle\" }, "
+                     "advance = function() end }\n",
+           "main = \"init.lua\"");
+  mods.write("broken/init.lua", "return {}\n");
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  try {
+    lua::check(mods / "broken", registry, {});
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "broken/runtime.lua:3")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "unknown property 'levle' (did you mean 'level'?)")) << e.what();
+  }
+  EXPECT_FALSE(registry.find("broken.r"));
+  lua::check(source_path("mods/magic"), registry, {});  // the bundled one is fine
+}
+
+}  // namespace
+}  // namespace alloy::test
