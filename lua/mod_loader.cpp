@@ -115,6 +115,17 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
     else if (key == "runtime")
       m.runtime = *s;
   }
+  // Files named by the manifest stay inside the mod's folder.
+  for (const auto& [field, value] : {std::pair<const char*, const std::string*>{"main", &m.main},
+                                     {"scene", &m.scene},
+                                     {"runtime", &m.runtime}}) {
+    const fs::path p(*value);
+    const bool outside = p.is_absolute() ||
+                         std::any_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; });
+    if (outside)
+      throw InputError(where, std::string("mod.lua '") + field + "' must name a file inside the mod's folder, not '" +
+                                  *value + "'");
+  }
   if (m.name.empty()) throw InputError(where, "mod.lua must give the mod's name");
   if (!is_identifier(m.name))
     throw InputError(where, "mod name '" + m.name + "' must be letters, digits and _ only");

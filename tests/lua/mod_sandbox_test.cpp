@@ -272,3 +272,23 @@ TEST(BudgetTicks, LoopsAndFunctionBodiesGetATickOnTheirOwnLine) {
 
 }  // namespace
 }  // namespace alloy::test
+
+namespace alloy::test {
+namespace {
+
+TEST(ModSandbox, AManifestCannotNameFilesOutsideItsFolder) {
+  PluginRegistry registry;
+  TempMods mods;
+  mods.write("sneaky/mod.lua", "return { name = \"sneaky\", version = \"1\", runtime = \"../../etc/passwd\" }\n");
+  lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
+  try {
+    runtime.load("sneaky");
+    FAIL() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "sneaky/mod.lua")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "must name a file inside the mod's folder")) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace alloy::test
