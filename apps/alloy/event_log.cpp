@@ -43,35 +43,49 @@ void EventLog::close() {
 
 void Narrator::narrate(const World& world, const Event& e) {
   ++counts_[e.type];
-  auto key = std::make_tuple(e.type, e.a, e.b);
-  // At most one line per event type and pair every `quiet_` seconds: a
-  // resting contact that flickers, or a doorbell that buzzes at 20 Hz, still
-  // shows up a few times a second instead of flooding or going silent.
-  auto it = last_.find(key);
-  if (it != last_.end() && e.time - it->second < quiet_) {
+  const auto key = std::make_tuple(e.type, e.a, e.b);
+  auto it = last_seen_.find(key);
+  const bool novel = it == last_seen_.end() || e.time - it->second >= 1.0;
+  last_seen_[key] = e.time;
+  const bool in_window = std::fmod(e.time, 1.0) < window_;
+  if (!novel && !in_window) {
     ++folded_;
     return;
   }
-  last_[key] = e.time;
 
+  std::string who;
+  if (!e.a.is_null()) who = world.describe(e.a);
+  if (!e.b.is_null()) who += " - " + world.describe(e.b);
+  if (e.step == line_step_ && e.type == line_type_ && e.values.empty() && e.text.empty() && !who.empty()) {
+    line_ += ", " + who;  // another element of the same change in the same step
+    return;
+  }
+  flush();
   std::string what = e.type;
   for (char& c : what)
     if (c == '_') c = ' ';
   char head[64];
   std::snprintf(head, sizeof head, "step %6llu  t=%7.3f s  ", (unsigned long long)e.step, e.time);
-  out_ << head << what;
-  if (!e.a.is_null()) out_ << ": " << world.describe(e.a);
-  if (!e.b.is_null()) out_ << " - " << world.describe(e.b);
+  line_ = head + what;
+  if (!who.empty()) line_ += ": " + who;
   for (const auto& [k, v] : e.values) {
     char num[48];
     std::snprintf(num, sizeof num, "%.4g", v);
-    out_ << "  " << k << "=" << num;
+    line_ += "  " + k + "=" + num;
   }
-  if (!e.text.empty()) out_ << "  (" << e.text << ")";
-  out_ << '\n';
+  if (!e.text.empty()) line_ += "  (" + e.text + ")";
+  line_step_ = e.values.empty() && e.text.empty() ? e.step : ~0ull;
+  line_type_ = e.type;
 }
 
-void Narrator::summary(const World& world, double wall_seconds) const {
+void Narrator::flush() {
+  if (!line_.empty()) out_ << line_ << '\n';
+  line_.clear();
+  line_step_ = ~0ull;
+}
+
+void Narrator::summary(const World& world, double wall_seconds) {
+  flush();
   char line[160];
   std::snprintf(line, sizeof line, "ran %llu steps of %.6g s: %.3f s simulated in %.3f s wall (%.1fx real time)\n",
                 (unsigned long long)world.step_count(), world.dt(), world.time(), wall_seconds,
@@ -80,7 +94,7 @@ void Narrator::summary(const World& world, double wall_seconds) const {
   if (!counts_.empty()) {
     out_ << "events:";
     for (const auto& [type, n] : counts_) out_ << " " << type << "=" << n;
-    if (folded_) out_ << " (" << folded_ << " quick repeats not narrated)";
+    if (folded_) out_ << " (" << folded_ << " repeats not narrated)";
     out_ << '\n';
   }
 }
