@@ -168,6 +168,7 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
 
   // The settings the scene gave, over the defaults the mod declared.
   ctx.settings().check_known(decl_name_, decl.settings);
+  settings_ = ctx.settings();
 
   lua_State* L = mod_->state();
   StackGuard guard(L);
@@ -228,7 +229,20 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
   lua_pushboolean(L, collisions_ != nullptr);
   lua_setfield(L, d, "contacts");
 
-  // Settings: the mod's defaults (its table's `settings`), then the scene's.
+  push_settings(decl);
+  lua_setfield(L, d, "settings");
+
+  mod_->push_state();
+  mod_->host().call(5, 1, where_);
+  record_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  (void)fn;
+  rebind(decl);
+  mod_->attach(this);
+}
+
+void LuaStage::push_settings(const StageDecl& decl) {
+  lua_State* L = mod_->state();
+  // The mod's defaults (its table's `settings`), then the scene's.
   lua_newtable(L);
   const int settings = lua_gettop(L);
   lua_rawgeti(L, LUA_REGISTRYINDEX, decl.def_ref);
@@ -240,7 +254,7 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
       lua_rawset(L, settings);
     }
   lua_pop(L, 2);
-  for (const auto& [key, value] : ctx.settings().values()) {
+  for (const auto& [key, value] : settings_.values()) {
     lua_pushstring(L, key.c_str());
     std::visit(
         [&](const auto& v) {
@@ -259,14 +273,6 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
         value);
     lua_rawset(L, settings);
   }
-  lua_setfield(L, d, "settings");
-
-  mod_->push_state();
-  mod_->host().call(5, 1, where_);
-  record_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
-  (void)fn;
-  rebind(decl);
-  mod_->attach(this);
 }
 
 LuaStage::~LuaStage() {
@@ -296,7 +302,8 @@ void LuaStage::rebind(const StageDecl& decl) {
   lua_rawgeti(L, LUA_REGISTRYINDEX, mod_->prelude_ref("bind"));
   lua_rawgeti(L, LUA_REGISTRYINDEX, record_ref_);
   lua_rawgeti(L, LUA_REGISTRYINDEX, decl.def_ref);
-  mod_->host().call(2, 0, where_);
+  push_settings(decl);  // a reload may have changed the defaults
+  mod_->host().call(3, 0, where_);
   where_ = decl.where;
   disabled_ = false;
   reported = false;

@@ -104,6 +104,8 @@ class LuaStage {
     int output = -1;                    ///< index into the set's outputs
     const LuaDerivedSet* set = nullptr; ///< DerivedInput: the Lua derived set read
   };
+  /// Pushes the stage's settings: the mod's defaults, then the scene's values.
+  void push_settings(const StageDecl& decl);
   /// Fills column `k`'s info for the current call.
   void fetch(std::size_t k);
   /// The object in `slot`, or false with last_error_ set.
@@ -125,6 +127,7 @@ class LuaStage {
   StageKind kind_;
   ErrorLocation where_;
   World& world_;
+  PluginSettings settings_;  // the scene's, for this stage
   std::vector<Source> sources_;
   /// Writers of the current resolver call, per column (made at fetch).
   using AnyWriter = std::variant<std::monostate, ColumnWriter<double>, ColumnWriter<std::int64_t>,

@@ -598,8 +598,12 @@ function M.new_stage(handle, infos_ud, call_ud, decl, state)
   return rec
 end
 
--- The stage's functions (a table with advance / build / update / apply).
-function M.bind(rec, def) rec.def = def end
+-- The stage's functions (a table with advance / build / update / apply), and
+-- its settings (the mod's defaults may have changed in a reload).
+function M.bind(rec, def, settings)
+  rec.def = def
+  rec.w.settings = frozen(settings, "settings")
+end
 
 -- The mod's state table, when it is replaced.
 function M.set_state(rec, state) rec.w.state = state end

@@ -296,6 +296,48 @@ mod.resolver {
   EXPECT_TRUE(disabled);
 }
 
+TEST_F(HotReload, ChangedSettingDefaultsReachTheLiveStagesButTheScenesValuesWin) {
+  auto mod = [](const std::string& rate) {
+    return "mod.property { name = \"level\" }\n"
+           "mod.resolver { name = \"fill.r\", writes = { \"level\" }, needs = { \"level\" }, settings = { rate = " +
+           rate + " },\n  advance = function(w, dt) local l = w:write(\"level\") "
+                  "for i in l:each() do l[i] = l[i] + w.settings.rate end end }\n";
+  };
+  mods.mod("fill", mod("1"));
+  lua::ModRuntime rt(registry, runtime_options(mods, &log));
+  rt.load("fill");
+  WorldDef def;
+  PluginSettings given;
+  given.set("rate", 100.0);
+  World plain(registry);
+  rt.attach(plain);
+  const ObjectId a = plain.create("a");
+  plain.set(a, "level", 0.0);
+  plain.step();
+  EXPECT_EQ(std::get<double>(plain.get(a, "level")), 1.0);
+  mods.write("fill/runtime.lua", mod("5"));
+  ASSERT_EQ(rt.reload("fill").kind, Kind::Reloaded);
+  plain.step();
+  EXPECT_EQ(std::get<double>(plain.get(a, "level")), 6.0);  // the new default, in the same stage
+
+  // A scene that sets the rate itself keeps it across reloads.
+  TempMods other;
+  other.mod("fill2", mod("1").replace(mod("1").find("fill.r"), 6, "fill.q"));
+  lua::ModRuntime rt3(registry, runtime_options(other, &log));
+  rt3.load("fill2");
+  def.plugins = {"fill.q"};
+  def.settings["fill.q"] = given;
+  World scened(registry, def);
+  rt3.attach(scened);
+  const ObjectId b = scened.create("b");
+  scened.set(b, "level", 0.0);
+  scened.step();
+  other.write("fill2/runtime.lua", mod("7").replace(mod("7").find("fill.r"), 6, "fill.q"));
+  ASSERT_EQ(rt3.reload("fill2").kind, Kind::Reloaded);
+  scened.step();
+  EXPECT_EQ(std::get<double>(scened.get(b, "level")), 200.0);
+}
+
 class Watching : public HotReload, public ::testing::WithParamInterface<bool> {};
 
 TEST_P(Watching, AChangedFileIsNoticedAndReloadedWithinASecond) {
