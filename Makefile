@@ -8,7 +8,7 @@
 
 BUILD      ?= build
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
-MAIN_SCENE ?= mods/rigid_demo
+MAIN_SCENE ?= mods/doorbell
 ALLOY      := $(BUILD)/apps/alloy
 
 # Debian packages the build needs (the dependencies named in DESIGN.md, plus
