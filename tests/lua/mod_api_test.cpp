@@ -429,3 +429,41 @@ TEST(ModCheck, CheckingAModFolderChecksItsRuntimeToo) {
 
 }  // namespace
 }  // namespace alloy::test
+
+namespace alloy::test {
+namespace {
+
+TEST(ModSwap, ALuaResolverIsSwappedForAnotherWhileTheWorldRunsAndKeepsEveryProperty) {
+  // Two implementations of the same physics, one per mod: the world swaps one
+  // for the other between steps (World::swap), as it does native resolvers.
+  TempMods mods;
+  mods.mod("slow", R"LUA(
+mod.property { name = "level" }
+mod.resolver { name = "fill.slow", writes = { "level" }, needs = { "level" },
+  advance = function(w) local l = w:write("level") for i in l:each() do l[i] = l[i] + 1 end end }
+)LUA");
+  mods.mod("fast", R"LUA(
+mod.property { name = "level" }
+mod.resolver { name = "fill.fast", writes = { "level" }, needs = { "level" },
+  advance = function(w) local l = w:write("level") for i in l:each() do l[i] = l[i] + 10 end end }
+)LUA");
+  PluginRegistry registry;
+  lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
+  runtime.load("slow");
+  runtime.load("fast");
+  World world(registry, WorldDef{.plugins = {"fill.slow"}});
+  runtime.attach(world);
+  const ObjectId tank = world.create("tank");
+  world.set(tank, "level", 0.0);
+  world.run(3);
+  EXPECT_EQ(std::get<double>(world.get(tank, "level")), 3.0);
+  world.swap("", "fill.slow", "fill.fast");
+  EXPECT_EQ(std::get<double>(world.get(tank, "level")), 3.0);  // nothing lost in the swap
+  world.run(2);
+  EXPECT_EQ(std::get<double>(world.get(tank, "level")), 23.0);
+  EXPECT_TRUE(world.has_stage("fill.fast"));
+  EXPECT_FALSE(world.has_stage("fill.slow"));
+}
+
+}  // namespace
+}  // namespace alloy::test
