@@ -55,8 +55,11 @@ class FieldCpp final : public Interaction {
 
 PluginDef field_cpp() {
   PluginDef def;
-  def.info = {.name = "bench.field_cpp", .kind = StageKind::Interaction, .reads = {"position", "mass"},
-              .target = "rigid_body", .doc = "F = -k m p on every body (C++)"};
+  def.info = {.name = "bench.field_cpp",
+              .kind = StageKind::Interaction,
+              .reads = {"position", "mass"},
+              .target = "rigid_body",
+              .doc = "F = -k m p on every body (C++)"};
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     return std::make_unique<FieldCpp>(ctx.target<rigid::RigidBodyResolver>());
   };
@@ -66,7 +69,8 @@ PluginDef field_cpp() {
 std::string field_lua(const std::string& name) {
   return R"LUA(
 mod.interaction {
-  name = ")LUA" + name + R"LUA(", reads = { "position", "mass" }, target = "rigid_body",
+  name = ")LUA" +
+         name + R"LUA(", reads = { "position", "mass" }, target = "rigid_body",
   settings = { k = 2 },
   apply = function(w)
     local pos, mass = w:read("position"), w:read("mass")
@@ -106,10 +110,12 @@ double median(std::vector<double> v) {
 }
 
 void measure(int bodies) {
-  const fs::path dir = fs::temp_directory_path() / ("alloy_bench_lua_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("alloy_bench_lua_" + std::to_string(::getpid()));
   write(dir / "field/mod.lua", "return { name = 'field', version = '1', runtime = 'runtime.lua' }");
   write(dir / "field/runtime.lua", field_lua("bench.field_lua"));
-  write(dir / "field_raw/mod.lua", "return { name = 'field_raw', version = '1', runtime = 'runtime.lua' }");
+  write(dir / "field_raw/mod.lua",
+        "return { name = 'field_raw', version = '1', runtime = 'runtime.lua' }");
   write(dir / "field_raw/runtime.lua", field_lua("bench.field_lua_raw"));
 
   PluginRegistry registry;
@@ -148,11 +154,14 @@ void measure(int bodies) {
     }
   const double cpp = median(variants[0].per_call), lua = median(variants[1].per_call),
                lua_raw = median(variants[2].per_call);
-  std::printf("%6d bodies   C++ %8.1f us   Lua %8.1f us   Lua without ticks %8.1f us   (per call; %.1f / %.1f / %.1f ns per body)\n",
-              bodies, cpp * 1e6, lua * 1e6, lua_raw * 1e6, cpp * 1e9 / bodies, lua * 1e9 / bodies,
-              lua_raw * 1e9 / bodies);
-  std::printf("%6d bodies   Lua / C++ = %.2f (goal <= 2)   budget ticks: Lua / Lua without = %.3f\n", bodies,
-              lua / cpp, lua / lua_raw);
+  std::printf(
+      "%6d bodies   C++ %8.1f us   Lua %8.1f us   Lua without ticks %8.1f us   (per call; %.1f / "
+      "%.1f / %.1f ns per body)\n",
+      bodies, cpp * 1e6, lua * 1e6, lua_raw * 1e6, cpp * 1e9 / bodies, lua * 1e9 / bodies,
+      lua_raw * 1e9 / bodies);
+  std::printf(
+      "%6d bodies   Lua / C++ = %.2f (goal <= 2)   budget ticks: Lua / Lua without = %.3f\n",
+      bodies, lua / cpp, lua / lua_raw);
   variants.clear();
   std::error_code ec;
   fs::remove_all(dir, ec);
@@ -161,7 +170,8 @@ void measure(int bodies) {
 }  // namespace
 
 int main() {
-  std::printf("A force field over every body, as an interaction queueing add_force on the rigid body\n");
+  std::printf(
+      "A force field over every body, as an interaction queueing add_force on the rigid body\n");
   for (int n : {1000, 10000}) measure(n);
   return 0;
 }

@@ -9,8 +9,12 @@ namespace alloy::lua {
 
 namespace {
 
-bool ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
-bool ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+bool ident_start(char c) {
+  return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+}
+bool ident_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+}
 
 /// The level of a long bracket opening at s[i] ("[[" -> 0, "[==[" -> 2), or -1.
 int long_bracket(std::string_view s, std::size_t i) {
@@ -90,8 +94,8 @@ std::string add_budget_ticks(std::string_view s, const std::string& display) {
         (c == '.' && i + 1 < s.size() && std::isdigit(static_cast<unsigned char>(s[i + 1])))) {
       while (i < s.size()) {
         const char d = s[i];
-        if ((d == '+' || d == '-') && (s[i - 1] == 'e' || s[i - 1] == 'E' || s[i - 1] == 'p' ||
-                                       s[i - 1] == 'P')) {
+        if ((d == '+' || d == '-') &&
+            (s[i - 1] == 'e' || s[i - 1] == 'E' || s[i - 1] == 'p' || s[i - 1] == 'P')) {
           ++i;
         } else if (ident_char(d) || d == '.') {
           ++i;

@@ -40,8 +40,8 @@ FileWatcher::~FileWatcher() {
 
 void FileWatcher::watch_tree(const fs::path& folder) {
 #if defined(__linux__)
-  const int wd = inotify_add_watch(fd_, folder.c_str(),
-                                   IN_CLOSE_WRITE | IN_MOVED_TO | IN_MOVED_FROM | IN_CREATE | IN_DELETE);
+  const int wd = inotify_add_watch(
+      fd_, folder.c_str(), IN_CLOSE_WRITE | IN_MOVED_TO | IN_MOVED_FROM | IN_CREATE | IN_DELETE);
   if (wd >= 0) watches_[wd] = folder;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(folder, ec))
@@ -55,16 +55,18 @@ void FileWatcher::add(const fs::path& folder) {
   const fs::path root = normal(folder);
   if (std::find(roots_.begin(), roots_.end(), root) != roots_.end()) return;
   roots_.push_back(root);
-  if (fd_ >= 0) watch_tree(root);
-  else stamps_ = scan();
+  if (fd_ >= 0)
+    watch_tree(root);
+  else
+    stamps_ = scan();
 }
 
 std::map<fs::path, FileWatcher::Stamp> FileWatcher::scan() const {
   std::map<fs::path, Stamp> out;
   for (const auto& root : roots_) {
     std::error_code ec;
-    for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator();
-         it.increment(ec)) {
+    for (auto it = fs::recursive_directory_iterator(root, ec);
+         !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
       if (!it->is_regular_file(ec)) continue;
       Stamp s;
       s.time = it->last_write_time(ec);
@@ -89,7 +91,8 @@ std::vector<fs::path> FileWatcher::changed() {
         if (it != watches_.end() && e->len > 0) {
           const fs::path p = it->second / e->name;
           std::error_code ec;
-          if ((e->mask & IN_CREATE) && (e->mask & IN_ISDIR)) watch_tree(p);
+          if ((e->mask & IN_CREATE) && (e->mask & IN_ISDIR))
+            watch_tree(p);
           else if (!(e->mask & IN_ISDIR) && !((e->mask & IN_CREATE) && fs::file_size(p, ec) == 0))
             out.insert(p);  // a file created empty is reported when it is written
         }

@@ -102,7 +102,8 @@ bool LuaHost::compile(std::string_view code, const std::string& chunkname) {
     try {
       ticked = add_budget_ticks(code, chunkname.empty() ? "?" : chunkname.substr(1));
     } catch (const InputError& e) {
-      const std::string msg = e.where().file + ":" + std::to_string(e.where().line) + ": " + e.bare();
+      const std::string msg =
+          e.where().file + ":" + std::to_string(e.where().line) + ": " + e.bare();
       lua_pushlstring(L_, msg.data(), msg.size());
       return false;
     }

@@ -15,7 +15,7 @@ namespace alloy::lua {
 namespace {
 
 const abi::Api kApi = {
-    &LuaStage::api_fetch, &LuaStage::api_set_scalar, &LuaStage::api_set_vec3,
+    &LuaStage::api_fetch,    &LuaStage::api_set_scalar, &LuaStage::api_set_vec3,
     &LuaStage::api_set_quat, &LuaStage::api_has,        &LuaStage::api_grow,
     &LuaStage::api_commands, &LuaStage::api_contacts,
 };
@@ -24,22 +24,33 @@ constexpr std::size_t kCommandBuffer = 8192;  // doubles: grows when a call queu
 
 abi::ColumnKind abi_kind(PropertyKind k) {
   switch (k) {
-    case PropertyKind::Number: return abi::kNumber;
-    case PropertyKind::Integer: return abi::kInteger;
-    case PropertyKind::Bool: return abi::kBool;
-    case PropertyKind::Vec3: return abi::kVec3;
-    case PropertyKind::Quat: return abi::kQuat;
-    case PropertyKind::Enum: return abi::kEnum;
-    case PropertyKind::Ref: return abi::kRef;
-    default: return abi::kOther;
+    case PropertyKind::Number:
+      return abi::kNumber;
+    case PropertyKind::Integer:
+      return abi::kInteger;
+    case PropertyKind::Bool:
+      return abi::kBool;
+    case PropertyKind::Vec3:
+      return abi::kVec3;
+    case PropertyKind::Quat:
+      return abi::kQuat;
+    case PropertyKind::Enum:
+      return abi::kEnum;
+    case PropertyKind::Ref:
+      return abi::kRef;
+    default:
+      return abi::kOther;
   }
 }
 
 const char* kind_name(StageKind k) {
   switch (k) {
-    case StageKind::Resolver: return "resolver";
-    case StageKind::Derived: return "derived";
-    case StageKind::Interaction: return "interaction";
+    case StageKind::Resolver:
+      return "resolver";
+    case StageKind::Derived:
+      return "derived";
+    case StageKind::Interaction:
+      return "interaction";
   }
   return "?";
 }
@@ -92,21 +103,27 @@ std::string number_text(double v) {
 std::string bounds_problem(const PropertyDef& def, double v) {
   if (!std::isfinite(v)) return "must be finite, got " + number_text(v);
   if (def.min && (def.min_exclusive ? !(v > *def.min) : !(v >= *def.min)))
-    return std::string("must be ") + (def.min_exclusive ? "above " : "at least ") + number_text(*def.min) +
-           ", got " + number_text(v);
-  if (def.max && !(v <= *def.max)) return "must be at most " + number_text(*def.max) + ", got " + number_text(v);
+    return std::string("must be ") + (def.min_exclusive ? "above " : "at least ") +
+           number_text(*def.min) + ", got " + number_text(v);
+  if (def.max && !(v <= *def.max))
+    return "must be at most " + number_text(*def.max) + ", got " + number_text(v);
   return "";
 }
 
 }  // namespace
 
-const abi::Api& stage_api() { return kApi; }
+const abi::Api& stage_api() {
+  return kApi;
+}
 
 void push_stage_host_functions(lua_State* L) {
   const luaL_Reg fns[] = {
-      {"last_error", &LuaStage::host_last_error}, {"name", &LuaStage::host_name},
-      {"find", &LuaStage::host_find},             {"alive", &LuaStage::host_alive},
-      {"emit", &LuaStage::host_emit},             {"slow_get", &LuaStage::host_slow_get},
+      {"last_error", &LuaStage::host_last_error},
+      {"name", &LuaStage::host_name},
+      {"find", &LuaStage::host_find},
+      {"alive", &LuaStage::host_alive},
+      {"emit", &LuaStage::host_emit},
+      {"slow_get", &LuaStage::host_slow_get},
       {"slow_set", &LuaStage::host_slow_set},
   };
   lua_createtable(L, 0, int(std::size(fns)));
@@ -147,7 +164,8 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
     }
     const auto& set = ctx.dependency<LuaDerivedSet>(d);
     for (std::size_t o = 0; o < set.outputs().size(); ++o) {
-      sources_.push_back(Source{Source::DerivedInput, kNoProperty, set.outputs()[o].kind, false, int(o), &set});
+      sources_.push_back(
+          Source{Source::DerivedInput, kNoProperty, set.outputs()[o].kind, false, int(o), &set});
       column_names_.push_back(set.outputs()[o].name);
     }
   }
@@ -259,16 +277,21 @@ void LuaStage::push_settings(const StageDecl& decl) {
     std::visit(
         [&](const auto& v) {
           using T = std::decay_t<decltype(v)>;
-          if constexpr (std::is_same_v<T, double>) lua_pushnumber(L, v);
-          else if constexpr (std::is_same_v<T, std::int64_t>) lua_pushnumber(L, double(v));
-          else if constexpr (std::is_same_v<T, bool>) lua_pushboolean(L, v);
-          else if constexpr (std::is_same_v<T, std::string>) lua_pushlstring(L, v.data(), v.size());
+          if constexpr (std::is_same_v<T, double>)
+            lua_pushnumber(L, v);
+          else if constexpr (std::is_same_v<T, std::int64_t>)
+            lua_pushnumber(L, double(v));
+          else if constexpr (std::is_same_v<T, bool>)
+            lua_pushboolean(L, v);
+          else if constexpr (std::is_same_v<T, std::string>)
+            lua_pushlstring(L, v.data(), v.size());
           else if constexpr (std::is_same_v<T, Vec3>) {
             lua_createtable(L, 3, 0);
             lua_pushnumber(L, v.x), lua_rawseti(L, -2, 1);
             lua_pushnumber(L, v.y), lua_rawseti(L, -2, 2);
             lua_pushnumber(L, v.z), lua_rawseti(L, -2, 3);
-          } else lua_pushnil(L);
+          } else
+            lua_pushnil(L);
         },
         value);
     lua_rawset(L, settings);
@@ -279,7 +302,8 @@ LuaStage::~LuaStage() {
   mod_->detach(this);
   // The Lua side may keep proxies of this stage (a mod that stored them):
   // with every count at zero they refuse to touch anything.
-  for (std::size_t k = 0; k < std::max<std::size_t>(1, sources_.size()); ++k) infos_[k] = abi::Column{};
+  for (std::size_t k = 0; k < std::max<std::size_t>(1, sources_.size()); ++k)
+    infos_[k] = abi::Column{};
   call_->in_call = 0;
   ++call_->epoch;
   call_->cmd = nullptr;
@@ -355,8 +379,8 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
     return false;
   }
   disabled_ = true;
-  reason_ = "stage '" + instance_ + "' of mod '" + mod_->name() + "' failed and is disabled until the mod is reloaded: " +
-            failure.what();
+  reason_ = "stage '" + instance_ + "' of mod '" + mod_->name() +
+            "' failed and is disabled until the mod is reloaded: " + failure.what();
   view.emit(Event{.type = "stage_disabled", .text = reason_});
   return false;
 }
@@ -390,14 +414,31 @@ void LuaStage::fetch(std::size_t k) {
         if (s.writable && access_) writers_[k] = access_->writer<T>(s.property);
     };
     switch (s.kind) {
-      case PropertyKind::Number: take(std::type_identity<double>{}); break;
-      case PropertyKind::Integer: take(std::type_identity<std::int64_t>{}); break;
-      case PropertyKind::Bool: take(std::type_identity<std::uint8_t>{}); break;
-      case PropertyKind::Vec3: take(std::type_identity<Vec3>{}); break;
-      case PropertyKind::Quat: take(std::type_identity<Quat>{}); break;
-      case PropertyKind::Enum: take(std::type_identity<EnumValue>{}); break;
-      case PropertyKind::Ref: take(std::type_identity<ObjectId>{}); break;
-      case PropertyKind::String: take(std::type_identity<std::string>{}); info.any = nullptr; break;
+      case PropertyKind::Number:
+        take(std::type_identity<double>{});
+        break;
+      case PropertyKind::Integer:
+        take(std::type_identity<std::int64_t>{});
+        break;
+      case PropertyKind::Bool:
+        take(std::type_identity<std::uint8_t>{});
+        break;
+      case PropertyKind::Vec3:
+        take(std::type_identity<Vec3>{});
+        break;
+      case PropertyKind::Quat:
+        take(std::type_identity<Quat>{});
+        break;
+      case PropertyKind::Enum:
+        take(std::type_identity<EnumValue>{});
+        break;
+      case PropertyKind::Ref:
+        take(std::type_identity<ObjectId>{});
+        break;
+      case PropertyKind::String:
+        take(std::type_identity<std::string>{});
+        info.any = nullptr;
+        break;
       case PropertyKind::RefList:
         members = view_->column<RefList>(s.property).members();
         break;
@@ -417,23 +458,30 @@ bool LuaStage::perform_commands() {
   const auto n = std::size_t(call_->buf_len);
   const PropertyStore& store = view_->store();
   if (native_target_) {
-    if (std::string problem = native_target_->perform(b, n, store); !problem.empty()) return error(problem), false;
+    if (std::string problem = native_target_->perform(b, n, store); !problem.empty())
+      return error(problem), false;
     return true;
   }
   for (std::size_t o = 0; o < n;) {
     const auto fn = std::size_t(b[o]);
-    if (fn >= target_functions_.size()) return error("a command of an unknown interaction function"), false;
+    if (fn >= target_functions_.size())
+      return error("a command of an unknown interaction function"), false;
     const FunctionDecl& f = target_functions_[fn];
     const std::size_t stride = 2 + std::size_t(widths(f.args));
     if (o + stride > n) return error("a truncated command"), false;
     // The prelude checked kinds, ranges and finiteness where the mod's line
     // was known; what remains is whether the objects still exist.
     const ObjectId id = store.id_at(std::uint32_t(b[o + 1]));
-    if (!id) return error("'" + f.name + "' on the object in slot " + number_text(b[o + 1]) + ", which was destroyed"), false;
+    if (!id)
+      return error("'" + f.name + "' on the object in slot " + number_text(b[o + 1]) +
+                   ", which was destroyed"),
+             false;
     std::size_t a = o + 2;
     for (ArgKind k : f.args) {
       if (k == ArgKind::Object && !store.id_at(std::uint32_t(b[a])))
-        return error("'" + f.name + "' of " + store.describe(id) + ": no object in slot " + number_text(b[a])), false;
+        return error("'" + f.name + "' of " + store.describe(id) + ": no object in slot " +
+                     number_text(b[a])),
+               false;
       a += std::size_t(width(k));
     }
     if (native_target_) {
@@ -454,7 +502,8 @@ std::int32_t LuaStage::api_fetch(void* p, std::int32_t column) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
     if (!st->view_) return st->error("not in a call");
-    if (column < 0 || std::size_t(column) >= st->sources_.size()) return st->error("no such column");
+    if (column < 0 || std::size_t(column) >= st->sources_.size())
+      return st->error("no such column");
     st->fetch(std::size_t(column));
     return 0;
   } catch (const std::exception& e) {
@@ -465,7 +514,8 @@ std::int32_t LuaStage::api_fetch(void* p, std::int32_t column) noexcept {
 std::int32_t LuaStage::api_set_scalar(void* p, std::int32_t k, double slot, double v) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
-    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() || !st->sources_[std::size_t(k)].writable)
+    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() ||
+        !st->sources_[std::size_t(k)].writable)
       return st->error("this column is not writable here");
     std::uint32_t s;
     if (!st->check_slot(slot, s)) return 1;
@@ -473,7 +523,8 @@ std::int32_t LuaStage::api_set_scalar(void* p, std::int32_t k, double slot, doub
     const PropertyDef& def = st->world_.properties().def(src.property);
     auto& w = st->writers_[std::size_t(k)];
     auto refuse = [&](const std::string& why) {
-      return st->error("'" + def.name + "' of " + st->view_->store().describe(st->view_->store().id_at(s)) + " " + why);
+      return st->error("'" + def.name + "' of " +
+                       st->view_->store().describe(st->view_->store().id_at(s)) + " " + why);
     };
     switch (src.kind) {
       case PropertyKind::Number:
@@ -500,10 +551,12 @@ std::int32_t LuaStage::api_set_scalar(void* p, std::int32_t k, double slot, doub
   }
 }
 
-std::int32_t LuaStage::api_set_vec3(void* p, std::int32_t k, double slot, double x, double y, double z) noexcept {
+std::int32_t LuaStage::api_set_vec3(void* p, std::int32_t k, double slot, double x, double y,
+                                    double z) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
-    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() || !st->sources_[std::size_t(k)].writable ||
+    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() ||
+        !st->sources_[std::size_t(k)].writable ||
         st->sources_[std::size_t(k)].kind != PropertyKind::Vec3)
       return st->error("this column is not a writable vec3 here");
     std::uint32_t s;
@@ -511,7 +564,8 @@ std::int32_t LuaStage::api_set_vec3(void* p, std::int32_t k, double slot, double
     const PropertyDef& def = st->world_.properties().def(st->sources_[std::size_t(k)].property);
     for (double c : {x, y, z})
       if (auto why = bounds_problem(def, c); !why.empty())
-        return st->error("'" + def.name + "' of " + st->view_->store().describe(st->view_->store().id_at(s)) + " " + why);
+        return st->error("'" + def.name + "' of " +
+                         st->view_->store().describe(st->view_->store().id_at(s)) + " " + why);
     if (def.nonzero && x == 0 && y == 0 && z == 0)
       return st->error("'" + def.name + "' must not be the zero vector");
     std::get<ColumnWriter<Vec3>>(st->writers_[std::size_t(k)]).set(s, Vec3{x, y, z});
@@ -521,18 +575,21 @@ std::int32_t LuaStage::api_set_vec3(void* p, std::int32_t k, double slot, double
   }
 }
 
-std::int32_t LuaStage::api_set_quat(void* p, std::int32_t k, double slot, double w, double x, double y,
-                                    double z) noexcept {
+std::int32_t LuaStage::api_set_quat(void* p, std::int32_t k, double slot, double w, double x,
+                                    double y, double z) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
-    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() || !st->sources_[std::size_t(k)].writable ||
+    if (!st->access_ || k < 0 || std::size_t(k) >= st->sources_.size() ||
+        !st->sources_[std::size_t(k)].writable ||
         st->sources_[std::size_t(k)].kind != PropertyKind::Quat)
       return st->error("this column is not a writable quat here");
     std::uint32_t s;
     if (!st->check_slot(slot, s)) return 1;
     const double norm = std::sqrt(w * w + x * x + y * y + z * z);
-    if (!std::isfinite(norm) || norm == 0) return st->error("a rotation must be a finite, non-zero quaternion");
-    std::get<ColumnWriter<Quat>>(st->writers_[std::size_t(k)]).set(s, Quat{w / norm, x / norm, y / norm, z / norm});
+    if (!std::isfinite(norm) || norm == 0)
+      return st->error("a rotation must be a finite, non-zero quaternion");
+    std::get<ColumnWriter<Quat>>(st->writers_[std::size_t(k)])
+        .set(s, Quat{w / norm, x / norm, y / norm, z / norm});
     return 0;
   } catch (const std::exception& e) {
     return st->error(e.what());
@@ -546,7 +603,8 @@ std::int32_t LuaStage::api_has(void* p, std::int32_t k, double slot) noexcept {
       st->error("not in a call");
       return -1;
     }
-    if (!(slot >= 0 && slot < double(st->view_->store().slot_count())) || std::floor(slot) != slot) return 0;
+    if (!(slot >= 0 && slot < double(st->view_->store().slot_count())) || std::floor(slot) != slot)
+      return 0;
     const auto s = std::uint32_t(slot);
     const Source& src = st->sources_[std::size_t(k)];
     if (src.what == Source::Property) {
@@ -565,7 +623,8 @@ std::int32_t LuaStage::api_has(void* p, std::int32_t k, double slot) noexcept {
 std::int32_t LuaStage::api_grow(void* p) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
-    if (!st->view_ || st->kind_ != StageKind::Interaction) return st->error("only an interaction may queue commands, while it runs");
+    if (!st->view_ || st->kind_ != StageKind::Interaction)
+      return st->error("only an interaction may queue commands, while it runs");
     st->commands_.resize(st->commands_.size() * 2);
     st->call_->buf = st->commands_.data();
     st->call_->buf_cap = double(st->commands_.size());
@@ -588,7 +647,8 @@ std::int32_t LuaStage::api_commands(void* p, std::int32_t fn) noexcept {
 std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
-    if (!st->view_ || !st->collisions_) return st->error("declare derived = { \"collisions\" } to read contacts");
+    if (!st->view_ || !st->collisions_)
+      return st->error("declare derived = { \"collisions\" } to read contacts");
     st->contacts_.clear();
     const rigid::CollisionSet& c = *st->collisions_;
     auto add = [&](std::span<const rigid::ContactPair> pairs, bool began) {
@@ -614,9 +674,10 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
     if (which == 1 || which == 3) add(c.ongoing(), false);
     if (which == 2) add(c.ended(), false);
     if (which == 3)  // touching: in (a, b) order, as the set keeps them
-      std::sort(st->contacts_.begin(), st->contacts_.end(), [](const abi::Contact& x, const abi::Contact& y) {
-        return x.a < y.a || (x.a == y.a && x.b < y.b);
-      });
+      std::sort(st->contacts_.begin(), st->contacts_.end(),
+                [](const abi::Contact& x, const abi::Contact& y) {
+                  return x.a < y.a || (x.a == y.a && x.b < y.b);
+                });
     st->call_->contacts = st->contacts_.data();
     st->call_->contact_count = std::uint32_t(st->contacts_.size());
     return 0;
@@ -655,7 +716,8 @@ int LuaStage::host_find(lua_State* L) {
 int LuaStage::host_alive(lua_State* L) {
   LuaStage* st = stage_of(L);
   const double slot = luaL_checknumber(L, 2);
-  lua_pushboolean(L, slot >= 0 && slot < double(st->view_->store().slot_count()) && std::floor(slot) == slot &&
+  lua_pushboolean(L, slot >= 0 && slot < double(st->view_->store().slot_count()) &&
+                         std::floor(slot) == slot &&
                          bool(st->view_->store().id_at(std::uint32_t(slot))));
   return 1;
 }
@@ -674,7 +736,8 @@ int LuaStage::host_emit(lua_State* L) {
         const std::string key = lua_tostring(L, -2);
         if (key == "a" || key == "b") {
           std::uint32_t s;
-          if (!st->check_slot(luaL_checknumber(L, -1), s)) throw InputError("w:emit '" + key + "': " + st->last_error_);
+          if (!st->check_slot(luaL_checknumber(L, -1), s))
+            throw InputError("w:emit '" + key + "': " + st->last_error_);
           (key == "a" ? e.a : e.b) = st->view_->store().id_at(s);
         } else if (key == "text") {
           if (lua_type(L, -1) != LUA_TSTRING) throw InputError("w:emit: 'text' must be a string");
@@ -725,10 +788,12 @@ int LuaStage::host_slow_set(lua_State* L) {
   return catch_exceptions(L, [&] {
     const auto k = std::size_t(luaL_checkinteger(L, 2));
     std::uint32_t s;
-    if (k >= st->sources_.size() || !st->access_ || !st->sources_[k].writable) throw InputError("not writable here");
+    if (k >= st->sources_.size() || !st->access_ || !st->sources_[k].writable)
+      throw InputError("not writable here");
     if (!st->check_slot(luaL_checknumber(L, 3), s)) throw InputError(st->last_error_);
     if (st->sources_[k].kind != PropertyKind::String)
-      throw InputError("writing '" + st->column_names_[k] + "' from Lua is not supported (numbers, vectors, "
+      throw InputError("writing '" + st->column_names_[k] +
+                       "' from Lua is not supported (numbers, vectors, "
                        "rotations, booleans, enums and strings are)");
     std::get<ColumnWriter<std::string>>(st->writers_[k]).set(s, luaL_checkstring(L, 4));
     return 0;
@@ -738,7 +803,9 @@ int LuaStage::host_slow_set(lua_State* L) {
 // --- the three kinds ----------------------------------------------------------------
 
 LuaResolver::LuaResolver(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx)
-    : LuaStage(std::move(mod), decl, ctx), functions_(decl.functions), queue_(decl.functions.size()) {}
+    : LuaStage(std::move(mod), decl, ctx),
+      functions_(decl.functions),
+      queue_(decl.functions.size()) {}
 
 void LuaResolver::build(ResolverAccess& access) {
   if (runnable()) invoke(access, &access, "build", access.dt());
@@ -749,7 +816,8 @@ void LuaResolver::advance(ResolverAccess& access, double dt) {
   for (auto& q : queue_) q.clear();  // performed, or dropped with a disabled stage
 }
 
-std::string LuaResolver::push(std::int32_t fn, std::uint32_t slot, const double* args, std::int32_t nargs) {
+std::string LuaResolver::push(std::int32_t fn, std::uint32_t slot, const double* args,
+                              std::int32_t nargs) {
   if (fn < 0 || std::size_t(fn) >= functions_.size()) return "no such interaction function";
   auto& q = queue_[std::size_t(fn)];
   q.push_back(double(slot));
@@ -774,7 +842,8 @@ std::int32_t LuaResolver::commands(std::int32_t fn) {
   return 0;
 }
 
-LuaDerivedSet::LuaDerivedSet(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx)
+LuaDerivedSet::LuaDerivedSet(std::shared_ptr<ModState> mod, const StageDecl& decl,
+                             PluginContext& ctx)
     : LuaStage(std::move(mod), decl, ctx), outputs_(decl.provides), data_(decl.provides.size()) {}
 
 void LuaDerivedSet::update(const WorldView& world) {
@@ -783,8 +852,10 @@ void LuaDerivedSet::update(const WorldView& world) {
   for (std::size_t o = 0; o < data_.size(); ++o) {
     Output& out = data_[o];
     out.present.assign(slots, 0);
-    if (outputs_[o].kind == PropertyKind::Vec3) out.vec3.assign(slots, Vec3{});
-    else out.num.assign(slots, 0.0);
+    if (outputs_[o].kind == PropertyKind::Vec3)
+      out.vec3.assign(slots, Vec3{});
+    else
+      out.num.assign(slots, 0.0);
   }
   const bool ok = runnable() && invoke(world, nullptr, "update", world.dt());
   for (Output& out : data_) {
@@ -799,7 +870,7 @@ void LuaDerivedSet::fill_outputs(std::size_t k, abi::Column& info) {
   const Output& out = data_[std::size_t(sources_[k].output)];
   Output& w = data_[std::size_t(sources_[k].output)];
   info.any = sources_[k].kind == PropertyKind::Vec3 ? static_cast<const void*>(out.vec3.data())
-                                                   : static_cast<const void*>(out.num.data());
+                                                    : static_cast<const void*>(out.num.data());
   info.out_num = w.num.data();
   info.out_vec3 = w.vec3.data();
   info.out_present = w.present.data();
@@ -812,15 +883,18 @@ void LuaDerivedSet::fill_outputs(std::size_t k, abi::Column& info) {
 
 void LuaDerivedSet::describe(int k, abi::Column& info) const {
   const Output& out = data_[std::size_t(k)];
-  info.any = outputs_[std::size_t(k)].kind == PropertyKind::Vec3 ? static_cast<const void*>(out.vec3.data())
-                                                                 : static_cast<const void*>(out.num.data());
+  info.any = outputs_[std::size_t(k)].kind == PropertyKind::Vec3
+                 ? static_cast<const void*>(out.vec3.data())
+                 : static_cast<const void*>(out.num.data());
   info.members = out.members.data();
   info.count = std::uint32_t(out.members.size());
-  info.out_present = const_cast<std::uint8_t*>(out.present.data());  // has() reads it; the prelude never writes a reader's
+  info.out_present = const_cast<std::uint8_t*>(
+      out.present.data());  // has() reads it; the prelude never writes a reader's
   info.n = std::uint32_t(out.present.size());
 }
 
-LuaInteraction::LuaInteraction(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx)
+LuaInteraction::LuaInteraction(std::shared_ptr<ModState> mod, const StageDecl& decl,
+                               PluginContext& ctx)
     : LuaStage(std::move(mod), decl, ctx) {}
 
 void LuaInteraction::apply(const WorldView& world) {
@@ -834,9 +908,12 @@ std::unique_ptr<Stage> LuaStageFactory::operator()(PluginContext& ctx) const {
   const StageDecl* d = p ? p->stage(stage) : nullptr;
   if (!d) throw AccessError("mod '" + mod->name() + "' does not define '" + stage + "' any more");
   switch (d->info.kind) {
-    case StageKind::Resolver: return std::make_unique<LuaResolver>(mod, *d, ctx);
-    case StageKind::Derived: return std::make_unique<LuaDerivedSet>(mod, *d, ctx);
-    case StageKind::Interaction: return std::make_unique<LuaInteraction>(mod, *d, ctx);
+    case StageKind::Resolver:
+      return std::make_unique<LuaResolver>(mod, *d, ctx);
+    case StageKind::Derived:
+      return std::make_unique<LuaDerivedSet>(mod, *d, ctx);
+    case StageKind::Interaction:
+      return std::make_unique<LuaInteraction>(mod, *d, ctx);
   }
   return nullptr;
 }
@@ -844,7 +921,8 @@ std::unique_ptr<Stage> LuaStageFactory::operator()(PluginContext& ctx) const {
 PluginDef make_plugin(const std::shared_ptr<ModState>& mod, const StageDecl& decl) {
   PluginDef def;
   def.info = decl.info;
-  def.info.doc = (decl.info.doc.empty() ? std::string() : decl.info.doc + " ") + "(Lua, mod '" + mod->name() + "')";
+  def.info.doc = (decl.info.doc.empty() ? std::string() : decl.info.doc + " ") + "(Lua, mod '" +
+                 mod->name() + "')";
   def.create = LuaStageFactory{mod, decl.info.name};
   return def;
 }

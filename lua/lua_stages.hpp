@@ -72,11 +72,12 @@ class LuaStage {
 
   // --- the FFI entry points (stage_abi.hpp), and the host functions ------------
   static std::int32_t api_fetch(void* stage, std::int32_t column) noexcept;
-  static std::int32_t api_set_scalar(void* stage, std::int32_t column, double slot, double v) noexcept;
-  static std::int32_t api_set_vec3(void* stage, std::int32_t column, double slot, double x, double y,
-                                   double z) noexcept;
-  static std::int32_t api_set_quat(void* stage, std::int32_t column, double slot, double w, double x,
+  static std::int32_t api_set_scalar(void* stage, std::int32_t column, double slot,
+                                     double v) noexcept;
+  static std::int32_t api_set_vec3(void* stage, std::int32_t column, double slot, double x,
                                    double y, double z) noexcept;
+  static std::int32_t api_set_quat(void* stage, std::int32_t column, double slot, double w,
+                                   double x, double y, double z) noexcept;
   static std::int32_t api_has(void* stage, std::int32_t column, double slot) noexcept;
   static std::int32_t api_grow(void* stage) noexcept;
   static std::int32_t api_commands(void* stage, std::int32_t function) noexcept;
@@ -101,8 +102,8 @@ class LuaStage {
     PropertyId property = kNoProperty;
     PropertyKind kind = PropertyKind::Number;
     bool writable = false;
-    int output = -1;                    ///< index into the set's outputs
-    const LuaDerivedSet* set = nullptr; ///< DerivedInput: the Lua derived set read
+    int output = -1;                     ///< index into the set's outputs
+    const LuaDerivedSet* set = nullptr;  ///< DerivedInput: the Lua derived set read
   };
   /// Pushes the stage's settings: the mod's defaults, then the scene's values.
   void push_settings(const StageDecl& decl);
@@ -138,7 +139,7 @@ class LuaStage {
   abi::Column* infos_ = nullptr;  // userdata in the mod's state, one per source
   abi::Call* call_ = nullptr;     // userdata in the mod's state
   int record_ref_ = -2;
-  const WorldView* view_ = nullptr;  // during a call
+  const WorldView* view_ = nullptr;   // during a call
   ResolverAccess* access_ = nullptr;  // during a resolver's call
   std::string last_error_;
   bool disabled_ = false;

@@ -120,11 +120,13 @@ Manifest read_manifest(LuaHost& host, const fs::path& folder) {
                                      {"scene", &m.scene},
                                      {"runtime", &m.runtime}}) {
     const fs::path p(*value);
-    const bool outside = p.is_absolute() ||
-                         std::any_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; });
+    const bool outside =
+        p.is_absolute() ||
+        std::any_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; });
     if (outside)
-      throw InputError(where, std::string("mod.lua '") + field + "' must name a file inside the mod's folder, not '" +
-                                  *value + "'");
+      throw InputError(where, std::string("mod.lua '") + field +
+                                  "' must name a file inside the mod's folder, not '" + *value +
+                                  "'");
   }
   if (m.name.empty()) throw InputError(where, "mod.lua must give the mod's name");
   if (!is_identifier(m.name))

@@ -107,7 +107,8 @@ class ModLoader {
   std::vector<std::string> loading_;                          // require chain, for cycles
   std::vector<std::string> checked_;                          // mods whose depends exist
   std::vector<std::string> required_;                         // mods run, in first-require order
-  ModLoader** box_ = nullptr;  // userdata holding `this`, the upvalue of require; nulled at destruction
+  ModLoader** box_ =
+      nullptr;  // userdata holding `this`, the upvalue of require; nulled at destruction
   int box_ref_ = -2;
   int envs_ref_ = -2;    // registry ref: mod name -> environment (this loader's own)
   int loaded_ref_ = -2;  // registry ref: module name -> value (this loader's own)

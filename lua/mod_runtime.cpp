@@ -26,14 +26,20 @@ bool same_property(const PropertyDef& a, const PropertyDef& b) {
          a.max == b.max && a.min_exclusive == b.min_exclusive;
 }
 
-bool is_lua_plugin(const PluginDef& def) { return def.create.target<LuaStageFactory>() != nullptr; }
+bool is_lua_plugin(const PluginDef& def) {
+  return def.create.target<LuaStageFactory>() != nullptr;
+}
 
-std::string kind_text(StageKind k) { return std::string(to_string(k)); }
+std::string kind_text(StageKind k) {
+  return std::string(to_string(k));
+}
 
 }  // namespace
 
 ModRuntime::ModRuntime(PluginRegistry& registry, ModRuntimeOptions options)
-    : registry_(registry), options_(std::move(options)), self_(std::make_shared<ModRuntime*>(this)) {
+    : registry_(registry),
+      options_(std::move(options)),
+      self_(std::make_shared<ModRuntime*>(this)) {
   if (!options_.log)
     options_.log = [](const std::string& mod, const std::string& line) {
       std::fprintf(stderr, "[%s] %s\n", mod.c_str(), line.c_str());
@@ -44,7 +50,8 @@ ModRuntime::~ModRuntime() {
   *self_ = nullptr;
   for (auto it = mods_.rbegin(); it != mods_.rend(); ++it)
     for (const auto& name : (*it)->plugins)
-      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, *(*it)->state)) registry_.remove(name);
+      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, *(*it)->state))
+        registry_.remove(name);
 }
 
 ModRuntime::Loaded* ModRuntime::find(const std::string& name) const {
@@ -109,8 +116,8 @@ void ModRuntime::load_manifest(const Manifest& m, std::vector<std::string>& chai
         break;
       }
     if (!found)
-      throw InputError(ErrorLocation{m.file, 0, ""},
-                       "mod '" + m.name + "' depends on '" + dep + "', which is not on the mod path");
+      throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + m.name + "' depends on '" + dep +
+                                                         "', which is not on the mod path");
   }
   chain.pop_back();
   if (m.runtime.empty()) return;  // parts and scenes only: nothing runs in the world
@@ -136,8 +143,8 @@ void ModRuntime::load_manifest(const Manifest& m, std::vector<std::string>& chai
   }
   if (watcher_) watcher_->add(m.folder);
   report({ModReport::Kind::Loaded, m.name,
-          "mod '" + m.name + "' " + m.version + " loaded: " + std::to_string(ref.plugins.size()) + " stages, " +
-              std::to_string(state->program()->handlers.size()) + " event handlers"});
+          "mod '" + m.name + "' " + m.version + " loaded: " + std::to_string(ref.plugins.size()) +
+              " stages, " + std::to_string(state->program()->handlers.size()) + " event handlers"});
 }
 
 void ModRuntime::validate(const ModState& mod, const Program& p) const {
@@ -147,12 +154,13 @@ void ModRuntime::validate(const ModState& mod, const Program& p) const {
   for (const auto& def : p.properties)
     if (auto id = props.find(def.name); id && !same_property(props.def(*id), def))
       throw InputError(at_file, "property '" + def.name + "' is already defined as " +
-                                    std::string(to_string(props.def(*id).kind)) + " (unit '" + props.def(*id).unit +
-                                    "') by '" + props.def(*id).owner + "'; mod '" + mod.name() +
-                                    "' cannot define it differently");
+                                    std::string(to_string(props.def(*id).kind)) + " (unit '" +
+                                    props.def(*id).unit + "') by '" + props.def(*id).owner +
+                                    "'; mod '" + mod.name() + "' cannot define it differently");
   auto known_property = [&](const std::string& n) {
     if (props.find(n)) return true;
-    return std::any_of(p.properties.begin(), p.properties.end(), [&](const PropertyDef& d) { return d.name == n; });
+    return std::any_of(p.properties.begin(), p.properties.end(),
+                       [&](const PropertyDef& d) { return d.name == n; });
   };
   auto lua_stage = [&](const std::string& n, StageKind kind) -> bool {
     if (const StageDecl* d = p.stage(n)) return d->info.kind == kind;
@@ -164,31 +172,37 @@ void ModRuntime::validate(const ModState& mod, const Program& p) const {
     const std::string what = kind_text(s.info.kind) + " '" + s.info.name + "'";
     if (const PluginDef* def = registry_.find(s.info.name); def && !registered_by(*def, mod))
       throw InputError(where, what + ": the name is taken by " +
-                                  (is_lua_plugin(*def) ? std::string("another mod's stage") : std::string("a native plugin")));
+                                  (is_lua_plugin(*def) ? std::string("another mod's stage")
+                                                       : std::string("a native plugin")));
     for (const auto* list : {&s.info.reads, &s.info.writes, &s.info.needs})
       for (const auto& n : *list)
         if (!known_property(n)) {
           std::vector<std::string> names = props.names();
           for (const auto& d : p.properties) names.push_back(d.name);
           std::string msg = what + ": unknown property '" + n + "'";
-          if (auto near = closest_name(n, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+          if (auto near = closest_name(n, names); !near.empty())
+            msg += " (did you mean '" + near + "'?)";
           throw InputError(where, msg);
         }
     for (const auto& d : s.info.derived)
       if (!native_derived_readable(d) && !lua_stage(d, StageKind::Derived))
-        throw InputError(where, what + ": derived set '" + d + "' is not one a Lua stage can read "
-                                       "(collisions, or a derived set defined in Lua)");
+        throw InputError(where, what + ": derived set '" + d +
+                                    "' is not one a Lua stage can read "
+                                    "(collisions, or a derived set defined in Lua)");
     for (const auto& r : s.info.resolvers)
-      if (!registry_.find(r) && !p.stage(r)) throw InputError(where, what + ": unknown resolver '" + r + "'");
+      if (!registry_.find(r) && !p.stage(r))
+        throw InputError(where, what + ": unknown resolver '" + r + "'");
     if (s.info.kind == StageKind::Interaction) {
       const std::string& t = s.info.target;
       if (!native_functions(t) && !lua_stage(t, StageKind::Resolver)) {
-        std::string msg = what + ": target '" + t + "' is not a resolver Lua can queue on (rigid_body, or a "
-                                 "resolver defined in Lua)";
+        std::string msg = what + ": target '" + t +
+                          "' is not a resolver Lua can queue on (rigid_body, or a "
+                          "resolver defined in Lua)";
         if (const PluginDef* def = registry_.find(t); !def) {
           std::vector<std::string> names = registry_.order();
           for (const auto& st : p.stages) names.push_back(st.info.name);
-          if (auto near = closest_name(t, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+          if (auto near = closest_name(t, names); !near.empty())
+            msg += " (did you mean '" + near + "'?)";
         }
         throw InputError(where, msg);
       }
@@ -206,7 +220,8 @@ void ModRuntime::commit(Loaded& l, std::unique_ptr<Program> p, bool first) {
     const StageDecl* now = p->stage(name);
     const StageDecl* was = old ? old->stage(name) : nullptr;
     if (!now || (was && was->info.kind != now->info.kind)) {
-      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, mod)) registry_.remove(name);
+      if (const PluginDef* d = registry_.find(name); d && registered_by(*d, mod))
+        registry_.remove(name);
       changed.push_back(name);
     }
   }
@@ -249,12 +264,15 @@ ModReport ModRuntime::reload(const std::string& name) {
     LuaHost reader;
     Manifest m = read_manifest(reader, before.folder);
     for (const auto& dep : m.depends)
-      if (!has(dep) && std::none_of(options_.mod_paths.begin(), options_.mod_paths.end(),
-                                    [&](const fs::path& d) { return fs::is_regular_file(d / dep / "mod.lua"); }) &&
+      if (!has(dep) &&
+          std::none_of(
+              options_.mod_paths.begin(), options_.mod_paths.end(),
+              [&](const fs::path& d) { return fs::is_regular_file(d / dep / "mod.lua"); }) &&
           !fs::is_regular_file(before.folder.parent_path() / dep / "mod.lua"))
         throw InputError(ErrorLocation{m.file, 0, ""}, "mod '" + name + "' depends on '" + dep +
                                                            "', which is not on the mod path");
-    if (m.runtime.empty()) throw InputError(ErrorLocation{m.file, 0, ""}, "mod.lua no longer names a runtime file");
+    if (m.runtime.empty())
+      throw InputError(ErrorLocation{m.file, 0, ""}, "mod.lua no longer names a runtime file");
     mod.set_manifest(m);
     if (was_stopped) mod.resume();
     std::unique_ptr<Program> p;
@@ -273,18 +291,22 @@ ModReport ModRuntime::reload(const std::string& name) {
                 std::to_string(mod.program()->handlers.size()) + " event handlers";
     try {
       // After a stop the state table is new: the mod starts over.
-      if (was_stopped) mod.call_hook(mod.program()->on_load, "on_load");
-      else mod.call_hook(mod.program()->on_reload, "on_reload");
+      if (was_stopped)
+        mod.call_hook(mod.program()->on_load, "on_load");
+      else
+        mod.call_hook(mod.program()->on_reload, "on_reload");
     } catch (const InputError& e) {
       r.message += "; but " + std::string(e.what());
       r.where = e.where();
     }
-    if (world_) world_->view().emit(Event{.type = "mod_reloaded", .source = "mods", .text = r.message});
+    if (world_)
+      world_->view().emit(Event{.type = "mod_reloaded", .source = "mods", .text = r.message});
   } catch (const InputError& e) {
     r.kind = ModReport::Kind::ReloadFailed;
     r.where = e.where();
     r.message = "mod '" + name + "' was not reloaded, the old code keeps running: " + e.what();
-    if (world_) world_->view().emit(Event{.type = "mod_reload_failed", .source = "mods", .text = r.message});
+    if (world_)
+      world_->view().emit(Event{.type = "mod_reload_failed", .source = "mods", .text = r.message});
   }
   report(r);
   return r;
@@ -296,7 +318,8 @@ void ModRuntime::unload(const std::string& name) {
   for (const auto& other : mods_) {
     const auto& deps = other->state->manifest().depends;
     if (other.get() != l && std::find(deps.begin(), deps.end(), name) != deps.end())
-      throw InputError("mod '" + name + "' cannot be unloaded: mod '" + other->state->name() + "' depends on it");
+      throw InputError("mod '" + name + "' cannot be unloaded: mod '" + other->state->name() +
+                       "' depends on it");
   }
   ModState& mod = *l->state;
   if (mod.program() && !mod.stopped()) {
@@ -318,7 +341,8 @@ void ModRuntime::unload(const std::string& name) {
 
 void ModRuntime::watch() {
   if (!watcher_)
-    watcher_ = std::make_unique<FileWatcher>(options_.poll_files ? FileWatcher::Mode::Polling : FileWatcher::Mode::Auto);
+    watcher_ = std::make_unique<FileWatcher>(options_.poll_files ? FileWatcher::Mode::Polling
+                                                                 : FileWatcher::Mode::Auto);
   for (const auto& l : mods_) watcher_->add(l->state->manifest().folder);
 }
 
@@ -333,15 +357,18 @@ std::vector<ModReport> ModRuntime::poll() {
         const auto rel = file.lexically_relative(folder);
         if (rel.empty() || *rel.begin() == "..") continue;
         const std::string& mod = l->state->name();
-        const bool ours = rel == "mod.lua" || std::any_of(l->state->program()->files.begin(), l->state->program()->files.end(),
-                                                          [&](const std::string& f) {
-                                                            return fs::absolute(f, ec).lexically_normal() == file;
-                                                          });
+        const bool ours = rel == "mod.lua" ||
+                          std::any_of(l->state->program()->files.begin(),
+                                      l->state->program()->files.end(), [&](const std::string& f) {
+                                        return fs::absolute(f, ec).lexically_normal() == file;
+                                      });
         if (ours) {
-          if (std::find(to_reload.begin(), to_reload.end(), mod) == to_reload.end()) to_reload.push_back(mod);
+          if (std::find(to_reload.begin(), to_reload.end(), mod) == to_reload.end())
+            to_reload.push_back(mod);
         } else {
           report({ModReport::Kind::Note, mod,
-                  display_path(file) + " changed: scene and part files take effect when the scene is loaded again"});
+                  display_path(file) +
+                      " changed: scene and part files take effect when the scene is loaded again"});
         }
       }
     }
@@ -422,14 +449,16 @@ void ModRuntime::dispatch(const Event& e) {
       mod.push_state();
       mod.begin_call(e.step);
       try {
-        mod.host().call(2, 0, ErrorLocation{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""});
+        mod.host().call(
+            2, 0, ErrorLocation{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""});
         mod.end_call();
       } catch (const InputError& err) {
         mod.end_call();
         if (mod.stopped()) break;
         l.handler_ok[h] = false;
-        const std::string text = "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
-                                 "' failed and is disabled until the mod is reloaded: " + err.what();
+        const std::string text =
+            "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
+            "' failed and is disabled until the mod is reloaded: " + err.what();
         options_.log(mod.name(), text);
         report({ModReport::Kind::StageDisabled, mod.name(), text, err.where()});
       }

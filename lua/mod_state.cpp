@@ -30,7 +30,8 @@ ErrorLocation mod_location(lua_State* L) {
   lua_Debug ar;
   for (int level = 0; lua_getstack(L, level, &ar); ++level) {
     if (!lua_getinfo(L, "Sl", &ar)) continue;
-    if (ar.source && ar.source[0] == '@' && ar.currentline > 0) return {ar.source + 1, ar.currentline, ""};
+    if (ar.source && ar.source[0] == '@' && ar.currentline > 0)
+      return {ar.source + 1, ar.currentline, ""};
   }
   return {};
 }
@@ -46,9 +47,12 @@ bool valid_name(const std::string& s, bool dots) {
 
 std::string_view to_string(ArgKind kind) {
   switch (kind) {
-    case ArgKind::Number: return "number";
-    case ArgKind::Object: return "object";
-    case ArgKind::Vec3: return "vec3";
+    case ArgKind::Number:
+      return "number";
+    case ArgKind::Object:
+      return "object";
+    case ArgKind::Vec3:
+      return "vec3";
   }
   return "?";
 }
@@ -78,45 +82,56 @@ struct Collector {
   static Collector* from(lua_State* L) {
     auto* box = static_cast<Collector**>(lua_touserdata(L, lua_upvalueindex(1)));
     if (!box || !*box)
-      throw InputError("mod.property, mod.resolver, mod.derived, mod.interaction and mod.on "
-                       "can only be called while the mod's files load");
+      throw InputError(
+          "mod.property, mod.resolver, mod.derived, mod.interaction and mod.on "
+          "can only be called while the mod's files load");
     return *box;
   }
 
   ErrorLocation here(lua_State* L) const { return mod.host().user_location(L); }
 
-  void check_fields(lua_State* L, int t, const std::vector<std::string>& allowed, const std::string& what) {
+  void check_fields(lua_State* L, int t, const std::vector<std::string>& allowed,
+                    const std::string& what) {
     for (lua_pushnil(L); lua_next(L, t); lua_pop(L, 1)) {
-      if (lua_type(L, -2) != LUA_TSTRING) throw InputError(here(L), what + " takes named fields only");
+      if (lua_type(L, -2) != LUA_TSTRING)
+        throw InputError(here(L), what + " takes named fields only");
       const std::string key = lua_tostring(L, -2);
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
         std::string msg = what + " has no field '" + key + "'";
-        if (auto near = closest_name(key, allowed); !near.empty()) msg += " (did you mean '" + near + "'?)";
+        if (auto near = closest_name(key, allowed); !near.empty())
+          msg += " (did you mean '" + near + "'?)";
         throw InputError(here(L), msg);
       }
     }
   }
 
-  std::optional<std::string> string_field(lua_State* L, int t, const char* key, const std::string& what) {
+  std::optional<std::string> string_field(lua_State* L, int t, const char* key,
+                                          const std::string& what) {
     lua_getfield(L, t, key);
     std::optional<std::string> out;
-    if (lua_type(L, -1) == LUA_TSTRING) out = lua_tostring(L, -1);
+    if (lua_type(L, -1) == LUA_TSTRING)
+      out = lua_tostring(L, -1);
     else if (!lua_isnil(L, -1))
-      throw InputError(here(L), what + ": '" + key + "' must be a string, not a " + luaL_typename(L, -1));
+      throw InputError(here(L),
+                       what + ": '" + key + "' must be a string, not a " + luaL_typename(L, -1));
     lua_pop(L, 1);
     return out;
   }
 
-  std::optional<double> number_field(lua_State* L, int t, const char* key, const std::string& what) {
+  std::optional<double> number_field(lua_State* L, int t, const char* key,
+                                     const std::string& what) {
     lua_getfield(L, t, key);
     std::optional<double> out;
-    if (lua_type(L, -1) == LUA_TNUMBER) out = lua_tonumber(L, -1);
-    else if (!lua_isnil(L, -1)) throw InputError(here(L), what + ": '" + key + "' must be a number");
+    if (lua_type(L, -1) == LUA_TNUMBER)
+      out = lua_tonumber(L, -1);
+    else if (!lua_isnil(L, -1))
+      throw InputError(here(L), what + ": '" + key + "' must be a number");
     lua_pop(L, 1);
     return out;
   }
 
-  std::vector<std::string> list_field(lua_State* L, int t, const char* key, const std::string& what) {
+  std::vector<std::string> list_field(lua_State* L, int t, const char* key,
+                                      const std::string& what) {
     lua_getfield(L, t, key);
     std::vector<std::string> out;
     if (lua_istable(L, -1)) {
@@ -133,10 +148,12 @@ struct Collector {
       while (lua_next(L, -2)) {
         lua_pop(L, 1);
         if (lua_type(L, -1) != LUA_TNUMBER)
-          throw InputError(here(L), what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
+          throw InputError(here(L),
+                           what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
       }
     } else if (!lua_isnil(L, -1)) {
-      throw InputError(here(L), what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
+      throw InputError(here(L),
+                       what + ": '" + key + "' must be a list of names, such as {\"mass\"}");
     }
     lua_pop(L, 1);
     return out;
@@ -163,15 +180,19 @@ struct Collector {
   void property(lua_State* L) {
     luaL_checktype(L, 1, LUA_TTABLE);
     const std::string what = "mod.property";
-    check_fields(L, 1, {"name", "kind", "unit", "doc", "min", "max", "min_exclusive", "values"}, what);
+    check_fields(L, 1, {"name", "kind", "unit", "doc", "min", "max", "min_exclusive", "values"},
+                 what);
     PropertyDef def;
     def.name = string_field(L, 1, "name", what).value_or("");
     if (!valid_name(def.name, false))
-      throw InputError(here(L), what + " needs a name made of letters, digits and _ (name = \"mana\")");
+      throw InputError(here(L),
+                       what + " needs a name made of letters, digits and _ (name = \"mana\")");
     const std::string kind = string_field(L, 1, "kind", what).value_or("number");
     auto k = kind_from_string(kind);
-    if (!k) throw InputError(here(L), what + " '" + def.name + "': unknown kind '" + kind +
-                                          "' (number, integer, bool, vec3, quat, string, ref, reflist, enum)");
+    if (!k)
+      throw InputError(here(L),
+                       what + " '" + def.name + "': unknown kind '" + kind +
+                           "' (number, integer, bool, vec3, quat, string, ref, reflist, enum)");
     def.kind = *k;
     def.unit = string_field(L, 1, "unit", what).value_or("");
     def.doc = string_field(L, 1, "doc", what).value_or("");
@@ -182,16 +203,20 @@ struct Collector {
     lua_pop(L, 1);
     def.enum_values = list_field(L, 1, "values", what);
     if (def.kind == PropertyKind::Enum && def.enum_values.empty())
-      throw InputError(here(L), what + " '" + def.name + "': an enum needs its values, e.g. values = {\"a\", \"b\"}");
+      throw InputError(here(L), what + " '" + def.name +
+                                    "': an enum needs its values, e.g. values = {\"a\", \"b\"}");
     def.owner = mod.name();
     for (const auto& p : program.properties)
-      if (p.name == def.name) throw InputError(here(L), what + " '" + def.name + "' is defined twice");
+      if (p.name == def.name)
+        throw InputError(here(L), what + " '" + def.name + "' is defined twice");
     program.properties.push_back(std::move(def));
   }
 
   void stage(lua_State* L, StageKind kind) {
     luaL_checktype(L, 1, LUA_TTABLE);
-    const char* fn_name = kind == StageKind::Resolver ? "resolver" : kind == StageKind::Derived ? "derived" : "interaction";
+    const char* fn_name = kind == StageKind::Resolver  ? "resolver"
+                          : kind == StageKind::Derived ? "derived"
+                                                       : "interaction";
     std::string what = std::string("mod.") + fn_name;
     std::vector<std::string> allowed = {"name", "doc", "reads", "needs", "settings"};
     switch (kind) {
@@ -222,7 +247,8 @@ struct Collector {
     d.info.resolvers = list_field(L, 1, "resolvers", what);
     d.info.target = string_field(L, 1, "target", what).value_or("");
     if (kind == StageKind::Interaction && d.info.target.empty())
-      throw InputError(d.where, what + " needs the one resolver it queues on (target = \"rigid_body\")");
+      throw InputError(d.where,
+                       what + " needs the one resolver it queues on (target = \"rigid_body\")");
     d.settings = keys_of(L, 1, "settings", what);
 
     if (kind == StageKind::Resolver) {
@@ -231,22 +257,28 @@ struct Collector {
         lua_getfield(L, -1, f.c_str());
         FunctionDecl fd{f, {}};
         if (!lua_istable(L, -1))
-          throw InputError(d.where, what + ": interaction function '" + f +
-                                        "' must list its arguments after the object, e.g. {\"number\"}");
+          throw InputError(d.where,
+                           what + ": interaction function '" + f +
+                               "' must list its arguments after the object, e.g. {\"number\"}");
         const int n = int(lua_objlen(L, -1));
         for (int i = 1; i <= n; ++i) {
           lua_rawgeti(L, -1, i);
           const std::string k = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "";
           lua_pop(L, 1);
-          if (k == "number") fd.args.push_back(ArgKind::Number);
-          else if (k == "object") fd.args.push_back(ArgKind::Object);
-          else if (k == "vec3") fd.args.push_back(ArgKind::Vec3);
+          if (k == "number")
+            fd.args.push_back(ArgKind::Number);
+          else if (k == "object")
+            fd.args.push_back(ArgKind::Object);
+          else if (k == "vec3")
+            fd.args.push_back(ArgKind::Vec3);
           else
             throw InputError(d.where, what + ": argument " + std::to_string(i) + " of '" + f +
                                           "' must be \"number\", \"object\" or \"vec3\"");
         }
         lua_pop(L, 2);
-        if (fd.args.size() > 4) throw InputError(d.where, what + ": '" + f + "' takes at most 4 arguments after the object");
+        if (fd.args.size() > 4)
+          throw InputError(d.where,
+                           what + ": '" + f + "' takes at most 4 arguments after the object");
         d.functions.push_back(std::move(fd));
       }
     }
@@ -261,9 +293,13 @@ struct Collector {
         d.provides.push_back({o, k == "vec3" ? PropertyKind::Vec3 : PropertyKind::Number});
       }
       if (d.provides.empty())
-        throw InputError(d.where, what + " provides nothing: list its outputs, e.g. provides = { charge = \"number\" }");
+        throw InputError(
+            d.where,
+            what + " provides nothing: list its outputs, e.g. provides = { charge = \"number\" }");
     }
-    const char* body = kind == StageKind::Resolver ? "advance" : kind == StageKind::Derived ? "update" : "apply";
+    const char* body = kind == StageKind::Resolver  ? "advance"
+                       : kind == StageKind::Derived ? "update"
+                                                    : "apply";
     lua_getfield(L, 1, body);
     if (!lua_isfunction(L, -1))
       throw InputError(d.where, what + " needs its function: " + body + " = function(w" +
@@ -271,7 +307,8 @@ struct Collector {
     lua_pop(L, 1);
     if (kind == StageKind::Resolver) {
       lua_getfield(L, 1, "build");
-      if (!lua_isnil(L, -1) && !lua_isfunction(L, -1)) throw InputError(d.where, what + ": 'build' must be a function");
+      if (!lua_isnil(L, -1) && !lua_isfunction(L, -1))
+        throw InputError(d.where, what + ": 'build' must be a function");
       lua_pop(L, 1);
     }
     for (const auto& s : program.stages)
@@ -283,7 +320,8 @@ struct Collector {
 
   void on(lua_State* L) {
     const std::string type = luaL_checkstring(L, 1);
-    if (type.empty()) throw InputError(here(L), "mod.on needs an event type, or \"*\" for every event");
+    if (type.empty())
+      throw InputError(here(L), "mod.on needs an event type, or \"*\" for every event");
     luaL_checktype(L, 2, LUA_TFUNCTION);
     lua_pushvalue(L, 2);
     program.handlers.emplace_back(type, luaL_ref(L, LUA_REGISTRYINDEX));
@@ -302,7 +340,8 @@ int mod_derived(lua_State* L) {
   return catch_exceptions(L, [&] { return Collector::from(L)->stage(L, StageKind::Derived), 0; });
 }
 int mod_interaction(lua_State* L) {
-  return catch_exceptions(L, [&] { return Collector::from(L)->stage(L, StageKind::Interaction), 0; });
+  return catch_exceptions(L,
+                          [&] { return Collector::from(L)->stage(L, StageKind::Interaction), 0; });
 }
 int mod_on(lua_State* L) {
   return catch_exceptions(L, [&] { return Collector::from(L)->on(L), 0; });
@@ -324,7 +363,9 @@ ModState::~ModState() {
   if (program_) release(*program_);
 }
 
-std::string ModState::runtime_file() const { return manifest_.runtime; }
+std::string ModState::runtime_file() const {
+  return manifest_.runtime;
+}
 
 void ModState::make_state() {
   host_ = std::make_unique<LuaHost>(HostOptions{budget_.memory_bytes, 0});
@@ -339,7 +380,8 @@ void ModState::make_state() {
   // The prelude is host code: no ticks, the state's own globals, and the FFI.
   const std::string_view src = kStagePreludeSource;
   if (luaL_loadbufferx(L, src.data(), src.size(), "=alloy.prelude", "t") != 0)
-    throw std::runtime_error(std::string("the stage prelude does not compile: ") + lua_tostring(L, -1));
+    throw std::runtime_error(std::string("the stage prelude does not compile: ") +
+                             lua_tostring(L, -1));
   const int chunk = lua_gettop(L);
   lua_pushcfunction(L, luaopen_ffi);
   lua_call(L, 0, 1);
@@ -389,7 +431,9 @@ int ModState::prelude_ref(const char* fn) const {
   return ref;
 }
 
-void ModState::push_state() { lua_rawgeti(host_->state(), LUA_REGISTRYINDEX, state_ref_); }
+void ModState::push_state() {
+  lua_rawgeti(host_->state(), LUA_REGISTRYINDEX, state_ref_);
+}
 
 void ModState::resume() {
   if (!stopped_) return;
@@ -496,15 +540,17 @@ std::unique_ptr<Program> ModState::load_program() {
   const fs::path file = manifest_.folder / runtime;
   const std::string display = display_path(file);
   if (!fs::is_regular_file(file))
-    throw InputError(ErrorLocation{manifest_.file, 0, ""}, "mod '" + manifest_.name + "' names its runtime file '" +
-                                                               runtime + "', but there is no file " + display);
+    throw InputError(ErrorLocation{manifest_.file, 0, ""},
+                     "mod '" + manifest_.name + "' names its runtime file '" + runtime +
+                         "', but there is no file " + display);
   Collector c{*this, *prog};
   auto** box = static_cast<Collector**>(lua_newuserdata(L, sizeof(Collector*)));
   *box = &c;
   const int box_ref = luaL_ref(L, LUA_REGISTRYINDEX);
-  auto loader = std::make_shared<ModLoader>(*host_, search_path_, [&](lua_State* L, int env, const std::string& mod) {
-    install_environment(L, env, mod, box_ref, &c);
-  });
+  auto loader = std::make_shared<ModLoader>(*host_, search_path_,
+                                            [&](lua_State* L, int env, const std::string& mod) {
+                                              install_environment(L, env, mod, box_ref, &c);
+                                            });
   loader->set_scene_mod(manifest_);
 
   const bool was_stopped = stopped_;
@@ -533,10 +579,13 @@ std::unique_ptr<Program> ModState::load_program() {
                             {"on_reload", &prog->on_reload},
                             {"on_unload", &prog->on_unload}}) {
       lua_getfield(L, -1, key);
-      if (lua_isfunction(L, -1)) *ref = luaL_ref(L, LUA_REGISTRYINDEX);
+      if (lua_isfunction(L, -1))
+        *ref = luaL_ref(L, LUA_REGISTRYINDEX);
       else if (!lua_isnil(L, -1))
-        throw InputError(ErrorLocation{display, 0, ""}, std::string("mod.") + key + " must be a function");
-      else lua_pop(L, 1);
+        throw InputError(ErrorLocation{display, 0, ""},
+                         std::string("mod.") + key + " must be a function");
+      else
+        lua_pop(L, 1);
     }
     lua_pop(L, 1);
   } catch (...) {
@@ -600,7 +649,9 @@ void ModState::call_hook(int ref, const char* what) {
   if (stopped_) throw InputError(stop_reason_);
 }
 
-void ModState::detach(LuaStage* s) { std::erase(stages_, s); }
+void ModState::detach(LuaStage* s) {
+  std::erase(stages_, s);
+}
 
 // --- budgets ------------------------------------------------------------------------
 
@@ -612,8 +663,10 @@ void ModState::begin_call(std::uint64_t step) {
   }
   tick_limit_ = budget_.ticks_per_step;
   call_start_ = std::chrono::steady_clock::now();
-  deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                std::chrono::duration<double>(std::max(0.0, budget_.seconds_per_step - step_seconds_)));
+  deadline_ =
+      call_start_ +
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(std::max(0.0, budget_.seconds_per_step - step_seconds_)));
   granted_ = stopped_ ? 0 : kQuantum;
   abi_budget_->ticks = granted_;
   abi_budget_->stopped = stopped_ ? 1 : 0;
@@ -640,7 +693,8 @@ void ModState::charge() {
 
 void ModState::end_call() {
   charge();
-  step_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - call_start_).count();
+  step_seconds_ +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - call_start_).count();
   if (loading_) {
     loading_ = false;
     step_ = ~0ull;
@@ -668,27 +722,31 @@ int ModState::over_budget(lua_State* L) {
   // swallow the stop and loop on.
   if (self->stopped_) self->stop(L, "");
   if (self->step_ticks_ > self->tick_limit_)
-    self->stop(L, "it ran more than " + millions(self->tick_limit_) + " ticks (loop iterations and calls) " +
+    self->stop(L, "it ran more than " + millions(self->tick_limit_) +
+                      " ticks (loop iterations and calls) " +
                       (self->loading_ ? "while loading" : "in one step") + " (a runaway loop?)");
   if (std::chrono::steady_clock::now() > self->deadline_) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%g ms", 1000 * (self->loading_ ? self->budget_.seconds_to_load : self->budget_.seconds_per_step));
-    self->stop(L, std::string("it ran longer than ") + buf + (self->loading_ ? " while loading" : " in one step"));
+    std::snprintf(
+        buf, sizeof buf, "%g ms",
+        1000 * (self->loading_ ? self->budget_.seconds_to_load : self->budget_.seconds_per_step));
+    self->stop(L, std::string("it ran longer than ") + buf +
+                      (self->loading_ ? " while loading" : " in one step"));
   }
   const std::size_t limit = self->budget_.memory_bytes;
   if (limit > 0 && self->host_->memory().used() > limit / 10 * 9) {
     lua_gc(L, LUA_GCCOLLECT, 0);
     if (self->host_->memory().used() > limit / 10 * 9)
-      self->stop(L, "it holds more than 90% of its memory budget of " + std::to_string(limit >> 20) +
-                        " MiB (an allocation bomb?)");
+      self->stop(L, "it holds more than 90% of its memory budget of " +
+                        std::to_string(limit >> 20) + " MiB (an allocation bomb?)");
   }
   self->granted_ = kQuantum;
   self->abi_budget_->ticks = kQuantum;
   return 0;
 }
 
-bool ModState::run_stage(int record_ref, const char* phase, double dt, double time, std::uint64_t step,
-                         const ErrorLocation& fallback, InputError* error) {
+bool ModState::run_stage(int record_ref, const char* phase, double dt, double time,
+                         std::uint64_t step, const ErrorLocation& fallback, InputError* error) {
   lua_State* L = host_->state();
   StackGuard guard(L);
   lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("run"));

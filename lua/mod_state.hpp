@@ -36,10 +36,10 @@ class LuaStage;
 /// every machine. The time budget is a wall-clock backstop for what ticks do
 /// not see (a long string operation in a library function).
 struct ModBudget {
-  std::size_t memory_bytes = 32u << 20;        ///< the mod's Lua state, all included
-  std::uint64_t ticks_per_step = 20'000'000;   ///< over all its stages and handlers in one step
-  double seconds_per_step = 0.25;              ///< same, wall clock
-  std::uint64_t ticks_to_load = 200'000'000;   ///< running its files and on_load / on_reload
+  std::size_t memory_bytes = 32u << 20;       ///< the mod's Lua state, all included
+  std::uint64_t ticks_per_step = 20'000'000;  ///< over all its stages and handlers in one step
+  double seconds_per_step = 0.25;             ///< same, wall clock
+  std::uint64_t ticks_to_load = 200'000'000;  ///< running its files and on_load / on_reload
   double seconds_to_load = 5;
   /// Instrument the mod's code with budget ticks. Without them nothing stops
   /// a runaway loop: only for trusted code, and to measure what they cost
@@ -51,7 +51,9 @@ struct ModBudget {
 enum class ArgKind : std::uint8_t { Number, Object, Vec3 };
 std::string_view to_string(ArgKind kind);
 /// Doubles one argument takes in a queued command.
-inline int width(ArgKind k) { return k == ArgKind::Vec3 ? 3 : 1; }
+inline int width(ArgKind k) {
+  return k == ArgKind::Vec3 ? 3 : 1;
+}
 
 /// An interaction function: a name and the arguments after the object.
 struct FunctionDecl {
@@ -197,8 +199,8 @@ class ModState : public std::enable_shared_from_this<ModState> {
   // Budget accounting.
   bool loading_ = false;
   bool stopped_ = false;
-  std::string stop_reason_;   // with where it was
-  std::string stop_message_;  // without
+  std::string stop_reason_;                   // with where it was
+  std::string stop_message_;                  // without
   std::string saved_reason_, saved_message_;  // of a stop lifted for a reload
   std::uint64_t step_ = ~0ull;
   std::uint64_t step_ticks_ = 0;

@@ -18,9 +18,15 @@ class RigidBodyTarget final : public NativeTarget {
   void call(std::int32_t fn, ObjectId object, const double* a) override {
     const Vec3 v{a[0], a[1], a[2]};
     switch (fn) {
-      case 0: rigid_.add_force(object, v); return;
-      case 1: rigid_.add_torque(object, v); return;
-      case 2: rigid_.add_force(object, v, Vec3{a[3], a[4], a[5]}); return;
+      case 0:
+        rigid_.add_force(object, v);
+        return;
+      case 1:
+        rigid_.add_torque(object, v);
+        return;
+      case 2:
+        rigid_.add_force(object, v, Vec3{a[3], a[4], a[5]});
+        return;
     }
     throw AccessError("rigid_body has no interaction function #" + std::to_string(fn));
   }
@@ -29,14 +35,22 @@ class RigidBodyTarget final : public NativeTarget {
       const auto fn = std::int32_t(b[o]);
       const auto slot = std::uint32_t(b[o + 1]);
       const ObjectId id = store.id_at(slot);
-      if (!id) return "'" + kRigidBody[std::size_t(fn < 0 || fn > 2 ? 0 : fn)].name + "' on the object in slot " +
-                      std::to_string(slot) + ", which was destroyed";
+      if (!id)
+        return "'" + kRigidBody[std::size_t(fn < 0 || fn > 2 ? 0 : fn)].name +
+               "' on the object in slot " + std::to_string(slot) + ", which was destroyed";
       const Vec3 v{b[o + 2], b[o + 3], b[o + 4]};
       switch (fn) {
-        case 0: rigid_.add_force(slot, v), o += 5; break;  // the fast path: the slot is alive
-        case 1: rigid_.add_torque(id, v), o += 5; break;
-        case 2: rigid_.add_force(id, v, Vec3{b[o + 5], b[o + 6], b[o + 7]}), o += 8; break;
-        default: return "a command of an unknown interaction function";
+        case 0:
+          rigid_.add_force(slot, v), o += 5;
+          break;  // the fast path: the slot is alive
+        case 1:
+          rigid_.add_torque(id, v), o += 5;
+          break;
+        case 2:
+          rigid_.add_force(id, v, Vec3{b[o + 5], b[o + 6], b[o + 7]}), o += 8;
+          break;
+        default:
+          return "a command of an unknown interaction function";
       }
     }
     return "";
@@ -60,6 +74,8 @@ std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx) {
                    "' (Lua can reach: rigid_body)");
 }
 
-bool native_derived_readable(std::string_view set) { return set == "collisions"; }
+bool native_derived_readable(std::string_view set) {
+  return set == "collisions";
+}
 
 }  // namespace alloy::lua

@@ -42,8 +42,9 @@ struct Column {
     const ObjectId* ref;
     const void* any;
   };
-  const std::uint32_t* members;  ///< slots of the objects carrying it (in the stage's area), ascending
-  double* out_num;               ///< a derived set's own outputs, writable by it alone
+  const std::uint32_t*
+      members;      ///< slots of the objects carrying it (in the stage's area), ascending
+  double* out_num;  ///< a derived set's own outputs, writable by it alone
   Vec3* out_vec3;
   std::uint8_t* out_present;
   std::uint32_t n;      ///< slots while fetched in the current call, 0 otherwise
@@ -62,26 +63,26 @@ struct Call {
   /// records {function, slot, arguments...} and performed by C++ when the
   /// call returns (all of them, or none if the call failed).
   double* buf = nullptr;
-  const double* cmd = nullptr;  ///< a resolver's queued commands of one function
+  const double* cmd = nullptr;     ///< a resolver's queued commands of one function
   const void* contacts = nullptr;  ///< Contact[contact_count]
   std::uint32_t cmd_count = 0, cmd_stride = 0;
   std::uint32_t contact_count = 0;
-  std::uint32_t slots = 0;  ///< object slots in the world
+  std::uint32_t slots = 0;   ///< object slots in the world
   std::int32_t in_call = 0;  ///< 1 while the stage runs
   std::uint32_t epoch = 0;   ///< moves at every call: lists of an older call are refused
 };
 
 /// A contact pair of the collisions derived set, copied for Lua.
 struct Contact {
-  std::uint32_t a, b;          ///< slots, a < b
-  std::int32_t points;         ///< contact points (0 for ended pairs)
-  std::int32_t began;          ///< 1 if the pair began at the set's last update
-  double speed;                ///< approach speed along the normal, m/s
-  double depth;                ///< deepest penetration, m
-  double impulse;              ///< normal impulse of the rigid body's last advance, N*s
-  double total_impulse;        ///< normal impulse since the pair began, N*s
-  Vec3 normal;                 ///< of the first point, from b towards a
-  Vec3 point;                  ///< the first point, m
+  std::uint32_t a, b;    ///< slots, a < b
+  std::int32_t points;   ///< contact points (0 for ended pairs)
+  std::int32_t began;    ///< 1 if the pair began at the set's last update
+  double speed;          ///< approach speed along the normal, m/s
+  double depth;          ///< deepest penetration, m
+  double impulse;        ///< normal impulse of the rigid body's last advance, N*s
+  double total_impulse;  ///< normal impulse since the pair began, N*s
+  Vec3 normal;           ///< of the first point, from b towards a
+  Vec3 point;            ///< the first point, m
 };
 
 /// A mod's budget as its ticks see it (budget_ticks.hpp).
@@ -101,7 +102,8 @@ struct Api {
                            double z) noexcept;
   std::int32_t (*set_quat)(void* stage, std::int32_t column, double slot, double w, double x,
                            double y, double z) noexcept;
-  std::int32_t (*has)(void* stage, std::int32_t column, double slot) noexcept;  ///< 1, 0, or -1 on error
+  std::int32_t (*has)(void* stage, std::int32_t column,
+                      double slot) noexcept;   ///< 1, 0, or -1 on error
   std::int32_t (*grow)(void* stage) noexcept;  ///< more room in Call::buf
   std::int32_t (*commands)(void* stage, std::int32_t function) noexcept;
   std::int32_t (*contacts)(void* stage, std::int32_t which) noexcept;
@@ -109,9 +111,10 @@ struct Api {
 
 static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
 static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
-static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 && offsetof(Call, in_call) == 80 &&
-              sizeof(Call) == 88);
-static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 && sizeof(Contact) == 96);
+static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 &&
+              offsetof(Call, in_call) == 80 && sizeof(Call) == 88);
+static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 &&
+              sizeof(Contact) == 96);
 
 /// The prelude's ffi.cdef of the structs above.
 inline constexpr const char* kCdef = R"C(

@@ -8,7 +8,9 @@ namespace alloy::lua {
 
 namespace {
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_interrupt(int) { g_interrupted = true; }
+extern "C" void on_interrupt(int) {
+  g_interrupted = true;
+}
 }  // namespace
 
 WatchLoop::WatchLoop(ModRuntime* mods, std::ostream& out) : mods_(mods), out_(out) {
@@ -20,11 +22,14 @@ WatchLoop::WatchLoop(ModRuntime* mods, std::ostream& out) : mods_(mods), out_(ou
     for (const auto& m : mods_->loaded()) out_ << " " << m;
     out_ << " for changes (Ctrl-C to stop)\n";
   } else {
-    out_ << "watching: the scene uses no mod with Lua stages; running in real time (Ctrl-C to stop)\n";
+    out_ << "watching: the scene uses no mod with Lua stages; running in real time (Ctrl-C to "
+            "stop)\n";
   }
 }
 
-WatchLoop::~WatchLoop() { std::signal(SIGINT, previous_handler_ ? previous_handler_ : SIG_DFL); }
+WatchLoop::~WatchLoop() {
+  std::signal(SIGINT, previous_handler_ ? previous_handler_ : SIG_DFL);
+}
 
 bool WatchLoop::between_steps(const World& world) {
   if (world_start_ < 0) {

@@ -22,14 +22,16 @@ using Kind = lua::ModReport::Kind;
 std::string capacitor(const std::string& rate, const std::string& extra = "") {
   return R"LUA(mod.property { name = "charge", unit = "C" }
 mod.property { name = "ticks" }
-local RATE = )LUA" + rate + R"LUA(
+local RATE = )LUA" +
+         rate + R"LUA(
 mod.resolver {
   name = "cap.charger", writes = { "charge", "ticks" }, needs = { "charge" },
   advance = function(w, dt)
     local c, t = w:write("charge"), w:write("ticks")
     w.state.n = w.state.n + 1
     for i in c:each() do
-      )LUA" + extra + R"LUA(
+      )LUA" +
+         extra + R"LUA(
       c[i] = c[i] + RATE * dt
       t[i] = w.state.n + 1000 * w.state.reloads
     end
@@ -86,7 +88,9 @@ TEST_F(HotReload, AChangedConstantTakesEffectOnTheNextSteps) {
 TEST_F(HotReload, ASyntaxErrorKeepsTheOldCodeAndReportsTheLine) {
   start();
   world->run(120);
-  mods.write("cap/runtime.lua", "mod.property { name = \"charge\", unit = \"C\" }\nlocal RATE = 10\nlocal broken = = 1\n");
+  mods.write(
+      "cap/runtime.lua",
+      "mod.property { name = \"charge\", unit = \"C\" }\nlocal RATE = 10\nlocal broken = = 1\n");
   const lua::ModReport r = runtime->reload("cap");
   EXPECT_EQ(r.kind, Kind::ReloadFailed);
   EXPECT_TRUE(contains(r.where.file, "cap/runtime.lua")) << r.message;
@@ -106,11 +110,13 @@ TEST_F(HotReload, ErrorsFoundWhileLoadingOrCheckingAlsoKeepTheOldCode) {
   world->run(10);
   const std::pair<std::string, int> bad[] = {
       {"mod.property { name = \"charge\", unit = \"C\" }\n\nerror(\"not today\")\n", 3},
-      {"mod.property { name = \"charge\", unit = \"C\" }\nmod.resolver { name = \"cap.charger\", writes = { \"chrage\" },"
+      {"mod.property { name = \"charge\", unit = \"C\" }\nmod.resolver { name = \"cap.charger\", "
+       "writes = { \"chrage\" },"
        " advance = function() end }\n",
        2},
-      {"mod.property { name = \"charge\", unit = \"A\" }\n", 0},  // a property redefined differently
-      {"while true do end\n", 1},                                // runs past the load budget
+      {"mod.property { name = \"charge\", unit = \"A\" }\n",
+       0},                         // a property redefined differently
+      {"while true do end\n", 1},  // runs past the load budget
   };
   for (const auto& [text, line] : bad) {
     SCOPED_TRACE(text);
@@ -156,7 +162,7 @@ TEST_F(HotReload, ALuaErrorDisablesTheStageAndAReloadBringsItBack) {
   }
   EXPECT_TRUE(disabled);
   EXPECT_EQ(world->step_count(), 240u);  // the world went on
-  EXPECT_NEAR(charge(), 0.5, 0.005);    // and the stage did nothing more
+  EXPECT_NEAR(charge(), 0.5, 0.005);     // and the stage did nothing more
   int disabled_reports = 0;
   for (const auto& r : runtime->poll()) disabled_reports += r.kind == Kind::StageDisabled;
   EXPECT_EQ(disabled_reports, 1);
@@ -189,7 +195,8 @@ mod.interaction {
   // resolver and the interaction that targets it; the derived set stays.
   auto* glow = world->stage("cap.glow");
   std::string changed = with_glow;
-  changed.replace(changed.find("needs = { \"charge\" },"), 21, "needs = { \"charge\" }, functions = { poke = {} },");
+  changed.replace(changed.find("needs = { \"charge\" },"), 21,
+                  "needs = { \"charge\" }, functions = { poke = {} },");
   mods.write("cap/runtime.lua", changed);
   ASSERT_EQ(runtime->reload("cap").kind, Kind::Reloaded);
   auto* charger = dynamic_cast<lua::LuaResolver*>(world->stage("cap.charger"));
@@ -239,7 +246,8 @@ mod.on("contact_began", function() end)
   EXPECT_FALSE(runtime->has("cap"));
   EXPECT_EQ(runtime->handlers_of("cap"), 0u);
   EXPECT_EQ(registry.order(), plugins_before);  // exactly what was there before
-  for (const char* p : {"cap.charger", "cap.glow", "rigid_body_from_charge"}) EXPECT_FALSE(world->has_stage(p)) << p;
+  for (const char* p : {"cap.charger", "cap.glow", "rigid_body_from_charge"})
+    EXPECT_FALSE(world->has_stage(p)) << p;
   // Property types stay (the objects still carry them), values untouched.
   std::vector<std::string> properties = registry.properties().names();
   EXPECT_EQ(properties.size(), properties_before.size() + 2);
@@ -269,7 +277,8 @@ mod.interaction {
   name = "sink_from_tap", reads = { "level" }, target = "sink.tank",
   apply = function(w) for i in w:each("level") do w.target.pour(i, 0.5) end end,
 }
-)LUA", "depends = { \"sink\" }");
+)LUA",
+           "depends = { \"sink\" }");
   lua::ModRuntime rt(registry, runtime_options(mods, &log));
   rt.load("tap");
   EXPECT_EQ(rt.loaded(), (std::vector<std::string>{"sink", "tap"}));  // its dependency first
@@ -278,8 +287,9 @@ mod.interaction {
   const ObjectId tank = w.create("tank");
   w.set(tank, "level", 0.0);
   w.run(4);
-  EXPECT_DOUBLE_EQ(std::get<double>(w.get(tank, "level")), 2.0);  // primed: a pour in each of 4 advances
-  EXPECT_THROW(rt.unload("sink"), InputError);                    // tap depends on it
+  EXPECT_DOUBLE_EQ(std::get<double>(w.get(tank, "level")),
+                   2.0);                        // primed: a pour in each of 4 advances
+  EXPECT_THROW(rt.unload("sink"), InputError);  // tap depends on it
   // The target's interaction function changes: the resolver and the other
   // mod's interaction onto it are re-created, and work together again.
   mods.write("sink/runtime.lua", R"LUA(
@@ -292,16 +302,19 @@ mod.resolver {
   ASSERT_EQ(rt.reload("sink").kind, Kind::Reloaded);
   w.step();  // the tap still passes one argument: its stage is disabled, the world goes on
   bool disabled = false;
-  for (const auto& r : rt.poll()) disabled = disabled || (r.kind == Kind::StageDisabled && contains(r.message, "sink_from_tap"));
+  for (const auto& r : rt.poll())
+    disabled = disabled || (r.kind == Kind::StageDisabled && contains(r.message, "sink_from_tap"));
   EXPECT_TRUE(disabled);
 }
 
 TEST_F(HotReload, ChangedSettingDefaultsReachTheLiveStagesButTheScenesValuesWin) {
   auto mod = [](const std::string& rate) {
     return "mod.property { name = \"level\" }\n"
-           "mod.resolver { name = \"fill.r\", writes = { \"level\" }, needs = { \"level\" }, settings = { rate = " +
-           rate + " },\n  advance = function(w, dt) local l = w:write(\"level\") "
-                  "for i in l:each() do l[i] = l[i] + w.settings.rate end end }\n";
+           "mod.resolver { name = \"fill.r\", writes = { \"level\" }, needs = { \"level\" }, "
+           "settings = { rate = " +
+           rate +
+           " },\n  advance = function(w, dt) local l = w:write(\"level\") "
+           "for i in l:each() do l[i] = l[i] + w.settings.rate end end }\n";
   };
   mods.mod("fill", mod("1"));
   lua::ModRuntime rt(registry, runtime_options(mods, &log));

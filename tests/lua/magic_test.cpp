@@ -37,8 +37,9 @@ TEST_F(Magic, LiftRunesChargeFloatAndFallBackAmongNativeParts) {
   World& world = *scene.world;
   world.start();
   const auto stages = world.active_stages();
-  for (const char* s : {"rigid_body", "collisions", "rigid_body_from_collisions", "gravity.uniform", "magic.mana",
-                        "magic.charge", "magic_from_collisions", "rigid_body_from_magic"})
+  for (const char* s :
+       {"rigid_body", "collisions", "rigid_body_from_collisions", "gravity.uniform", "magic.mana",
+        "magic.charge", "magic_from_collisions", "rigid_body_from_magic"})
     EXPECT_NE(std::find(stages.begin(), stages.end(), s), stages.end()) << s;
 
   std::map<std::string, Flight> f;
@@ -88,7 +89,8 @@ TEST_F(Magic, TheSameSceneTwiceIsBitIdentical) {
       const Vec3 p = get<Vec3>(*scene.world, n, "position");
       out.insert(out.end(), {p.x, p.y, p.z});
     }
-    for (const char* n : {"feather", "kite", "channel", "bearer"}) out.push_back(get<double>(*scene.world, n, "mana"));
+    for (const char* n : {"feather", "kite", "channel", "bearer"})
+      out.push_back(get<double>(*scene.world, n, "mana"));
     return out;
   };
   const auto a = run(), b = run();

@@ -119,14 +119,17 @@ class ModApi : public ::testing::Test {
  protected:
   void SetUp() override {
     register_native_plugins(registry);
-    mods.mod("warmth", kWarmthRuntime, "depends = { \"kit\" }, main = \"init.lua\", scene = \"scene.lua\"");
+    mods.mod("warmth", kWarmthRuntime,
+             "depends = { \"kit\" }, main = \"init.lua\", scene = \"scene.lua\"");
     mods.write("warmth/init.lua", kWarmthInit);
     mods.write("warmth/scene.lua", kWarmthScene);
   }
   lua::LoadedScene load(const std::string& path) {
     lua::LoadOptions o;
     o.mod_paths = {mods.path()};
-    o.mod_log = [this](const std::string& m, const std::string& l) { log.push_back("[" + m + "] " + l); };
+    o.mod_log = [this](const std::string& m, const std::string& l) {
+      log.push_back("[" + m + "] " + l);
+    };
     return lua::load_scene(path, registry, o);
   }
   double y(const World& w, const std::string& name) { return get<Vec3>(w, name, "position").y; }
@@ -180,7 +183,8 @@ TEST_F(ModApi, EveryKindOfDefinitionFromLuaActsInAWorldNextToNativeStages) {
   world.run(240);
   EXPECT_GT(get<double>(world, "pot", "temperature"), 320);
   EXPECT_LT(get<double>(world, "stone", "temperature"), 300.5);
-  EXPECT_DOUBLE_EQ(get<double>(world, "plate", "temperature"), 900);  // no heat capacity: a reservoir
+  EXPECT_DOUBLE_EQ(get<double>(world, "plate", "temperature"),
+                   900);  // no heat capacity: a reservoir
   EXPECT_TRUE(log.empty()) << log.front();
 }
 
@@ -227,7 +231,7 @@ object { name = "crumb", position = { -1.2, 0 }, temperature = 300, heat_capacit
   world.run(240);
   EXPECT_TRUE(world.has_stage("warmth.heat@oven"));
   EXPECT_FALSE(world.has_stage("warmth.heat"));
-  EXPECT_GT(get<double>(world, "loaf", "temperature"), 800);   // heated towards the oven's 1000 K
+  EXPECT_GT(get<double>(world, "loaf", "temperature"), 800);  // heated towards the oven's 1000 K
   EXPECT_DOUBLE_EQ(get<double>(world, "crumb", "temperature"), 300);  // out of the area: untouched
 }
 
@@ -240,15 +244,20 @@ TEST_F(ModApi, DefinitionErrorsNameTheFileAndLine) {
   const Case cases[] = {
       {"\nmod.resolver { name = 'bad.one', reads = { 'mas' }, advance = function() end }", 2,
        "unknown property 'mas' (did you mean 'mass'?)"},
-      {"mod.resolver { name = 'bad.two', advnce = function() end }", 1, "no field 'advnce' (did you mean 'advance'?)"},
+      {"mod.resolver { name = 'bad.two', advnce = function() end }", 1,
+       "no field 'advnce' (did you mean 'advance'?)"},
       {"\n\nmod.derived { name = 'bad.three', update = function() end }", 3, "provides nothing"},
       {"mod.interaction { name = 'bad.four', target = 'electricity', apply = function() end }", 1,
        "not a resolver Lua can queue on"},
-      {"mod.interaction { name = 'bad.five', apply = function() end }", 1, "needs the one resolver it queues on"},
-      {"mod.resolver { name = 'bad.six', functions = { f = { 'string' } }, advance = function() end }", 1,
-       "must be \"number\", \"object\" or \"vec3\""},
-      {"mod.resolver { name = 'rigid_body', advance = function() end }", 1, "taken by a native plugin"},
-      {"local x = 1\nmod.property { name = 'mass', kind = 'vec3' }", 0, "cannot define it differently"},
+      {"mod.interaction { name = 'bad.five', apply = function() end }", 1,
+       "needs the one resolver it queues on"},
+      {"mod.resolver { name = 'bad.six', functions = { f = { 'string' } }, advance = function() "
+       "end }",
+       1, "must be \"number\", \"object\" or \"vec3\""},
+      {"mod.resolver { name = 'rigid_body', advance = function() end }", 1,
+       "taken by a native plugin"},
+      {"local x = 1\nmod.property { name = 'mass', kind = 'vec3' }", 0,
+       "cannot define it differently"},
       {"mod.property { name = 'x', kind = 'colour' }", 1, "unknown kind 'colour'"},
       {"local a = 1\nlocal b = = 2", 2, "unexpected symbol"},
       {"\nerror('refused at load')", 2, "refused at load"},
@@ -268,7 +277,8 @@ TEST_F(ModApi, DefinitionErrorsNameTheFileAndLine) {
     }
     // Nothing of a failed load stays registered.
     EXPECT_FALSE(runtime.has("bad"));
-    for (const char* p : {"bad.one", "bad.two", "bad.three", "bad.four"}) EXPECT_FALSE(registry.find(p));
+    for (const char* p : {"bad.one", "bad.two", "bad.three", "bad.four"})
+      EXPECT_FALSE(registry.find(p));
   }
 }
 
@@ -308,7 +318,8 @@ mod.interaction {
     if (r.kind == lua::ModReport::Kind::StageDisabled) disabled.push_back(r.message);
   ASSERT_EQ(disabled.size(), 3u);
   auto has = [&](const char* part) {
-    return std::any_of(disabled.begin(), disabled.end(), [&](const std::string& m) { return contains(m, part); });
+    return std::any_of(disabled.begin(), disabled.end(),
+                       [&](const std::string& m) { return contains(m, part); });
   };
   EXPECT_TRUE(has("writes 'mass' without declaring it"));
   EXPECT_TRUE(has("only a resolver may write properties"));
@@ -410,8 +421,10 @@ TEST(ModCheck, CheckingAModFolderChecksItsRuntimeToo) {
   // `alloy check mods/x` runs the mod's main file and its runtime file, so a
   // bad stage definition is found before anything runs.
   TempMods mods;
-  mods.mod("broken", "mod.property { name = \"level\" }\n\nmod.resolver { name = \"broken.r\", writes = { \"levle\" }, "
-                     "advance = function() end }\n",
+  mods.mod("broken",
+           "mod.property { name = \"level\" }\n\nmod.resolver { name = \"broken.r\", writes = { "
+           "\"levle\" }, "
+           "advance = function() end }\n",
            "main = \"init.lua\"");
   mods.write("broken/init.lua", "return {}\n");
   PluginRegistry registry;

@@ -24,7 +24,8 @@ mod.resolver {
 /// The evil mod: `code` runs in its resolver's advance, at line 5.
 std::string evil(const std::string& code) {
   return "mod.property { name = \"evil_mark\" }\n"
-         "mod.resolver { name = \"evil.stage\", reads = { \"mass\" }, writes = { \"evil_mark\" }, needs = { \"evil_mark\" },\n"
+         "mod.resolver { name = \"evil.stage\", reads = { \"mass\" }, writes = { \"evil_mark\" }, "
+         "needs = { \"evil_mark\" },\n"
          "  advance = function(w)\n"
          "    local mark = w:write(\"evil_mark\")\n" +
          code +
@@ -41,44 +42,63 @@ struct Attempt {
 };
 
 const Attempt kAttempts[] = {
-    {"io", "io.open('/etc/passwd')", Kind::StageDisabled, "attempt to index global 'io' (a nil value)"},
+    {"io", "io.open('/etc/passwd')", Kind::StageDisabled,
+     "attempt to index global 'io' (a nil value)"},
     {"os", "os.execute('touch /tmp/alloy_pwned')", Kind::StageDisabled, "global 'os'"},
     {"require ffi", "local ffi = require 'ffi'", Kind::StageDisabled, "requires 'ffi'"},
     {"require a path", "require '../../etc/passwd'", Kind::StageDisabled, "paths are not allowed"},
     {"jit", "jit.off()", Kind::StageDisabled, "global 'jit'"},
-    {"debug.sethook", "debug.sethook(function() end, '', 1)", Kind::StageDisabled, "global 'debug'"},
+    {"debug.sethook", "debug.sethook(function() end, '', 1)", Kind::StageDisabled,
+     "global 'debug'"},
     {"package", "local x = package.loaded", Kind::StageDisabled, "global 'package'"},
     {"string.dump", "string.dump(function() end)", Kind::StageDisabled, "field 'dump'"},
     {"method dump", "local d = ('x').dump(print)", Kind::StageDisabled, "field 'dump'"},
-    {"bytecode", "local f, e = load('\\27LJ\\2\\0\\0') error(e, 0)", Kind::StageDisabled, "binary chunk"},
+    {"bytecode", "local f, e = load('\\27LJ\\2\\0\\0') error(e, 0)", Kind::StageDisabled,
+     "binary chunk"},
     {"bytecode mode", "load('return 1', 'x', 'b')", Kind::StageDisabled, "only text chunks"},
     {"getfenv", "local g = getfenv(print)", Kind::StageDisabled, "global 'getfenv'"},
     {"setfenv", "setfenv(1, {})", Kind::StageDisabled, "global 'setfenv'"},
-    {"string metatable", "local s = getmetatable('').__index", Kind::StageDisabled, "attempt to index a boolean value"},
+    {"string metatable", "local s = getmetatable('').__index", Kind::StageDisabled,
+     "attempt to index a boolean value"},
     {"host table metatable", "setmetatable(alloy, {})", Kind::StageDisabled, "protected metatable"},
-    {"host table rawset", "rawset(alloy, 'version', 'x')", Kind::StageDisabled, "belongs to the host"},
-    {"column metatable", "getmetatable(w:read('mass')).__index = nil", Kind::StageDisabled, "index a string value"},
+    {"host table rawset", "rawset(alloy, 'version', 'x')", Kind::StageDisabled,
+     "belongs to the host"},
+    {"column metatable", "getmetatable(w:read('mass')).__index = nil", Kind::StageDisabled,
+     "index a string value"},
     {"collectgarbage", "collectgarbage('stop')", Kind::StageDisabled, "global 'collectgarbage'"},
     {"newproxy", "newproxy(true)", Kind::StageDisabled, "global 'newproxy'"},
-    {"reserved tick name", "local f, e = load('local __alloy_tick = 1') error(e, 0)", Kind::StageDisabled, "reserved for the host"},
-    {"infinite loop", "while true do end", Kind::Stopped, "ran more than 2 million ticks (loop iterations and calls) in one step (a runaway loop?)"},
+    {"reserved tick name", "local f, e = load('local __alloy_tick = 1') error(e, 0)",
+     Kind::StageDisabled, "reserved for the host"},
+    {"infinite loop", "while true do end", Kind::Stopped,
+     "ran more than 2 million ticks (loop iterations and calls) in one step (a runaway loop?)"},
     {"goto loop", "::again:: goto again", Kind::Stopped, "a runaway loop"},
-    {"loop swallowing its stop", "while true do pcall(function() while true do end end) end", Kind::Stopped, "runaway loop"},
-    {"xpcall handler loop", "xpcall(function() while true do end end, function() while true do end end)", Kind::Stopped, "runaway loop"},
-    {"loop in a coroutine", "coroutine.wrap(function() while true do end end)()", Kind::Stopped, "runaway loop"},
+    {"loop swallowing its stop", "while true do pcall(function() while true do end end) end",
+     Kind::Stopped, "runaway loop"},
+    {"xpcall handler loop",
+     "xpcall(function() while true do end end, function() while true do end end)", Kind::Stopped,
+     "runaway loop"},
+    {"loop in a coroutine", "coroutine.wrap(function() while true do end end)()", Kind::Stopped,
+     "runaway loop"},
     {"loop in loaded text", "load('while true do end')()", Kind::Stopped, "runaway loop"},
-    {"memory bomb", "local t = {} while true do t[#t + 1] = { 1, 2, 3 } end", Kind::Stopped, "memory budget of 8 MiB (an allocation bomb?)"},
-    {"huge string.rep", "local s = string.rep('x', 1e9)", Kind::Stopped, "ran out of its memory budget of 8 MiB", false},
-    {"deep recursion", "local function f() return 1 + f() end f()", Kind::StageDisabled, "stack overflow"},
-    {"pattern bomb", "local s = ('a'):rep(5000) s:find(('a*'):rep(8) .. 'b')", Kind::StageDisabled, "could take exponential time"},
+    {"memory bomb", "local t = {} while true do t[#t + 1] = { 1, 2, 3 } end", Kind::Stopped,
+     "memory budget of 8 MiB (an allocation bomb?)"},
+    {"huge string.rep", "local s = string.rep('x', 1e9)", Kind::Stopped,
+     "ran out of its memory budget of 8 MiB", false},
+    {"deep recursion", "local function f() return 1 + f() end f()", Kind::StageDisabled,
+     "stack overflow"},
+    {"pattern bomb", "local s = ('a'):rep(5000) s:find(('a*'):rep(8) .. 'b')", Kind::StageDisabled,
+     "could take exponential time"},
     {"unpack bomb", "unpack({}, 1, 1e8)", Kind::StageDisabled, "too many results to unpack"},
-    {"slot out of range", "local m = w:read('mass') local x = m[1e9]", Kind::StageDisabled, "no object in slot 1000000000"},
+    {"slot out of range", "local m = w:read('mass') local x = m[1e9]", Kind::StageDisabled,
+     "no object in slot 1000000000"},
     {"write past the end", "mark[2^31] = 1", Kind::StageDisabled, "no object in slot"},
-    {"NaN into a property", "for i in mark:each() do mark[i] = 0/0 end", Kind::StageDisabled, "must be finite"},
+    {"NaN into a property", "for i in mark:each() do mark[i] = 0/0 end", Kind::StageDisabled,
+     "must be finite"},
     {"column kept for later",
      "if w.state.keep then local x = w.state.keep[0] else w.state.keep = w:read('mass') end",
      Kind::StageDisabled, "can only be used while the stage that got it runs"},
-    {"queue without a target", "w.target.add_force(0, {0, 1e9, 0})", Kind::StageDisabled, "index field 'target'"},
+    {"queue without a target", "w.target.add_force(0, {0, 1e9, 0})", Kind::StageDisabled,
+     "index field 'target'"},
 };
 
 class Sandbox : public ::testing::TestWithParam<Attempt> {};
@@ -126,7 +146,8 @@ TEST_P(Sandbox, EachEscapeOrAbuseIsContained) {
 
 INSTANTIATE_TEST_SUITE_P(Attempts, Sandbox, ::testing::ValuesIn(kAttempts), [](const auto& info) {
   std::string n;
-  for (char c : std::string(info.param.name)) n += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  for (char c : std::string(info.param.name))
+    n += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
   return n;
 });
 
@@ -174,7 +195,8 @@ function mod.on_load(state) state.calls = 0 end
   world.set(x, "n", 0.0);
   world.run(5);
   EXPECT_TRUE(runtime.stopped("loop"));
-  EXPECT_TRUE(contains(runtime.stop_reason("loop"), "loop/runtime.lua:8")) << runtime.stop_reason("loop");
+  EXPECT_TRUE(contains(runtime.stop_reason("loop"), "loop/runtime.lua:8"))
+      << runtime.stop_reason("loop");
   EXPECT_EQ(std::get<double>(world.get(x, "n")), 3.0);  // the write before the loop, then nothing
   EXPECT_TRUE(find_event(world, "mod_stopped") == nullptr);  // reported once, at step 3
   // A failed reload leaves it stopped; a good one starts it over (on_load, a new state table).
@@ -240,8 +262,8 @@ mod.resolver { name = "r", writes = { "out" }, needs = { "out" },
   };
   const std::string a = run("dice"), b = run("dice"), c = run("coin");
   EXPECT_EQ(a.substr(0, a.find('|')), "1,2.5,3,alpha,mid,zeta,true");  // numbers, strings, booleans
-  EXPECT_EQ(a, b);                                                     // the same run, the same numbers
-  EXPECT_NE(a.substr(a.find('|')), c.substr(c.find('|')));             // seeded by the mod's name
+  EXPECT_EQ(a, b);                                          // the same run, the same numbers
+  EXPECT_NE(a.substr(a.find('|')), c.substr(c.find('|')));  // seeded by the mod's name
 }
 
 TEST(BudgetTicks, LoopsAndFunctionBodiesGetATickOnTheirOwnLine) {
@@ -266,8 +288,10 @@ TEST(BudgetTicks, LoopsAndFunctionBodiesGetATickOnTheirOwnLine) {
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), std::count(src.begin(), src.end(), '\n') + 1);
   EXPECT_THROW(lua::add_budget_ticks("local x\nlocal __alloy_tick", "t.lua"), InputError);
   // Keywords inside strings, comments and names are left alone.
-  EXPECT_EQ(lua::add_budget_ticks("local undo, redo = 'do', [==[repeat]==] --[[ function() ]]", "t.lua"),
-            "return function(__alloy_tick) return function(...)local undo, redo = 'do', [==[repeat]==] --[[ function() ]]\nend end");
+  EXPECT_EQ(
+      lua::add_budget_ticks("local undo, redo = 'do', [==[repeat]==] --[[ function() ]]", "t.lua"),
+      "return function(__alloy_tick) return function(...)local undo, redo = 'do', [==[repeat]==] "
+      "--[[ function() ]]\nend end");
 }
 
 }  // namespace
@@ -279,7 +303,8 @@ namespace {
 TEST(ModSandbox, AManifestCannotNameFilesOutsideItsFolder) {
   PluginRegistry registry;
   TempMods mods;
-  mods.write("sneaky/mod.lua", "return { name = \"sneaky\", version = \"1\", runtime = \"../../etc/passwd\" }\n");
+  mods.write("sneaky/mod.lua",
+             "return { name = \"sneaky\", version = \"1\", runtime = \"../../etc/passwd\" }\n");
   lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
   try {
     runtime.load("sneaky");

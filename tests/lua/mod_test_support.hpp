@@ -52,8 +52,10 @@ class TempMods {
   }
 
   /// A mod folder with a manifest naming runtime.lua, and its runtime file.
-  void mod(const std::string& name, const std::string& runtime, const std::string& extra_manifest = "") const {
-    write(name + "/mod.lua", "return { name = \"" + name + "\", version = \"1.0\", runtime = \"runtime.lua\"" +
+  void mod(const std::string& name, const std::string& runtime,
+           const std::string& extra_manifest = "") const {
+    write(name + "/mod.lua", "return { name = \"" + name +
+                                 "\", version = \"1.0\", runtime = \"runtime.lua\"" +
                                  (extra_manifest.empty() ? "" : ", " + extra_manifest) + " }\n");
     write(name + "/runtime.lua", runtime);
   }
