@@ -560,6 +560,11 @@ bool World::assign_areas() {
     int& was = area_of_slot_[slot];
     if (in == was) continue;
     if (was >= 0) areas_[std::size_t(was)].left.push_back(slot);
+    if (const ObjectId id = store_.id_at(slot); id && (was >= 0 || in >= 0) && started_) {
+      auto name = [&](int a) { return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name; };
+      pending_.push_back(Event{.type = "area_entered", .source = "world", .a = id,
+                               .text = name(was) + " -> " + name(in)});
+    }
     was = in;
     changed = true;
   }

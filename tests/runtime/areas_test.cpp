@@ -114,8 +114,15 @@ TEST_F(AreasTest, AnObjectCrossingABorderKeepsItsPropertiesAndChangesResolver) {
   body(w, "b", 3);
   w.run(3);
   auto& left = dynamic_cast<Tagger&>(*w.stage("tag.two@left"));
+  std::vector<Event> crossings;
+  w.add_observer([&](const Event& e) {
+    if (e.type == "area_entered") crossings.push_back(e);
+  });
   w.set(a, "position", Vec3{4, 0, 0});  // carried across the border
   w.step();
+  ASSERT_EQ(crossings.size(), 1u);
+  EXPECT_EQ(crossings[0].a, a);
+  EXPECT_EQ(crossings[0].text, "left -> (no area)");
   EXPECT_EQ(w.area_of(a), "");
   EXPECT_EQ(tag(w, a), 1);                                // the global provider took it over
   EXPECT_EQ(std::get<double>(w.get(a, "mass")), 1.0);     // every property kept
