@@ -48,6 +48,24 @@ PropertyValue setting_value(const SceneValue& v, const std::string& plugin,
                    describe(v));
 }
 
+/// One plugin's settings as written in world{} or in an area; `what` starts
+/// the messages ("world", "world: area 'moon'").
+PluginSettings make_settings(const RecordedSettings& s, const std::string& what, const ErrorLocation& where,
+                             const PluginRegistry& registry) {
+  if (!registry.find(s.plugin))
+    throw InputError(where, what + ": settings for unknown plugin '" + s.plugin + "'" + plugin_hint(registry, s.plugin));
+  PluginSettings settings;
+  settings.where = ErrorLocation{where.file, where.line, ""};
+  for (const auto& f : s.fields) {
+    try {
+      settings.set(f.key, setting_value(f.value, s.plugin, f.key));
+    } catch (const InputError& e) {
+      throw InputError(where, e.bare());
+    }
+  }
+  return settings;
+}
+
 WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) {
   WorldDef def;
   const ErrorLocation& where = w.where;
@@ -63,21 +81,7 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
     if (!registry.find(p)) fail("world: unknown plugin '" + p + "'" + plugin_hint(registry, p));
     def.plugins.push_back(p);
   }
-  for (const auto& s : w.settings) {
-    if (!registry.find(s.plugin))
-      fail("world: settings for unknown plugin '" + s.plugin + "'" +
-           plugin_hint(registry, s.plugin));
-    PluginSettings settings;
-    settings.where = ErrorLocation{where.file, where.line, ""};
-    for (const auto& f : s.fields) {
-      try {
-        settings.set(f.key, setting_value(f.value, s.plugin, f.key));
-      } catch (const InputError& e) {
-        fail(e.bare());
-      }
-    }
-    def.settings[s.plugin] = std::move(settings);
-  }
+  for (const auto& s : w.settings) def.settings[s.plugin] = make_settings(s, "world", where, registry);
   for (const auto& [what, plugin] : w.use) {
     const PluginDef* d = registry.find(plugin);
     if (!d) fail("world: use: unknown plugin '" + plugin + "'" + plugin_hint(registry, plugin));
@@ -110,19 +114,7 @@ WorldDef make_world_def(const RecordedWorld& w, const PluginRegistry& registry) 
     for (const auto& p : ra.plugins)
       if (!registry.find(p)) fail(what + ": unknown plugin '" + p + "'" + plugin_hint(registry, p));
     a.plugins = ra.plugins;
-    for (const auto& s : ra.settings) {
-      if (!registry.find(s.plugin)) fail(what + ": settings for unknown plugin '" + s.plugin + "'" + plugin_hint(registry, s.plugin));
-      PluginSettings settings;
-      settings.where = ErrorLocation{where.file, where.line, ""};
-      for (const auto& f : s.fields) {
-        try {
-          settings.set(f.key, setting_value(f.value, s.plugin, f.key));
-        } catch (const InputError& e) {
-          fail(e.bare());
-        }
-      }
-      a.settings[s.plugin] = std::move(settings);
-    }
+    for (const auto& s : ra.settings) a.settings[s.plugin] = make_settings(s, what, where, registry);
     def.areas.push_back(std::move(a));
   }
   for (const auto& [plugin, n] : w.every) {

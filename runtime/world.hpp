@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -123,6 +124,10 @@ class World {
   void set(ObjectId id, PropertyId property, const PropertyValue& value);
   void remove(ObjectId id, std::string_view property);
   PropertyValue get(ObjectId id, std::string_view property) const;
+  /// The value if `property` is registered, the object carries it and it is a
+  /// T (a number may be read from an integer property); else nullopt. For
+  /// tools and checks, not for a stage's inner loop.
+  template <class T> std::optional<T> value(ObjectId id, std::string_view property) const;
   /// Input scheduled ahead, such as a scene's timeline ("at t = 1 s the switch
   /// bar is let go"): the edit is applied like a player's hand, between steps,
   /// at the start of the first step that begins at or after `time`, and is
@@ -275,6 +280,17 @@ class World {
 };
 
 // ---------------------------------------------------------------------------
+
+template <class T>
+std::optional<T> World::value(ObjectId id, std::string_view property) const {
+  const auto pid = properties().find(property);
+  if (!pid || !store_.has(id, *pid)) return std::nullopt;
+  const PropertyValue v = store_.get(id, *pid);
+  if (const T* t = std::get_if<T>(&v)) return *t;
+  if constexpr (std::is_same_v<T, double>)
+    if (const auto* i = std::get_if<std::int64_t>(&v)) return double(*i);
+  return std::nullopt;
+}
 
 template <class T>
 ColumnView<T> WorldView::column(PropertyId id) const {

@@ -9,15 +9,6 @@ namespace alloy::viewer {
 
 namespace {
 
-template <class T>
-std::optional<T> get(const World& w, ObjectId id, const char* name) {
-  const auto pid = w.properties().find(name);
-  if (!pid || !w.store().has(id, *pid)) return std::nullopt;
-  const PropertyValue v = w.store().get(id, *pid);
-  if (const T* t = std::get_if<T>(&v)) return *t;
-  return std::nullopt;
-}
-
 /// Runs an edit; any exception becomes a refusal with its message.
 template <class F>
 EditResult guarded(F&& f) {
@@ -70,8 +61,8 @@ std::vector<ObjectId> Editor::joined_group(ObjectId part) const {
   for (bool grew = true; grew;) {
     grew = false;
     for (const ObjectId j : carriers(store, *joint)) {
-      const auto a = get<ObjectId>(*world_, j, "body_a");
-      const auto b = get<ObjectId>(*world_, j, "body_b");
+      const auto a = world_->value<ObjectId>(j, "body_a");
+      const auto b = world_->value<ObjectId>(j, "body_b");
       const bool has_a = a && store.alive(*a), has_b = b && store.alive(*b);
       const bool touches = (has_a && in.count(*a)) || (has_b && in.count(*b));
       if (!touches) continue;
@@ -99,15 +90,15 @@ EditResult Editor::grab(ObjectId part, Vec2 at) {
   for (ObjectId id : group) {
     const auto p = read_part(*world_, id);
     if (!p) continue;
-    const double z = get<Vec3>(*world_, id, "position").value_or(Vec3{}).z;
+    const double z = world_->value<Vec3>(id, "position").value_or(Vec3{}).z;
     held_.push_back({id, p->centre - at, p->angle, z, false, has(id, "mass") && !p->is_static});
   }
   // The joints among them (and those that pin them to the play area) move too.
   if (const auto joint = world_->properties().find("joint")) {
     const PropertyStore& store = world_->store();
     for (const ObjectId j : carriers(store, *joint)) {
-      const auto a = get<ObjectId>(*world_, j, "body_a");
-      const auto anchor = get<Vec3>(*world_, j, "anchor");
+      const auto a = world_->value<ObjectId>(j, "body_a");
+      const auto anchor = world_->value<Vec3>(j, "anchor");
       if (!a || !members.count(*a) || !anchor) continue;
       held_.push_back({j, xy(*anchor) - at, 0, anchor->z, true, false});
     }
@@ -256,19 +247,19 @@ EditResult Editor::set_pinned(ObjectId part, bool pinned) {
 }
 
 EditResult Editor::toggle_pin(ObjectId part) {
-  const bool pinned = world_ && get<bool>(*world_, part, "pinned").value_or(false);
+  const bool pinned = world_ && world_->value<bool>(part, "pinned").value_or(false);
   return set_pinned(part, !pinned);
 }
 
 bool Editor::electrical(ObjectId id) const {
   if (has(id, "wire_from") || has(id, "wire_to")) return false;
   return has(id, "emf") || has(id, "inductance") ||
-         get<bool>(*world_, id, "conductive").value_or(false);
+         world_->value<bool>(id, "conductive").value_or(false);
 }
 
 bool Editor::two_terminal(ObjectId id) const {
   return has(id, "emf") || has(id, "inductance") ||
-         (get<bool>(*world_, id, "conductive").value_or(false) && has(id, "resistance"));
+         (world_->value<bool>(id, "conductive").value_or(false) && has(id, "resistance"));
 }
 
 std::string Editor::unique_name(const std::string& base) const {

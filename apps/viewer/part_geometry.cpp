@@ -8,15 +8,6 @@ namespace alloy::viewer {
 
 namespace {
 
-template <class T>
-std::optional<T> get(const World& w, ObjectId id, const char* name) {
-  const auto pid = w.properties().find(name);
-  if (!pid || !w.store().has(id, *pid)) return std::nullopt;
-  const PropertyValue v = w.store().get(id, *pid);
-  if (const T* t = std::get_if<T>(&v)) return *t;
-  return std::nullopt;
-}
-
 std::optional<std::string> enum_name(const World& w, ObjectId id, const char* name) {
   const auto pid = w.properties().find(name);
   if (!pid || !w.store().has(id, *pid)) return std::nullopt;
@@ -43,28 +34,28 @@ double Part2D::half_extent_x() const {
 
 std::optional<Part2D> read_part(const World& world, ObjectId id) {
   if (!world.store().alive(id)) return std::nullopt;
-  if (get<EnumValue>(world, id, "joint")) return std::nullopt;
+  if (world.value<EnumValue>(id, "joint")) return std::nullopt;
   const auto shape = enum_name(world, id, "shape");
-  const auto position = get<Vec3>(world, id, "position");
+  const auto position = world.value<Vec3>(id, "position");
   if (!shape || !position) return std::nullopt;
   Part2D p;
   p.id = id;
   p.centre = xy(*position);
-  if (auto q = get<Quat>(world, id, "orientation")) p.angle = angle_z(*q);
-  p.is_static = get<bool>(world, id, "static").value_or(false);
-  p.pinned = get<bool>(world, id, "pinned").value_or(false);
+  if (auto q = world.value<Quat>(id, "orientation")) p.angle = angle_z(*q);
+  p.is_static = world.value<bool>(id, "static").value_or(false);
+  p.pinned = world.value<bool>(id, "pinned").value_or(false);
   if (*shape == "box") {
-    const auto size = get<Vec3>(world, id, "size");
+    const auto size = world.value<Vec3>(id, "size");
     if (!size) return std::nullopt;
     p.shape = Shape2D::Box;
     p.half = {size->x / 2, size->y / 2};
   } else if (*shape == "sphere") {
     p.shape = Shape2D::Disk;
-    p.radius = get<double>(world, id, "radius").value_or(0);
+    p.radius = world.value<double>(id, "radius").value_or(0);
   } else if (*shape == "capsule") {
     p.shape = Shape2D::Capsule;
-    p.radius = get<double>(world, id, "radius").value_or(0);
-    p.half_length = get<double>(world, id, "length").value_or(0) / 2;
+    p.radius = world.value<double>(id, "radius").value_or(0);
+    p.half_length = world.value<double>(id, "length").value_or(0) / 2;
   } else {
     return std::nullopt;
   }

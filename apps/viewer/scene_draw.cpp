@@ -13,17 +13,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-template <class T>
-std::optional<T> get(const World& w, ObjectId id, const char* name) {
-  const auto pid = w.properties().find(name);
-  if (!pid || !w.store().has(id, *pid)) return std::nullopt;
-  const PropertyValue v = w.store().get(id, *pid);
-  if (const T* t = std::get_if<T>(&v)) return *t;
-  if constexpr (std::is_same_v<T, double>)
-    if (const auto* i = std::get_if<std::int64_t>(&v)) return double(*i);
-  return std::nullopt;
-}
-
 bool has(const World& w, ObjectId id, const char* name) {
   const auto pid = w.properties().find(name);
   return pid && w.store().has(id, *pid);
@@ -161,7 +150,7 @@ void draw_hatch(ImDrawList* dl, const Camera& cam, const Part2D& p, ImU32 c) {
 }  // namespace
 
 Material material_of(const World& world, ObjectId id) {
-  const auto d = get<double>(world, id, "density");
+  const auto d = world.value<double>(id, "density");
   if (!d) return Material::Other;
   struct Known {
     double density;
@@ -184,9 +173,9 @@ Material material_of(const World& world, ObjectId id) {
 ImU32 fill_colour(const World& world, ObjectId id) {
   if (has(world, id, "emf")) return colour::kBattery;
   if (has(world, id, "inductance")) return colour::kCopper;  // a coil: its winding is what shows
-  const bool is_static = get<bool>(world, id, "static").value_or(false);
+  const bool is_static = world.value<bool>(id, "static").value_or(false);
   // A static part has no mass, so often no density: a conductive one is metal.
-  if (is_static && !has(world, id, "density") && get<bool>(world, id, "conductive").value_or(false))
+  if (is_static && !has(world, id, "density") && world.value<bool>(id, "conductive").value_or(false))
     return colour::kBrass;
   switch (material_of(world, id)) {
     case Material::Steel:
@@ -208,16 +197,16 @@ ImU32 fill_colour(const World& world, ObjectId id) {
   }
   if (is_static) return colour::kStaticWood;
   // Something the kit does not make: a colour from its friction and restitution.
-  const double f = get<double>(world, id, "friction").value_or(0.5);
+  const double f = world.value<double>(id, "friction").value_or(0.5);
   return colour::rgb(120 + int(60 * std::min(f, 1.0)), 150, 170);
 }
 
 Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal) {
   const auto p = read_part(world, part);
-  if (!p) return xy(get<Vec3>(world, part, "position").value_or(Vec3{}));
+  if (!p) return xy(world.value<Vec3>(part, "position").value_or(Vec3{}));
   const bool two =
       has(world, part, "emf") || has(world, part, "inductance") ||
-      (get<bool>(world, part, "conductive").value_or(false) && has(world, part, "resistance"));
+      (world.value<bool>(part, "conductive").value_or(false) && has(world, part, "resistance"));
   if (!two) return p->centre;
   const double x = p->half_extent_x() * 0.8;
   return p->to_world({terminal == 1 ? x : -x, 0});
@@ -242,12 +231,12 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       const ObjectId id = p.id;
       const std::vector<Vec2> poly = outline(p, std::clamp(int(p.radius * px), 24, 64));
       const ImU32 base = fill_colour(world, id);
-      const bool powered = get<bool>(world, id, "powered").value_or(false);
+      const bool powered = world.value<bool>(id, "powered").value_or(false);
       if (powered) stroke(dl, cam, poly, with_alpha(colour::kPowered, 0.55f), 9);
       fill(dl, cam, poly, base);
 
       const auto magnet = enum_name(world, id, "magnet");
-      const double q = get<double>(world, id, "pole_strength").value_or(0);
+      const double q = world.value<double>(id, "pole_strength").value_or(0);
       const double hx = p.half_extent_x();
       if (magnet == "permanent" && q != 0) {
         // The classic bar magnet: north half red, south half green.
@@ -283,7 +272,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         }
       } else if (has(world, id, "emf")) {
         // A battery: a dark cell with a brass cap at its + end (terminal 1, +x).
-        const double emf = get<double>(world, id, "emf").value_or(0);
+        const double emf = world.value<double>(id, "emf").value_or(0);
         const bool plus_right = emf >= 0;
         const double cap = hx * 0.18;
         const double hy = p.shape == Shape2D::Box ? p.half.y : p.radius;
@@ -334,10 +323,10 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   if (const auto joint = world.properties().find("joint")) {
     const PropertyStore& store = world.store();
     for (const ObjectId j : carriers(store, *joint)) {
-      const auto anchor = get<Vec3>(world, j, "anchor");
+      const auto anchor = world.value<Vec3>(j, "anchor");
       if (!anchor) continue;
       const ImVec2 c = iv(cam.to_screen(xy(*anchor)));
-      const auto b = get<ObjectId>(world, j, "body_b");
+      const auto b = world.value<ObjectId>(j, "body_b");
       const bool to_board = !b || !store.alive(*b);
       if (enum_name(world, j, "joint") == "fixed") {
         dl->AddRectFilled({c.x - 4, c.y - 4}, {c.x + 4, c.y + 4}, IM_COL32(60, 60, 70, 255));
@@ -357,19 +346,19 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
     if (const auto from = world.properties().find("wire_from")) {
       const PropertyStore& store = world.store();
       for (const ObjectId w : carriers(store, *from)) {
-        const auto a = get<ObjectId>(world, w, "wire_from");
-        const auto b = get<ObjectId>(world, w, "wire_to");
+        const auto a = world.value<ObjectId>(w, "wire_from");
+        const auto b = world.value<ObjectId>(w, "wire_to");
         if (!a || !b || !store.alive(*a) || !store.alive(*b)) continue;
         const Vec2 pa = terminal_point(
-            world, *a, get<std::int64_t>(world, w, "wire_from_terminal").value_or(0));
+            world, *a, world.value<std::int64_t>(w, "wire_from_terminal").value_or(0));
         const Vec2 pb =
-            terminal_point(world, *b, get<std::int64_t>(world, w, "wire_to_terminal").value_or(0));
+            terminal_point(world, *b, world.value<std::int64_t>(w, "wire_to_terminal").value_or(0));
         const double span = length(pb - pa);
         const Vec2 mid = (pa + pb) * 0.5 + Vec2{0, -0.25 * span - 0.02};
         const ImVec2 sa = iv(cam.to_screen(pa)), sb = iv(cam.to_screen(pb)),
                      sm = iv(cam.to_screen(mid));
-        const double current = get<double>(world, w, "current").value_or(0);
-        const bool live = get<bool>(world, w, "powered").value_or(false);
+        const double current = world.value<double>(w, "current").value_or(0);
+        const bool live = world.value<bool>(w, "powered").value_or(false);
         dl->AddBezierQuadratic(sa, sm, sb, IM_COL32(255, 255, 255, 200), 5.0f, 24);
         dl->AddBezierQuadratic(sa, sm, sb, live ? colour::kWireLive : colour::kWireIdle, 2.5f, 24);
         for (const ImVec2 end : {sa, sb}) {

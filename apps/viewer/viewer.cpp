@@ -30,17 +30,6 @@ constexpr double kToastSeconds = 7;
 
 const char* kFontPath = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
-template <class T>
-std::optional<T> get(const World& w, ObjectId id, const char* name) {
-  const auto pid = w.properties().find(name);
-  if (!pid || !w.store().has(id, *pid)) return std::nullopt;
-  const PropertyValue v = w.store().get(id, *pid);
-  if (const T* t = std::get_if<T>(&v)) return *t;
-  if constexpr (std::is_same_v<T, double>)
-    if (const auto* i = std::get_if<std::int64_t>(&v)) return double(*i);
-  return std::nullopt;
-}
-
 std::string value_text(const World& w, PropertyId p, const PropertyValue& v) {
   char buf[160];
   const PropertyDef& def = w.properties().def(p);
@@ -1083,22 +1072,22 @@ void Viewer::panel_inspector() {
   ImGui::TextColored(ImVec4(0.43f, 0.16f, 0.63f, 1), "%s", w->describe(id).c_str());
   if (part) {
     ImGui::SameLine();
-    const char* what = get<double>(*w, id, "emf")          ? "battery"
-                       : get<double>(*w, id, "inductance") ? "coil"
+    const char* what = (*w).value<double>(id, "emf")          ? "battery"
+                       : (*w).value<double>(id, "inductance") ? "coil"
                                                            : material_name(material_of(*w, id));
     ImGui::TextDisabled("%s%s%s", what, part->is_static ? ", static" : "",
                         part->pinned ? ", pinned" : "");
-    const double mass = get<double>(*w, id, "mass").value_or(0);
+    const double mass = (*w).value<double>(id, "mass").value_or(0);
     if (mass > 0) ImGui::Text("mass %.4g kg", mass);
     ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y,
                 part->angle * 180 / std::numbers::pi);
-    if (const auto v = get<Vec3>(*w, id, "velocity")) ImGui::Text("speed %.3f m/s", length(xy(*v)));
+    if (const auto v = (*w).value<Vec3>(id, "velocity")) ImGui::Text("speed %.3f m/s", length(xy(*v)));
   }
-  if (const auto emf = get<double>(*w, id, "emf")) ImGui::Text("battery %.3g V", *emf);
-  if (const auto i = get<double>(*w, id, "current")) ImGui::Text("current %.4g A", *i);
-  if (get<bool>(*w, id, "powered").value_or(false))
+  if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
+  if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);
+  if ((*w).value<bool>(id, "powered").value_or(false))
     ImGui::TextColored(ImVec4(0.8f, 0.55f, 0, 1), "powered");
-  if (const auto q = get<double>(*w, id, "pole_strength"); q && *q != 0)
+  if (const auto q = (*w).value<double>(id, "pole_strength"); q && *q != 0)
     ImGui::Text("poles %.3g A m, north at %s end", std::abs(*q), *q > 0 ? "+x" : "-x");
   if (part && !part->is_static) {
     bool pinned = part->pinned;

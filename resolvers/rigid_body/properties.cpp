@@ -77,13 +77,6 @@ bool carries(const World& w, ObjectId id, const char* property) {
   auto p = w.properties().find(property);
   return p && w.store().has(id, *p);
 }
-template <class T>
-std::optional<T> value(const World& w, ObjectId id, const char* property) {
-  if (!carries(w, id, property)) return std::nullopt;
-  const PropertyValue v = w.get(id, property);
-  if (const T* t = std::get_if<T>(&v)) return *t;
-  return std::nullopt;
-}
 std::string num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
@@ -93,9 +86,9 @@ std::string num(double v) {
 
 void check_object(const World& w, ObjectId id) {
   if (carries(w, id, "joint")) {
-    auto a = value<ObjectId>(w, id, "body_a");
+    auto a = w.value<ObjectId>(id, "body_a");
     if (!a || a->is_null()) throw InputError("a joint needs 'body_a', the body it holds");
-    auto b = value<ObjectId>(w, id, "body_b");
+    auto b = w.value<ObjectId>(id, "body_b");
     if (b && *b == *a) throw InputError("a joint cannot join '" + w.describe(*a) + "' to itself");
     for (ObjectId body : {*a, b.value_or(ObjectId{})}) {
       if (body.is_null()) continue;
@@ -104,13 +97,13 @@ void check_object(const World& w, ObjectId id) {
       if (!carries(w, body, "shape"))
         throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' has no shape");
     }
-    auto lo = value<double>(w, id, "limit_low");
-    auto hi = value<double>(w, id, "limit_high");
+    auto lo = w.value<double>(id, "limit_low");
+    auto hi = w.value<double>(id, "limit_high");
     if (lo && hi && *lo > *hi)
       throw InputError("'limit_low' (" + num(*lo) + ") is above 'limit_high' (" + num(*hi) + ")");
     return;
   }
-  auto shape = value<EnumValue>(w, id, "shape");
+  auto shape = w.value<EnumValue>(id, "shape");
   if (!shape) return;
   switch (Shape(shape->index)) {
     case Shape::Box:
@@ -124,7 +117,7 @@ void check_object(const World& w, ObjectId id) {
         throw InputError("a capsule needs a 'radius' and a 'length'");
       break;
   }
-  if (!value<bool>(w, id, "static").value_or(false) && !carries(w, id, "mass") && !carries(w, id, "density"))
+  if (!w.value<bool>(id, "static").value_or(false) && !carries(w, id, "mass") && !carries(w, id, "density"))
     throw InputError("a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
 }
 
