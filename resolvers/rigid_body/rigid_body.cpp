@@ -663,9 +663,30 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
       contact.surface.bounce_vel = c.bounce_velocity;
     }
     const double sign = swapped ? -1.0 : 1.0;  // the normal must push body 1 out
+    const int mode = contact.surface.mode;
     const std::uint32_t first = fb;
     for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
       const ContactPoint& p = contact_points_[k];
+      // A resting or sliding point that has drifted shallower than half the
+      // surface layer may close to the full layer within this step (ODE's
+      // normal surface motion: an allowance, never a pull). Without it the
+      // velocity-level contact lets curved relative motion (a bar resting on
+      // a turning wheel) drift the parts apart by 1/2 a_n dt^2 a step, and the
+      // contact ends and begins again every few steps. Points that bounce, or
+      // that are deep enough, are left exactly as ODE treats them.
+      contact.surface.mode = mode;
+      contact.surface.motionN = 0;
+      if (p.depth < 0.5 * config_.surface_layer) {
+        dVector3 v1, v2 = {0, 0, 0};
+        dBodyGetPointVel(b1, p.position.x, p.position.y, p.position.z, v1);
+        if (b2) dBodyGetPointVel(b2, p.position.x, p.position.y, p.position.z, v2);
+        const double approach = -sign * (p.normal.x * (v1[0] - v2[0]) + p.normal.y * (v1[1] - v2[1]) +
+                                         p.normal.z * (v1[2] - v2[2]));
+        if (c.restitution <= 0 || approach <= c.bounce_velocity) {
+          contact.surface.mode |= dContactMotionN;
+          contact.surface.motionN = -(config_.surface_layer - p.depth) / dt;
+        }
+      }
       contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y, contact.geom.pos[2] = p.position.z;
       contact.geom.normal[0] = sign * p.normal.x, contact.geom.normal[1] = sign * p.normal.y,
       contact.geom.normal[2] = sign * p.normal.z;
