@@ -73,9 +73,12 @@ magnetic.coil = {
 -- Remanence Br (T) and density (kg/m^3) of magnet grades: sintered NdFeB
 -- N35 1.17-1.21 T, 7500; sintered ferrite (Y30) 0.38-0.40 T, 4900.
 -- Sources: Arnold Magnetic Technologies and TDK data sheets.
+-- Conduction: sintered NdFeB is a metal (about 1.5e-6 ohm m) and is sold
+-- nickel-plated (Ni-Cu-Ni), so a neodymium magnet conducts like any metal
+-- part; sintered ferrite is a ceramic (1e4 ohm m and more): an insulator.
 local grades = {
-  neodymium = { remanence = 1.2, density = 7500 },
-  ferrite = { remanence = 0.4, density = 4900 },
+  neodymium = { remanence = 1.2, density = 7500, conductive = true },
+  ferrite = { remanence = 0.4, density = 4900, conductive = false },
 }
 
 magnetic.magnet = {
@@ -90,6 +93,7 @@ magnetic.magnet = {
     { "north", "string", default = "+x", doc = "\"+x\" or \"-x\": which end of the bar is north" },
     { "angle", "number", default = 0, doc = "rotation about +z, rad" },
     { "pinned", "boolean", default = false, doc = "held in place on the play area" },
+    { "conductive", "boolean", doc = "conducts (touching parts connect); default: the grade's (neodymium, plated, yes; ferrite no)" },
   },
   build = function(a)
     local g = grades[a.grade]
@@ -115,6 +119,9 @@ magnetic.magnet = {
       planar = true,
     }
     if a.pinned then p.pinned = true end
+    local conductive = a.conductive
+    if conductive == nil then conductive = g.conductive end
+    if conductive then p.conductive = true end
     return p
   end,
 }
