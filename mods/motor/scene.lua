@@ -1,0 +1,17 @@
+-- The electric motor: at t = 0.1 s the sliding contact is let go; it falls
+-- onto the spokes, closes the first circuit, and the rotor starts to turn
+-- anticlockwise by itself, steadily from about frame 200 (0.83 s).
+-- `alloy run mods/motor` narrates it; docs/motor.md says what to look for.
+world {
+  name = "motor",
+  description = "the paper's electric motor (4.2): the sliding contact falls, the rotor turns",
+  dt = 1 / 240,
+  seconds = 10,
+  settings = {
+    ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
+  },
+}
+
+local motor = require "motor.layout" ()
+
+at(motor.slider_release, "slider", { pinned = false })

@@ -1,0 +1,163 @@
+// Running the motor (mods/motor) headless and measuring it: its events as
+// plain records, the rotor's angle at every step, and the speed of each whole
+// revolution. Shared by the tests and by motor_study (the tolerance study of
+// docs/motor.md).
+//
+// A *frame* is one step at the scene's time step (1/240 s in mods/motor): the
+// paper counts frames, the world counts steps, and they are the same thing.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lua/scene_loader.hpp"
+#include "resolvers/plugins.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::motor::test {
+
+inline std::filesystem::path source(const std::string& relative) {
+  return std::filesystem::path(ALLOY_SOURCE_DIR) / relative;
+}
+
+constexpr const char* kScene = "mods/motor";
+constexpr const char* kBatteryOff = "mods/motor/battery_off.lua";
+constexpr double kSceneDt = 1.0 / 240;
+/// The paper's "steady from frame 200", and the window the tests measure in:
+/// frames 200 to 2000 at the scene's step, 0.833 s to 8.333 s.
+constexpr double kSteadyFrom = 200 * kSceneDt, kSteadyTo = 2000 * kSceneDt;
+
+/// An event with its objects by name.
+struct Record {
+  std::uint64_t step = 0;
+  double time = 0;
+  std::string type, a, b;
+  std::vector<std::pair<std::string, double>> values;
+  double value(const std::string& key) const {
+    for (const auto& [k, v] : values)
+      if (k == key) return v;
+    return NAN;
+  }
+};
+
+struct RunOptions {
+  std::optional<double> dt;        ///< overrides the scene's step (World::set_dt)
+  std::optional<double> seconds;   ///< default: the scene's
+  double emf_scale = 1;            ///< the battery's emf times this, before the first step
+  double friction_scale = 1;       ///< the bearing's dry friction times this
+  std::optional<double> emf;       ///< the battery's emf, V (instead of a scale)
+  std::optional<double> friction;  ///< the bearing's dry friction, N m
+  double drag_scale = 1;           ///< the bearing's viscous drag times this
+};
+
+struct RunResult {
+  std::vector<Record> events;
+  double dt = 0;
+  std::vector<double> time;   ///< at the end of each step, and 0 first
+  std::vector<double> angle;  ///< the rotor's angle (the axle's), unwrapped, rad; anticlockwise positive
+  std::vector<double> spin;   ///< its angular velocity about +z, rad/s
+
+  std::vector<const Record*> of(const std::string& type, const std::string& a = "") const {
+    std::vector<const Record*> out;
+    for (const auto& e : events)
+      if (e.type == type && (a.empty() || e.a == a)) out.push_back(&e);
+    return out;
+  }
+  /// The index of the first sample at or after time t.
+  std::size_t at(double t) const {
+    return std::size_t(std::lower_bound(time.begin(), time.end(), t - 1e-9) - time.begin());
+  }
+};
+
+inline double get_number(World& w, const char* object, const char* property) {
+  return std::get<double>(w.get(w.find(object), property));
+}
+
+inline RunResult run_motor(const std::string& scene, const RunOptions& options = {}) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions load;
+  load.mod_paths.push_back(source("mods"));
+  lua::LoadedScene loaded = lua::load_scene(source(scene), registry, load);
+  World& world = *loaded.world;
+  if (options.dt) world.set_dt(*options.dt);
+  const ObjectId battery = world.find("battery"), bearing = world.find("bearing"), axle = world.find("axle");
+  if (options.emf) world.set(battery, "emf", *options.emf);
+  if (options.emf_scale != 1) world.set(battery, "emf", get_number(world, "battery", "emf") * options.emf_scale);
+  if (options.friction) world.set(bearing, "joint_friction", *options.friction);
+  if (options.friction_scale != 1)
+    world.set(bearing, "joint_friction", get_number(world, "bearing", "joint_friction") * options.friction_scale);
+  if (options.drag_scale != 1)
+    world.set(axle, "angular_damping", get_number(world, "axle", "angular_damping") * options.drag_scale);
+  RunResult r;
+  world.add_observer([&](const Event& e) {
+    r.events.push_back({e.step, e.time, e.type, e.a ? world.describe(e.a) : "", e.b ? world.describe(e.b) : "",
+                        e.values});
+  });
+  r.dt = world.dt();
+  const double seconds = options.seconds ? *options.seconds : loaded.seconds;
+  const auto steps = std::uint64_t(std::llround(seconds / r.dt));
+  r.time.reserve(steps + 1), r.angle.reserve(steps + 1), r.spin.reserve(steps + 1);
+  auto sample = [&] {
+    const double a = angle_z(std::get<Quat>(world.get(axle, "orientation")));
+    // Less than half a turn a step: the nearest branch is the right one.
+    const double unwrapped =
+        r.angle.empty() ? a : r.angle.back() + std::remainder(a - r.angle.back(), 2 * std::numbers::pi);
+    r.time.push_back(world.time());
+    r.angle.push_back(unwrapped);
+    // The rigid body gives the axle its velocities in its first advance.
+    const bool moving = world.store().has(axle, world.properties().id("angular_velocity"));
+    r.spin.push_back(moving ? std::get<Vec3>(world.get(axle, "angular_velocity")).z : 0.0);
+  };
+  sample();
+  for (std::uint64_t i = 0; i < steps; ++i) {
+    world.step();
+    sample();
+  }
+  return r;
+}
+
+/// The rotor's mean angular velocity over each whole revolution that starts
+/// and ends between t0 and t1, the first starting at t0: 2 pi / its duration,
+/// signed (anticlockwise positive). A turn ends at the first sample at which
+/// the rotor has turned one more full turn either way.
+inline std::vector<double> revolutions(const RunResult& r, double t0, double t1) {
+  std::vector<double> out;
+  const std::size_t i0 = r.at(t0), i1 = std::min(r.at(t1), r.time.size() - 1);
+  if (i0 >= i1) return out;
+  std::size_t start = i0;
+  for (std::size_t i = i0 + 1; i <= i1; ++i) {
+    const double turned = r.angle[i] - r.angle[start];
+    if (std::abs(turned) >= 2 * std::numbers::pi) {
+      out.push_back(std::copysign(2 * std::numbers::pi, turned) / (r.time[i] - r.time[start]));
+      start = i;
+    }
+  }
+  return out;
+}
+
+struct Steadiness {
+  std::size_t turns = 0;
+  double mean = 0, min = 0, max = 0;  ///< of the per-revolution means, rad/s
+  /// (max - min) / |mean| of the per-revolution means.
+  double spread() const { return turns ? (max - min) / std::abs(mean) : INFINITY; }
+};
+
+inline Steadiness steadiness(const std::vector<double>& per_turn) {
+  Steadiness s;
+  s.turns = per_turn.size();
+  if (per_turn.empty()) return s;
+  s.min = *std::min_element(per_turn.begin(), per_turn.end());
+  s.max = *std::max_element(per_turn.begin(), per_turn.end());
+  for (double w : per_turn) s.mean += w;
+  s.mean /= double(per_turn.size());
+  return s;
+}
+
+}  // namespace alloy::motor::test
