@@ -137,7 +137,7 @@ return function(options)
   -- The battery, below and to the left, and the wires. A coil's current
   -- from its terminal 1 to 0 makes its -x end (the one facing the rotor) a
   -- north pole.
-  kit.battery { name = "battery", at = { C[1] - 0.14, C[2] - 0.13 }, emf = o.emf,
+  kit.battery { name = "battery", at = { C[1] - 0.115, C[2] - 0.125 }, emf = o.emf,
                 internal_resistance = o.internal_resistance }
   kit.wire { name = "lead", from = "battery", from_terminal = 1, to = "slider" }
   for _, s in ipairs(spokes) do
