@@ -42,9 +42,10 @@ local defaults = {
   spoke_length = 0.05, spoke_width = 0.01, spoke_inner = 0.024, hub_radius = 0.022,
   -- The bearing: a 10 mm steel axle in a greased bronze bush. Dry friction
   -- (N m) and the grease's viscous drag (N m s: Petroff's law, 2 pi eta r^3
-  -- l / c, is 7.9e-3 for grease of 10 Pa s, r = 5 mm, l = 20 mm, c = 20 um).
-  axle_friction = 0.002, bearing_drag = 7.9e-3,
-  -- The sliding contact: a brass rod 140 x 4 x 4 mm hinged 4 mm from its
+  -- l / c, is 9.0e-3 for grease of 10 Pa s, r = 5 mm, l = 23 mm, c = 20 um).
+  -- The drag is what sets the steady speed (docs/motor.md, "What sets the speed").
+  axle_friction = 0.002, bearing_drag = 9e-3,
+  -- The sliding contact: a brass rod 170 x 4 x 4 mm hinged 4 mm from its
   -- left end. Its underside lies on the tangent to the circle of the spokes'
   -- ends at contact_angle, the hinge hinge_distance down that line. It is
   -- held raised by slider_lift (rad) until slider_release (s), then falls.
@@ -52,7 +53,7 @@ local defaults = {
   -- (a silver-graphite face), restitution 0 on both sides of the pair (the
   -- rigid body takes the larger of a pair's two values, so the spokes' ends
   -- are dead too).
-  contact_angle = 135, hinge_distance = 0.10, slider_length = 0.14, slider_width = 0.004,
+  contact_angle = 135, hinge_distance = 0.13, slider_length = 0.17, slider_width = 0.004,
   slider_lift = 0.4, slider_release = 0.1, slider_friction = 0.15, spoke_restitution = 0,
   -- The electromagnets: the kit's coil (500 turns of 0.5 mm copper on a
   -- 50 x 30 mm bobbin with an iron core: 3.2 ohm, 16 mH, q = 30 A m per

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -27,7 +28,11 @@ struct Point {
   std::string sweep;
   double x = 0;       ///< the swept value, in the sweep's unit
   Steadiness s;
-  std::size_t coil_switches = 0;
+  std::size_t coil_switches = 0;  ///< electromagnet_on events in the window
+  double turned = 0;              ///< turns in the window
+  /// Coil switch-ons per turn: 8 when each spoke hands over cleanly, more
+  /// when the slider bounces at hand-overs and a coil comes on twice.
+  double switches_per_turn() const { return turned > 0.5 ? coil_switches / turned : NAN; }
 };
 
 struct Sweep {
@@ -42,9 +47,10 @@ Point measure(const Sweep& sweep, double x) {
   RunOptions o = sweep.options(x);
   o.seconds = kSteadyTo + 0.1;
   const RunResult r = run_motor(kScene, o);
-  Point p{sweep.name, x, steadiness(revolutions(r, kSteadyFrom, kSteadyTo)), 0};
+  Point p{sweep.name, x, steadiness(revolutions(r, kSteadyFrom, kSteadyTo)), 0, 0};
   for (const Record* e : r.of("electromagnet_on"))
-    if (e->time >= kSteadyFrom && e->time < kSteadyTo) ++p.coil_switches;
+    if (e->time >= kSteadyFrom && e->time < kSteadyTo && std::abs(e->value("current")) > 1e-3) ++p.coil_switches;
+  p.turned = (r.angle[r.at(kSteadyTo)] - r.angle[r.at(kSteadyFrom)]) / (2 * std::numbers::pi);
   return p;
 }
 
@@ -90,8 +96,11 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
         << num(t) << "</text>\n";
   }
   std::vector<double> xt;
-  if (sweep.log_x) xt = sweep.values;
-  else xt = ticks(lo, hi);
+  if (sweep.log_x) {  // powers of two times the largest value
+    for (double v = hi; v >= lo * (1 - 1e-9); v /= 2) xt.push_back(v);
+  } else {
+    xt = ticks(lo, hi);
+  }
   for (double t : xt) {
     const std::string label = sweep.log_x ? "1/" + num(std::round(1 / t)) : num(t);
     svg << "<line x1='" << fx(t) << "' x2='" << fx(t) << "' y1='" << bottom << "' y2='" << bottom + 4
@@ -118,8 +127,8 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
     }
     line += (line.empty() ? "M" : " L") + num(x, 6) + " " + num(fy(p.s.mean), 6);
     svg << "<line x1='" << x << "' x2='" << x << "' y1='" << fy(p.s.min) << "' y2='" << fy(p.s.max)
-        << "' stroke='#247' stroke-width='1.5'/>\n<circle cx='" << x << "' cy='" << fy(p.s.mean)
-        << "' r='3.5' fill='#247'/>\n";
+        << "' stroke='#247' stroke-width='1.5'/>\n<circle cx='" << x << "' cy='" << fy(p.s.mean) << "' r='3.5' "
+        << (p.switches_per_turn() > 8.5 ? "fill='white' stroke='#247' stroke-width='1.5'" : "fill='#247'") << "/>\n";
   }
   if (!line.empty()) svg << "<path d='" << line << "' fill='none' stroke='#247' stroke-opacity='0.5'/>\n";
 }
@@ -134,41 +143,47 @@ int main(int argc, char** argv) {
   const std::filesystem::path out = argv[1];
   const std::vector<Sweep> sweeps = {
       {"emf", "Battery emf", "emf, V (the scene: 6 V)", 6.0,
-       {3, 3.5, 4, 4.5, 5, 5.4, 6, 6.6, 7, 7.5, 8, 9, 10, 12},
+       {3, 3.25, 3.5, 4, 4.5, 5, 5.4, 6, 6.6, 7, 7.5, 8, 9, 10, 12},
        [](double v) { return RunOptions{.emf = v}; }},
       {"friction", "Bearing dry friction", "friction torque, N m (the scene: 0.002)", 0.002,
-       {0, 0.001, 0.002, 0.003, 0.004, 0.006, 0.008, 0.010, 0.012, 0.014, 0.016, 0.018},
+       {0, 0.001, 0.002, 0.003, 0.004, 0.006, 0.008, 0.010, 0.012, 0.015, 0.018, 0.021, 0.024, 0.027},
        [](double v) { return RunOptions{.friction = v}; }},
       {"dt", "Time step", "dt, s (the scene: 1/240)", 1.0 / 240,
        {1.0 / 120, 1.0 / 160, 1.0 / 240, 1.0 / 320, 1.0 / 480, 1.0 / 720, 1.0 / 960, 1.0 / 1440, 1.0 / 1920},
        [](double v) { return RunOptions{.dt = v}; }, true},
-      {"drag", "Bearing viscous drag", "drag, N m s (the scene: 0.0079)", 0.0079,
-       {0.004, 0.005, 0.006, 0.007, 0.0079, 0.009, 0.010, 0.012, 0.014, 0.016},
-       [](double v) { return RunOptions{.drag_scale = v / 0.0079}; }},
+      {"drag", "Bearing viscous drag", "drag, N m s (the scene: 0.009)", 0.009,
+       {0.004, 0.005, 0.006, 0.007, 0.008, 0.009, 0.010, 0.012, 0.014, 0.016},
+       [](double v) { return RunOptions{.drag_scale = v / 0.009}; }},
   };
   std::vector<Point> points;
   std::ofstream csv(out / "motor_tolerance.csv");
-  csv << "sweep,value,turns,mean_rad_s,min_rad_s,max_rad_s,spread,coil_switches\n";
+  csv << "sweep,value,turns,mean_rad_s,min_rad_s,max_rad_s,spread,coil_switches_per_turn\n";
   for (const Sweep& sw : sweeps)
     for (double v : sw.values) {
       const Point p = measure(sw, v);
       points.push_back(p);
       csv << sw.name << "," << num(v, 8) << "," << p.s.turns << "," << num(p.s.mean, 6) << "," << num(p.s.min, 6)
-          << "," << num(p.s.max, 6) << "," << num(p.s.turns ? p.s.spread() : NAN, 4) << "," << p.coil_switches << "\n";
+          << "," << num(p.s.max, 6) << "," << num(p.s.turns ? p.s.spread() : NAN, 4) << "," << num(p.switches_per_turn(), 3)
+          << "\n";
       std::cout << sw.name << " " << num(v, 6) << ": " << p.s.turns << " turns, " << num(p.s.mean, 4) << " rad/s, spread "
-                << num(p.s.turns ? 100 * p.s.spread() : NAN, 3) << " %\n";
+                << num(p.s.turns ? 100 * p.s.spread() : NAN, 3) << " %, " << num(p.switches_per_turn(), 3)
+                << " coil switch-ons a turn\n";
     }
   double y_max = 0;
   for (const Point& p : points) y_max = std::max(y_max, p.s.max);
   y_max = std::ceil(y_max / 2) * 2;
   const double w = 460, h = 300;
   std::ofstream svg(out / "motor_tolerance.svg");
-  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << 2 * w << "' height='" << 2 * h + 40
+  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << 2 * w << "' height='" << 2 * h + 66
       << "' font-family='sans-serif'>\n<rect width='100%' height='100%' fill='white'/>\n";
-  svg << "<text x='" << w << "' y='24' text-anchor='middle' font-size='15'>mods/motor: steady speed (mean of the "
-         "per-revolution means, frames 200-2000; bars: least to greatest; x: did not run; dashed: the scene)</text>\n";
+  svg << "<text x='" << w << "' y='20' text-anchor='middle' font-size='15' font-weight='bold'>mods/motor: the "
+         "steady speed, one thing changed at a time</text>\n<text x='"
+      << w << "' y='38' text-anchor='middle' font-size='12'>dot: mean of the per-revolution mean angular velocities, "
+         "frames 200-2000; bar: least to greatest; x: did not turn; dashed: the scene's value</text>\n<text x='"
+      << w << "' y='54' text-anchor='middle' font-size='12'>filled: 8 coil switch-ons a turn, one per spoke; hollow: "
+         "more (the slider bounces at hand-overs)</text>\n";
   for (std::size_t i = 0; i < sweeps.size(); ++i)
-    panel(svg, sweeps[i], points, (i % 2) * w, 40 + (i / 2) * h, w, h, y_max);
+    panel(svg, sweeps[i], points, (i % 2) * w, 66 + (i / 2) * h, w, h, y_max);
   svg << "</svg>\n";
   std::cout << "wrote " << (out / "motor_tolerance.csv").string() << " and " << (out / "motor_tolerance.svg").string()
             << "\n";
