@@ -56,8 +56,10 @@ struct RigidBodyConfig {
   int max_contacts = 4;
   /// Penetration allowed without correction, m. Resting contacts then keep a
   /// small overlap instead of being pushed apart and falling back each step,
-  /// which would make contact lists (and electric circuits) flicker. Small,
-  /// because a stack sinks by it once per contact (10 cubes: 1 mm).
+  /// which would make contact lists (and electric circuits) flicker; a pressed
+  /// contact that has drifted shallower than half of it (a bar sliding on a
+  /// turning part) may close to it again within a step. Small, because a
+  /// stack sinks by it once per contact (10 cubes: 1 mm).
   double surface_layer = 0.0001;
   /// Cap on the velocity with which ERP pushes overlapping parts apart, m/s:
   /// a deep overlap (a part dropped into another) separates gently instead of

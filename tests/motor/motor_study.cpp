@@ -26,7 +26,7 @@ using namespace alloy::motor::test;
 
 struct Point {
   std::string sweep;
-  double x = 0;       ///< the swept value, in the sweep's unit
+  double x = 0;  ///< the swept value, in the sweep's unit
   Steadiness s;
   std::size_t coil_switches = 0;  ///< electromagnet_on events in the window
   double turned = 0;              ///< turns in the window
@@ -37,7 +37,7 @@ struct Point {
 
 struct Sweep {
   std::string name, label, unit;
-  double scene_value;              ///< the scene's own value, marked on the plot
+  double scene_value;  ///< the scene's own value, marked on the plot
   std::vector<double> values;
   std::function<RunOptions(double)> options;
   bool log_x = false;
@@ -49,7 +49,8 @@ Point measure(const Sweep& sweep, double x) {
   const RunResult r = run_motor(kScene, o);
   Point p{sweep.name, x, steadiness(revolutions(r, kSteadyFrom, kSteadyTo)), 0, 0};
   for (const Record* e : r.of("electromagnet_on"))
-    if (e->time >= kSteadyFrom && e->time < kSteadyTo && std::abs(e->value("current")) > 1e-3) ++p.coil_switches;
+    if (e->time >= kSteadyFrom && e->time < kSteadyTo && std::abs(e->value("current")) > 1e-3)
+      ++p.coil_switches;
   p.turned = (r.angle[r.at(kSteadyTo)] - r.angle[r.at(kSteadyFrom)]) / (2 * std::numbers::pi);
   return p;
 }
@@ -72,17 +73,19 @@ std::vector<double> ticks(double lo, double hi, int want = 6) {
       break;
     }
   std::vector<double> t;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step) t.push_back(std::abs(v) < 1e-12 ? 0 : v);
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step)
+    t.push_back(std::abs(v) < 1e-12 ? 0 : v);
   return t;
 }
 
-void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& points, double x0, double y0, double w,
-           double h, double y_max) {
+void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& points, double x0,
+           double y0, double w, double h, double y_max) {
   const double left = x0 + 58, right = x0 + w - 14, top = y0 + 30, bottom = y0 + h - 46;
   double lo = 1e300, hi = -1e300;
   for (double v : sweep.values) lo = std::min(lo, v), hi = std::max(hi, v);
   auto fx = [&](double v) {
-    if (sweep.log_x) return left + (std::log(v) - std::log(lo)) / (std::log(hi) - std::log(lo)) * (right - left);
+    if (sweep.log_x)
+      return left + (std::log(v) - std::log(lo)) / (std::log(hi) - std::log(lo)) * (right - left);
     const double pad = 0.04 * (hi - lo);
     return left + (v - (lo - pad)) / (hi - lo + 2 * pad) * (right - left);
   };
@@ -92,8 +95,8 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
   // Grid and axes.
   for (double t : ticks(0, y_max)) {
     svg << "<line x1='" << left << "' x2='" << right << "' y1='" << fy(t) << "' y2='" << fy(t)
-        << "' stroke='#ddd'/>\n<text x='" << left - 6 << "' y='" << fy(t) + 4 << "' text-anchor='end' font-size='11'>"
-        << num(t) << "</text>\n";
+        << "' stroke='#ddd'/>\n<text x='" << left - 6 << "' y='" << fy(t) + 4
+        << "' text-anchor='end' font-size='11'>" << num(t) << "</text>\n";
   }
   std::vector<double> xt;
   if (sweep.log_x) {  // powers of two times the largest value
@@ -103,34 +106,40 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
   }
   for (double t : xt) {
     const std::string label = sweep.log_x ? "1/" + num(std::round(1 / t)) : num(t);
-    svg << "<line x1='" << fx(t) << "' x2='" << fx(t) << "' y1='" << bottom << "' y2='" << bottom + 4
-        << "' stroke='#333'/>\n<text x='" << fx(t) << "' y='" << bottom + 17 << "' text-anchor='middle' font-size='11'>"
-        << label << "</text>\n";
+    svg << "<line x1='" << fx(t) << "' x2='" << fx(t) << "' y1='" << bottom << "' y2='"
+        << bottom + 4 << "' stroke='#333'/>\n<text x='" << fx(t) << "' y='" << bottom + 17
+        << "' text-anchor='middle' font-size='11'>" << label << "</text>\n";
   }
-  svg << "<rect x='" << left << "' y='" << top << "' width='" << right - left << "' height='" << bottom - top
-      << "' fill='none' stroke='#333'/>\n";
-  svg << "<text x='" << (left + right) / 2 << "' y='" << bottom + 36 << "' text-anchor='middle' font-size='12'>"
-      << sweep.unit << "</text>\n";
-  svg << "<text x='" << x0 + 16 << "' y='" << (top + bottom) / 2 << "' text-anchor='middle' font-size='12' transform='rotate(-90 "
-      << x0 + 16 << " " << (top + bottom) / 2 << ")'>steady speed, rad/s</text>\n";
+  svg << "<rect x='" << left << "' y='" << top << "' width='" << right - left << "' height='"
+      << bottom - top << "' fill='none' stroke='#333'/>\n";
+  svg << "<text x='" << (left + right) / 2 << "' y='" << bottom + 36
+      << "' text-anchor='middle' font-size='12'>" << sweep.unit << "</text>\n";
+  svg << "<text x='" << x0 + 16 << "' y='" << (top + bottom) / 2
+      << "' text-anchor='middle' font-size='12' transform='rotate(-90 " << x0 + 16 << " "
+      << (top + bottom) / 2 << ")'>steady speed, rad/s</text>\n";
   // The scene's value.
-  svg << "<line x1='" << fx(sweep.scene_value) << "' x2='" << fx(sweep.scene_value) << "' y1='" << top << "' y2='"
-      << bottom << "' stroke='#c33' stroke-dasharray='4 3'/>\n";
+  svg << "<line x1='" << fx(sweep.scene_value) << "' x2='" << fx(sweep.scene_value) << "' y1='"
+      << top << "' y2='" << bottom << "' stroke='#c33' stroke-dasharray='4 3'/>\n";
   // The points: mean with the range of the per-revolution means; x where it did not run.
   std::string line;
   for (const Point& p : points) {
     if (p.sweep != sweep.name) continue;
     const double x = fx(p.x);
     if (p.s.turns < 2 || p.s.mean <= 0) {
-      svg << "<path d='M" << x - 4 << " " << fy(0) - 4 << " l8 8 m0 -8 l-8 8' stroke='#c33' stroke-width='2'/>\n";
+      svg << "<path d='M" << x - 4 << " " << fy(0) - 4
+          << " l8 8 m0 -8 l-8 8' stroke='#c33' stroke-width='2'/>\n";
       continue;
     }
     line += (line.empty() ? "M" : " L") + num(x, 6) + " " + num(fy(p.s.mean), 6);
     svg << "<line x1='" << x << "' x2='" << x << "' y1='" << fy(p.s.min) << "' y2='" << fy(p.s.max)
-        << "' stroke='#247' stroke-width='1.5'/>\n<circle cx='" << x << "' cy='" << fy(p.s.mean) << "' r='3.5' "
-        << (p.switches_per_turn() > 8.5 ? "fill='white' stroke='#247' stroke-width='1.5'" : "fill='#247'") << "/>\n";
+        << "' stroke='#247' stroke-width='1.5'/>\n<circle cx='" << x << "' cy='" << fy(p.s.mean)
+        << "' r='3.5' "
+        << (p.switches_per_turn() > 8.5 ? "fill='white' stroke='#247' stroke-width='1.5'"
+                                        : "fill='#247'")
+        << "/>\n";
   }
-  if (!line.empty()) svg << "<path d='" << line << "' fill='none' stroke='#247' stroke-opacity='0.5'/>\n";
+  if (!line.empty())
+    svg << "<path d='" << line << "' fill='none' stroke='#247' stroke-opacity='0.5'/>\n";
 }
 
 }  // namespace
@@ -142,16 +151,31 @@ int main(int argc, char** argv) {
   }
   const std::filesystem::path out = argv[1];
   const std::vector<Sweep> sweeps = {
-      {"emf", "Battery emf", "emf, V (the scene: 6 V)", 6.0,
+      {"emf",
+       "Battery emf",
+       "emf, V (the scene: 6 V)",
+       6.0,
        {3, 3.25, 3.5, 4, 4.5, 5, 5.4, 6, 6.6, 7, 7.5, 8, 9, 10, 12},
        [](double v) { return RunOptions{.emf = v}; }},
-      {"friction", "Bearing dry friction", "friction torque, N m (the scene: 0.002)", 0.002,
-       {0, 0.001, 0.002, 0.003, 0.004, 0.006, 0.008, 0.010, 0.012, 0.015, 0.018, 0.021, 0.024, 0.027},
+      {"friction",
+       "Bearing dry friction",
+       "friction torque, N m (the scene: 0.002)",
+       0.002,
+       {0, 0.001, 0.002, 0.003, 0.004, 0.006, 0.008, 0.010, 0.012, 0.015, 0.018, 0.021, 0.024,
+        0.027},
        [](double v) { return RunOptions{.friction = v}; }},
-      {"dt", "Time step", "dt, s (the scene: 1/240)", 1.0 / 240,
-       {1.0 / 120, 1.0 / 160, 1.0 / 240, 1.0 / 320, 1.0 / 480, 1.0 / 720, 1.0 / 960, 1.0 / 1440, 1.0 / 1920},
-       [](double v) { return RunOptions{.dt = v}; }, true},
-      {"drag", "Bearing viscous drag", "drag, N m s (the scene: 0.009)", 0.009,
+      {"dt",
+       "Time step",
+       "dt, s (the scene: 1/240)",
+       1.0 / 240,
+       {1.0 / 120, 1.0 / 160, 1.0 / 240, 1.0 / 320, 1.0 / 480, 1.0 / 720, 1.0 / 960, 1.0 / 1440,
+        1.0 / 1920},
+       [](double v) { return RunOptions{.dt = v}; },
+       true},
+      {"drag",
+       "Bearing viscous drag",
+       "drag, N m s (the scene: 0.009)",
+       0.009,
        {0.004, 0.005, 0.006, 0.007, 0.008, 0.009, 0.010, 0.012, 0.014, 0.016},
        [](double v) { return RunOptions{.drag_scale = v / 0.009}; }},
   };
@@ -162,12 +186,13 @@ int main(int argc, char** argv) {
     for (double v : sw.values) {
       const Point p = measure(sw, v);
       points.push_back(p);
-      csv << sw.name << "," << num(v, 8) << "," << p.s.turns << "," << num(p.s.mean, 6) << "," << num(p.s.min, 6)
-          << "," << num(p.s.max, 6) << "," << num(p.s.turns ? p.s.spread() : NAN, 4) << "," << num(p.switches_per_turn(), 3)
-          << "\n";
-      std::cout << sw.name << " " << num(v, 6) << ": " << p.s.turns << " turns, " << num(p.s.mean, 4) << " rad/s, spread "
-                << num(p.s.turns ? 100 * p.s.spread() : NAN, 3) << " %, " << num(p.switches_per_turn(), 3)
-                << " coil switch-ons a turn\n";
+      csv << sw.name << "," << num(v, 8) << "," << p.s.turns << "," << num(p.s.mean, 6) << ","
+          << num(p.s.min, 6) << "," << num(p.s.max, 6) << ","
+          << num(p.s.turns ? p.s.spread() : NAN, 4) << "," << num(p.switches_per_turn(), 3) << "\n";
+      std::cout << sw.name << " " << num(v, 6) << ": " << p.s.turns << " turns, "
+                << num(p.s.mean, 4) << " rad/s, spread "
+                << num(p.s.turns ? 100 * p.s.spread() : NAN, 3) << " %, "
+                << num(p.switches_per_turn(), 3) << " coil switch-ons a turn\n";
     }
   double y_max = 0;
   for (const Point& p : points) y_max = std::max(y_max, p.s.max);
@@ -176,16 +201,22 @@ int main(int argc, char** argv) {
   std::ofstream svg(out / "motor_tolerance.svg");
   svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << 2 * w << "' height='" << 2 * h + 66
       << "' font-family='sans-serif'>\n<rect width='100%' height='100%' fill='white'/>\n";
-  svg << "<text x='" << w << "' y='20' text-anchor='middle' font-size='15' font-weight='bold'>mods/motor: the "
+  svg << "<text x='" << w
+      << "' y='20' text-anchor='middle' font-size='15' font-weight='bold'>mods/motor: the "
          "steady speed, one thing changed at a time</text>\n<text x='"
-      << w << "' y='38' text-anchor='middle' font-size='12'>dot: mean of the per-revolution mean angular velocities, "
-         "frames 200-2000; bar: least to greatest; x: did not turn; dashed: the scene's value</text>\n<text x='"
-      << w << "' y='54' text-anchor='middle' font-size='12'>filled: 8 coil switch-ons a turn, one per spoke; hollow: "
+      << w
+      << "' y='38' text-anchor='middle' font-size='12'>dot: mean of the per-revolution mean "
+         "angular velocities, "
+         "frames 200-2000; bar: least to greatest; x: did not turn; dashed: the scene's "
+         "value</text>\n<text x='"
+      << w
+      << "' y='54' text-anchor='middle' font-size='12'>filled: 8 coil switch-ons a turn, one per "
+         "spoke; hollow: "
          "more (the slider bounces at hand-overs)</text>\n";
   for (std::size_t i = 0; i < sweeps.size(); ++i)
     panel(svg, sweeps[i], points, (i % 2) * w, 66 + (i / 2) * h, w, h, y_max);
   svg << "</svg>\n";
-  std::cout << "wrote " << (out / "motor_tolerance.csv").string() << " and " << (out / "motor_tolerance.svg").string()
-            << "\n";
+  std::cout << "wrote " << (out / "motor_tolerance.csv").string() << " and "
+            << (out / "motor_tolerance.svg").string() << "\n";
   return 0;
 }

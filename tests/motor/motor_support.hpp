@@ -59,9 +59,10 @@ struct RunOptions {
 struct RunResult {
   std::vector<Record> events;
   double dt = 0;
-  std::vector<double> time;   ///< at the end of each step, and 0 first
-  std::vector<double> angle;  ///< the rotor's angle (the axle's), unwrapped, rad; anticlockwise positive
-  std::vector<double> spin;   ///< its angular velocity about +z, rad/s
+  std::vector<double> time;  ///< at the end of each step, and 0 first
+  std::vector<double>
+      angle;  ///< the rotor's angle (the axle's), unwrapped, rad; anticlockwise positive
+  std::vector<double> spin;  ///< its angular velocity about +z, rad/s
 
   std::vector<const Record*> of(const std::string& type, const std::string& a = "") const {
     std::vector<const Record*> out;
@@ -87,18 +88,22 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
   lua::LoadedScene loaded = lua::load_scene(source(scene), registry, load);
   World& world = *loaded.world;
   if (options.dt) world.set_dt(*options.dt);
-  const ObjectId battery = world.find("battery"), bearing = world.find("bearing"), axle = world.find("axle");
+  const ObjectId battery = world.find("battery"), bearing = world.find("bearing"),
+                 axle = world.find("axle");
   if (options.emf) world.set(battery, "emf", *options.emf);
-  if (options.emf_scale != 1) world.set(battery, "emf", get_number(world, "battery", "emf") * options.emf_scale);
+  if (options.emf_scale != 1)
+    world.set(battery, "emf", get_number(world, "battery", "emf") * options.emf_scale);
   if (options.friction) world.set(bearing, "joint_friction", *options.friction);
   if (options.friction_scale != 1)
-    world.set(bearing, "joint_friction", get_number(world, "bearing", "joint_friction") * options.friction_scale);
+    world.set(bearing, "joint_friction",
+              get_number(world, "bearing", "joint_friction") * options.friction_scale);
   if (options.drag_scale != 1)
-    world.set(axle, "angular_damping", get_number(world, "axle", "angular_damping") * options.drag_scale);
+    world.set(axle, "angular_damping",
+              get_number(world, "axle", "angular_damping") * options.drag_scale);
   RunResult r;
   world.add_observer([&](const Event& e) {
-    r.events.push_back({e.step, e.time, e.type, e.a ? world.describe(e.a) : "", e.b ? world.describe(e.b) : "",
-                        e.values});
+    r.events.push_back({e.step, e.time, e.type, e.a ? world.describe(e.a) : "",
+                        e.b ? world.describe(e.b) : "", e.values});
   });
   r.dt = world.dt();
   const double seconds = options.seconds ? *options.seconds : loaded.seconds;
@@ -108,7 +113,8 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
     const double a = angle_z(std::get<Quat>(world.get(axle, "orientation")));
     // Less than half a turn a step: the nearest branch is the right one.
     const double unwrapped =
-        r.angle.empty() ? a : r.angle.back() + std::remainder(a - r.angle.back(), 2 * std::numbers::pi);
+        r.angle.empty() ? a
+                        : r.angle.back() + std::remainder(a - r.angle.back(), 2 * std::numbers::pi);
     r.time.push_back(world.time());
     r.angle.push_back(unwrapped);
     // The rigid body gives the axle its velocities in its first advance.

@@ -8,11 +8,11 @@
 //
 // Frames are steps at the scene's time step, 1/240 s (motor_support.hpp).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <numbers>
 #include <sstream>
-#include <unistd.h>
 
 #include "apps/alloy/commands.hpp"
 #include "tests/motor/motor_support.hpp"
@@ -21,7 +21,8 @@ namespace alloy::motor::test {
 namespace {
 
 constexpr double kRelease = 0.1;  // mods/motor/scene.lua: at(0.1, "slider", { pinned = false })
-constexpr double kBatteryOffAt = 5.0;  // mods/motor/battery_off.lua: at(5.0, "battery", { emf = 0 })
+constexpr double kBatteryOffAt =
+    5.0;  // mods/motor/battery_off.lua: at(5.0, "battery", { emf = 0 })
 constexpr double kPitch = std::numbers::pi / 4;  // one spoke
 
 std::string describe(const Steadiness& s) {
@@ -33,7 +34,8 @@ std::string describe(const Steadiness& s) {
 /// What every running motor must show between frames 200 and 2000: it turns
 /// anticlockwise, at least `min_turns` whole turns, each turn's mean speed
 /// within `max_spread` (max - min over mean) of the others.
-Steadiness expect_turns_steadily(const RunResult& r, std::size_t min_turns = 4, double max_spread = 0.10) {
+Steadiness expect_turns_steadily(const RunResult& r, std::size_t min_turns = 4,
+                                 double max_spread = 0.10) {
   const Steadiness s = steadiness(revolutions(r, kSteadyFrom, kSteadyTo));
   EXPECT_GE(s.turns, min_turns) << describe(s);
   EXPECT_GT(s.min, 0) << "every turn anticlockwise: " << describe(s);
@@ -57,14 +59,17 @@ void expect_alternation(const RunResult& r, double t0, double t1) {
   const auto on = switched_on(r, t0, t1);
   ASSERT_GE(on.size(), 8u);
   for (std::size_t i = 1; i < on.size(); ++i)
-    ASSERT_NE(on[i]->a, on[i - 1]->a) << "step " << on[i]->step << ": " << on[i]->a << " came on twice in a row";
+    ASSERT_NE(on[i]->a, on[i - 1]->a)
+        << "step " << on[i]->step << ": " << on[i]->a << " came on twice in a row";
   for (const char* coil : {"upper_coil", "lower_coil"}) {
     std::vector<std::pair<std::uint64_t, bool>> switches;
     for (const Record& e : r.events)
-      if (e.a == coil && e.time >= t0 && e.time < t1 && (e.type == "electromagnet_on" || e.type == "electromagnet_off"))
+      if (e.a == coil && e.time >= t0 && e.time < t1 &&
+          (e.type == "electromagnet_on" || e.type == "electromagnet_off"))
         switches.push_back({e.step, e.type == "electromagnet_on"});
     for (std::size_t i = 1; i < switches.size(); ++i)
-      ASSERT_NE(switches[i].second, switches[i - 1].second) << coil << " at step " << switches[i].first;
+      ASSERT_NE(switches[i].second, switches[i - 1].second)
+          << coil << " at step " << switches[i].first;
   }
 }
 
@@ -79,10 +84,12 @@ TEST(Motor, StartsUpAsThePaperTellsIt) {
   ASSERT_EQ(released.size(), 1u);
   EXPECT_NEAR(released[0]->time, kRelease, 1.5 * r.dt);
   const auto touched = r.of("contact_began");
-  const auto first_touch = std::find_if(touched.begin(), touched.end(), [](const Record* e) { return e->b == "slider"; });
+  const auto first_touch = std::find_if(touched.begin(), touched.end(),
+                                        [](const Record* e) { return e->b == "slider"; });
   ASSERT_NE(first_touch, touched.end());
   const Record& touch = **first_touch;
-  EXPECT_EQ(touch.a, "spoke_N3") << "the north spoke under the slider, where the bias magnet put it";
+  EXPECT_EQ(touch.a, "spoke_N3")
+      << "the north spoke under the slider, where the bias magnet put it";
   EXPECT_GT(touch.time, kRelease);
   EXPECT_LT(touch.time, kRelease + 0.25) << "it falls for a few tenths of a second at most";
   const auto on = switched_on(r, 0, 1);
@@ -117,7 +124,8 @@ TEST(Motor, TheTwoElectromagnetsTakeTurns) {
   const RunResult r = run_motor(kScene, {.seconds = kSteadyTo + 0.1});
   expect_alternation(r, kSteadyFrom, kSteadyTo);
   // Eight spokes: each turn switches each coil on four times.
-  const double turns = (r.angle[r.at(kSteadyTo)] - r.angle[r.at(kSteadyFrom)]) / (2 * std::numbers::pi);
+  const double turns =
+      (r.angle[r.at(kSteadyTo)] - r.angle[r.at(kSteadyFrom)]) / (2 * std::numbers::pi);
   const auto on = switched_on(r, kSteadyFrom, kSteadyTo);
   EXPECT_NEAR(double(on.size()), 8 * turns, 1.5);
   // And only the coil of the spoke touched: never both for more than the
@@ -143,9 +151,10 @@ TEST(Motor, RemovingTheBatteryStopsIt) {
   for (std::size_t i = 0; i < r.spin.size(); ++i)
     if (std::abs(r.spin[i]) > 1e-3) last_moving = i;
   EXPECT_GT(r.time[last_moving], kBatteryOffAt);
-  EXPECT_LT(r.time[last_moving], kBatteryOffAt + 2.0) << "still turning " << r.time[last_moving] - kBatteryOffAt
-                                                    << " s after the battery went";
-  EXPECT_LT(std::abs(r.angle.back() - r.angle[r.at(kBatteryOffAt + 2.5)]), 1e-3) << "and stays stopped";
+  EXPECT_LT(r.time[last_moving], kBatteryOffAt + 2.0)
+      << "still turning " << r.time[last_moving] - kBatteryOffAt << " s after the battery went";
+  EXPECT_LT(std::abs(r.angle.back() - r.angle[r.at(kBatteryOffAt + 2.5)]), 1e-3)
+      << "and stays stopped";
 }
 
 // --- the same with small changes: robust, not at a knife edge ----------------------
@@ -176,7 +185,8 @@ TEST(MotorRobustness, TwiceTheBearingFriction) {
 }
 
 TEST(MotorRobustness, HalfTheStepAndTenPercentLessEmf) {
-  const RunResult r = run_motor(kScene, {.dt = kSceneDt / 2, .seconds = kSteadyTo + 0.1, .emf_scale = 0.9});
+  const RunResult r =
+      run_motor(kScene, {.dt = kSceneDt / 2, .seconds = kSteadyTo + 0.1, .emf_scale = 0.9});
   expect_turns_steadily(r);
 }
 
@@ -188,9 +198,11 @@ class MotorPutDownOutOfPlace : public ::testing::TestWithParam<int> {};
 TEST_P(MotorPutDownOutOfPlace, SettlesOnTheBiasMagnetAndStarts) {
   namespace fs = std::filesystem;
   const int degrees = GetParam();
-  const fs::path f = fs::temp_directory_path() /
-                     ("alloy_motor_put_down_" + std::to_string(::getpid()) + "_" + std::to_string(degrees + 90) + ".lua");
-  std::ofstream(f) << "world { dt = 1 / 240, seconds = 5, settings = { [\"gravity.uniform\"] = { g = { 0, -9.81, 0 } } } }\n"
+  const fs::path f =
+      fs::temp_directory_path() / ("alloy_motor_put_down_" + std::to_string(::getpid()) + "_" +
+                                   std::to_string(degrees + 90) + ".lua");
+  std::ofstream(f) << "world { dt = 1 / 240, seconds = 5, settings = { [\"gravity.uniform\"] = { g "
+                      "= { 0, -9.81, 0 } } } }\n"
                       "require \"motor.layout\" { rotor_angle = "
                    << degrees << ", slider_release = 2 }\nat(2, \"slider\", { pinned = false })\n";
   const RunResult r = run_motor(f.string());
@@ -209,7 +221,8 @@ TEST_P(MotorPutDownOutOfPlace, SettlesOnTheBiasMagnetAndStarts) {
   EXPECT_NEAR(s.mean, 4.90, 0.3) << describe(s);
 }
 
-INSTANTIATE_TEST_SUITE_P(Degrees, MotorPutDownOutOfPlace, ::testing::Values(-40, -20, -10, 10, 20, 40));
+INSTANTIATE_TEST_SUITE_P(Degrees, MotorPutDownOutOfPlace,
+                         ::testing::Values(-40, -20, -10, 10, 20, 40));
 
 // --- the command: `alloy run mods/motor` tells the start-up -------------------------
 
@@ -230,9 +243,12 @@ TEST(MotorCommand, TheRunNarratesTheStartUp) {
       {"electromagnet on", "lower_coil"}};
   std::size_t next = 0;
   for (std::string line; next < told.size() && std::getline(lines, line);)
-    if (line.find(told[next].first + ": ") != std::string::npos && line.find(told[next].second) != std::string::npos)
+    if (line.find(told[next].first + ": ") != std::string::npos &&
+        line.find(told[next].second) != std::string::npos)
       ++next;
-  EXPECT_EQ(next, told.size()) << "'" << (next < told.size() ? told[next].first + ": " + told[next].second : "")
+  EXPECT_EQ(next, told.size()) << "'"
+                               << (next < told.size() ? told[next].first + ": " + told[next].second
+                                                      : "")
                                << "' is not told, in its order:\n"
                                << out.str();
 }
@@ -246,9 +262,11 @@ TEST(MotorKit, NeodymiumMagnetsConductFerriteOnesDoNot) {
   load.mod_paths.push_back(source("mods"));
   lua::LoadedScene loaded = lua::load_scene(source(kScene), registry, load);
   World& w = *loaded.world;
-  for (const char* spoke : {"spoke_N1", "spoke_N2", "spoke_N3", "spoke_N4", "spoke_S1", "spoke_S2", "spoke_S3", "spoke_S4"})
+  for (const char* spoke : {"spoke_N1", "spoke_N2", "spoke_N3", "spoke_N4", "spoke_S1", "spoke_S2",
+                            "spoke_S3", "spoke_S4"})
     EXPECT_TRUE(std::get<bool>(w.get(w.find(spoke), "conductive"))) << spoke;
-  EXPECT_FALSE(w.store().has(w.find("bias"), w.properties().id("conductive"))) << "the ferrite bias magnet";
+  EXPECT_FALSE(w.store().has(w.find("bias"), w.properties().id("conductive")))
+      << "the ferrite bias magnet";
   // North out and south out in turn: the pole at the spoke's outer end.
   for (const char* spoke : {"spoke_N1", "spoke_N3"})
     EXPECT_GT(std::get<double>(w.get(w.find(spoke), "pole_strength")), 100) << spoke;

@@ -27,7 +27,8 @@ double share_of(const Image& img, ScreenPoint at, ImU32 c, int r = 1, int tol = 
       if (x < 0 || y < 0 || x >= img.width || y >= img.height) continue;
       const std::uint8_t* p = img.at(x, y);
       ++n;
-      hits += std::abs(p[0] - cr) <= tol && std::abs(p[1] - cg) <= tol && std::abs(p[2] - cb) <= tol;
+      hits +=
+          std::abs(p[0] - cr) <= tol && std::abs(p[1] - cg) <= tol && std::abs(p[2] - cb) <= tol;
     }
   return n ? double(hits) / n : 0;
 }
@@ -35,8 +36,8 @@ double share_of(const Image& img, ScreenPoint at, ImU32 c, int r = 1, int tol = 
 std::string pixel(const Image& img, ScreenPoint at) {
   const std::uint8_t* p = img.at(int(at.x), int(at.y));
   std::ostringstream s;
-  s << "pixel at (" << int(at.x) << ", " << int(at.y) << ") is rgb(" << int(p[0]) << ", " << int(p[1]) << ", "
-    << int(p[2]) << ")";
+  s << "pixel at (" << int(at.x) << ", " << int(at.y) << ") is rgb(" << int(p[0]) << ", "
+    << int(p[1]) << ", " << int(p[2]) << ")";
   return s.str();
 }
 
@@ -51,14 +52,15 @@ TEST(ViewerMotor, TheSpokesPolesAreRedAndGreenAndThePoweredCoilFacesNorth) {
   v.set_paused(true);
   World& w = *v.world();
   const Image img = v.render_image();
-  auto* forces = dynamic_cast<magnetism::MagneticForces*>(w.stage(magnetism::MagneticForces::kName));
+  auto* forces =
+      dynamic_cast<magnetism::MagneticForces*>(w.stage(magnetism::MagneticForces::kName));
   ASSERT_NE(forces, nullptr);
 
   // Every spoke: two poles, north out or south out, in their colours where
   // the magnetic_forces set puts them.
   int checked = 0;
-  for (const char* name : {"spoke_N1", "spoke_N2", "spoke_N3", "spoke_N4", "spoke_S1", "spoke_S2", "spoke_S3",
-                           "spoke_S4"}) {
+  for (const char* name : {"spoke_N1", "spoke_N2", "spoke_N3", "spoke_N4", "spoke_S1", "spoke_S2",
+                           "spoke_S3", "spoke_S4"}) {
     const ObjectId spoke = w.find(name);
     ASSERT_TRUE(bool(spoke)) << name;
     const magnetism::MagneticBody* body = forces->find(spoke);
@@ -84,7 +86,8 @@ TEST(ViewerMotor, TheSpokesPolesAreRedAndGreenAndThePoweredCoilFacesNorth) {
 
   // The slider lies on spoke N2 at this frame: the upper coil is on, and its
   // end facing the rotor is north; the lower coil is off.
-  EXPECT_LT(std::get<double>(w.get(w.find("upper_coil"), "pole_strength")), -1) << "the upper coil is on, north at -x";
+  EXPECT_LT(std::get<double>(w.get(w.find("upper_coil"), "pole_strength")), -1)
+      << "the upper coil is on, north at -x";
   EXPECT_EQ(std::get<double>(w.get(w.find("lower_coil"), "pole_strength")), 0.0);
   const magnetism::MagneticBody* coil = forces->find(w.find("upper_coil"));
   ASSERT_NE(coil, nullptr);
@@ -103,7 +106,8 @@ TEST(ViewerMotor, TheSpokesPolesAreRedAndGreenAndThePoweredCoilFacesNorth) {
     const Vec2 centre = xy(std::get<Vec3>(w.get(w.find("bias"), "position")));
     EXPECT_EQ(pole.strength > 0, pole.position.y > centre.y) << "north up";
     const ScreenPoint s = v.camera().to_screen(xy(pole.position));
-    EXPECT_GT(share_of(img, s, pole.strength > 0 ? colour::kNorth : colour::kSouth), 0.5) << "bias: " << pixel(img, s);
+    EXPECT_GT(share_of(img, s, pole.strength > 0 ? colour::kNorth : colour::kSouth), 0.5)
+        << "bias: " << pixel(img, s);
   }
 }
 
