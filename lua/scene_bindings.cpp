@@ -13,7 +13,7 @@ namespace alloy::lua {
 namespace {
 
 const std::vector<std::string> kWorldFields = {"name",  "description", "dt",  "seconds", "plugins",
-                                               "settings", "every",     "use", "areas"};
+                                               "settings", "every",     "use", "areas", "report"};
 const std::vector<std::string> kAreaFields = {"name", "center", "half_extents", "radius", "plugins",
                                               "settings"};
 
@@ -213,6 +213,13 @@ int SceneRecorder::record_world(lua_State* L) {
       else if (!std::holds_alternative<std::vector<double>>(v) ||
                !std::get<std::vector<double>>(v).empty())
         throw InputError(where, "world: 'plugins' must be a list of plugin names");
+    } else if (key == "report") {
+      raw_field(L, 1, key);
+      SceneValue v = to_scene_value(L, -1);
+      lua_pop(L, 1);
+      if (auto* specs = std::get_if<std::vector<std::string>>(&v)) w.report = *specs;
+      else if (auto* one = std::get_if<std::string>(&v)) w.report = {*one};
+      else throw InputError(where, "world: 'report' must be a list such as { \"axle.angular_velocity.z@1\" }");
     } else if (key == "use") {
       raw_field(L, 1, key);
       const int t = lua_gettop(L);

@@ -155,6 +155,7 @@ LoadedScene load_scene(const fs::path& path, PluginRegistry& registry, const Loa
   scene.def = std::move(built.def);
   scene.world = std::move(built.world);
   scene.seconds = w.seconds;
+  scene.report = w.report;
   scene.description = !w.description.empty() ? w.description
                       : rec.source.mod       ? rec.source.mod->description
                                              : "";

@@ -54,6 +54,9 @@ struct LoadedScene {
   std::unique_ptr<World> world;  ///< objects applied, not started
   double seconds = 0;            ///< suggested run length, 0 = none
   std::string description;
+  /// world{ report = {...} }: values the CLI reports as the run goes, each
+  /// "object.property[.component][@seconds]" (checked by the CLI).
+  std::vector<std::string> report;
   /// Where each named object was defined (to locate errors found later).
   std::map<std::string, ErrorLocation, std::less<>> sources;
 };

@@ -58,6 +58,7 @@ struct RecordedWorld {
   std::vector<RecordedSettings> settings;
   std::vector<std::pair<std::string, double>> every;
   std::vector<std::pair<std::string, std::string>> use;  ///< thing -> plugin
+  std::vector<std::string> report;  ///< "object.property[.component][@seconds]" for the CLI
   std::vector<RecordedArea> areas;
 };
 

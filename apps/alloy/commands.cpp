@@ -35,6 +35,7 @@ struct RunOptions {
   std::uint64_t trace_every = 1;
   std::string audio;
   std::vector<std::string> swaps;
+  std::vector<std::string> reports;
   std::string events;
   bool profile = false;
   bool quiet = false;
@@ -106,6 +107,70 @@ void write_audio(World& world, const std::string& path, std::ostream& out, bool 
   out << "\n";
 }
 
+/// A value the run reports as it goes: --report OBJECT.PROPERTY[.COMPONENT][@SECONDS]
+/// (or the scene's world{ report = {...} }), e.g. the motor's axle speed.
+struct Report {
+  ObjectId id;
+  PropertyId property;
+  std::string label, unit;
+  char component = 0;  // 0, or x y z w (vec3, quat), or 'a' (a quat's play-area angle)
+  double every = 1, next = 0;
+};
+
+Report parse_report(const World& world, const std::string& spec) {
+  const auto bad = [&](const std::string& why) { return InputError("report '" + spec + "': " + why); };
+  std::string rest = spec;
+  Report r;
+  if (auto at = rest.rfind('@'); at != std::string::npos) {
+    try {
+      r.every = std::stod(rest.substr(at + 1));
+    } catch (const std::logic_error&) {
+      throw bad("the interval after '@' must be a number of seconds");
+    }
+    if (!(r.every > 0)) throw bad("the interval after '@' must be positive");
+    rest.resize(at);
+  }
+  const auto dot = rest.find('.');
+  if (dot == std::string::npos) throw bad("expected OBJECT.PROPERTY[.COMPONENT][@SECONDS]");
+  const std::string object = rest.substr(0, dot);
+  std::string property = rest.substr(dot + 1), component;
+  if (auto d2 = property.find('.'); d2 != std::string::npos) component = property.substr(d2 + 1), property.resize(d2);
+  r.id = world.find(object);
+  if (!r.id) throw bad("no object is called '" + object + "'");
+  r.property = world.properties().id(property);
+  const PropertyDef& def = world.properties().def(r.property);
+  if (def.kind == PropertyKind::Vec3 || def.kind == PropertyKind::Quat) {
+    const bool quat = def.kind == PropertyKind::Quat;
+    if (component == "angle" && quat) r.component = 'a';
+    else if (component.size() == 1 && std::string(quat ? "wxyz" : "xyz").find(component[0]) != std::string::npos)
+      r.component = component[0];
+    else throw bad("name a component: " + std::string(quat ? "w, x, y, z or angle" : "x, y or z"));
+  } else if (def.kind != PropertyKind::Number && def.kind != PropertyKind::Integer && def.kind != PropertyKind::Bool) {
+    throw bad("only numbers, booleans and vector components can be reported");
+  } else if (!component.empty()) {
+    throw bad("'" + property + "' has no components");
+  }
+  r.label = object + " " + property + (component.empty() ? "" : "." + component);
+  r.unit = r.component == 'a' ? "rad" : def.unit;
+  return r;
+}
+
+void print_report(const World& world, const Report& r, std::ostream& out) {
+  if (!world.store().alive(r.id) || !world.store().has(r.id, r.property)) return;  // removed meanwhile
+  const PropertyValue v = world.store().get(r.id, r.property);
+  double x = 0;
+  if (const double* d = std::get_if<double>(&v)) x = *d;
+  else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) x = double(*i);
+  else if (const bool* b = std::get_if<bool>(&v)) x = *b;
+  else if (const Vec3* p = std::get_if<Vec3>(&v)) x = r.component == 'x' ? p->x : r.component == 'y' ? p->y : p->z;
+  else if (const Quat* q = std::get_if<Quat>(&v))
+    x = r.component == 'a' ? angle_z(*q) : r.component == 'w' ? q->w : r.component == 'x' ? q->x : r.component == 'y' ? q->y : q->z;
+  char line[200];
+  std::snprintf(line, sizeof line, "step %6llu  t=%7.3f s  report: %s = %.4g %s\n",
+                (unsigned long long)world.step_count(), world.time(), r.label.c_str(), x, r.unit.c_str());
+  out << line;
+}
+
 /// --swap [AREA:]FROM=TO[@TIME]: a resolver swap at TIME (default 0, before the first step).
 void schedule_swap(World& world, const std::string& spec) {
   const auto bad = [&] {
@@ -154,6 +219,11 @@ int run(const RunOptions& opt, std::ostream& out) {
   if (opt.watch) watch.emplace(scene.mods.get(), out);
 
   for (const std::string& spec : opt.swaps) schedule_swap(world, spec);
+  std::vector<Report> reports;
+  std::vector<std::string> specs = scene.report;
+  specs.insert(specs.end(), opt.reports.begin(), opt.reports.end());
+  for (const std::string& spec : specs) reports.push_back(parse_report(world, spec));
+  for (Report& r : reports) r.next = r.every;
   if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
   if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
@@ -182,6 +252,11 @@ int run(const RunOptions& opt, std::ostream& out) {
     for (std::uint64_t i = 0; i < steps; ++i) {
       world.step();
       if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
+      for (Report& r : reports)
+        if (world.time() + 0.5 * world.dt() >= r.next) {
+          if (!opt.quiet) print_report(world, r, out);
+          r.next += r.every;
+        }
       if (watch && !watch->between_steps(world)) break;
     }
   } catch (const InputError& e) {
@@ -239,6 +314,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")->check(CLI::PositiveNumber);
   run_cmd->add_option("--events", ro.events, "Write the events as JSON lines");
   run_cmd->add_option("--audio", ro.audio, "Write what the run sounded like as a WAV file (16-bit mono)");
+  run_cmd->add_option("--report", ro.reports,
+                      "Report a value as the run goes: OBJECT.PROPERTY[.COMPONENT][@SECONDS] (repeatable)");
   run_cmd->add_option("--swap", ro.swaps,
                       "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");

@@ -7,6 +7,8 @@ world {
   description = "the paper's electric motor (4.2): the sliding contact falls, the rotor turns",
   dt = 1 / 240,
   seconds = 10,
+  -- once a simulated second, the rotor's speed (rad/s, + is anticlockwise)
+  report = { "axle.angular_velocity.z@1" },
   settings = {
     ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
   },

@@ -188,5 +188,20 @@ TEST(AlloyCli, SwapReplacesAResolverWhileRunning) {
   EXPECT_EQ(cli({"run", "tests/lua/scenes/areas.lua", "--swap", "a=b=c@x"}).code, kExitBadInput);
 }
 
+TEST(AlloyCli, ReportPrintsAValueAsTheRunGoes) {
+  Result r = cli({"run", kDemo, "--seconds", "1", "--report", "ball.position.y@0.5"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("step    120  t=  0.500 s  report: ball position.y = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("step    240  t=  1.000 s  report: ball position.y = "), std::string::npos) << r.out;
+  r = cli({"run", kDemo, "--report", "ball.position"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("name a component: x, y or z"), std::string::npos) << r.err;
+  EXPECT_EQ(cli({"run", kDemo, "--report", "nobody.mass"}).code, kExitBadInput);
+  // A scene may ask for reports itself: the motor reports its rotor's speed.
+  r = cli({"run", "mods/motor", "--seconds", "2"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("report: axle angular_velocity.z = "), std::string::npos) << r.out;
+}
+
 }  // namespace
 }  // namespace alloy::app
