@@ -12,25 +12,13 @@
 #include "lua/scene_loader.hpp"
 #include "resolvers/plugins.hpp"
 #include "runtime/world.hpp"
+#include "tests/scenes/event_records.hpp"
 
 namespace alloy::doorbell::test {
 
-inline std::filesystem::path source(const std::string& relative) {
-  return std::filesystem::path(ALLOY_SOURCE_DIR) / relative;
-}
-
-/// An event with its objects by name.
-struct Record {
-  std::uint64_t step = 0;
-  double time = 0;
-  std::string type, a, b;
-  std::vector<std::pair<std::string, double>> values;
-  double value(const std::string& key) const {
-    for (const auto& [k, v] : values)
-      if (k == key) return v;
-    return NAN;
-  }
-};
+using alloy::test::EventRecords;
+using alloy::test::Record;
+using alloy::test::source;
 
 struct RunOptions {
   std::optional<double> dt;       ///< overrides the scene's step
@@ -38,18 +26,11 @@ struct RunOptions {
   std::optional<double> seconds;  ///< default: the scene's
 };
 
-struct RunResult {
-  std::vector<Record> events;
+struct RunResult : EventRecords {
   double dt = 0;
   std::uint64_t steps = 0;
   double final_coil_current = 0;
 
-  std::vector<const Record*> of(const std::string& type, const std::string& a = "") const {
-    std::vector<const Record*> out;
-    for (const auto& e : events)
-      if (e.type == type && (a.empty() || e.a == a)) out.push_back(&e);
-    return out;
-  }
   /// Times of the bell's strikes (its `sound` events).
   std::vector<double> strikes() const {
     std::vector<double> t;
@@ -68,12 +49,7 @@ inline RunResult run_scene(const std::string& scene, const RunOptions& options =
   if (options.emf_scale != 1)
     world.set(battery, "emf", std::get<double>(world.get(battery, "emf")) * options.emf_scale);
   RunResult r;
-  world.add_observer([&](const Event& e) {
-    Record rec{
-        e.step,  e.time, e.type, e.a ? world.describe(e.a) : "", e.b ? world.describe(e.b) : "",
-        e.values};
-    r.events.push_back(std::move(rec));
-  });
+  r.record(world);
   r.dt = world.dt();
   const double seconds = options.seconds ? *options.seconds : loaded.seconds;
   r.steps = std::uint64_t(std::llround(seconds / r.dt));

@@ -19,12 +19,13 @@
 #include "lua/scene_loader.hpp"
 #include "resolvers/plugins.hpp"
 #include "runtime/world.hpp"
+#include "tests/scenes/event_records.hpp"
 
 namespace alloy::motor::test {
 
-inline std::filesystem::path source(const std::string& relative) {
-  return std::filesystem::path(ALLOY_SOURCE_DIR) / relative;
-}
+using alloy::test::EventRecords;
+using alloy::test::Record;
+using alloy::test::source;
 
 constexpr const char* kScene = "mods/motor";
 constexpr const char* kBatteryOff = "mods/motor/battery_off.lua";
@@ -32,19 +33,6 @@ constexpr double kSceneDt = 1.0 / 240;
 /// The paper's "steady from frame 200", and the window the tests measure in:
 /// frames 200 to 2000 at the scene's step, 0.833 s to 8.333 s.
 constexpr double kSteadyFrom = 200 * kSceneDt, kSteadyTo = 2000 * kSceneDt;
-
-/// An event with its objects by name.
-struct Record {
-  std::uint64_t step = 0;
-  double time = 0;
-  std::string type, a, b;
-  std::vector<std::pair<std::string, double>> values;
-  double value(const std::string& key) const {
-    for (const auto& [k, v] : values)
-      if (k == key) return v;
-    return NAN;
-  }
-};
 
 struct RunOptions {
   std::optional<double> dt;        ///< overrides the scene's step (World::set_dt)
@@ -56,20 +44,13 @@ struct RunOptions {
   double drag_scale = 1;           ///< the bearing's viscous drag times this
 };
 
-struct RunResult {
-  std::vector<Record> events;
+struct RunResult : EventRecords {
   double dt = 0;
   std::vector<double> time;  ///< at the end of each step, and 0 first
   std::vector<double>
       angle;  ///< the rotor's angle (the axle's), unwrapped, rad; anticlockwise positive
   std::vector<double> spin;  ///< its angular velocity about +z, rad/s
 
-  std::vector<const Record*> of(const std::string& type, const std::string& a = "") const {
-    std::vector<const Record*> out;
-    for (const auto& e : events)
-      if (e.type == type && (a.empty() || e.a == a)) out.push_back(&e);
-    return out;
-  }
   /// The index of the first sample at or after time t.
   std::size_t at(double t) const {
     return std::size_t(std::lower_bound(time.begin(), time.end(), t - 1e-9) - time.begin());
@@ -101,10 +82,7 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
     world.set(axle, "angular_damping",
               get_number(world, "axle", "angular_damping") * options.drag_scale);
   RunResult r;
-  world.add_observer([&](const Event& e) {
-    r.events.push_back({e.step, e.time, e.type, e.a ? world.describe(e.a) : "",
-                        e.b ? world.describe(e.b) : "", e.values});
-  });
+  r.record(world);
   r.dt = world.dt();
   const double seconds = options.seconds ? *options.seconds : loaded.seconds;
   const auto steps = std::uint64_t(std::llround(seconds / r.dt));
