@@ -23,13 +23,24 @@ double twist_angle(Quat q, Vec3 axis) {
   return a;
 }
 
+/// How fast body 1 moves into body 2 (null: the play area) at `point`,
+/// along `normal` (ODE's contact normal, pointing out of body 2 into body 1), m/s.
+double approach_speed(dBodyID b1, dBodyID b2, Vec3 point, Vec3 normal) {
+  dVector3 v1, v2 = {0, 0, 0};
+  dBodyGetPointVel(b1, point.x, point.y, point.z, v1);
+  if (b2) dBodyGetPointVel(b2, point.x, point.y, point.z, v2);
+  return -(normal.x * (v1[0] - v2[0]) + normal.y * (v1[1] - v2[1]) + normal.z * (v1[2] - v2[2]));
+}
+
 }  // namespace
 
 // --- settings -------------------------------------------------------------------------
 
 const std::vector<std::string>& RigidBodyConfig::keys() {
   static const std::vector<std::string> k = {"solver", "iterations", "sor", "erp", "cfm",
-                                             "max_contacts", "surface_layer", "max_correcting_velocity"};
+                                             "max_contacts", "surface_layer", "max_correcting_velocity",
+                                             "substeps", "auto_disable", "auto_disable_linear",
+                                             "auto_disable_angular", "auto_disable_steps"};
   return k;
 }
 
@@ -55,6 +66,15 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   if (!(c.surface_layer >= 0 && c.surface_layer < 1)) bad("surface_layer must be in [0, 1) m");
   c.max_correcting_velocity = s.number("max_correcting_velocity", c.max_correcting_velocity);
   if (!(c.max_correcting_velocity > 0)) bad("max_correcting_velocity must be > 0");
+  c.substeps = int(s.integer("substeps", c.substeps));
+  if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be between 1 and 1000");
+  c.auto_disable = s.boolean("auto_disable", c.auto_disable);
+  c.auto_disable_linear = s.number("auto_disable_linear", c.auto_disable_linear);
+  if (!(c.auto_disable_linear >= 0)) bad("auto_disable_linear must be >= 0 m/s");
+  c.auto_disable_angular = s.number("auto_disable_angular", c.auto_disable_angular);
+  if (!(c.auto_disable_angular >= 0)) bad("auto_disable_angular must be >= 0 rad/s");
+  c.auto_disable_steps = int(s.integer("auto_disable_steps", c.auto_disable_steps));
+  if (c.auto_disable_steps < 1 || c.auto_disable_steps > 100000) bad("auto_disable_steps must be between 1 and 100000");
   return c;
 }
 
@@ -82,6 +102,11 @@ struct RigidBodyResolver::Impl {
     bool planar = false;
     bool moved = false;      ///< a kinematic body teleported by an edit: write its parts
     double linear_damping = 0, angular_damping = 0;  ///< 1/s
+    double mass = 0;
+    // auto_disable: the load queued this step, and the load it had when it
+    // last ran; a sleeping body wakes when the two differ.
+    Vec3 load_force, load_torque, awake_force, awake_torque;
+    bool asleep = false;  ///< disabled when this advance began
   };
   struct Hinge {
     ObjectId id;
@@ -115,7 +140,15 @@ struct RigidBodyResolver::Impl {
     dWorldSetQuickStepW(world, config.sor);
     dWorldSetContactSurfaceLayer(world, config.surface_layer);
     dWorldSetContactMaxCorrectingVel(world, config.max_correcting_velocity);
-    dWorldSetAutoDisableFlag(world, 0);
+    dWorldSetAutoDisableFlag(world, config.auto_disable ? 1 : 0);
+    if (config.auto_disable) {
+      dWorldSetAutoDisableLinearThreshold(world, config.auto_disable_linear);
+      dWorldSetAutoDisableAngularThreshold(world, config.auto_disable_angular);
+      dWorldSetAutoDisableSteps(world, config.auto_disable_steps);
+      dWorldSetAutoDisableTime(world, 0);
+      // Average the speeds over the window: one slow step in a bounce is not rest.
+      dWorldSetAutoDisableAverageSamplesCount(world, unsigned(std::min(config.auto_disable_steps, 10)));
+    }
     contact_group = dJointGroupCreate(0);
   }
   void destroy_world() {
@@ -174,6 +207,17 @@ struct RigidBodyResolver::Impl {
     return std::int32_t(parts[p].body);
   }
 
+  /// The part in `slot` if it is a body's part (and, generation != 0, still
+  /// the object the command was queued for), else null.
+  const Part* part_for(std::uint32_t slot, std::uint32_t generation) const {
+    if (slot >= part_of_slot.size()) return nullptr;
+    const std::int32_t pi = part_of_slot[slot];
+    if (pi < 0) return nullptr;  // not a body (static, or not a rigid part)
+    const Part& p = parts[pi];
+    if (generation != 0 && generation != p.id.generation) return nullptr;  // another object now
+    return &p;
+  }
+
   RigidBodyConfig config;
   dWorldID world = nullptr;
   dJointGroupID contact_group = nullptr;
@@ -182,6 +226,8 @@ struct RigidBodyResolver::Impl {
   std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, or -1
   std::vector<Hinge> hinges;
   std::vector<dJointFeedback> feedback;
+  std::vector<Vec3> feedback_force;  ///< per contact point: force 1 summed over the substeps
+  std::vector<double> depth;           ///< per queued contact point: depth at the current substep
   std::vector<PairRecord> records;
   double damping_dt = 0;
   bool dirty = true;
@@ -378,6 +424,7 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
 
     body.id = dBodyCreate(world);
     dBodySetMass(body.id, &total);
+    body.mass = total.mass;
     dBodySetPosition(body.id, com.x, com.y, com.z);
     dQuaternion q;
     to_ode(qb, q);
@@ -458,6 +505,8 @@ void RigidBodyResolver::Impl::write_poses(ResolverAccess& access, bool all) {
   auto angular_velocity = access.writer<Vec3>(id.angular_velocity);
   for (Body& b : bodies) {
     if (b.kinematic && !all && !b.moved) continue;  // pinned parts do not move
+    // A body that slept through the whole advance has nothing new to say.
+    if (b.asleep && !all && !b.moved && !dBodyIsEnabled(b.id)) continue;
     b.moved = false;
     const Vec3 x = to_vec3(dBodyGetPosition(b.id));
     const Quat q = to_quat(dBodyGetQuaternion(b.id));
@@ -561,6 +610,11 @@ RigidBodyResolver::~RigidBodyResolver() = default;
 
 std::size_t RigidBodyResolver::body_count() const { return impl_->bodies.size(); }
 std::size_t RigidBodyResolver::joint_count() const { return impl_->hinges.size(); }
+std::size_t RigidBodyResolver::awake_count() const {
+  return std::size_t(std::count_if(impl_->bodies.begin(), impl_->bodies.end(), [](const Impl::Body& b) {
+    return !b.kinematic && dBodyIsEnabled(b.id);
+  }));
+}
 
 void RigidBodyResolver::build(ResolverAccess& access) {
   ensure_ode();
@@ -597,39 +651,20 @@ void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const 
   contacts_.push_back(c);
 }
 
-void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
-  ensure_ode();
+void RigidBodyResolver::apply_loads() {
   Impl& m = *impl_;
-  m.resolve_ids(access);
-  if (m.dirty || m.defining_changed()) build(access);
-  m.apply_edits(access);
-
-  if (dt != m.damping_dt) {
-    // Damping in SI (dv/dt = -c v) as ODE's per-step scale: v *= 1 - scale.
-    for (const auto& b : m.bodies) {
-      if (b.kinematic) continue;
-      dBodySetLinearDamping(b.id, 1 - std::exp(-b.linear_damping * dt));
-      dBodySetAngularDamping(b.id, 1 - std::exp(-b.angular_damping * dt));
-    }
-    m.damping_dt = dt;
-  }
-
-  // 1. Loads queued by interactions.
   for (const LoadCommand& c : forces_) {
-    if (c.slot >= m.part_of_slot.size()) continue;
-    const std::int32_t pi = m.part_of_slot[c.slot];
-    if (pi < 0) continue;  // not a body (static, or not a rigid part)
-    const Impl::Part& p = m.parts[pi];
-    if (c.generation != 0 && c.generation != p.id.generation) continue;  // another object now
-    const Impl::Body& b = m.bodies[p.body];
-    if (b.kinematic) continue;
+    const Impl::Part* p = m.part_for(c.slot, c.generation);
+    if (!p) continue;
+    const Impl::Body& b = m.bodies[p->body];
+    if (b.kinematic || !dBodyIsEnabled(b.id)) continue;  // a sleeping body keeps no load
     switch (c.kind) {
       case Load::Force:
-        if (p.identity) {
+        if (p->identity) {
           dBodyAddForce(b.id, c.value.x, c.value.y, c.value.z);
         } else {
           dVector3 at;
-          dBodyGetRelPointPos(b.id, p.offset.x, p.offset.y, p.offset.z, at);
+          dBodyGetRelPointPos(b.id, p->offset.x, p->offset.y, p->offset.z, at);
           dBodyAddForceAtPos(b.id, c.value.x, c.value.y, c.value.z, at[0], at[1], at[2]);
         }
         break;
@@ -639,10 +674,53 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
       case Load::Torque: dBodyAddTorque(b.id, c.value.x, c.value.y, c.value.z); break;
     }
   }
+}
 
-  // 2. Contacts queued by rigid_body_from_collisions become contact joints for this step.
-  m.records.clear();
-  m.feedback.resize(contact_points_.size());  // joints keep pointers into it: no growth below
+void RigidBodyResolver::wake_on_load_change() {
+  Impl& m = *impl_;
+  for (Impl::Body& b : m.bodies) b.load_force = b.load_torque = Vec3{};
+  for (const LoadCommand& c : forces_) {
+    const Impl::Part* p = m.part_for(c.slot, c.generation);
+    if (!p) continue;
+    Impl::Body& b = m.bodies[p->body];
+    if (b.kinematic) continue;
+    const Vec3 x = to_vec3(dBodyGetPosition(b.id));
+    switch (c.kind) {
+      case Load::Force:
+        b.load_force += c.value;
+        if (!p->identity) b.load_torque += cross(rotate(to_quat(dBodyGetQuaternion(b.id)), p->offset), c.value);
+        break;
+      case Load::ForceAtPoint:
+        b.load_force += c.value;
+        b.load_torque += cross(c.point - x, c.value);
+        break;
+      case Load::Torque: b.load_torque += c.value; break;
+    }
+  }
+  for (Impl::Body& b : m.bodies) {
+    if (b.kinematic) continue;
+    b.asleep = !dBodyIsEnabled(b.id);
+    if (!b.asleep) {
+      b.awake_force = b.load_force, b.awake_torque = b.load_torque;
+      continue;
+    }
+    // The load it slept under (its weight, a magnet's pull) holds it still;
+    // a different one (the magnet switched on, gravity turned) must move it.
+    // Tolerances: 0.1 % of that load, or an acceleration of 1 mm/s^2.
+    const double df = length(b.load_force - b.awake_force), dtq = length(b.load_torque - b.awake_torque);
+    if (df > 1e-3 * length(b.awake_force) + 1e-3 * b.mass ||
+        dtq > 1e-3 * length(b.awake_torque) + 1e-4 * b.mass) {
+      dBodySetForce(b.id, 0, 0, 0);
+      dBodySetTorque(b.id, 0, 0, 0);
+      dBodyEnable(b.id);
+      b.asleep = false;
+      b.awake_force = b.load_force, b.awake_torque = b.load_torque;
+    }
+  }
+}
+
+void RigidBodyResolver::add_contact_joints(double h, bool first) {
+  Impl& m = *impl_;
   std::uint32_t fb = 0;
   for (std::uint32_t ci = 0; ci < contacts_.size(); ++ci) {
     const ContactCommand& c = contacts_[ci];
@@ -664,9 +742,10 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
     }
     const double sign = swapped ? -1.0 : 1.0;  // the normal must push body 1 out
     const int mode = contact.surface.mode;
-    const std::uint32_t first = fb;
+    const std::uint32_t first_feedback = fb;
     for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
       const ContactPoint& p = contact_points_[k];
+      const double depth = m.depth[k];
       // A resting or sliding point that has drifted shallower than half the
       // surface layer may close to the full layer within this step (ODE's
       // normal surface motion: an allowance, never a pull). Without it the
@@ -676,37 +755,92 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
       // that are deep enough, are left exactly as ODE treats them.
       contact.surface.mode = mode;
       contact.surface.motionN = 0;
-      if (p.depth < 0.5 * config_.surface_layer) {
-        dVector3 v1, v2 = {0, 0, 0};
-        dBodyGetPointVel(b1, p.position.x, p.position.y, p.position.z, v1);
-        if (b2) dBodyGetPointVel(b2, p.position.x, p.position.y, p.position.z, v2);
-        const double approach = -sign * (p.normal.x * (v1[0] - v2[0]) + p.normal.y * (v1[1] - v2[1]) +
-                                         p.normal.z * (v1[2] - v2[2]));
+      if (depth < 0.5 * config_.surface_layer) {
+        const double approach = approach_speed(b1, b2, p.position, sign * p.normal);
         if (c.restitution <= 0 || approach <= c.bounce_velocity) {
           contact.surface.mode |= dContactMotionN;
-          contact.surface.motionN = -(config_.surface_layer - p.depth) / dt;
+          contact.surface.motionN = -(config_.surface_layer - depth) / h;
         }
       }
       contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y, contact.geom.pos[2] = p.position.z;
       contact.geom.normal[0] = sign * p.normal.x, contact.geom.normal[1] = sign * p.normal.y,
       contact.geom.normal[2] = sign * p.normal.z;
-      contact.geom.depth = p.depth;
+      contact.geom.depth = depth;
       dJointID j = dJointCreateContact(m.world, m.contact_group, &contact);
       dJointAttach(j, b1, b2);
       dJointSetFeedback(j, &m.feedback[fb++]);
     }
-    m.records.push_back({ci, first, fb - first, swapped});
+    if (first) m.records.push_back({ci, first_feedback, fb - first_feedback, swapped});
+  }
+}
+
+void RigidBodyResolver::carry_depths(double h) {
+  // Between substeps no new contacts are found: each kept point's depth grows
+  // by how far its parts approached along the normal, so that the error
+  // reduction does not push the same overlap out once per substep.
+  Impl& m = *impl_;
+  for (const auto& r : m.records) {
+    const ContactCommand& c = contacts_[r.command];
+    const std::int32_t ba = m.body_of(c.a), bb = m.body_of(c.b);
+    dBodyID b1 = m.bodies[r.swapped ? bb : ba].id;
+    dBodyID b2 = r.swapped ? nullptr : (bb >= 0 ? m.bodies[bb].id : nullptr);
+    const double sign = r.swapped ? -1.0 : 1.0;
+    for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
+      const ContactPoint& p = contact_points_[k];
+      m.depth[k] += h * approach_speed(b1, b2, p.position, sign * p.normal);
+    }
+  }
+}
+
+void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
+  ensure_ode();
+  Impl& m = *impl_;
+  m.resolve_ids(access);
+  if (m.dirty || m.defining_changed()) build(access);
+  m.apply_edits(access);
+
+  const int n = config_.substeps;
+  const double h = dt / n;
+  if (h != m.damping_dt) {
+    // Damping in SI (dv/dt = -c v) as ODE's per-step scale: v *= 1 - scale.
+    for (const auto& b : m.bodies) {
+      if (b.kinematic) continue;
+      dBodySetLinearDamping(b.id, 1 - std::exp(-b.linear_damping * h));
+      dBodySetAngularDamping(b.id, 1 - std::exp(-b.angular_damping * h));
+    }
+    m.damping_dt = h;
+  }
+  if (config_.auto_disable) wake_on_load_change();
+
+  // Contact points as queued; their depth is carried forward between substeps.
+  m.depth.resize(contact_points_.size());
+  for (std::size_t k = 0; k < contact_points_.size(); ++k) m.depth[k] = contact_points_[k].depth;
+  m.feedback.resize(contact_points_.size());  // joints keep pointers into it: no growth below
+  m.feedback_force.assign(contact_points_.size(), Vec3{});
+  m.records.clear();
+
+  for (int sub = 0; sub < n; ++sub) {
+    apply_loads();
+    add_contact_joints(h, sub == 0);
+    // QuickStep shuffles constraints with ODE's global random generator;
+    // seeding it from the step number makes every world's step a function of
+    // its own state (two worlds, or two runs, stay bit-identical).
+    dRandSetSeed(static_cast<unsigned long>((access.step() * std::uint64_t(n) + std::uint64_t(sub)) *
+                                                2654435761u +
+                                            1));
+    if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, h);
+    else dWorldStep(m.world, h);
+    m.fix_planar();
+    for (std::size_t k = 0; k < m.records.size(); ++k) {
+      const auto& r = m.records[k];
+      for (std::uint32_t i = 0; i < r.count; ++i)
+        m.feedback_force[r.first_feedback + i] += to_vec3(m.feedback[r.first_feedback + i].f1);
+    }
+    dJointGroupEmpty(m.contact_group);
+    if (sub + 1 < n) carry_depths(h);
   }
 
-  // 3. Integrate. QuickStep shuffles constraints with ODE's global random
-  // generator; seeding it from the step number makes every world's step a
-  // function of its own state (two worlds, or two runs, stay bit-identical).
-  dRandSetSeed(static_cast<unsigned long>(access.step() * 2654435761u + 1));
-  if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, dt);
-  else dWorldStep(m.world, dt);
-  m.fix_planar();
-
-  // 4. Publish the impulse each pair received (force feedback times dt).
+  // Publish the impulse each pair received over the window.
   const bool had = !impulses_.empty();
   impulses_.clear();
   for (const auto& r : m.records) {
@@ -714,12 +848,12 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
     Vec3 f{};
     double fn = 0;
     for (std::uint32_t k = 0; k < r.count; ++k) {
-      const dJointFeedback& jf = m.feedback[r.first_feedback + k];
-      const Vec3 f1 = to_vec3(jf.f1);
+      const Vec3 f1 = m.feedback_force[r.first_feedback + k];
       f += f1;
       fn += dot(f1, contact_points_[c.first + k].normal) * (r.swapped ? -1.0 : 1.0);
     }
-    impulses_.push_back({c.a, c.b, (r.swapped ? -1.0 : 1.0) * f * dt, std::max(0.0, fn * dt)});
+    // Each substep's force acted for h: the sum times h is the window's impulse.
+    impulses_.push_back({c.a, c.b, (r.swapped ? -1.0 : 1.0) * f * h, std::max(0.0, fn * h)});
   }
   if (!std::is_sorted(impulses_.begin(), impulses_.end(), [](const PairImpulse& x, const PairImpulse& y) {
         return pair_less(x.a, x.b, y.a, y.b);
@@ -728,7 +862,6 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
       return pair_less(x.a, x.b, y.a, y.b);
     });
   if (had || !impulses_.empty()) ++state_version_;
-  dJointGroupEmpty(m.contact_group);
 
   // 5. Write the new state to the properties.
   m.write_poses(access, false);

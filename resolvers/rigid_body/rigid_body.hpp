@@ -65,6 +65,21 @@ struct RigidBodyConfig {
   /// a deep overlap (a part dropped into another) separates gently instead of
   /// exploding. Does not limit restitution.
   double max_correcting_velocity = 2.0;
+  /// ODE steps of dt / substeps per advance. The coupling window stays the
+  /// world's step: forces queued by interactions are held over the window (a
+  /// zero-order hold), and the contacts found at its start are kept, their
+  /// depth carried forward by the parts' approach speed. For stiff mechanisms
+  /// (heavy on light, long chains) where the contact and joint solve needs a
+  /// shorter step than the rest of the world.
+  int substeps = 1;
+  /// Bodies at rest stop being simulated (ODE's auto-disable) until something
+  /// touches them, an edit moves them, or the load queued on them changes. A
+  /// settled pile then costs little more than its collision detection.
+  bool auto_disable = false;
+  /// Below these average speeds for `auto_disable_steps` steps a body sleeps.
+  double auto_disable_linear = 0.01;   ///< m/s
+  double auto_disable_angular = 0.01;  ///< rad/s
+  int auto_disable_steps = 20;
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static RigidBodyConfig from(const PluginSettings& settings);
@@ -118,6 +133,8 @@ class RigidBodyResolver final : public Resolver {
   std::size_t body_count() const;
   /// ODE joints made from joint objects (fixed joints merge bodies and make none).
   std::size_t joint_count() const;
+  /// Bodies being simulated: not kinematic, and not asleep (auto_disable).
+  std::size_t awake_count() const;
   /// Full rebuilds so far (build() and rebuilds after a defining edit).
   std::uint64_t rebuild_count() const { return rebuilds_; }
 
@@ -132,6 +149,11 @@ class RigidBodyResolver final : public Resolver {
   struct Impl;
 
   void queue(ObjectId part, Vec3 value, Vec3 point, Load kind);
+  // The parts of advance().
+  void apply_loads();
+  void wake_on_load_change();
+  void add_contact_joints(double h, bool first);
+  void carry_depths(double h);
 
   const PropertyStore& store_;
   RigidBodyConfig config_;
