@@ -1,0 +1,243 @@
+// Work-precision of the analytic scenes: error against CPU run time per
+// simulated second, for every step from 1/60 s to 1/1920 s and every solver
+// setting, through the real World and plugins (tests/scenes/analytic_scenes).
+//
+//   free fall          exact y0 - g t^2 / 2
+//   pendulum 0.05 rad  fine RK4 of theta'' = -(m g d / I) sin theta
+//   pendulum 2.5 rad   the same, far from the small-angle regime
+//   tumbling box       fine RK4 of Euler's equations + quaternion (Dzhanibekov flip)
+//   two-body orbit     Kepler's circular orbit under gravity.nbody
+//   RL circuit         I(t) = E/R (1 - e^(-t/tau))
+//   magnets            fine RK4 of the pole model's force law
+//
+// Methods: the rigid body's solver (dWorldStep; dWorldQuickStep at 10, 20,
+// 40, 80 iterations; only where there are constraints to solve, else step
+// and quick 40), the rigid body's substeps (when the resolver has them), and
+// electricity's substeps (1, 2, 4, 8). The default (1/240 s, quick 40, rigid
+// substeps 1, electricity substeps 4) is marked on every plot.
+//
+// Writes docs/bench/work_precision.csv, docs/bench/wp_<scene>.svg and the
+// table between <!-- bench:work_precision --> markers in docs/performance.md.
+//
+//   build/bench/alloy_bench_work_precision [--quick] [--out DIR] [--docs FILE] [--no-progress]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bench/common/bench_common.hpp"
+#include "tests/scenes/analytic_scenes.hpp"
+
+namespace {
+
+using namespace alloy::bench;
+using alloy::scenes::analytic::Method;
+using alloy::scenes::analytic::Result;
+namespace an = alloy::scenes::analytic;
+
+constexpr int kDefaultRate = 240;
+
+struct NamedMethod {
+  std::string name;
+  Method method;
+  bool is_default = false;
+};
+
+struct Scene {
+  std::string key;  // file names: wp_<key>.svg
+  std::string title;
+  std::string error_label;  // y axis, with units
+  std::function<Result(double, const Method&)> run;
+  std::vector<NamedMethod> methods;
+};
+
+struct Run {
+  const Scene* scene;
+  const NamedMethod* method;
+  int rate;  // steps per second: dt = 1 / rate
+  Result result;
+  double cost = 0;  // CPU s per simulated s (best of the repeats)
+};
+
+std::vector<NamedMethod> rigid_methods(bool constrained) {
+  std::vector<NamedMethod> m;
+  m.push_back({"step", {.solver = "step"}});
+  if (constrained)
+    for (int it : {10, 20}) m.push_back({"quick " + std::to_string(it), {.iterations = it}});
+  m.push_back({"quick 40", {}, true});
+  if (constrained) m.push_back({"quick 80", {.iterations = 80}});
+  if (an::rigid_substeps_supported())
+    for (int sub : {2, 4})
+      m.push_back({"quick 40, " + std::to_string(sub) + " substeps", {.rigid_substeps = sub}});
+  return m;
+}
+
+std::vector<Scene> scenes() {
+  std::vector<Scene> s;
+  s.push_back({"free_fall", "Free fall (1 s from rest)", "largest height error (m)",
+               [](double dt, const Method& m) { return an::run_free_fall(dt, m); },
+               rigid_methods(false)});
+  s.push_back({"pendulum_small", "Bar pendulum, 0.05 rad (5 s)", "largest angle error (rad)",
+               [](double dt, const Method& m) { return an::run_pendulum(dt, m, 0.05); },
+               rigid_methods(true)});
+  s.push_back({"pendulum_large", "Bar pendulum, 2.5 rad (5 s)", "largest angle error (rad)",
+               [](double dt, const Method& m) { return an::run_pendulum(dt, m, 2.5); },
+               rigid_methods(true)});
+  s.push_back({"tumbling_box", "Torque-free box near its intermediate axis (3 s)",
+               "largest orientation error (rad)",
+               [](double dt, const Method& m) { return an::run_tumbling_box(dt, m); },
+               rigid_methods(false)});
+  s.push_back({"orbit", "Two-body circular orbit, gravity.nbody (2 orbits)",
+               "separation error after 2 orbits (relative)",
+               [](double dt, const Method& m) { return an::run_orbit(dt, m); },
+               rigid_methods(false)});
+  std::vector<NamedMethod> elec;
+  for (int sub : {1, 2, 4, 8})
+    elec.push_back({std::to_string(sub) + " substep" + (sub > 1 ? "s" : ""),
+                    {.electricity_substeps = sub},
+                    sub == 4});
+  s.push_back({"rl_circuit", "RL circuit, tau = 10 ms (5 tau)",
+               "largest current error (relative to E/R)",
+               [](double dt, const Method& m) { return an::run_rl(dt, m); }, elec});
+  s.push_back({"magnets", "Two magnets, like poles facing (1 s)", "largest position error (m)",
+               [](double dt, const Method& m) { return an::run_magnets(dt, m); },
+               rigid_methods(false)});
+  return s;
+}
+
+/// Runs once for the error, then repeats (full mode) until the timed CPU time
+/// reaches `min_cpu`, keeping the cheapest: short runs are otherwise at the
+/// mercy of the clock's grain and of other work on the machine.
+Run measure(const Scene& sc, const NamedMethod& nm, int rate, double min_cpu) {
+  Run r{&sc, &nm, rate, sc.run(1.0 / rate, nm.method)};
+  r.cost = r.result.cost();
+  double total = r.result.cpu_seconds;
+  for (int rep = 0; rep < 30 && total < min_cpu; ++rep) {
+    const Result again = sc.run(1.0 / rate, nm.method);
+    total += again.cpu_seconds;
+    r.cost = std::min(r.cost, again.cost());
+  }
+  return r;
+}
+
+std::string rate_label(int rate) {
+  return "1/" + std::to_string(rate);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = Options::parse(argc, argv, "alloy_bench_work_precision");
+  const std::vector<int> rates =
+      opt.quick ? std::vector<int>{120, 240} : std::vector<int>{60, 120, 240, 480, 960, 1920};
+  std::vector<Scene> all = scenes();
+  if (opt.quick)  // one method per scene: the default
+    for (Scene& s : all)
+      std::erase_if(s.methods, [](const NamedMethod& m) { return !m.is_default; });
+  const double min_cpu = opt.quick ? 0.0 : 0.1;
+
+  std::size_t total = 0;
+  for (const Scene& s : all) total += s.methods.size() * rates.size();
+  std::vector<Run> runs;
+  {
+    Progress bar("work-precision", total, opt.progress);
+    for (const Scene& s : all)
+      for (const NamedMethod& m : s.methods)
+        for (int rate : rates) {
+          runs.push_back(measure(s, m, rate, min_cpu));
+          bar.tick();
+        }
+  }
+
+  Csv csv(opt.file("work_precision.csv"),
+          {"scene", "method", "solver", "iterations", "rigid_substeps", "electricity_substeps",
+           "dt", "steps", "sim_seconds", "cpu_seconds", "cpu_per_sim_second", "error",
+           "energy_drift", "momentum_drift", "finite", "default"});
+  for (const Run& r : runs) {
+    const Method& m = r.method->method;
+    const bool def = r.method->is_default && r.rate == kDefaultRate;
+    csv.row({r.scene->key, r.method->name, m.solver, Csv::cell(m.iterations),
+             Csv::cell(m.rigid_substeps), Csv::cell(m.electricity_substeps),
+             Csv::cell(1.0 / r.rate), Csv::cell((long long)r.result.steps),
+             Csv::cell(r.result.sim_seconds), Csv::cell(r.result.cpu_seconds), Csv::cell(r.cost),
+             Csv::cell(r.result.error), Csv::cell(r.result.energy_drift),
+             Csv::cell(r.result.momentum_drift), r.result.finite ? "1" : "0", def ? "1" : "0"});
+  }
+
+  Table table({"scene", "method", "order", "error at 1/240 s", "cost at 1/240 s (ms/s)",
+               "energy drift at 1/240 s", "on the Pareto front at"});
+  std::string fronts;
+  bool all_finite = true;
+  for (const Scene& s : all) {
+    std::vector<const Run*> mine;
+    for (const Run& r : runs)
+      if (r.scene == &s) mine.push_back(&r);
+    std::vector<double> cost, err;
+    for (const Run* r : mine) cost.push_back(r->cost), err.push_back(r->result.error);
+    const std::vector<std::size_t> front = pareto_front(cost, err);
+    auto on_front = [&](const Run* r) {
+      for (std::size_t i : front)
+        if (mine[i] == r) return true;
+      return false;
+    };
+
+    Plot plot;
+    plot.title = s.title;
+    plot.x_label = "CPU run time per simulated second (s)";
+    plot.y_label = s.error_label;
+    for (const NamedMethod& m : s.methods) {
+      Series series{.name = m.name};
+      std::vector<double> dts, errs;
+      std::string front_rates;
+      const Run* at_default = nullptr;
+      for (const Run* r : mine) {
+        if (r->method != &m) continue;
+        series.x.push_back(r->cost);
+        series.y.push_back(r->result.error);
+        dts.push_back(1.0 / r->rate);
+        errs.push_back(r->result.error);
+        all_finite = all_finite && r->result.finite;
+        if (on_front(r)) front_rates += (front_rates.empty() ? "" : ", ") + rate_label(r->rate);
+        if (r->rate == kDefaultRate) at_default = r;
+        if (m.is_default && r->rate == kDefaultRate)
+          plot.markers.push_back({r->cost, r->result.error, "default (1/240 s, " + m.name + ")"});
+      }
+      plot.series.push_back(std::move(series));
+      table.row({s.key, m.name, fmt(loglog_slope(dts, errs), 2),
+                 at_default ? fmt(at_default->result.error) : "-",
+                 at_default ? fmt(1e3 * at_default->cost) : "-",
+                 at_default && at_default->result.energy_drift >= 0
+                     ? fmt(at_default->result.energy_drift)
+                     : "-",
+                 front_rates.empty() ? "-" : front_rates});
+    }
+    write_svg(plot, opt.file("wp_" + s.key + ".svg"));
+
+    fronts += "- **" + s.key + "**: ";
+    for (std::size_t k = 0; k < front.size(); ++k) {
+      const Run* r = mine[front[k]];
+      fronts += (k ? " < " : "") + r->method->name + " @ " + rate_label(r->rate) + " (" +
+                fmt(r->result.error, 2) + ", " + fmt(1e3 * r->cost, 2) + " ms/s)";
+    }
+    fronts += "\n";
+  }
+
+  std::printf("%s\nPareto fronts, by increasing cost (error, CPU ms per simulated s):\n%s",
+              table.str().c_str(), fronts.c_str());
+  if (!opt.docs.empty()) {
+    std::string md = "Orders are least-squares slopes of log(error) against log(dt) over " +
+                     std::string("dt = 1/60 ... 1/1920 s; cost is CPU time per simulated second ") +
+                     "(best of repeats). Generated by `alloy_bench_work_precision`; data in " +
+                     "[bench/work_precision.csv](bench/work_precision.csv).\n\n" + table.str() +
+                     "\nPareto fronts of (cost, error), cheapest first, as method @ dt (error, "
+                     "CPU ms per simulated s):\n\n" +
+                     fronts + "\n";
+    for (const Scene& s : all) md += "![" + s.title + "](bench/wp_" + s.key + ".svg)\n";
+    splice(opt.docs, "work_precision", md);
+  }
+  if (!all_finite) std::fprintf(stderr, "work-precision: a run froze an object (non-finite)\n");
+  return all_finite ? 0 : 1;
+}

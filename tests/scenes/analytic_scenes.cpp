@@ -1,0 +1,374 @@
+// Analytic scenes for work-precision (see analytic_scenes.hpp): builders, the
+// exact solutions or fine RK4 references, and the timed runs.
+#include "tests/scenes/analytic_scenes.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <ctime>
+#include <numbers>
+
+#include "resolvers/magnetism/magnet_parts.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
+#include "resolvers/magnetism/pole_model.hpp"
+#include "resolvers/rigid_body/rigid_body.hpp"
+#include "tests/scenes/rigid_scenes.hpp"
+
+namespace alloy::scenes::analytic {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kG = 9.81;  // gravity.uniform's default, m/s^2
+
+// std::clock is this process's CPU time (clock_gettime of the process CPU
+// clock on Linux): the scenes library does not depend on the bench library.
+double cpu_now() {
+  return double(std::clock()) / CLOCKS_PER_SEC;
+}
+
+std::uint64_t steps_for(double seconds, double dt) {
+  return std::uint64_t(std::llround(seconds / dt));
+}
+
+/// Steps the world `n` times, calling `after(step_index)` after each (the
+/// comparison with a precomputed reference: a few column reads, small
+/// against a step, and the same for every method). Timed as a whole: a CPU
+/// clock read per step would cost about as much as a small world's step.
+template <class F>
+void run_timed(World& w, std::uint64_t n, Result& r, F&& after) {
+  // The world refuses a non-finite write and reports it as a "non_finite"
+  // event (freezing the object): such a run's error would mean nothing.
+  bool non_finite = false;
+  w.add_observer([&](const Event& e) { non_finite = non_finite || e.type == "non_finite"; });
+  w.start();
+  const double t0 = cpu_now();
+  for (std::uint64_t i = 1; i <= n; ++i) {
+    w.step();
+    after(i);
+  }
+  r.cpu_seconds = cpu_now() - t0;
+  r.steps = n;
+  r.sim_seconds = double(n) * w.dt();
+  r.finite = !non_finite && std::isfinite(r.error);
+}
+
+// A column read by slot: cheap enough to sit in the per-step comparison.
+template <class T>
+const T& read(const World& w, ObjectId o, std::string_view property) {
+  return w.view().column<T>(property)[o.index];
+}
+
+// --- quaternions (w, x, y, z), the world's convention -------------------------------
+
+Quat conj(Quat q) {
+  return {q.w, -q.x, -q.y, -q.z};
+}
+Quat normalised(Quat q) {
+  const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  return {q.w / n, q.x / n, q.y / n, q.z / n};
+}
+/// Angle of the rotation taking a to b, rad, in [0, pi].
+double rotation_between(Quat a, Quat b) {
+  const Quat d = conj(a) * b;
+  const double v = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+  return 2 * std::atan2(v, std::abs(d.w));
+}
+
+// --- the tumbling box's reference: Euler's equations in the body frame ----------------
+
+struct RigidState {
+  Vec3 w;  // angular velocity, body frame
+  Quat q;  // body to world
+};
+
+RigidState rigid_rate(const RigidState& s, Vec3 inertia) {
+  const Vec3 w = s.w;
+  const Vec3 dw{(inertia.y - inertia.z) / inertia.x * w.y * w.z,
+                (inertia.z - inertia.x) / inertia.y * w.z * w.x,
+                (inertia.x - inertia.y) / inertia.z * w.x * w.y};
+  const Quat dq = s.q * Quat{0, w.x, w.y, w.z};
+  return {dw, {0.5 * dq.w, 0.5 * dq.x, 0.5 * dq.y, 0.5 * dq.z}};
+}
+
+RigidState add(const RigidState& s, const RigidState& d, double h) {
+  return {s.w + d.w * h,
+          {s.q.w + d.q.w * h, s.q.x + d.q.x * h, s.q.y + d.q.y * h, s.q.z + d.q.z * h}};
+}
+
+RigidState rk4(const RigidState& s, Vec3 inertia, double h) {
+  const RigidState k1 = rigid_rate(s, inertia);
+  const RigidState k2 = rigid_rate(add(s, k1, h / 2), inertia);
+  const RigidState k3 = rigid_rate(add(s, k2, h / 2), inertia);
+  const RigidState k4 = rigid_rate(add(s, k3, h), inertia);
+  RigidState out = s;
+  out.w += (k1.w + 2.0 * k2.w + 2.0 * k3.w + k4.w) * (h / 6);
+  out.q = normalised({s.q.w + (k1.q.w + 2 * k2.q.w + 2 * k3.q.w + k4.q.w) * h / 6,
+                      s.q.x + (k1.q.x + 2 * k2.q.x + 2 * k3.q.x + k4.q.x) * h / 6,
+                      s.q.y + (k1.q.y + 2 * k2.q.y + 2 * k3.q.y + k4.q.y) * h / 6,
+                      s.q.z + (k1.q.z + 2 * k2.q.z + 2 * k3.q.z + k4.q.z) * h / 6});
+  return out;
+}
+
+/// Substeps of at most h that divide dt exactly.
+int substeps_within(double dt, double h) {
+  return std::max(1, int(std::ceil(dt / h - 1e-9)));
+}
+
+// --- magnets -----------------------------------------------------------------------------
+
+constexpr double kMagnetLength = 0.1, kMagnetPole = 20.0, kMagnetMass = 0.05, kMagnetStart = 0.12;
+
+}  // namespace
+
+bool rigid_substeps_supported() {
+  const auto& k = rigid::RigidBodyConfig::keys();
+  return std::find(k.begin(), k.end(), "substeps") != k.end();
+}
+
+WorldDef world_def(double dt, const Method& m, bool gravity) {
+  WorldDef def;
+  def.dt = dt;
+  auto& rb = def.settings["rigid_body"];
+  rb.set("solver", m.solver);
+  rb.set("iterations", std::int64_t(m.iterations));
+  if (m.rigid_substeps != 1 && rigid_substeps_supported())
+    rb.set("substeps", std::int64_t(m.rigid_substeps));
+  def.settings["electricity"].set("substeps", std::int64_t(m.electricity_substeps));
+  if (!gravity) def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
+  return def;
+}
+
+Result run_free_fall(double dt, const Method& m, double seconds) {
+  Sim s(world_def(dt, m));
+  const FreeFall f = build_free_fall(*s, 10.0);
+  Result r;
+  run_timed(*s, steps_for(seconds, dt), r, [&](std::uint64_t i) {
+    const double t = double(i) * dt;
+    const double exact = f.start.y - 0.5 * kG * t * t;
+    r.error = std::max(r.error, std::abs(read<Vec3>(*s, f.ball, "position").y - exact));
+  });
+  return r;
+}
+
+std::vector<double> pendulum_reference(double k, double theta0, double dt, std::size_t n,
+                                       double h) {
+  std::vector<double> out(n + 1);
+  const int sub = substeps_within(dt, h);
+  const double hs = dt / sub;
+  double th = theta0, om = 0;
+  out[0] = th;
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (int j = 0; j < sub; ++j) {
+      const double k1t = om, k1o = -k * std::sin(th);
+      const double k2t = om + hs / 2 * k1o, k2o = -k * std::sin(th + hs / 2 * k1t);
+      const double k3t = om + hs / 2 * k2o, k3o = -k * std::sin(th + hs / 2 * k2t);
+      const double k4t = om + hs * k3o, k4o = -k * std::sin(th + hs * k3t);
+      th += hs / 6 * (k1t + 2 * k2t + 2 * k3t + k4t);
+      om += hs / 6 * (k1o + 2 * k2o + 2 * k3o + k4o);
+    }
+    out[i] = th;
+  }
+  return out;
+}
+
+Result run_pendulum(double dt, const Method& m, double theta0, double seconds) {
+  Sim s(world_def(dt, m));
+  const BarPendulum p = build_bar_pendulum(*s, 1.0, theta0);
+  // Compound pendulum: I about the pivot, d from pivot to centre of mass.
+  const double d = p.length / 2;
+  const double inertia = p.mass * (p.length * p.length + p.width * p.width) / 12 + p.mass * d * d;
+  const std::uint64_t n = steps_for(seconds, dt);
+  const std::vector<double> ref = pendulum_reference(p.mass * kG * d / inertia, theta0, dt, n);
+  Result r;
+  run_timed(*s, n, r, [&](std::uint64_t i) {
+    const Vec3 c = read<Vec3>(*s, p.bar, "position");
+    r.error = std::max(r.error, std::abs(std::atan2(c.x, -c.y) - ref[i]));
+  });
+  return r;
+}
+
+Result run_tumbling_box(double dt, const Method& m, double seconds) {
+  Sim s(world_def(dt, m, /*gravity=*/false));
+  const Vec3 size{0.3, 0.2, 0.1};
+  const double mass = 1.0;
+  const Vec3 inertia{mass * (size.y * size.y + size.z * size.z) / 12,
+                     mass * (size.x * size.x + size.z * size.z) / 12,
+                     mass * (size.x * size.x + size.y * size.y) / 12};
+  // Near the intermediate (y) axis: the small x and z parts grow at about
+  // 2.9 /s and the box flips over about 2 s in; the run goes through it.
+  const Vec3 w0{0.05, 6.0, 0.05};
+  const ObjectId box = add_box(*s, {0, 0, 0}, size, mass, Quat{}, "box");
+  s->set(box, "angular_velocity", w0);
+
+  const std::uint64_t n = steps_for(seconds, dt);
+  std::vector<Quat> ref(n + 1);
+  RigidState st{w0, Quat{}};  // body frame = world frame at the start
+  ref[0] = st.q;
+  const int sub = substeps_within(dt, 1e-4);
+  for (std::uint64_t i = 1; i <= n; ++i) {
+    for (int j = 0; j < sub; ++j) st = rk4(st, inertia, dt / sub);
+    ref[i] = st.q;
+  }
+
+  auto energy_momentum = [&](Quat q, Vec3 w_world) {
+    const Vec3 wb = rotate(conj(q), w_world);
+    const Vec3 lb{inertia.x * wb.x, inertia.y * wb.y, inertia.z * wb.z};
+    return std::pair{0.5 * dot(wb, lb), rotate(q, lb)};
+  };
+  const auto [e0, l0] = energy_momentum(Quat{}, w0);
+  Result r;
+  r.energy_drift = r.momentum_drift = 0;
+  run_timed(*s, n, r, [&](std::uint64_t i) {
+    const Quat q = read<Quat>(*s, box, "orientation");
+    r.error = std::max(r.error, rotation_between(q, ref[i]));
+    const auto [e, l] = energy_momentum(q, read<Vec3>(*s, box, "angular_velocity"));
+    r.energy_drift = std::max(r.energy_drift, std::abs(e - e0) / e0);
+    r.momentum_drift = std::max(r.momentum_drift, length(l - l0) / length(l0));
+  });
+  return r;
+}
+
+namespace {
+constexpr double kOrbitG = 20, kOrbitM1 = 3, kOrbitM2 = 1, kOrbitD = 2;
+}
+
+double orbit_period() {
+  return 2 * kPi * std::sqrt(kOrbitD * kOrbitD * kOrbitD / (kOrbitG * (kOrbitM1 + kOrbitM2)));
+}
+
+Result run_orbit(double dt, const Method& m, int orbits) {
+  WorldDef def = world_def(dt, m);
+  def.use = {{"gravity", "gravity.nbody"}};
+  def.settings["gravity.nbody"].set("G", kOrbitG);
+  def.settings["gravity.nbody"].set("softening", 0.0);
+  Sim s(def);
+  const double M = kOrbitM1 + kOrbitM2, d = kOrbitD;
+  // Relative speed sqrt(G M / d), shared so that the total momentum is zero.
+  const double vrel = std::sqrt(kOrbitG * M / d);
+  const ObjectId a = add_sphere(*s, {-d * kOrbitM2 / M, 0, 0}, 0.05, kOrbitM1, "a");
+  const ObjectId b = add_sphere(*s, {d * kOrbitM1 / M, 0, 0}, 0.05, kOrbitM2, "b");
+  s->set(a, "velocity", Vec3{0, -vrel * kOrbitM2 / M, 0});
+  s->set(b, "velocity", Vec3{0, vrel * kOrbitM1 / M, 0});
+  auto energy = [&] {
+    const Vec3 va = read<Vec3>(*s, a, "velocity"), vb = read<Vec3>(*s, b, "velocity");
+    const double r = length(read<Vec3>(*s, b, "position") - read<Vec3>(*s, a, "position"));
+    return 0.5 * kOrbitM1 * dot(va, va) + 0.5 * kOrbitM2 * dot(vb, vb) -
+           kOrbitG * kOrbitM1 * kOrbitM2 / r;
+  };
+  const double e0 = 0.5 * kOrbitM1 * std::pow(vrel * kOrbitM2 / M, 2) +
+                    0.5 * kOrbitM2 * std::pow(vrel * kOrbitM1 / M, 2) -
+                    kOrbitG * kOrbitM1 * kOrbitM2 / d;
+  const std::uint64_t n = steps_for(orbits * orbit_period(), dt);
+  Result r;
+  r.energy_drift = 0;
+  run_timed(*s, n, r, [&](std::uint64_t i) {
+    r.energy_drift = std::max(r.energy_drift, std::abs(energy() - e0) / std::abs(e0));
+    if (i == n) {
+      const double phase = 2 * kPi * double(i) * dt / orbit_period();
+      const Vec3 exact{d * std::cos(phase), d * std::sin(phase), 0};
+      const Vec3 sep = read<Vec3>(*s, b, "position") - read<Vec3>(*s, a, "position");
+      r.error = length(sep - exact) / d;
+    }
+  });
+  return r;
+}
+
+Result run_rl(double dt, const Method& m) {
+  Sim s(world_def(dt, m));
+  World& w = *s;
+  const double e = 6.0, rb = 0.1, rc = 5.9, l = 0.06, wire_r = 0.01;
+  const double r_total = rb + rc + 2 * wire_r, tau = l / r_total;
+  const ObjectId battery = w.create("battery");
+  w.set(battery, "emf", e);
+  w.set(battery, "internal_resistance", rb);
+  const ObjectId coil = w.create("coil");
+  w.set(coil, "inductance", l);
+  w.set(coil, "resistance", rc);
+  for (auto [name, from, ft, to, tt] :
+       {std::tuple{"w1", battery, 1, coil, 0}, std::tuple{"w2", coil, 1, battery, 0}}) {
+    const ObjectId id = w.create(name);
+    w.set(id, "wire_from", from);
+    w.set(id, "wire_from_terminal", std::int64_t(ft));
+    w.set(id, "wire_to", to);
+    w.set(id, "wire_to_terminal", std::int64_t(tt));
+    w.set(id, "resistance", wire_r);
+  }
+  Result r;
+  const double i_inf = e / r_total;
+  run_timed(w, steps_for(5 * tau, dt) + 1, r, [&](std::uint64_t i) {
+    const double t = double(i) * dt;
+    const double exact = i_inf * (1 - std::exp(-t / tau));
+    r.error = std::max(r.error, std::abs(read<double>(w, coil, "current") - exact) / i_inf);
+  });
+  return r;
+}
+
+double magnet_force(double x) {
+  // Written out from docs/magnetism.md rather than called, so that the
+  // reference does not share a slip with the resolver: poles +q and -q at
+  // +-s/2 along each bar's axis, force q1 q2 mu0/(4 pi) r / (r^2 + eps^2)^1.5.
+  const double s = magnetism::kMagneticLengthRatio * kMagnetLength;
+  const double eps = magnetism::MagneticForces::kDefaultSoftening;
+  const double mu = 1.25663706212e-6 / (4 * kPi);
+  // Fixed bar, axis +x: north at +s/2, south at -s/2. Free bar, axis -x
+  // (turned half round): north at x - s/2, south at x + s/2.
+  const std::array<std::pair<double, double>, 2> fixed = {
+      {{s / 2, kMagnetPole}, {-s / 2, -kMagnetPole}}};
+  const std::array<std::pair<double, double>, 2> free = {
+      {{x - s / 2, kMagnetPole}, {x + s / 2, -kMagnetPole}}};
+  double f = 0;
+  for (const auto& [xf, qf] : fixed)
+    for (const auto& [xm, qm] : free) {
+      const double r = xm - xf;
+      f += mu * qf * qm * r / std::pow(r * r + eps * eps, 1.5);
+    }
+  return f;
+}
+
+Result run_magnets(double dt, const Method& m, double seconds) {
+  Sim s(world_def(dt, m, /*gravity=*/false));
+  World& w = *s;
+  const PropertyRegistry& reg = w.properties();
+  auto magnet = [&](const std::string& name, double x, double angle) {
+    const ObjectId id = w.create(name);
+    w.set(id, "position", Vec3{x, 0, 0});
+    w.set(id, "orientation", Quat::from_angle_z(angle));
+    w.set(id, "shape", *reg.enum_value(reg.id("shape"), "box"));
+    w.set(id, "size", Vec3{kMagnetLength, 0.02, 0.02});
+    w.set(id, magnetism::prop::kMagnet, EnumValue{std::int32_t(magnetism::MagnetKind::Permanent)});
+    w.set(id, magnetism::prop::kPoleStrength, kMagnetPole);
+    return id;
+  };
+  magnet("fixed", 0, 0);  // no mass: the rigid body does not move it
+  const ObjectId mover = magnet("free", kMagnetStart, kPi);
+  w.set(mover, "mass", kMagnetMass);
+
+  const std::uint64_t n = steps_for(seconds, dt);
+  std::vector<double> ref(n + 1);
+  {
+    const int sub = substeps_within(dt, 1e-5);
+    const double h = dt / sub;
+    double x = kMagnetStart, v = 0;
+    ref[0] = x;
+    auto acc = [](double p) { return magnet_force(p) / kMagnetMass; };
+    for (std::uint64_t i = 1; i <= n; ++i) {
+      for (int j = 0; j < sub; ++j) {
+        const double k1x = v, k1v = acc(x);
+        const double k2x = v + h / 2 * k1v, k2v = acc(x + h / 2 * k1x);
+        const double k3x = v + h / 2 * k2v, k3v = acc(x + h / 2 * k2x);
+        const double k4x = v + h * k3v, k4v = acc(x + h * k3x);
+        x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
+        v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+      }
+      ref[i] = x;
+    }
+  }
+  Result r;
+  run_timed(w, n, r, [&](std::uint64_t i) {
+    r.error = std::max(r.error, std::abs(read<Vec3>(w, mover, "position").x - ref[i]));
+  });
+  return r;
+}
+
+}  // namespace alloy::scenes::analytic

@@ -1,0 +1,95 @@
+// Scenes with a known answer, for work-precision measurements: each is built
+// through the world's editing API with every native plugin (as a Lua scene
+// would be), run at a given step and solver setting, and compared along the
+// way with its exact solution or with a fine RK4 of its equations of motion.
+// bench/work_precision.cpp sweeps them; tests/bench asserts the orders of
+// convergence they show.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/world.hpp"
+
+namespace alloy::scenes::analytic {
+
+/// The knobs a work-precision sweep turns besides the step.
+struct Method {
+  std::string solver =
+      "quick";             ///< rigid_body solver: "quick" (dWorldQuickStep) or "step" (dWorldStep)
+  int iterations = 40;     ///< QuickStep iterations
+  int rigid_substeps = 1;  ///< rigid_body `substeps` (ignored when the resolver has no such key)
+  int electricity_substeps = 4;  ///< electricity `substeps`
+};
+
+/// Whether the rigid body resolver accepts a `substeps` setting.
+bool rigid_substeps_supported();
+
+/// A world definition at step `dt` with the method's settings; `gravity`
+/// false sets uniform gravity to zero.
+WorldDef world_def(double dt, const Method& method, bool gravity = true);
+
+/// One run of a scene.
+struct Result {
+  double error = 0;        ///< the scene's error measure (see each scene)
+  double cpu_seconds = 0;  ///< CPU time of the stepping loop (no set-up, no reference)
+  double sim_seconds = 0;  ///< simulated time covered
+  std::uint64_t steps = 0;
+  double energy_drift = -1;    ///< largest |E - E0| / |E0| over the run; < 0: not measured
+  double momentum_drift = -1;  ///< largest |L - L0| / |L0| (angular momentum); < 0: not measured
+  bool finite = true;          ///< no non-finite value was written (nor is the error one)
+  double cost() const { return sim_seconds > 0 ? cpu_seconds / sim_seconds : 0; }
+};
+
+// --- the scenes ----------------------------------------------------------------------
+// Each run_* builds a fresh world, starts it (untimed), steps it for its
+// simulated time while comparing with the reference, and returns the result.
+
+/// A 0.1 m ball dropped from rest at 10 m for `seconds`; error: the largest
+/// |y - (y0 - g t^2 / 2)| over the run, m. Semi-implicit Euler's error is
+/// g t dt / 2: first order.
+Result run_free_fall(double dt, const Method& m, double seconds = 1.0);
+
+/// The 1 m bar pendulum of rigid_scenes (planar bar on a hinge) released at
+/// theta0 rad; error: the largest |theta - theta_ref| over the run, rad, where
+/// theta_ref is a fine RK4 of theta'' = -(m g d / I) sin theta.
+Result run_pendulum(double dt, const Method& m, double theta0, double seconds = 5.0);
+
+/// A free 0.3 x 0.2 x 0.1 m box (I1 < I2 < I3) spun near its intermediate
+/// axis with no gravity: it flips over (Dzhanibekov) about 2 s in. Error: the largest rotation
+/// angle between its orientation and a fine RK4 of Euler's equations with the
+/// quaternion, rad; energy and angular-momentum drift of the run.
+Result run_tumbling_box(double dt, const Method& m, double seconds = 3.0);
+
+/// Two spheres (3 kg and 1 kg, 2 m apart, G = 20) on a circular orbit about
+/// their centre of mass under gravity.nbody; error: |r - r_Kepler| / |r| of
+/// the separation after `orbits` orbits; energy drift over the run.
+Result run_orbit(double dt, const Method& m, int orbits = 2);
+/// The orbit's period, s.
+double orbit_period();
+
+/// A battery (6 V, 0.1 Ohm) wired to a coil (60 mH, 5.9 Ohm) with 10 mOhm
+/// wires; error: the largest |I - E/R (1 - e^(-t/tau))| over five time
+/// constants, relative to E/R.
+Result run_rl(double dt, const Method& m);
+
+/// Two permanent bar magnets (10 x 2 x 2 cm, 20 A*m poles) on the x axis with
+/// like poles facing, no gravity: one has no mass (it stays), the other
+/// (50 g, 12 cm away) is pushed away along x. Error: the largest |x - x_ref|
+/// over the run, m, where x_ref is a fine RK4 of m x'' = F(x) with F the pole
+/// model's softened force law written out here.
+Result run_magnets(double dt, const Method& m, double seconds = 1.0);
+
+// --- references (exposed for tests) -----------------------------------------------------
+
+/// theta at times 0, dt, ..., n dt of theta'' = -k sin theta, theta(0) = theta0,
+/// theta'(0) = 0, by RK4 with at most `h` per substep.
+std::vector<double> pendulum_reference(double k, double theta0, double dt, std::size_t n,
+                                       double h = 1e-4);
+
+/// The axial force on the free magnet at centre x from the fixed one at the
+/// origin (like poles facing), N: the pole model's four pole pairs.
+double magnet_force(double x);
+
+}  // namespace alloy::scenes::analytic
