@@ -4,7 +4,9 @@
 #
 #   make run     build, then run the main job (the bundled scene, headless)
 #   make test    build, then run the whole test suite through ctest
-#   make bench   build, then run the benchmarks
+#   make bench   build, then run every benchmark and regenerate the tables
+#                and plots of docs/performance.md (QUICK=1: a short smoke run
+#                that writes into the build directory only)
 
 BUILD      ?= build
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
@@ -30,7 +32,7 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 bench: build
-	set -e; for b in $(BUILD)/bench/alloy_bench_*; do [ -x "$$b" ] && "$$b"; done
+	bench/run_all.sh $(BUILD) $(if $(QUICK),--quick)
 
 # Installs only what is missing, so a machine that has everything runs no apt.
 deps:
