@@ -9,15 +9,40 @@
 
 #include <cstdint>
 #include <span>
+#include <type_traits>
 
 #include "runtime/property_store.hpp"
 #include "runtime/scope.hpp"
 
 namespace alloy {
 class ResolverAccess;
-}
 
-namespace alloy {
+namespace detail {
+/// One branch for the whole value: x - x is 0 for every finite x and NaN for
+/// NaN and +-Inf, and a sum with a NaN is NaN. Exact IEEE arithmetic (the
+/// project builds without -ffast-math); integers, strings and refs are always
+/// "finite".
+template <class T>
+inline bool finite_write(const T& v) {
+  if constexpr (std::is_same_v<T, double>)
+    return v - v == 0;
+  else if constexpr (std::is_same_v<T, Vec3>)
+    return (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0;
+  else if constexpr (std::is_same_v<T, Quat>)
+    return (v.w - v.w) + (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0;
+  else
+    return true;
+}
+/// A resolver wrote a non-finite value: refuse it, record a "non_finite"
+/// event naming the resolver, object and property, and freeze the object
+/// (World::frozen). `components` are the refused value's numbers. Out of line
+/// and cold: it runs only when a simulation has already gone wrong.
+void non_finite_write(ResolverAccess* access, std::uint32_t slot, PropertyId property,
+                      const double* components, int count);
+/// A write outside the writer's scope: silently refused if the object is
+/// frozen (a resolver may still hold it through a reference), else AccessError.
+void out_of_scope_write(ResolverAccess* access, std::uint32_t slot);
+}  // namespace detail
 
 /// Read-only view of one column. Cheap to copy; valid for the world's lifetime.
 /// A view handed to a stage of an area sees only the objects in that area.
@@ -58,7 +83,8 @@ class ColumnView {
 };
 
 /// Write access to one column that a resolver declared. Setting a value that
-/// differs from the stored one moves the column's change counter.
+/// differs from the stored one moves the column's change counter. A
+/// non-finite number (NaN, +-Inf) is never stored: see detail::non_finite_write.
 template <class T>
 class ColumnWriter {
  public:
@@ -70,7 +96,14 @@ class ColumnWriter {
   /// Writes `value` for the object in `slot`; the object starts carrying the
   /// property if it did not.
   void set(std::uint32_t slot, const T& value) {
-    if (scope_ && !scope_->contains(slot)) out_of_scope(slot);
+    if (scope_ && !scope_->contains(slot)) [[unlikely]] {
+      detail::out_of_scope_write(access_, slot);
+      return;
+    }
+    if (!detail::finite_write(value)) [[unlikely]] {
+      refuse(slot, value);
+      return;
+    }
     if (!c_->has(slot)) {
       c_->values_[slot] = value;
       c_->mark_present(slot, true);
@@ -83,7 +116,10 @@ class ColumnWriter {
   /// The object in `slot` stops carrying the property (a structural change).
   void erase(std::uint32_t slot) {
     if (!c_->has(slot)) return;
-    if (scope_ && !scope_->contains(slot)) out_of_scope(slot);
+    if (scope_ && !scope_->contains(slot)) [[unlikely]] {
+      detail::out_of_scope_write(access_, slot);
+      return;
+    }
     c_->values_[slot] = T{};
     c_->mark_present(slot, false);
     ++c_->version_;
@@ -96,13 +132,22 @@ class ColumnWriter {
 
  private:
   friend class ResolverAccess;
-  ColumnWriter(Column<T>* column, const Scope* scope) : c_(column), scope_(scope) {}
-  [[noreturn]] void out_of_scope(std::uint32_t slot) const {
-    throw AccessError("a resolver of an area wrote object #" + std::to_string(slot) +
-                      ", which is outside its area");
+  ColumnWriter(Column<T>* column, const Scope* scope, ResolverAccess* access)
+      : c_(column), scope_(scope), access_(access) {}
+  [[gnu::noinline, gnu::cold]] void refuse(std::uint32_t slot, const T& value) const {
+    if constexpr (std::is_same_v<T, double>) {
+      detail::non_finite_write(access_, slot, c_->id(), &value, 1);
+    } else if constexpr (std::is_same_v<T, Vec3>) {
+      const double c[3] = {value.x, value.y, value.z};
+      detail::non_finite_write(access_, slot, c_->id(), c, 3);
+    } else if constexpr (std::is_same_v<T, Quat>) {
+      const double c[4] = {value.w, value.x, value.y, value.z};
+      detail::non_finite_write(access_, slot, c_->id(), c, 4);
+    }
   }
   Column<T>* c_ = nullptr;
   const Scope* scope_ = nullptr;
+  ResolverAccess* access_ = nullptr;
 };
 
 }  // namespace alloy

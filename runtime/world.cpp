@@ -46,6 +46,68 @@ void WorldView::emit(Event e) const {
   world_.pending_.push_back(std::move(e));
 }
 
+// --- non-finite writes ---------------------------------------------------------
+
+namespace detail {
+
+void non_finite_write(ResolverAccess* access, std::uint32_t slot, PropertyId property,
+                      const double* components, int count) {
+  if (!access)
+    throw AccessError("a column writer with no resolver behind it wrote a non-finite value");
+  World& w = access->mutable_world_;
+  const ObjectId id = w.store_.id_at(slot);
+  if (id.is_null() || w.frozen(id)) return;  // refused; one event per freeze
+  w.frozen_.insert(std::upper_bound(w.frozen_.begin(), w.frozen_.end(), id,
+                                    [](ObjectId a, ObjectId b) { return a.index < b.index; }),
+                   id);
+  w.frozen_changed_ = true;
+  static constexpr const char* kVec[] = {"x", "y", "z"};
+  static constexpr const char* kQuat[] = {"w", "x", "y", "z"};
+  Event e{.type = "non_finite",
+          .source = access->stage_,
+          .a = id,
+          .text = w.properties().def(property).name};
+  for (int i = 0; i < count; ++i)
+    e.values.emplace_back(count == 1 ? "value" : count == 3 ? kVec[i] : kQuat[i], components[i]);
+  w.pending_.push_back(std::move(e));
+}
+
+void out_of_scope_write(ResolverAccess* access, std::uint32_t slot) {
+  // A frozen object is out of every scope, but a resolver may still reach it
+  // through a reference (a hinge's body): its writes are dropped, not fatal.
+  if (access && access->mutable_world_.frozen_slot(slot)) return;
+  throw AccessError("a resolver of an area wrote object #" + std::to_string(slot) +
+                    ", which is outside its area");
+}
+
+}  // namespace detail
+
+std::string frozen_message(const World& world, const Event& e) {
+  std::string value;
+  char buf[32];
+  for (const auto& [k, v] : e.values) {
+    std::snprintf(buf, sizeof buf, "%g", v);
+    value += (value.empty() ? "" : ", ") + std::string(buf);
+  }
+  if (e.values.size() > 1) value = "{" + value + "}";
+  return "frozen: " + world.describe(e.a) + ": " + e.source + " wrote " + e.text + " = " + value;
+}
+
+bool World::frozen(ObjectId id) const {
+  return std::find(frozen_.begin(), frozen_.end(), id) != frozen_.end();
+}
+
+bool World::frozen_slot(std::uint32_t slot) const {
+  for (ObjectId id : frozen_)
+    if (id.index == slot) return true;
+  return false;
+}
+
+void World::unfreeze(ObjectId id) {
+  store_.check_alive(id);
+  if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+}
+
 // --- World -------------------------------------------------------------------
 
 World::World(PluginRegistry& plugins, WorldDef def)
@@ -93,7 +155,10 @@ ObjectId World::create(const std::string& name) {
   return id;
 }
 
-void World::destroy(ObjectId id) { store_.destroy(id); }
+void World::destroy(ObjectId id) {
+  store_.destroy(id);
+  if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+}
 
 void World::set(ObjectId id, std::string_view property, const PropertyValue& value) {
   set(id, properties().id(property), value);
@@ -332,8 +397,18 @@ void World::publish_phase() {
 // --- structure and activation ----------------------------------------------------
 
 void World::sync_structure() {
-  if (synced_ && seen_structure_ == store_.structure_version()) return;
+  if (synced_ && seen_structure_ == store_.structure_version() && !frozen_changed_) return;
   synced_ = true;
+  if (frozen_changed_ || !frozen_.empty()) {
+    // Frozen objects leave every scope: global stages act on live_ (every
+    // other object) while any is frozen, areas and their outsides drop them.
+    frozen_changed_ = false;
+    refresh_live();
+    refresh_area_scopes();
+    for (auto& s : slots_)
+      if (s->area < 0)
+        if (const PluginDef* d = plugins_.find(s->info.name)) s->scope = global_scope(*d);
+  }
   // A resolver's build may give objects a column that makes another plugin
   // needed (gravity publishes `gravity`); settle that in a few rounds. Only
   // the first round rebuilds every resolver: later rounds see memberships that
@@ -414,7 +489,7 @@ const Scope* World::global_scope(const PluginDef& def) {
         break;
       }
     }
-  if (excluded.empty()) return nullptr;
+  if (excluded.empty()) return frozen_.empty() ? nullptr : &live_;
   Outside& o = outside_[def.info.name];
   o.areas = std::move(excluded);
   refresh_outside(o);
@@ -531,7 +606,7 @@ void World::refresh_outside(Outside& o) const {
   sc.in_.assign(store_.slot_count(), 0);
   sc.slots_.clear();
   for (std::uint32_t slot = 0; slot < store_.slot_count(); ++slot) {
-    if (store_.id_at(slot).is_null()) continue;
+    if (store_.id_at(slot).is_null() || (!frozen_.empty() && frozen_slot(slot))) continue;
     const int a = slot < area_of_slot_.size() ? area_of_slot_[slot] : -1;
     if (a >= 0 && listed_area(o.areas, a)) continue;
     sc.in_[slot] = 1;
@@ -569,16 +644,37 @@ bool World::assign_areas() {
     changed = true;
   }
   if (!changed) return false;
+  refresh_area_scopes();
+  return true;
+}
+
+void World::refresh_area_scopes() {
+  const std::size_t n = area_of_slot_.size();
+  std::vector<std::uint8_t> frozen(n, 0);
+  for (ObjectId id : frozen_)
+    if (id.index < n) frozen[id.index] = 1;
   for (std::size_t i = 0; i < areas_.size(); ++i) {
     Scope& sc = areas_[i].scope;
     sc.in_.assign(n, 0);
     sc.slots_.clear();
     for (std::uint32_t slot = 0; slot < n; ++slot)
-      if (area_of_slot_[slot] == int(i)) sc.in_[slot] = 1, sc.slots_.push_back(slot);
+      if (area_of_slot_[slot] == int(i) && !frozen[slot])
+        sc.in_[slot] = 1, sc.slots_.push_back(slot);
     ++sc.version_;
   }
   for (auto& [name, o] : outside_) refresh_outside(o);
-  return true;
+}
+
+void World::refresh_live() {
+  const std::size_t n = store_.slot_count();
+  live_.in_.assign(n, 0);
+  live_.slots_.clear();
+  for (std::uint32_t slot = 0; slot < n; ++slot)
+    if (!store_.id_at(slot).is_null()) live_.in_[slot] = 1;
+  for (ObjectId id : frozen_) live_.in_[id.index] = 0;
+  for (std::uint32_t slot = 0; slot < n; ++slot)
+    if (live_.in_[slot]) live_.slots_.push_back(slot);
+  ++live_.version_;
 }
 
 void World::rescope() {

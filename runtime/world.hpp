@@ -104,6 +104,9 @@ class ResolverAccess : public WorldView {
   }
 
  private:
+  friend void detail::non_finite_write(ResolverAccess*, std::uint32_t, PropertyId, const double*,
+                                       int);
+  friend void detail::out_of_scope_write(ResolverAccess*, std::uint32_t);
   World& mutable_world_;
   const std::string& stage_;
   const std::vector<PropertyId>& writes_;
@@ -167,6 +170,22 @@ class World {
   const Profile& profile() const { return profile_; }
   WorldView view() const { return WorldView(*this); }
 
+  // --- frozen objects ------------------------------------------------------------
+  // A resolver that writes a non-finite value (NaN, +-Inf) into a property is
+  // refused (the old value stays), a "non_finite" event is published (source:
+  // the resolver's stage, a: the object, text: the property's name, values:
+  // the refused numbers), and the object is frozen: from the next structure
+  // sync (the start of the next step) it is in no stage's scope, as if it had
+  // left every area, so that each resolver rebuilds without it and the NaN
+  // cannot spread (the rigid body drops its ODE body). It keeps every
+  // property, with its last finite values.
+  bool frozen(ObjectId id) const;
+  /// Frozen objects, by slot.
+  std::vector<ObjectId> frozen_objects() const { return frozen_; }
+  /// An edit: the object rejoins every stage that wants it at the next step
+  /// (fix its properties first, or it may be frozen again).
+  void unfreeze(ObjectId id);
+
   // --- areas and swaps ---------------------------------------------------------
   /// The area an object is in, or "" (none). Updated after each advance (where
   /// the resolvers left it) and at the start of each step (where edits put it).
@@ -202,6 +221,9 @@ class World {
  private:
   friend class WorldView;
   friend class ResolverAccess;
+  friend void detail::non_finite_write(ResolverAccess*, std::uint32_t, PropertyId, const double*,
+                                       int);
+  friend void detail::out_of_scope_write(ResolverAccess*, std::uint32_t);
   friend class PluginContext;
   struct Slot;
 
@@ -226,7 +248,10 @@ class World {
     Scope scope;
   };
   bool assign_areas();
+  void refresh_area_scopes();
+  void refresh_live();
   void rescope();
+  bool frozen_slot(std::uint32_t slot) const;
   void refresh_outside(Outside& o) const;
   static bool listed_area(const std::vector<int>& v, int a) {
     return std::find(v.begin(), v.end(), a) != v.end();
@@ -272,12 +297,19 @@ class World {
   bool synced_ = false;
   bool primed_ = false;  // start() has primed the pipeline
   std::uint64_t seen_structure_ = 0;
+  std::vector<ObjectId> frozen_;  // by slot
+  bool frozen_changed_ = false;   // since the last structure sync
+  Scope live_;  // every object not frozen: the scope of global stages while any is frozen
   const std::string* current_stage_ = nullptr;  // for Event::source
   mutable std::vector<Event> pending_;
   std::vector<Event> published_;
   std::vector<Observer> observers_;
   Profile profile_;
 };
+
+/// The narrated line of a "non_finite" event: "frozen: ball: rigid_body wrote
+/// position = {nan, 0.5, 1}".
+std::string frozen_message(const World& world, const Event& e);
 
 // ---------------------------------------------------------------------------
 
@@ -300,7 +332,7 @@ ColumnView<T> WorldView::column(PropertyId id) const {
 template <class T>
 ColumnWriter<T> ResolverAccess::writer(PropertyId id) {
   for (PropertyId w : writes_)
-    if (w == id) return ColumnWriter<T>(&mutable_world_.store_.typed_mut<T>(id), scope_);
+    if (w == id) return ColumnWriter<T>(&mutable_world_.store_.typed_mut<T>(id), scope_, this);
   throw AccessError("resolver '" + stage_ + "' may not write '" + properties().def(id).name +
                     "': it is not in the resolver's declared writes");
 }

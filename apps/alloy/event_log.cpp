@@ -43,6 +43,13 @@ void EventLog::close() {
 
 void Narrator::narrate(const World& world, const Event& e) {
   ++counts_[e.type];
+  if (e.type == "non_finite") {  // rare and serious: always told, on its own line
+    flush();
+    char head[64];
+    std::snprintf(head, sizeof head, "step %6llu  t=%7.3f s  ", (unsigned long long)e.step, e.time);
+    out_ << head << frozen_message(world, e) << '\n';
+    return;
+  }
   const auto key = std::make_tuple(e.type, e.a, e.b);
   auto it = last_seen_.find(key);
   const bool novel = it == last_seen_.end() || e.time - it->second >= 1.0;
