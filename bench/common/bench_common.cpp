@@ -478,21 +478,7 @@ void write_svg(const Plot& plot, const fs::path& path) {
   }
   o << "</g>\n";
 
-  // Markers: rings around the point, the label beside it (left of it near
-  // the right edge so that it stays inside the plot).
-  for (const auto& m : plot.markers) {
-    if (!ax.usable(m.x) || !ay.usable(m.y)) continue;
-    const double x = ax.px(m.x), y = ay.px(m.y);
-    o << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y)
-      << "\" r=\"10\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/>\n";
-    const double tw = 7.5 * double(m.label.size());
-    const bool left = x + 14 + tw > x1;
-    const double ty = y - 14 < y1 + 12 ? y + 24 : y - 14;
-    o << "<text x=\"" << num(left ? x - 12 : x + 12) << "\" y=\"" << num(ty) << "\" text-anchor=\""
-      << (left ? "end" : "start") << "\" font-weight=\"bold\" stroke=\"white\" stroke-width=\"3\" "
-      << "paint-order=\"stroke\">" << esc(m.label) << "</text>\n";
-  }
-
+  double leg_x = 0, leg_y = 0, leg_w = 0, leg_h = 0;  // the legend's box, if any
   // Legend in the corner of the plot with the fewest points under it.
   if (!plot.series.empty()) {
     std::size_t longest = 0;
@@ -515,6 +501,7 @@ void write_svg(const Plot& plot, const fs::path& path) {
       if (count < best_count) best = c, best_count = count;
     }
     const auto [lx, ly] = corners[best];
+    leg_x = lx, leg_y = ly, leg_w = lw, leg_h = lh;
     o << "<rect x=\"" << num(lx) << "\" y=\"" << num(ly) << "\" width=\"" << num(lw)
       << "\" height=\"" << num(lh)
       << "\" fill=\"white\" fill-opacity=\"0.88\" stroke=\"#888888\"/>\n";
@@ -530,6 +517,35 @@ void write_svg(const Plot& plot, const fs::path& path) {
       o << "<text x=\"" << num(lx + 38) << "\" y=\"" << num(cy + 4.5) << "\">" << esc(s.name)
         << "</text>\n";
     }
+  }
+  // Markers: rings around the point, the label beside it, at the first of
+  // four places that stays inside the plot and clear of the legend.
+  for (const auto& m : plot.markers) {
+    if (!ax.usable(m.x) || !ay.usable(m.y)) continue;
+    const double x = ax.px(m.x), y = ay.px(m.y);
+    o << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y)
+      << "\" r=\"10\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/>\n";
+    const double tw = 7.6 * double(m.label.size()), th = 14;
+    struct Place {
+      bool left;
+      double baseline;
+    };
+    const Place places[] = {{false, y - 14}, {true, y - 14}, {false, y + 24}, {true, y + 24}};
+    Place chosen = places[0];
+    for (const Place& p : places) {
+      const double bx = p.left ? x - 12 - tw : x + 12, by = p.baseline - th;
+      const bool inside = bx >= x0 && bx + tw <= x1 && by >= y1 && p.baseline <= y0;
+      const bool clear = leg_w == 0 || bx + tw < leg_x || bx > leg_x + leg_w ||
+                         p.baseline < leg_y || by > leg_y + leg_h;
+      if (inside && clear) {
+        chosen = p;
+        break;
+      }
+    }
+    o << "<text x=\"" << num(chosen.left ? x - 12 : x + 12) << "\" y=\"" << num(chosen.baseline)
+      << "\" text-anchor=\"" << (chosen.left ? "end" : "start")
+      << "\" font-weight=\"bold\" stroke=\"white\" stroke-width=\"3\" "
+      << "paint-order=\"stroke\">" << esc(m.label) << "</text>\n";
   }
   o << "</svg>\n";
 

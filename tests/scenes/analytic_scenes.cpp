@@ -274,7 +274,7 @@ Result run_orbit(double dt, const Method& m, int orbits) {
   return r;
 }
 
-Result run_rl(double dt, const Method& m) {
+Result run_rl(double dt, const Method& m, double seconds) {
   Sim s(world_def(dt, m));
   World& w = *s;
   const double e = 6.0, rb = 0.1, rc = 5.9, l = 0.06, wire_r = 0.01;
@@ -296,7 +296,7 @@ Result run_rl(double dt, const Method& m) {
   }
   Result r;
   const double i_inf = e / r_total;
-  run_timed(w, steps_for(5 * tau, dt) + 1, r, [&](std::uint64_t i) {
+  run_timed(w, steps_for(seconds, dt), r, [&](std::uint64_t i) {
     const double t = double(i) * dt;
     const double exact = i_inf * (1 - std::exp(-t / tau));
     r.error = std::max(r.error, std::abs(read<double>(w, coil, "current") - exact) / i_inf);
