@@ -1,0 +1,208 @@
+// Stress tests for numerical stability, shortened (issue 6, item 3): each
+// scene of tests/scenes/stress_scenes.hpp runs a few hundred to a few thousand
+// steps with every number, vec3 and quat property checked for NaN / Inf after
+// every step, energy that never rises above its start (nothing here is driven),
+// and drift limits scaled to the run's length. bench/stress.cpp runs the same
+// scenes for 100,000 steps and more, and reports the figures.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "tests/scenes/stress_scenes.hpp"
+
+namespace alloy::scenes::stress {
+namespace {
+
+/// Steps `steps` times, observing after each; `each` (optional) runs after
+/// every step too.
+template <class F>
+Monitor run(World& w, std::uint64_t steps, F&& each) {
+  Monitor m(w);
+  for (std::uint64_t i = 0; i < steps; ++i) {
+    w.step();
+    m.observe(w);
+    each();
+  }
+  return m;
+}
+Monitor run(World& w, std::uint64_t steps) {
+  return run(w, steps, [] {});
+}
+
+WorldDef rigid(std::initializer_list<std::pair<const char*, PropertyValue>> settings) {
+  WorldDef d;
+  for (const auto& [k, v] : settings) d.settings["rigid_body"].set(k, v);
+  return d;
+}
+
+void expect_finite(const Monitor& m) {
+  EXPECT_EQ(m.non_finite, 0u) << "first: " << m.first_non_finite;
+}
+
+/// The energy never rose above its start by more than `rel` of |E0| (ERP's
+/// push-out of a contact overlap adds a little; nothing may add more).
+void expect_no_gain(const Monitor& m, double scale, double rel = 1e-4) {
+  EXPECT_LE(m.gain(), rel * scale) << "E0 " << m.e0 << " J, max " << m.e_max << " J";
+}
+
+TEST(Stress, TwentyBoxStackStandsStill) {
+  Sim sim;
+  const Stack s = build_stack(*sim, 20, 0.2);
+  const auto start = positions(*sim, s.boxes);
+  // 10 s: a sixth of the full test's 60 s, whose criterion is 1 cm.
+  const Monitor m = run(*sim, 2400);
+  expect_finite(m);
+  expect_no_gain(m, m.e0);
+  EXPECT_LT(max_displacement(*sim, s.boxes, start), 0.01);
+  EXPECT_LT(m.speed_max, 0.5);
+}
+
+TEST(Stress, PyramidOfBaseTwentyStands) {
+  Sim sim(rigid({{"auto_disable", true}}));
+  const Pyramid p = build_pyramid(*sim, 20);
+  EXPECT_EQ(p.boxes.size(), 210u);
+  const auto start = positions(*sim, p.boxes);
+  const Monitor m = run(*sim, 400);
+  expect_finite(m);
+  expect_no_gain(m, m.e0);
+  EXPECT_LT(max_displacement(*sim, p.boxes, start), 0.01);
+}
+
+TEST(Stress, HeavyBoxOnLightOnesHoldsWithTheDirectSolver) {
+  // At 100:1 QuickStep's 40 iterations let the column collapse (bench/stress
+  // shows it); the direct LCP solve holds it.
+  Sim sim(rigid({{"solver", std::string("step")}}));
+  const HeavyOnLight s = build_heavy_on_light(*sim, 4, 100);
+  std::vector<ObjectId> all = s.light;
+  all.push_back(s.heavy);
+  const auto start = positions(*sim, all);
+  const Monitor m = run(*sim, 1200);
+  expect_finite(m);
+  expect_no_gain(m, m.e0);
+  EXPECT_LT(max_displacement(*sim, all, start), 0.005);
+}
+
+TEST(Stress, ChainAtThousandToOneHoldsWithSubsteps) {
+  // 10 links of 10 g, a 10 kg weight, released 30 degrees from hanging.
+  // Without substeps QuickStep lets it fly apart (bench/stress shows it);
+  // eight substeps hold it. (The direct solver holds it tighter but gains a
+  // little energy: 6e-4 of the swing in 5 s.)
+  Sim sim(rigid({{"substeps", std::int64_t(8)}}));
+  const Chain c = build_chain(*sim, 10, std::numbers::pi / 6, 1000, 0.1, 0.01);
+  double gap = 0;
+  const Monitor m = run(*sim, 1200, [&] { gap = std::max(gap, c.joint_gap(*sim)); });
+  expect_finite(m);
+  // Scale: the weight's swing, m g L (1 - cos 30 degrees).
+  const double swing = 10 * 9.81 * 1.05 * (1 - std::cos(std::numbers::pi / 6));
+  expect_no_gain(m, swing);
+  EXPECT_LT(gap, 2e-3) << "the chain came apart";
+}
+
+TEST(Stress, FiftyLinkChainSwingsWithoutGainingEnergy) {
+  // Released horizontal, no damping: the swing is chaotic but conservative;
+  // the solver may only lose energy. The free end whips at 25 m/s: at one
+  // substep a hinge opens by up to 6 cm in the whip, at four by 1.4 cm.
+  Sim sim(rigid({{"substeps", std::int64_t(4)}}));
+  const Chain c = build_chain(*sim, 50, std::numbers::pi / 2);
+  double gap = 0;
+  const Monitor m = run(*sim, 1200, [&] { gap = std::max(gap, c.joint_gap(*sim)); });
+  expect_finite(m);
+  const double drop = 50 * 0.1 * 9.81 * 2.5;  // the chain's centre falls up to 2.5 m
+  expect_no_gain(m, drop, 1e-3);
+  EXPECT_GT(m.ke_max, 0.3 * drop) << "it swings";
+  EXPECT_LT(gap, 0.02);
+}
+
+TEST(Stress, ThousandBodyPileStaysFinite) {
+  Sim sim(rigid({{"auto_disable", true}}));
+  build_pile(*sim, pile_layout(1000));
+  const Monitor m = run(*sim, 240);
+  expect_finite(m);
+  expect_no_gain(m, m.e0);
+  EXPECT_LT(m.speed_max, 20) << "falls about 4 m at most";
+}
+
+TEST(Stress, ProjectileTunnellingFallsWithTheStep) {
+  // 500 m/s travels 2.1 m per step at 240 Hz against a 0.1 m wall: without
+  // continuous collision detection most shots pass through. At a step short
+  // enough that the projectile cannot cross the wall plus its own diameter in
+  // one step (0.14 m: dt < 0.28 ms), none may.
+  auto tunnelled = [](double dt, int shots) {
+    int through = 0;
+    for (int k = 0; k < shots; ++k) {
+      WorldDef d;
+      d.dt = dt;
+      Sim sim(d);
+      const Shot s = build_shot(*sim, k, shots, dt);
+      const Monitor m = run(*sim, std::uint64_t(std::ceil(0.006 / dt)));
+      expect_finite(m);
+      if (s.side(*sim) > 0) ++through;
+    }
+    return through;
+  };
+  const int coarse = tunnelled(1.0 / 240, 20);
+  const int fine = tunnelled(1.0 / 7680, 20);
+  RecordProperty("tunnelled_240", coarse);
+  RecordProperty("tunnelled_7680", fine);
+  EXPECT_GT(coarse, 10);
+  EXPECT_EQ(fine, 0);
+}
+
+TEST(Stress, PackedMagnetsStayFinite) {
+  // 125 magnets of 1 cm in a 5 x 5 x 5 block (the full test: 1,000), pulling
+  // on each other with up to 40 N, 500 times their weight. At dt = 1/240 s a
+  // 1 mm gap closes within one step at 20 m/s and the block flies apart
+  // (bench/stress shows it: 37 m/s, 118 J); at 1/960 s it closes up and stays.
+  WorldDef d;
+  d.dt = 1.0 / 960;
+  Sim sim(d);
+  const MagnetPack p = build_magnet_pack(*sim, 125);
+  sim->start();
+  ASSERT_TRUE(sim->has_stage("magnetic_forces"));
+  const Monitor m = run(*sim, 360);
+  expect_finite(m);
+  EXPECT_LT(m.speed_max, 3.0) << "a packed block may close up, not fly apart";
+  EXPECT_GT(p.pole_strength, 100);
+}
+
+TEST(Stress, StiffCircuitConvergesWithoutRinging) {
+  // L / R = 1 us against a step of 4.2 ms: backward Euler must land on E / R
+  // at once and never overshoot, however often the battery switches.
+  for (std::int64_t substeps : {1, 4}) {
+    WorldDef d;
+    d.settings["electricity"].set("substeps", substeps);
+    Sim sim(d);
+    const StiffCircuit c = build_stiff_circuit(*sim, 1e-6);
+    const double h_over_tau = sim->dt() / double(substeps) / 1e-6;
+    double previous = 0;
+    bool on = true;
+    int since = 0;  // steps since the battery last switched
+    const Monitor m = run(*sim, 2400, [&] {
+      ++since;
+      const double target = on ? c.steady() : 0;
+      const double i = std::get<double>(sim->get(c.coil, "current"));
+      ASSERT_TRUE(std::isfinite(i));
+      EXPECT_LE(i, c.steady() * (1 + 1e-12)) << "overshoot";
+      EXPECT_GE(i, -1e-12 * c.steady()) << "undershoot";
+      if (on)
+        EXPECT_GE(i, previous - 1e-12) << "rings";
+      else
+        EXPECT_LE(i, previous + 1e-12) << "rings";
+      // Backward Euler divides the distance to the target by 1 + h / tau per
+      // substep: 2.4e-4 of it left after one step at one substep, 1e-12 at four.
+      const double left = std::pow(1 + h_over_tau, -double(since * substeps));
+      EXPECT_NEAR(i, target, (left * 1.01 + 1e-12) * c.steady());
+      previous = i;
+      if (sim->step_count() % 120 == 0) {  // toggle every 0.5 s
+        on = !on;
+        since = 0;
+        sim->set(c.battery, "emf", on ? c.e : 0.0);
+      }
+    });
+    expect_finite(m);
+  }
+}
+
+}  // namespace
+}  // namespace alloy::scenes::stress
