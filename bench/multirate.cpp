@@ -13,7 +13,9 @@
 // linearly in log-log between the two front points whose errors bracket a
 // multi-rate point's error, gives the single-rate cost of that error; the
 // speed-up is that cost over the multi-rate point's. A multi-rate point more
-// accurate than every single-rate run has no speed-up (shown as "-").
+// accurate than every single-rate run has no speed-up (shown as "-"). Only
+// points whose error falls when their window is halved count towards the
+// goal: an error near zero where it changes sign between windows is luck.
 //
 // Writes docs/bench/multirate.csv, multirate_doorbell.svg, multirate_motor.svg
 // and the "multirate" section of docs/performance.md.
@@ -103,14 +105,16 @@ int main(int argc, char** argv) {
   md << "\nCommand: `build/bench/alloy_bench_multirate` (or `make bench`); raw data "
         "`docs/bench/multirate.csv`. Single-rate: every stage at dt, electricity and rigid "
         "body 1 substep. Equal error: log-log interpolation of the single-rate Pareto front "
-        "at the multi-rate run's error; speed-up = that cost / the multi-rate cost.\n";
+        "at the multi-rate run's error; speed-up = that cost / the multi-rate cost; a point "
+        "counts towards the goal only if halving its window reduces its error (no lucky "
+        "crossing of zero).\n";
   bool goal_met = true;
 
   for (const Scene& scene : scenes) {
     const Rates def = scene_rates(scene.mod);
     const Measure ref = scene.measure(with(def, {.dt = 1.0 / ref_n}));
     progress.tick();
-    auto run = [&](const Rates& r) {
+    auto run = [&](const Rates& r) {  // the least CPU time of `repeats` runs
       Measure m = scene.measure(r);
       progress.tick();
       for (int k = 1; k < repeats; ++k) {
@@ -165,27 +169,40 @@ int main(int argc, char** argv) {
       halving_rows.push_back(cells);
     }
     Table speed({"multi-rate configuration", "window", "error", "CPU s / s",
-                 "single-rate CPU s / s at that error", "speed-up"});
+                 "single-rate CPU s / s at that error", "speed-up",
+                 "counts (error falls at half the window)"});
     double best = 0;
     std::string best_what;
     for (const Recipe& rc : multi) {
       Series series{rc.name, {}, {}, true, true};
+      std::vector<Rates> rates;
+      std::vector<Measure> measured;
       for (std::size_t wi = 0; wi < window_n.size(); ++wi) {
-        const Rates r = with(def, with(rc.over, {.dt = 1.0 / window_n[wi]}));
-        const Measure m = run(r);
+        rates.push_back(with(def, with(rc.over, {.dt = 1.0 / window_n[wi]})));
+        measured.push_back(run(rates.back()));
+      }
+      for (std::size_t wi = 0; wi < window_n.size(); ++wi) {
+        const Rates& r = rates[wi];
+        const Measure& m = measured[wi];
         const double err = relative_error(m, ref.value);
         const double equal = single_rate_cost(single, err);
         const double up = equal / m.cost();
+        // A point counts only where halving its window reduces its error: an
+        // error that passes through zero between two windows (a lucky
+        // crossing) is no accuracy a user can rely on.
+        const bool converging = wi + 1 < window_n.size() &&
+                                relative_error(measured[wi + 1], ref.value) < err;
         row(rc.name, r, m, err, equal);
         halving_rows[wi].push_back(percent(err));
         speed.row({rc.name, step_name(r.dt), percent(err), m.ok() ? fmt(m.cost(), 2) : "-",
                    std::isfinite(equal) ? fmt(equal, 2) : "-",
-                   std::isfinite(up) ? fmt(up, 2) + "x" : "-"});
-        if (std::isfinite(up) && up > best)
+                   std::isfinite(up) ? fmt(up, 2) + "x" : "-", converging ? "yes" : "no"});
+        if (converging && std::isfinite(up) && up > best)
           best = up, best_what = rc.name + " at " + step_name(r.dt) + ", error " + percent(err);
         if (!m.ok()) continue;
         series.x.push_back(m.cost()), series.y.push_back(err);
-        if (rc.over.every.at("magnetism") == 1 && std::abs(r.dt - def.dt) < 1e-12 &&
+        if (rc.over.every.at("magnetism") == 1 && rc.over.rigid_substeps == 1 &&
+            std::abs(r.dt - def.dt) < 1e-12 &&
             rc.over.electricity_substeps == def.electricity_substeps)
           plot.markers.push_back({m.cost(), err, "scene default (" + step_name(r.dt) + ")"});
       }
@@ -209,5 +226,7 @@ int main(int argc, char** argv) {
   splice(o.docs, "multirate", text);
   std::fprintf(stderr, "multi-rate goal (>= 2x at equal error on both scenes): %s\n",
                goal_met ? "met" : "not met");
-  return goal_met ? 0 : 1;  // the convention: 1 when a goal it checks was missed
+  // The convention: 1 when a goal it checks was missed. The quick sweep is too
+  // small to judge the goal (CI runs it to keep the program working).
+  return goal_met || o.quick ? 0 : 1;
 }
