@@ -13,6 +13,7 @@ const MagneticBody* MagneticForces::find(ObjectId id) const {
 Vec3 MagneticForces::field(Vec3 point) const {
   Vec3 h;
   const std::uint32_t none = kNoBody;
+  // One point: the direct sum is cheaper than building a tree.
   pole_fields(poles_, softening_, std::span(&point, 1), std::span(&none, 1), std::span(&h, 1));
   return h * kMu0;
 }
@@ -64,7 +65,7 @@ void MagneticForces::update(const WorldView& world) {
   }
 
   // 2. The poles the field induces in soft iron, consistently with one another.
-  const InductionResult induced = solve_induction(fixed, bars, softening_);
+  const InductionResult induced = solve_induction(fixed, bars, softening_, summation_);
   for (std::size_t i = 0; i < bars.size(); ++i) strength[bars[i].body] = induced.strength[i];
   if (!induced.converged && induction_converged_)
     world.emit({.type = "magnetic_induction_unconverged",
@@ -86,7 +87,8 @@ void MagneticForces::update(const WorldView& world) {
 
   // 4. Forces on poles, then force and torque about each part's centre.
   std::vector<Vec3> pole_force(poles_.size());
-  accumulate_pole_forces(poles_, softening_, pole_force);
+  used_tree_ = summation_.use_tree(poles_.size());
+  accumulate_pole_forces(poles_, softening_, pole_force, summation_, &tree_);
   for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
     MagneticBody& body = bodies_[b];
     for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {

@@ -8,6 +8,9 @@
 //             the magnetism resolver (whose electromagnets it sees through pole_strength)
 //   writes    only its own data below; recomputed only when an input changed
 //   settings  softening (m, default 0.005): the Plummer length eps of the pole force law
+//             method ("auto" | "direct" | "tree", default "auto"): how pole pairs are
+//             summed; auto is direct below kTreeCrossoverPoles poles (pole_model.hpp)
+//             theta (default 0.5, in (0, 1)): the tree's opening angle
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -43,7 +46,9 @@ class MagneticForces : public DerivedSet {
   static constexpr const char* kName = "magnetic_forces";
   static constexpr double kDefaultSoftening = 0.005;
 
-  explicit MagneticForces(double softening = kDefaultSoftening) : softening_(softening) {}
+  explicit MagneticForces(double softening = kDefaultSoftening,
+                          SummationOptions summation = {.method = Summation::Auto})
+      : softening_(softening), summation_(summation) {}
 
   void update(const WorldView& world) override;
 
@@ -57,6 +62,10 @@ class MagneticForces : public DerivedSet {
   Vec3 field(Vec3 point) const;
 
   double softening() const { return softening_; }
+  const SummationOptions& summation() const { return summation_; }
+  void set_summation(const SummationOptions& s) { summation_ = s; }
+  /// Whether the last update summed the forces with the tree.
+  bool used_tree() const { return used_tree_; }
   /// Newton iterations of the last soft-iron solve, and whether it converged.
   int induction_iterations() const { return induction_iterations_; }
   bool induction_converged() const { return induction_converged_; }
@@ -65,6 +74,9 @@ class MagneticForces : public DerivedSet {
 
  private:
   double softening_;
+  SummationOptions summation_;
+  multipole::Tree tree_;  // its memory, kept between updates
+  bool used_tree_ = false;
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody

@@ -51,11 +51,25 @@ void register_magnetism_plugins(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
-            s.check_known(MagneticForces::kName, {"softening"});
+            s.check_known(MagneticForces::kName, {"softening", "method", "theta"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
-            return std::make_unique<MagneticForces>(eps);
+            SummationOptions sum{.method = Summation::Auto};
+            const std::string method = s.string("method", "auto");
+            if (method == "direct")
+              sum.method = Summation::Direct;
+            else if (method == "tree")
+              sum.method = Summation::Tree;
+            else if (method != "auto")
+              throw InputError(s.where,
+                               "magnetic_forces: 'method' must be \"auto\", \"direct\" "
+                               "or \"tree\", not \"" +
+                                   method + "\"");
+            sum.theta = s.number("theta", kDefaultTheta);
+            if (!(sum.theta > 0 && sum.theta < 1))
+              throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
+            return std::make_unique<MagneticForces>(eps, sum);
           },
   });
 

@@ -6,8 +6,27 @@
 
 namespace alloy::magnetism {
 
-void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::span<Vec3> force) {
+namespace {
+std::vector<multipole::Source> tree_sources(std::span<const Pole> poles) {
+  std::vector<multipole::Source> sources(poles.size());
+  for (std::size_t i = 0; i < poles.size(); ++i)
+    sources[i] = {poles[i].position, poles[i].strength, poles[i].body};
+  return sources;
+}
+}  // namespace
+
+void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::span<Vec3> force,
+                            const SummationOptions& options, multipole::Tree* workspace) {
   const std::size_t n = poles.size();
+  if (options.use_tree(n)) {
+    multipole::Tree local;
+    multipole::Tree& tree = workspace ? *workspace : local;
+    tree.build(tree_sources(poles), softening, {.theta = options.theta});
+    std::vector<Vec3> k(n);
+    tree.evaluate_at_sources(k);
+    for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);
+    return;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const Pole& a = poles[i];
     if (a.strength == 0) continue;
@@ -22,8 +41,19 @@ void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::
 }
 
 void pole_fields(std::span<const Pole> poles, double softening, std::span<const Vec3> points,
-                 std::span<const std::uint32_t> exclude_body, std::span<Vec3> field) {
+                 std::span<const std::uint32_t> exclude_body, std::span<Vec3> field,
+                 const SummationOptions& options, multipole::Tree* workspace) {
   constexpr double kInv4Pi = 1.0 / (4.0 * std::numbers::pi);
+  // The tree pays for its build only over many points.
+  if (options.use_tree(poles.size()) &&
+      (options.method == Summation::Tree || points.size() >= 64)) {
+    multipole::Tree local;
+    multipole::Tree& tree = workspace ? *workspace : local;
+    tree.build(tree_sources(poles), softening, {.theta = options.theta});
+    for (std::size_t i = 0; i < points.size(); ++i)
+      field[i] = tree.evaluate(points[i], exclude_body[i]) * kInv4Pi;
+    return;
+  }
   for (std::size_t i = 0; i < points.size(); ++i) {
     Vec3 h{};
     for (const Pole& p : poles) {
@@ -50,7 +80,7 @@ double demagnetizing_factor(double p) {
 }
 
 InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<const InducedBar> bars,
-                                double softening) {
+                                double softening, const SummationOptions& options) {
   const std::size_t n = bars.size();
   InductionResult out;
   out.strength.assign(n, 0.0);
@@ -67,7 +97,7 @@ InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<con
 
   // Axial field from the fixed poles (permanent magnets, electromagnets).
   std::vector<Vec3> h_fixed(3 * n);
-  pole_fields(fixed_poles, softening, points, exclude, h_fixed);
+  pole_fields(fixed_poles, softening, points, exclude, h_fixed, options);
   Eigen::VectorXd h(n), gain(n), qsat(n);
   for (std::size_t b = 0; b < n; ++b) {
     double a = 0;

@@ -1,7 +1,7 @@
 // The magnetic pole model (Gilbert model), free of any world or property: the
 // physics of docs/magnetism.md in plain functions, so that it can be tested
-// against closed forms and swapped for a faster summation without touching the
-// stages.
+// against closed forms, and its summation chosen (direct or tree) without
+// touching the stages.
 //
 // A magnetic part is a bar whose magnetisation is represented by two point
 // poles of strength +q (north) and -q (south) on its local x axis. A pole of
@@ -21,6 +21,7 @@
 #include <span>
 #include <vector>
 
+#include "resolvers/common/multipole_tree.hpp"
 #include "runtime/math.hpp"
 
 namespace alloy::magnetism {
@@ -64,19 +65,50 @@ inline BarPoles bar_poles(Vec3 centre, Vec3 axis, double separation) {
 }
 
 // --- summation -----------------------------------------------------------------
-// Every pole-pair sum of the resolver goes through these two functions. They are
-// direct O(n^2) sums; a tree or multipole method would replace them alone.
+// Every pole-pair sum of the resolver goes through these two functions: the
+// direct O(P^2) sum, or the Barnes-Hut tree of resolvers/common/multipole_tree.hpp
+// (O(P log P), error set by theta; docs/magnetism.md "Summation").
+
+enum class Summation : std::uint8_t {
+  Direct,  ///< every pair, exactly
+  Tree,    ///< Barnes-Hut octree with quadrupole cells
+  Auto,    ///< Direct below kTreeCrossoverPoles poles, Tree from there on
+};
+
+/// Number of poles from which the tree is faster than the direct sum, measured
+/// by bench/scaling.cpp (docs/performance.md "Scaling": the two cross between
+/// 300 and 1000 magnets at theta 0.5; this is the measured crossover rounded).
+inline constexpr std::size_t kTreeCrossoverPoles = 1000;
+/// Default opening angle: the largest at which both the random and the packed
+/// 10,000-magnet configurations of bench/scaling.cpp stay under 1e-3 RMS
+/// relative force error (docs/magnetism.md, "Summation").
+inline constexpr double kDefaultTheta = 0.25;
+
+struct SummationOptions {
+  Summation method = Summation::Direct;
+  double theta = kDefaultTheta;
+  /// Whether `method` sums `poles` poles with the tree.
+  bool use_tree(std::size_t poles) const {
+    return method == Summation::Tree || (method == Summation::Auto && poles >= kTreeCrossoverPoles);
+  }
+};
 
 /// Adds to `force[i]` the force on pole i from every pole of another body, N.
-/// Each pair is evaluated once and applied with opposite signs, so the sum of
-/// all forces is zero to rounding.
-void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::span<Vec3> force);
+/// Direct: each pair is evaluated once and applied with opposite signs, so the
+/// sum of all forces is zero to rounding. Tree: each pole's force is summed on
+/// its own, so the sum is zero only to the tree's error. `workspace` (optional)
+/// keeps the tree's memory between calls.
+void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::span<Vec3> force,
+                            const SummationOptions& options = {},
+                            multipole::Tree* workspace = nullptr);
 
 /// H at each point from every pole whose body differs from `exclude_body[i]`, A/m.
 /// `exclude_body[i]` may be kNoBody to include every pole.
 inline constexpr std::uint32_t kNoBody = 0xffffffffu;
+static_assert(kNoBody == multipole::kNoGroup);
 void pole_fields(std::span<const Pole> poles, double softening, std::span<const Vec3> points,
-                 std::span<const std::uint32_t> exclude_body, std::span<Vec3> field);
+                 std::span<const std::uint32_t> exclude_body, std::span<Vec3> field,
+                 const SummationOptions& options = {}, multipole::Tree* workspace = nullptr);
 
 // --- induced poles (soft iron) ------------------------------------------------------
 
@@ -135,7 +167,8 @@ struct InductionResult {
 /// starting from the uncoupled estimate (bars ignore one another). If Newton
 /// fails to converge (strongly coupled bars beyond the model's validity) the
 /// uncoupled estimate is returned and `converged` is false.
+/// `options` sums the fixed poles' field (the bar-bar coupling stays dense).
 InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<const InducedBar> bars,
-                                double softening);
+                                double softening, const SummationOptions& options = {});
 
 }  // namespace alloy::magnetism

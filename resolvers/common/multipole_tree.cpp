@@ -1,0 +1,277 @@
+#include "resolvers/common/multipole_tree.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace alloy::multipole {
+
+namespace {
+// Below this a cube is not split further, whatever it holds: sources at one
+// point (or nearly) would otherwise recurse without end.
+constexpr int kMaxDepth = 40;
+}  // namespace
+
+Vec3 direct_sum(std::span<const Source> sources, double softening, Vec3 x, std::uint32_t exclude) {
+  const double eps2 = softening * softening;
+  Vec3 f{};
+  for (const Source& s : sources) {
+    if (s.strength == 0 || (exclude != kNoGroup && s.group == exclude)) continue;
+    f += kernel(x - s.position, eps2) * s.strength;
+  }
+  return f;
+}
+
+void Tree::build(std::span<const Source> sources, double softening, TreeOptions options) {
+  eps2_ = softening * softening;
+  const double theta = std::clamp(options.theta, 1e-3, 0.99);
+  theta2_ = theta * theta;
+  leaf_size_ = std::max<std::uint32_t>(1, options.leaf_size);
+  nodes_.clear();
+  cell_interactions_ = direct_interactions_ = 0;
+  const auto n = std::uint32_t(sources.size());
+  order_.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) order_[i] = i;
+  sources_.assign(sources.begin(), sources.end());
+  if (n == 0) return;
+
+  Vec3 lo = sources[0].position, hi = lo;
+  for (const Source& s : sources) {
+    lo = {std::min(lo.x, s.position.x), std::min(lo.y, s.position.y), std::min(lo.z, s.position.z)};
+    hi = {std::max(hi.x, s.position.x), std::max(hi.y, s.position.y), std::max(hi.z, s.position.z)};
+  }
+  const Vec3 mid = (lo + hi) * 0.5;
+  // A little margin so that no source sits exactly on the root's faces.
+  const double half = 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) * (1 + 1e-9) + 1e-12;
+
+  scratch_.resize(n);
+  nodes_.reserve(2 * (n / leaf_size_ + 1));
+  make_node(mid, half, 0, n, 0);
+
+  // Sources in tree order, so that a cell's sources are contiguous in memory.
+  std::vector<Source> ordered(n);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    ordered[t] = sources[order_[t]];
+  }
+  sources_ = std::move(ordered);
+  for (Node& node : nodes_) moments(node);
+
+  // Group -> members (tree positions), for excluding a target's own group from
+  // a cell used whole.
+  std::uint32_t groups = 0;
+  for (const Source& s : sources_)
+    if (s.group != kNoGroup) groups = std::max(groups, s.group + 1);
+  group_start_.assign(groups + 1, 0);
+  for (const Source& s : sources_)
+    if (s.group != kNoGroup) ++group_start_[s.group + 1];
+  for (std::uint32_t g = 0; g < groups; ++g) group_start_[g + 1] += group_start_[g];
+  group_members_.resize(group_start_[groups]);
+  std::vector<std::uint32_t> fill(group_start_.begin(), group_start_.end() - 1);
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (sources_[t].group != kNoGroup) group_members_[fill[sources_[t].group]++] = t;
+}
+
+std::int32_t Tree::make_node(Vec3 box_centre, double half, std::uint32_t begin, std::uint32_t end,
+                             int depth) {
+  const auto index = std::int32_t(nodes_.size());
+  nodes_.emplace_back();
+  {
+    Node& node = nodes_.back();
+    node.box_centre = box_centre;
+    node.half = half;
+    node.begin = begin;
+    node.end = end;
+    std::fill(std::begin(node.child), std::end(node.child), -1);
+  }
+  if (end - begin <= leaf_size_ || depth >= kMaxDepth) return index;
+
+  // Counting sort of [begin, end) into the eight octants (stable: deterministic).
+  auto octant = [&](std::uint32_t i) {
+    const Vec3 p = sources_[i].position;
+    return int(p.x >= box_centre.x) | int(p.y >= box_centre.y) << 1 | int(p.z >= box_centre.z) << 2;
+  };
+  std::uint32_t count[9] = {};
+  for (std::uint32_t t = begin; t < end; ++t) ++count[octant(order_[t]) + 1];
+  for (int o = 0; o < 8; ++o) count[o + 1] += count[o];
+  std::uint32_t next[8];
+  for (int o = 0; o < 8; ++o) next[o] = begin + count[o];
+  for (std::uint32_t t = begin; t < end; ++t) scratch_[next[octant(order_[t])]++] = order_[t];
+  std::copy(scratch_.begin() + begin, scratch_.begin() + end, order_.begin() + begin);
+
+  nodes_[index].leaf = false;
+  const double h = 0.5 * half;
+  for (int o = 0; o < 8; ++o) {
+    const std::uint32_t b = begin + count[o], e = begin + count[o + 1];
+    if (b == e) continue;
+    const Vec3 c{box_centre.x + ((o & 1) ? h : -h), box_centre.y + ((o & 2) ? h : -h),
+                 box_centre.z + ((o & 4) ? h : -h)};
+    const std::int32_t child = make_node(c, h, b, e, depth + 1);
+    nodes_[index].child[o] = child;
+  }
+  return index;
+}
+
+void Tree::moments(Node& n) const {
+  // Expansion centre: the |q|-weighted centroid. For neutral cells (whole
+  // magnets) the charge centroid is undefined; this one stays inside the cell.
+  double w = 0;
+  Vec3 c{};
+  for (std::uint32_t t = n.begin; t < n.end; ++t) {
+    const double a = std::abs(sources_[t].strength);
+    w += a;
+    c += sources_[t].position * a;
+  }
+  n.empty = !(w > 0);
+  if (n.empty) return;
+  c = c / w;
+  n.centre = c;
+  double b2 = 0, q = 0;
+  Vec3 d{};
+  double m[6] = {}, o[10] = {};
+  for (std::uint32_t t = n.begin; t < n.end; ++t) {
+    const Source& s = sources_[t];
+    const Vec3 r = s.position - c;
+    b2 = std::max(b2, dot(r, r));
+    q += s.strength;
+    d += r * s.strength;
+    m[0] += s.strength * r.x * r.x;
+    m[1] += s.strength * r.y * r.y;
+    m[2] += s.strength * r.z * r.z;
+    m[3] += s.strength * r.x * r.y;
+    m[4] += s.strength * r.x * r.z;
+    m[5] += s.strength * r.y * r.z;
+    const double qx = s.strength * r.x, qy = s.strength * r.y, qz = s.strength * r.z;
+    o[0] += qx * r.x * r.x;
+    o[1] += qy * r.y * r.y;
+    o[2] += qz * r.z * r.z;
+    o[3] += qx * r.x * r.y;
+    o[4] += qx * r.x * r.z;
+    o[5] += qx * r.y * r.y;
+    o[6] += qy * r.y * r.z;
+    o[7] += qx * r.z * r.z;
+    o[8] += qy * r.z * r.z;
+    o[9] += qx * r.y * r.z;
+  }
+  n.b2 = b2;
+  n.q = q;
+  n.d = d;
+  std::copy(std::begin(m), std::end(m), std::begin(n.m));
+  std::copy(std::begin(o), std::end(o), std::begin(n.o));
+}
+
+Vec3 Tree::cell_field(const Node& n, Vec3 x) const {
+  // The cell whole: the softened kernel's Taylor expansion about its centre c.
+  // With r = x - c, s^2 = |r|^2 + eps^2, moments Q, D_a, M_ab, O_abc of the
+  // offsets d_j = p_j - c, T_a = O_abb:
+  //   sum q_j K(r - d_j) = Q r/s^3
+  //     + 3 (D.r) r/s^5 - D/s^3
+  //     + 7.5 (r.M.r) r/s^7 - 1.5 tr(M) r/s^5 - 3 M.r/s^5
+  //     + 17.5 (O:rrr) r/s^9 - 7.5 (T.r) r/s^7 - 7.5 (O:rr)/s^7 + 1.5 T/s^5
+  // (derivatives of 1/s; docs/magnetism.md, "Summation").
+  const Vec3 r = x - n.centre;
+  const double s2 = dot(r, r) + eps2_;
+  const double inv_s2 = 1.0 / s2;
+  const double inv3 = inv_s2 / std::sqrt(s2);
+  const double inv5 = inv3 * inv_s2;
+  const double inv7 = inv5 * inv_s2;
+  const double inv9 = inv7 * inv_s2;
+  const double* m = n.m;
+  const Vec3 mr{m[0] * r.x + m[3] * r.y + m[4] * r.z, m[3] * r.x + m[1] * r.y + m[5] * r.z,
+                m[4] * r.x + m[5] * r.y + m[2] * r.z};
+  const double rmr = dot(r, mr);
+  const double tr = m[0] + m[1] + m[2];
+  const double* o = n.o;
+  // O:rr, component a = O_abc r_b r_c.
+  const double xx = r.x * r.x, yy = r.y * r.y, zz = r.z * r.z;
+  const double xy = r.x * r.y, xz = r.x * r.z, yz = r.y * r.z;
+  const Vec3 orr{o[0] * xx + o[5] * yy + o[7] * zz + 2 * (o[3] * xy + o[4] * xz + o[9] * yz),
+                 o[3] * xx + o[1] * yy + o[8] * zz + 2 * (o[5] * xy + o[9] * xz + o[6] * yz),
+                 o[4] * xx + o[6] * yy + o[2] * zz + 2 * (o[9] * xy + o[7] * xz + o[8] * yz)};
+  const double orrr = dot(orr, r);
+  const Vec3 t{o[0] + o[5] + o[7], o[3] + o[1] + o[8], o[4] + o[6] + o[2]};
+  const double tdr = dot(t, r);
+  const double radial = n.q * inv3 + 3.0 * dot(n.d, r) * inv5 + 7.5 * rmr * inv7 - 1.5 * tr * inv5 +
+                        17.5 * orrr * inv9 - 7.5 * tdr * inv7;
+  return r * radial - n.d * inv3 - mr * (3.0 * inv5) - orr * (7.5 * inv7) + t * (1.5 * inv5);
+}
+
+void Tree::walk(std::span<const Vec3> x, std::uint32_t exclude, std::uint32_t self,
+                std::span<Vec3> out) const {
+  for (Vec3& f : out) f = {};
+  if (nodes_.empty() || x.empty()) return;
+  const bool grouped = exclude != kNoGroup && exclude + 1 < group_start_.size();
+  // The targets' bounding sphere: a cell is used whole only if it is far from
+  // all of them, and then for all of them, so that the errors at a magnet's
+  // two poles are alike and cancel in its net force as the forces do.
+  Vec3 centre{};
+  for (const Vec3& p : x) centre += p;
+  centre = centre / double(x.size());
+  double radius = 0;
+  for (const Vec3& p : x) radius = std::max(radius, length(p - centre));
+
+  stack_.clear();
+  stack_.push_back(0);
+  std::uint64_t cells = 0, pairs = 0;
+  while (!stack_.empty()) {
+    const Node& n = nodes_[stack_.back()];
+    stack_.pop_back();
+    if (n.empty) continue;
+    const double dist = length(centre - n.centre) - radius;
+    if (dist > 0 && n.b2 < theta2_ * dist * dist) {
+      cells += x.size();
+      for (std::size_t i = 0; i < x.size(); ++i) out[i] += cell_field(n, x[i]);
+      if (grouped) {
+        // The targets' own group must not act on them: take out, exactly,
+        // those of its members the cell included (few: a magnet has two poles).
+        for (std::uint32_t k = group_start_[exclude]; k < group_start_[exclude + 1]; ++k) {
+          const std::uint32_t t = group_members_[k];
+          if (t < n.begin || t >= n.end) continue;
+          for (std::size_t i = 0; i < x.size(); ++i)
+            out[i] -= kernel(x[i] - sources_[t].position, eps2_) * sources_[t].strength;
+        }
+      }
+    } else if (n.leaf) {
+      for (std::uint32_t t = n.begin; t < n.end; ++t) {
+        const Source& s = sources_[t];
+        if (t == self || s.strength == 0 || (exclude != kNoGroup && s.group == exclude)) continue;
+        for (std::size_t i = 0; i < x.size(); ++i)
+          out[i] += kernel(x[i] - s.position, eps2_) * s.strength;
+      }
+      pairs += (n.end - n.begin) * x.size();
+    } else {
+      for (int o = 7; o >= 0; --o)
+        if (n.child[o] >= 0) stack_.push_back(n.child[o]);
+    }
+  }
+  cell_interactions_ += cells;
+  direct_interactions_ += pairs;
+}
+
+Vec3 Tree::evaluate(Vec3 x, std::uint32_t exclude) const {
+  Vec3 f;
+  walk(std::span(&x, 1), exclude, 0xffffffffu, std::span(&f, 1));
+  return f;
+}
+
+void Tree::evaluate_at_sources(std::span<Vec3> out) const {
+  std::vector<Vec3> xs, fs;
+  for (std::uint32_t t = 0; t < sources_.size(); ++t) {
+    const std::uint32_t g = sources_[t].group;
+    if (g == kNoGroup) {
+      Vec3 f;
+      walk(std::span(&sources_[t].position, 1), g, t, std::span(&f, 1));
+      out[order_[t]] = f;
+      continue;
+    }
+    // A group is evaluated once, when its first member (in tree order) comes.
+    const std::uint32_t* first = group_members_.data() + group_start_[g];
+    const std::uint32_t* last = group_members_.data() + group_start_[g + 1];
+    if (*first != t) continue;
+    xs.clear();
+    for (const std::uint32_t* m = first; m != last; ++m) xs.push_back(sources_[*m].position);
+    fs.resize(xs.size());
+    walk(xs, g, t, fs);
+    for (std::size_t i = 0; i < xs.size(); ++i) out[order_[first[i]]] = fs[i];
+  }
+}
+
+}  // namespace alloy::multipole

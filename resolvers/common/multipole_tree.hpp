@@ -1,0 +1,119 @@
+// A Barnes-Hut octree for sums of the Plummer-softened inverse-square kernel
+//
+//   F(x) = sum_j q_j K(x - p_j),   K(r) = r / (|r|^2 + eps^2)^(3/2)
+//
+// over point sources of signed strength q_j (magnetic poles: A*m; masses: kg).
+// Each cell carries its monopole, dipole, quadrupole and octupole moments about
+// its expansion centre c (the |q|-weighted centroid of its sources); a cell
+// whose sources all lie within b_max of c is used whole, through the Taylor
+// expansion of the softened kernel to third order, when
+//
+//   b_max < theta * |x - c|        (the opening criterion)
+//
+// and opened otherwise; leaves (at most leaf_size sources) are summed directly.
+// When the targets are a group's sources (a magnet's two poles), the criterion
+// holds for the group's bounding sphere, b_max < theta * (|x_g - c| - r_g), and
+// a cell is taken whole or opened for all of them together.
+// The expansion goes to the octupole because magnets are neutral: a cell of
+// whole magnets has Q ~ 0 and its leading term is the dipole, so the error of
+// an expansion to order p is (b/r)^p relative to the cell's field, not
+// (b/r)^(p+1) as for masses; p = 3 gives theta^3 where gravity's usual
+// monopole + quadrupole gives theta^3 too (docs/magnetism.md, "Summation").
+// Sources are grouped (a magnet's two poles): a target excludes one group, as
+// a part never acts on itself. The tree is plain data built by one thread in a
+// fixed order, so the same input gives bit-identical output.
+//
+// Shared by magnetism (magnetic_forces) and gravity.nbody; no world, no
+// properties. docs/magnetism.md argues the choice and gives the measured error.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "runtime/math.hpp"
+
+namespace alloy::multipole {
+
+inline constexpr std::uint32_t kNoGroup = 0xffffffffu;
+
+struct Source {
+  Vec3 position;
+  double strength = 0;
+  std::uint32_t group = kNoGroup;  ///< sources of one group do not act on a target of it
+};
+
+struct TreeOptions {
+  /// Opening angle, in (0, 1): smaller is more accurate and slower.
+  double theta = 0.5;
+  /// Largest number of sources in a leaf.
+  std::uint32_t leaf_size = 8;
+};
+
+/// The softened kernel K(r), 1/m^2 along r; zero at r = 0 when eps = 0.
+inline Vec3 kernel(Vec3 r, double eps2) {
+  const double s2 = dot(r, r) + eps2;
+  if (s2 <= 0) return {};
+  return r * (1.0 / (s2 * std::sqrt(s2)));
+}
+
+/// Direct O(N) sum at one point: every source not in `exclude` and not at x itself.
+Vec3 direct_sum(std::span<const Source> sources, double softening, Vec3 x,
+                std::uint32_t exclude = kNoGroup);
+
+class Tree {
+ public:
+  /// Builds the tree over `sources` (copied).
+  void build(std::span<const Source> sources, double softening, TreeOptions options = {});
+
+  /// sum_j q_j K(x - p_j) over sources not in group `exclude` and not at x itself.
+  Vec3 evaluate(Vec3 x, std::uint32_t exclude = kNoGroup) const;
+
+  /// The same at every source, excluding its own group: out[i] for sources[i]
+  /// as given to build(). Visits the targets in tree order (cache-friendly).
+  void evaluate_at_sources(std::span<Vec3> out) const;
+
+  std::size_t size() const { return sources_.size(); }
+  std::size_t cells() const { return nodes_.size(); }
+  /// Cells used whole and source pairs summed directly by the evaluations so
+  /// far (what the cost is made of).
+  std::uint64_t cell_interactions() const { return cell_interactions_; }
+  std::uint64_t direct_interactions() const { return direct_interactions_; }
+
+ private:
+  struct Node {
+    Vec3 box_centre;
+    double half = 0;   ///< half side of the cube
+    Vec3 centre;       ///< expansion centre
+    double b2 = 0;     ///< b_max^2: every source is within b_max of centre
+    double q = 0;      ///< monopole
+    Vec3 d;            ///< dipole about centre
+    double m[6] = {};  ///< quadrupole about centre: xx yy zz xy xz yz
+    /// octupole about centre: xxx yyy zzz xxy xxz xyy yyz xzz yzz xyz
+    double o[10] = {};
+    std::uint32_t begin = 0, end = 0;
+    std::int32_t child[8];
+    bool leaf = true;
+    bool empty = true;  ///< every strength is zero
+  };
+  std::int32_t make_node(Vec3 box_centre, double half, std::uint32_t begin, std::uint32_t end,
+                         int depth);
+  void moments(Node& n) const;
+  Vec3 cell_field(const Node& n, Vec3 x) const;
+  /// Sums at the targets `x` (the members of group `exclude`, or one point),
+  /// skipping that group and the source at tree position `self`.
+  void walk(std::span<const Vec3> x, std::uint32_t exclude, std::uint32_t self,
+            std::span<Vec3> out) const;
+
+  double eps2_ = 0, theta2_ = 0.25;
+  std::uint32_t leaf_size_ = 8;
+  std::vector<Source> sources_;       ///< in tree order
+  std::vector<std::uint32_t> order_;  ///< tree position -> index given to build()
+  std::vector<std::uint32_t> group_start_, group_members_;  ///< CSR: group -> tree positions
+  std::vector<Node> nodes_;
+  std::vector<std::uint32_t> scratch_;
+  mutable std::vector<std::int32_t> stack_;
+  mutable std::uint64_t cell_interactions_ = 0, direct_interactions_ = 0;
+};
+
+}  // namespace alloy::multipole

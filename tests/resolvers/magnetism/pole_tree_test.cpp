@@ -1,0 +1,288 @@
+// Tests for the Barnes-Hut summation of pole forces (resolvers/common/multipole_tree.hpp
+// through pole_model.hpp and the magnetic_forces set): the cell expansion
+// against the direct sum, the error bound on random and packed magnets,
+// a magnet's own poles left out even inside a cell used whole, coincident
+// poles, bit-identical repeats, and the set's method / theta settings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "magnet_scene.hpp"
+#include "resolvers/common/multipole_tree.hpp"
+#include "resolvers/magnetism/pole_model.hpp"
+
+namespace alloy::magnetism {
+namespace {
+
+using namespace testing;
+
+/// Bars as poles: body b has poles 2b (north) and 2b + 1 (south).
+struct Bars {
+  std::vector<Pole> poles;
+  std::size_t count() const { return poles.size() / 2; }
+  void add(Vec3 centre, Vec3 axis, double separation, double q) {
+    const auto b = std::uint32_t(count());
+    const BarPoles p = bar_poles(centre, axis / length(axis), separation);
+    poles.push_back({p.north, q, b});
+    poles.push_back({p.south, -q, b});
+  }
+};
+
+/// n kit bars (pole separation 8.5 cm, 50 to 150 A*m, either sign) at uniform
+/// random places in a cube holding one bar per (0.15 m)^3, pointing anywhere.
+Bars random_bars(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double side = 0.15 * std::cbrt(double(n));
+  Bars bars;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
+    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
+    const double s = std::sqrt(1 - z * z);
+    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
+    bars.add(c, {s * std::cos(phi), s * std::sin(phi), z}, 0.085, q);
+  }
+  return bars;
+}
+
+/// Bars 10 cm x 2 cm x 2 cm packed end to end and side by side (a block of
+/// nx x ny x nz), all magnetised along x like a stack of real magnets: the
+/// case where near poles nearly cancel and far ones add up.
+Bars packed_bars(int nx, int ny, int nz) {
+  Bars bars;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j)
+      for (int k = 0; k < nz; ++k) bars.add({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085, 100);
+  return bars;
+}
+
+/// Force on each bar (sum over its two poles), N.
+std::vector<Vec3> bar_forces(const Bars& bars, const SummationOptions& options,
+                             double eps = 0.005) {
+  std::vector<Vec3> pole_force(bars.poles.size());
+  accumulate_pole_forces(bars.poles, eps, pole_force, options);
+  std::vector<Vec3> f(bars.count());
+  for (std::size_t b = 0; b < bars.count(); ++b) f[b] = pole_force[2 * b] + pole_force[2 * b + 1];
+  return f;
+}
+
+/// The error measure of docs/magnetism.md: sqrt(sum |F_tree - F_direct|^2 /
+/// sum |F_direct|^2) over the bars, i.e. RMS of the error over RMS of the force.
+double rms_relative(const std::vector<Vec3>& approx, const std::vector<Vec3>& exact) {
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    const Vec3 e = approx[i] - exact[i];
+    num += dot(e, e);
+    den += dot(exact[i], exact[i]);
+  }
+  return std::sqrt(num / den);
+}
+
+const SummationOptions kDirect{.method = Summation::Direct};
+SummationOptions tree(double theta) {
+  return {.method = Summation::Tree, .theta = theta};
+}
+
+TEST(PoleTree, CellExpansionErrorFallsAsTheCubeOfSizeOverDistance) {
+  // One cluster of signed sources seen from farther and farther away with
+  // theta just under 1 (the cell is always taken whole): a second-order
+  // expansion leaves an error of relative order (b / r)^3 against the field.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  std::vector<multipole::Source> sources;
+  for (int i = 0; i < 40; ++i) sources.push_back({{u(rng), u(rng), u(rng)}, 10 * u(rng)});
+  multipole::Tree t;
+  t.build(sources, 0.0, {.theta = 0.99, .leaf_size = 64});
+  double previous = 0;
+  for (double r : {0.5, 1.0, 2.0, 4.0}) {
+    const Vec3 x{r * 0.6, r * 0.8, 0};
+    const Vec3 exact = multipole::direct_sum(sources, 0.0, x);
+    const double err = length(t.evaluate(x) - exact) / length(exact);
+    EXPECT_LT(err, 0.2 * std::pow(0.087 / r, 2)) << "r = " << r;
+    if (previous > 0) {
+      EXPECT_LT(err, previous / 5) << "halving b/r cuts the error by ~8 or more";
+    }
+    previous = err;
+  }
+  EXPECT_EQ(t.cell_interactions(), 4u) << "the root was used whole every time";
+}
+
+TEST(PoleTree, SofteningIsExpandedToo) {
+  // With eps comparable to the distance, the expansion of the softened kernel
+  // (not of 1/r^2) must still match the softened direct sum.
+  std::vector<multipole::Source> sources = {
+      {{0.01, 0, 0}, 3}, {{-0.01, 0.005, 0}, -2}, {{0, -0.01, 0.01}, 1.5}};
+  multipole::Tree t;
+  t.build(sources, 0.2, {.theta = 0.99, .leaf_size = 8});
+  const Vec3 x{0.15, 0.1, -0.05};
+  const Vec3 exact = multipole::direct_sum(sources, 0.2, x);
+  EXPECT_LT(length(t.evaluate(x) - exact), 5e-5 * length(exact));
+  EXPECT_EQ(t.cell_interactions(), 1u);
+}
+
+TEST(PoleTree, RandomMagnetsWithinTheErrorBound) {
+  const Bars bars = random_bars(600, 1);
+  const auto exact = bar_forces(bars, kDirect);
+  const double e = rms_relative(bar_forces(bars, tree(kDefaultTheta)), exact);
+  const double e5 = rms_relative(bar_forces(bars, tree(0.5)), exact);
+  EXPECT_LT(e, 1e-3);
+  EXPECT_LT(e, e5 / 4) << "a smaller opening angle is more accurate";
+  EXPECT_GT(e, 0) << "the tree really approximated something";
+  std::printf("random 600 bars: RMS relative error %.2e (theta %.2f), %.2e (theta 0.5)\n", e,
+              kDefaultTheta, e5);
+}
+
+TEST(PoleTree, PackedMagnetsWithinTheErrorBound) {
+  const Bars bars = packed_bars(12, 8, 6);  // 576 bars touching
+  const auto exact = bar_forces(bars, kDirect);
+  const double e = rms_relative(bar_forces(bars, tree(kDefaultTheta)), exact);
+  EXPECT_LT(e, 1e-3);
+  EXPECT_GT(e, 0);
+  std::printf("packed 576 bars: RMS relative error %.2e (theta %.2f)\n", e, kDefaultTheta);
+}
+
+TEST(PoleTree, TorquesFollowTheForcesOnThePoles) {
+  // Torque about each bar's centre from its two pole forces: same measure.
+  const Bars bars = random_bars(300, 3);
+  auto torques = [&](const SummationOptions& o) {
+    std::vector<Vec3> pf(bars.poles.size());
+    accumulate_pole_forces(bars.poles, 0.005, pf, o);
+    std::vector<Vec3> t(bars.count());
+    for (std::size_t b = 0; b < bars.count(); ++b) {
+      const Vec3 c = (bars.poles[2 * b].position + bars.poles[2 * b + 1].position) * 0.5;
+      t[b] = cross(bars.poles[2 * b].position - c, pf[2 * b]) +
+             cross(bars.poles[2 * b + 1].position - c, pf[2 * b + 1]);
+    }
+    return t;
+  };
+  EXPECT_LT(rms_relative(torques(tree(kDefaultTheta)), torques(kDirect)), 1e-3);
+}
+
+TEST(PoleTree, OwnPolesLeftOutEvenInsideACellUsedWhole) {
+  // The target pole's partner (same body) sits in a far cluster that the tree
+  // takes whole: the partner must still not act on it.
+  std::vector<multipole::Source> sources;
+  sources.push_back({{0, 0, 0}, 5, 0});
+  sources.push_back({{10, 0, 0}, -5, 0});  // the partner, far off
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  for (std::uint32_t i = 0; i < 30; ++i)
+    sources.push_back({{10 + u(rng), u(rng), u(rng)}, 4 * u(rng), 1 + i});
+  multipole::Tree t;
+  t.build(sources, 0.005, {.theta = 0.5, .leaf_size = 4});
+  std::vector<Vec3> at(sources.size());
+  t.evaluate_at_sources(at);
+  const Vec3 exact = multipole::direct_sum(sources, 0.005, {0, 0, 0}, 0);
+  EXPECT_LT(length(at[0] - exact), 1e-6 * length(exact));
+  EXPECT_GT(t.cell_interactions(), 0u);
+  // Had the partner been counted, the field would be ~5/100 instead of ~0.4/100.
+  const Vec3 with_partner = multipole::direct_sum(sources, 0.005, {0, 0, 0});
+  EXPECT_GT(length(with_partner - exact), 10 * length(at[0] - exact));
+}
+
+TEST(PoleTree, CoincidentPolesStayFiniteAndMatchTheDirectSum) {
+  // Many poles at one point (magnets dropped in one place): the tree stops
+  // splitting at its depth limit instead of recursing for ever.
+  Bars bars;
+  for (int i = 0; i < 40; ++i) bars.add({0, 0, 0}, {1, 0, 0}, 0.085, 10 + i);
+  for (int i = 0; i < 40; ++i) bars.add({0.3, 0, 0}, {0, 1, 0}, 0.085, 10 + i);
+  const auto exact = bar_forces(bars, kDirect);
+  const auto approx = bar_forces(bars, tree(kDefaultTheta));
+  for (const Vec3& f : approx) EXPECT_TRUE(is_finite(f));
+  // Each cluster's own forces cancel exactly (its poles coincide), leaving the
+  // small pull of the other: a looser bound than for spread-out magnets.
+  EXPECT_LT(rms_relative(approx, exact), 1e-2);
+}
+
+TEST(PoleTree, RepeatedRunsAreBitIdentical) {
+  const Bars bars = random_bars(500, 5);
+  multipole::Tree workspace;
+  auto run = [&] {
+    std::vector<Vec3> f(bars.poles.size());
+    accumulate_pole_forces(bars.poles, 0.005, f, tree(kDefaultTheta), &workspace);
+    return f;
+  };
+  const auto a = run();
+  const auto b = run();  // the workspace reused
+  const auto c = bar_forces(bars, tree(kDefaultTheta));
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i], b[i]) << i;
+  }
+  for (std::size_t b2 = 0; b2 < c.size(); ++b2) EXPECT_EQ(a[2 * b2] + a[2 * b2 + 1], c[b2]);
+}
+
+TEST(PoleTree, FieldsAtPointsMatchTheDirectSum) {
+  const Bars bars = random_bars(200, 9);
+  std::vector<Vec3> points;
+  std::vector<std::uint32_t> exclude;
+  for (std::size_t b = 0; b < 100; ++b) {
+    points.push_back(bars.poles[2 * b].position * 0.5 + bars.poles[2 * b + 1].position * 0.5);
+    exclude.push_back(std::uint32_t(b));
+  }
+  std::vector<Vec3> exact(points.size()), approx(points.size());
+  pole_fields(bars.poles, 0.005, points, exclude, exact, kDirect);
+  pole_fields(bars.poles, 0.005, points, exclude, approx, tree(kDefaultTheta));
+  EXPECT_LT(rms_relative(approx, exact), 1e-3);
+}
+
+TEST(PoleTree, AutoSwitchesAtTheCrossover) {
+  EXPECT_FALSE((SummationOptions{.method = Summation::Auto}.use_tree(kTreeCrossoverPoles - 1)));
+  EXPECT_TRUE((SummationOptions{.method = Summation::Auto}.use_tree(kTreeCrossoverPoles)));
+  EXPECT_FALSE(kDirect.use_tree(1000000));
+  EXPECT_TRUE(tree(kDefaultTheta).use_tree(2));
+}
+
+// --- the magnetic_forces set --------------------------------------------------------
+
+class MagneticForcesMethod : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    register_current_source(registry);
+    register_magnetism_plugins(registry);
+  }
+  WorldDef with(const char* method, double theta = kDefaultTheta) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("method", std::string(method));
+    def.settings[MagneticForces::kName].set("theta", theta);
+    return def;
+  }
+  std::vector<Vec3> forces(WorldDef def, bool* used_tree = nullptr) {
+    World w(registry, std::move(def));
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 150; ++i)
+      add_permanent(w, "m" + std::to_string(i), {2 * u(rng), 2 * u(rng), 2 * u(rng)},
+                    2 * std::numbers::pi * u(rng), 50 + 100 * u(rng));
+    w.start();
+    const MagneticForces& f = forces_of(w);
+    if (used_tree) *used_tree = f.used_tree();
+    std::vector<Vec3> out;
+    for (const MagneticBody& b : f.bodies()) out.push_back(b.force);
+    return out;
+  }
+  PluginRegistry registry;
+};
+
+TEST_F(MagneticForcesMethod, TreeSettingAgreesWithDirect) {
+  bool tree_used = false, direct_used = true, auto_used = true;
+  const auto exact = forces(with("direct"), &direct_used);
+  const auto approx = forces(with("tree", kDefaultTheta), &tree_used);
+  const auto automatic = forces(WorldDef{}, &auto_used);
+  EXPECT_FALSE(direct_used);
+  EXPECT_TRUE(tree_used);
+  EXPECT_FALSE(auto_used) << "300 poles are below the crossover";
+  EXPECT_LT(rms_relative(approx, exact), 1e-3);
+  EXPECT_EQ(automatic, exact);
+}
+
+TEST_F(MagneticForcesMethod, BadSettingsAreRefused) {
+  EXPECT_THROW(forces(with("fmm")), InputError);
+  EXPECT_THROW(forces(with("tree", 1.0)), InputError);
+  EXPECT_THROW(forces(with("tree", 0.0)), InputError);
+}
+
+}  // namespace
+}  // namespace alloy::magnetism
