@@ -152,6 +152,7 @@ void Tree::moments(Node& n) const {
     o[9] += qx * r.y * r.z;
   }
   n.b2 = b2;
+  n.reach = std::sqrt(b2 / theta2_);
   n.q = q;
   n.d = d;
   std::copy(std::begin(m), std::end(m), std::begin(n.m));
@@ -215,8 +216,10 @@ void Tree::walk(std::span<const Vec3> x, std::uint32_t exclude, std::uint32_t se
     const Node& n = nodes_[stack_.back()];
     stack_.pop_back();
     if (n.empty) continue;
-    const double dist = length(centre - n.centre) - radius;
-    if (dist > 0 && n.b2 < theta2_ * dist * dist) {
+    // b_max < theta (|x_g - c| - r_g), squared to spare a square root per cell.
+    const Vec3 gap = centre - n.centre;
+    const double reach = n.reach + radius;
+    if (dot(gap, gap) > reach * reach) {
       cells += x.size();
       for (std::size_t i = 0; i < x.size(); ++i) out[i] += cell_field(n, x[i]);
       if (grouped) {

@@ -86,6 +86,7 @@ class Tree {
     double half = 0;   ///< half side of the cube
     Vec3 centre;       ///< expansion centre
     double b2 = 0;     ///< b_max^2: every source is within b_max of centre
+    double reach = 0;  ///< b_max / theta: used whole from farther than this
     double q = 0;      ///< monopole
     Vec3 d;            ///< dipole about centre
     double m[6] = {};  ///< quadrupole about centre: xx yy zz xy xz yz

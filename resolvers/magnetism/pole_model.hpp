@@ -71,14 +71,15 @@ inline BarPoles bar_poles(Vec3 centre, Vec3 axis, double separation) {
 
 enum class Summation : std::uint8_t {
   Direct,  ///< every pair, exactly
-  Tree,    ///< Barnes-Hut octree with quadrupole cells
+  Tree,    ///< Barnes-Hut octree, cells expanded to the octupole
   Auto,    ///< Direct below kTreeCrossoverPoles poles, Tree from there on
 };
 
-/// Number of poles from which the tree is faster than the direct sum, measured
-/// by bench/scaling.cpp (docs/performance.md "Scaling": the two cross between
-/// 300 and 1000 magnets at theta 0.5; this is the measured crossover rounded).
-inline constexpr std::size_t kTreeCrossoverPoles = 1000;
+/// Number of poles from which the tree is faster than the direct sum at the
+/// default theta, measured by bench/scaling.cpp (docs/performance.md "Scaling":
+/// the two cross at 3,900 to 4,500 magnets, i.e. 7,800 to 9,000 poles).
+inline constexpr std::size_t kTreeCrossoverPoles = 8000;
+
 /// Default opening angle: the largest at which both the random and the packed
 /// 10,000-magnet configurations of bench/scaling.cpp stay under 1e-3 RMS
 /// relative force error (docs/magnetism.md, "Summation").

@@ -1,0 +1,576 @@
+// Scaling (issue 6, item 4): time per step against the number of objects n,
+// for each resolver, derived set and interaction that can be isolated, with
+// the growth exponent fitted over the upper half of n; and the magnetic forces
+// summed directly and with the Barnes-Hut tree: both times, the crossover n
+// and the tree's error against the direct sum at every n.
+//
+//   build/bench/alloy_bench_scaling [--quick] [--out DIR] [--docs FILE] [--no-progress]
+//
+// Scenes (each built through the world's editing API, only the plugins it
+// needs allowed, so that a stage's time is its own):
+//   free      n boxes in a 3D grid 0.5 m apart, falling (no contact anywhere):
+//             rigid_body, collisions (broad phase finds nothing), gravity.uniform,
+//             rigid_body_from_gravity
+//   resting   n boxes resting on a floor, 0.3 m apart: 4 contacts each
+//   nbody     n spheres 1 m apart under gravity.nbody (every pair)
+//   magnets   n kit bars (10 cm, 50-150 A*m) at random places and directions in
+//             a cube of one bar per (0.15 m)^3, free to move (no gravity, no
+//             collisions): magnetism, magnetic_forces (tree, then direct, on the
+//             same world), rigid_body_from_magnetism
+//   ladder    a battery feeding a ladder of n/2 series resistors and n/2 coil
+//             rungs, wired: electricity with dense LU, and with sparse LU
+//   voices    n parts ringing at once (struck once, T60 30 s): sound
+//
+// Timing: each stage's time is World::profile()'s (wall clock) over the timed
+// steps, scaled by the loop's CPU / wall ratio, so a busy machine does not
+// inflate it. Each point runs warm-up steps, then timed steps until 0.3 s of
+// CPU (quick: 0.03 s) or 200 steps, at least one. A point whose predicted time
+// per step (from the last two points' growth) exceeds 20 s is skipped and the
+// table says so.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "bench/common/bench_common.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
+#include "resolvers/magnetism/pole_model.hpp"
+#include "resolvers/plugins.hpp"
+#include "resolvers/sound/sound_resolver.hpp"
+#include "tests/scenes/rigid_scenes.hpp"
+
+namespace {
+
+using namespace alloy;
+using namespace alloy::bench;
+
+constexpr double kSkipSeconds = 20;  // a point predicted slower than this per step is skipped
+
+// --- scenes --------------------------------------------------------------------------
+
+WorldDef def_with(std::vector<std::string> plugins) {
+  WorldDef d;
+  d.plugins = std::move(plugins);
+  return d;
+}
+
+int cube_side(int n) {
+  return std::max(1, int(std::ceil(std::cbrt(double(n)) - 1e-9)));
+}
+
+void build_free(World& w, int n) {
+  const int s = cube_side(n);
+  for (int i = 0; i < n; ++i)
+    scenes::add_box(w, {0.5 * (i % s), 0.5 * (i / s % s) + 100, 0.5 * (i / (s * s))},
+                    {0.2, 0.2, 0.2}, 1.0);
+}
+
+void build_resting(World& w, int n) {
+  const int s = std::max(1, int(std::ceil(std::sqrt(double(n)))));
+  scenes::add_floor(w, 0, {0.3 * s + 2, 1, 0.3 * s + 2});
+  for (int i = 0; i < n; ++i)
+    scenes::add_box(w, {0.3 * (i % s - s / 2), 0.1, 0.3 * (i / s - s / 2)}, {0.2, 0.2, 0.2}, 1.0);
+}
+
+void build_nbody(World& w, int n) {
+  const int s = cube_side(n);
+  for (int i = 0; i < n; ++i)
+    scenes::add_sphere(w, {1.0 * (i % s), 1.0 * (i / s % s), 1.0 * (i / (s * s))}, 0.05, 1e3);
+}
+
+/// The magnets of the tests (tests/resolvers/magnetism/pole_tree_test.cpp), as bodies.
+void build_magnets(World& w, int n) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double side = 0.15 * std::cbrt(double(n));
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
+    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
+    const double sz = std::sqrt(1 - z * z);
+    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
+    // The rotation taking x to the random direction a: about x cross a.
+    const Vec3 a{sz * std::cos(phi), sz * std::sin(phi), z};
+    Vec3 axis = cross({1, 0, 0}, a);
+    const double sin_angle = length(axis);
+    const Quat rot = sin_angle > 1e-12
+                         ? Quat::from_axis_angle(axis / sin_angle, std::atan2(sin_angle, a.x))
+                         : Quat{};
+    const ObjectId id = scenes::add_box(w, c, {0.1, 0.02, 0.02}, 0.15, rot);
+    w.set(id, "magnet", std::string("permanent"));
+    w.set(id, "pole_strength", q);
+  }
+}
+
+ObjectId part(World& w, const std::string& name, const char* kind, double value) {
+  const ObjectId id = w.create(name);
+  w.set(id, "conductive", true);
+  if (std::string(kind) == "emf") {
+    w.set(id, "emf", value);
+    w.set(id, "internal_resistance", 0.1);
+  } else if (std::string(kind) == "coil") {
+    w.set(id, "inductance", value);
+    w.set(id, "resistance", 5.0);
+  } else {
+    w.set(id, "resistance", value);
+  }
+  return id;
+}
+
+void wire(World& w, ObjectId a, int ta, ObjectId b, int tb) {
+  const ObjectId id = w.create();
+  w.set(id, "wire_from", a);
+  w.set(id, "wire_from_terminal", std::int64_t(ta));
+  w.set(id, "wire_to", b);
+  w.set(id, "wire_to_terminal", std::int64_t(tb));
+  w.set(id, "resistance", 0.01);
+}
+
+/// A battery feeding a ladder: n/2 series resistors along the top rail, and
+/// from each rail node a coil rung down to the ground bar. n elements in all.
+void build_ladder(World& w, int n) {
+  const ObjectId battery = part(w, "battery", "emf", 6.0);
+  const ObjectId ground = w.create("ground");
+  w.set(ground, "conductive", true);
+  wire(w, battery, 0, ground, 0);
+  ObjectId rail = battery;
+  int rail_terminal = 1;
+  for (int i = 0; i < std::max(1, n / 2); ++i) {
+    const ObjectId r = part(w, "r" + std::to_string(i), "resistor", 1.0);
+    const ObjectId l = part(w, "l" + std::to_string(i), "coil", 0.05);
+    wire(w, rail, rail_terminal, r, 0);
+    wire(w, r, 1, l, 0);
+    wire(w, l, 1, ground, 0);
+    rail = r;
+    rail_terminal = 1;
+  }
+}
+
+void build_voices(World& w, int n) {
+  for (int i = 0; i < n; ++i) {
+    const ObjectId id = w.create();
+    w.set(id, "acoustic", std::string("bar"));
+    w.set(id, "pitch", 200.0 + i % 1000);
+    w.set(id, "decay", 30.0);
+  }
+}
+
+/// After start(): strike every ringing part once, so that n voices ring.
+void strike_all(World& w) {
+  auto& s = dynamic_cast<sound::SoundResolver&>(*w.stage("sound"));
+  const PropertyStore& store = w.store();
+  for (std::uint32_t slot = 0; slot < store.slot_count(); ++slot) {
+    const ObjectId id = store.id_at(slot);
+    if (store.alive(id)) s.strike({.part = id, .normal_speed = 2.0});
+  }
+}
+
+// --- measuring ---------------------------------------------------------------------------
+
+/// One stage of one scene, as a line of the plot and a row of the table.
+struct Line {
+  std::string label;     // "rigid_body (no contacts)"
+  std::string stage;     // profile name
+  std::string expected;  // "linear", "n log n", "quadratic", "cubic"
+  std::vector<double> n, seconds;
+  std::vector<std::string> skipped;  // "n = 3000: predicted 45 s per step"
+};
+
+struct Scene {
+  std::string name;
+  WorldDef def;
+  std::function<void(World&, int)> build;
+  std::vector<std::size_t> lines;  // indices into the lines
+  int warmup = 2;
+  std::function<void(World&)> after_start;
+  int max_n = 1 << 30;
+};
+
+/// Per-stage seconds so far, by stage name.
+std::map<std::string, double> stage_seconds(const World& w) {
+  std::map<std::string, double> m;
+  for (const StageTiming& t : w.profile().stages) m[t.name] += t.seconds;
+  return m;
+}
+
+struct Timed {
+  std::map<std::string, double> per_step;  // CPU seconds per step, by stage
+  int steps = 0;
+};
+
+/// Steps `w` until `budget` CPU seconds have passed (at least once, at most
+/// max_steps) and returns each stage's time per step.
+Timed time_steps(World& w, double budget, int max_steps) {
+  const auto before = stage_seconds(w);
+  const double c0 = cpu_seconds(), w0 = now_seconds();
+  int steps = 0;
+  do {
+    w.step();
+    ++steps;
+  } while (steps < max_steps && cpu_seconds() - c0 < budget);
+  const double cpu = cpu_seconds() - c0, wall = now_seconds() - w0;
+  const double scale = wall > 0 ? std::min(1.0, cpu / wall) : 1.0;
+  Timed t;
+  t.steps = steps;
+  for (const auto& [name, s] : stage_seconds(w)) {
+    const auto it = before.find(name);
+    t.per_step[name] = (s - (it == before.end() ? 0.0 : it->second)) * scale / steps;
+  }
+  return t;
+}
+
+/// Predicted seconds per step at n from the line's last two points (growth at
+/// least linear), or 0 if unknown.
+double predict(const Line& l, double n) {
+  const std::size_t k = l.n.size();
+  if (k == 0) return 0;
+  double slope = 1;
+  if (k >= 2 && l.seconds[k - 1] > 0 && l.seconds[k - 2] > 0)
+    slope = std::max(
+        1.0, std::log(l.seconds[k - 1] / l.seconds[k - 2]) / std::log(l.n[k - 1] / l.n[k - 2]));
+  return l.seconds[k - 1] * std::pow(n / l.n[k - 1], slope);
+}
+
+std::string growth_class(double slope) {
+  if (!std::isfinite(slope)) return "-";
+  if (slope < 0.5) return "flat (fixed cost)";
+  if (slope < 1.25) return "linear";
+  if (slope < 1.6) return "n log n .. n^1.5";
+  if (slope < 2.5) return "quadratic";
+  return "cubic";
+}
+
+/// Slope of log t against log n over the upper half of the measured n.
+double upper_slope(const Line& l) {
+  std::vector<double> x, y;
+  const std::size_t from = l.n.size() / 2;
+  for (std::size_t i = from; i < l.n.size(); ++i) {
+    x.push_back(l.n[i]);
+    y.push_back(l.seconds[i]);
+  }
+  if (x.size() < 2) return NAN;
+  return loglog_slope(x, y);
+}
+
+// --- the magnetic forces: direct against tree ------------------------------------------
+
+struct MagneticPoint {
+  double n = 0, direct = 0, tree = 0, error = NAN, torque_error = NAN;
+  bool direct_skipped = false;
+};
+
+double rms_relative(const std::vector<Vec3>& approx, const std::vector<Vec3>& exact) {
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    const Vec3 e = approx[i] - exact[i];
+    num += dot(e, e);
+    den += dot(exact[i], exact[i]);
+  }
+  return std::sqrt(num / den);
+}
+
+/// The error of the tree on a packed block of aligned bars (the hard case:
+/// near forces cancel), measured on the pole model alone.
+double packed_error(int nx, int ny, int nz, double theta) {
+  using namespace alloy::magnetism;
+  std::vector<Pole> poles;
+  std::uint32_t b = 0;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j)
+      for (int k = 0; k < nz; ++k, ++b) {
+        const BarPoles p = bar_poles({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085);
+        poles.push_back({p.north, 100, b});
+        poles.push_back({p.south, -100, b});
+      }
+  auto forces = [&](SummationOptions o) {
+    std::vector<Vec3> pf(poles.size());
+    accumulate_pole_forces(poles, 0.005, pf, o);
+    std::vector<Vec3> f(b);
+    for (std::uint32_t i = 0; i < b; ++i) f[i] = pf[2 * i] + pf[2 * i + 1];
+    return f;
+  };
+  return rms_relative(forces({.method = Summation::Tree, .theta = theta}),
+                      forces({.method = Summation::Direct}));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = Options::parse(argc, argv, "alloy_bench_scaling");
+  const std::vector<int> ns = opt.quick ? std::vector<int>{10, 30, 100, 300}
+                                        : std::vector<int>{10, 30, 100, 300, 1000, 3000, 10000};
+  const double budget = opt.quick ? 0.02 : 0.3;
+  const int max_steps = opt.quick ? 20 : 200;
+
+  std::vector<Line> lines;
+  auto line = [&](std::string label, std::string stage, std::string expected) {
+    lines.push_back({std::move(label), std::move(stage), std::move(expected), {}, {}, {}});
+    return lines.size() - 1;
+  };
+  const std::vector<std::string> rigid = {"rigid_body", "collisions", "gravity.uniform",
+                                          "rigid_body_from_gravity", "rigid_body_from_collisions"};
+  std::vector<Scene> scene_list;
+  scene_list.push_back(
+      {.name = "free",
+       .def = def_with(rigid),
+       .build = build_free,
+       .lines = {line("rigid_body (no contacts)", "rigid_body", "linear"),
+                 line("collisions (no contacts)", "collisions", "linear"),
+                 line("gravity.uniform", "gravity.uniform", "linear"),
+                 line("rigid_body_from_gravity", "rigid_body_from_gravity", "linear")}});
+  scene_list.push_back(
+      {.name = "resting",
+       .def = def_with(rigid),
+       .build = build_resting,
+       .lines = {line("rigid_body (contacts)", "rigid_body", "linear"),
+                 line("collisions (contacts)", "collisions", "linear"),
+                 line("rigid_body_from_collisions", "rigid_body_from_collisions", "linear")},
+       .warmup = 20});
+  {
+    WorldDef d = def_with({"rigid_body", "gravity.nbody", "rigid_body_from_gravity"});
+    d.use["gravity"] = "gravity.nbody";
+    scene_list.push_back({.name = "nbody",
+                          .def = d,
+                          .build = build_nbody,
+                          .lines = {line("gravity.nbody", "gravity.nbody", "quadratic")}});
+  }
+  for (const char* method : {"dense", "sparse"}) {
+    WorldDef d = def_with({"electricity"});
+    d.settings["electricity"].set("dense_limit",
+                                  std::int64_t(std::string(method) == "dense" ? 1 << 30 : 0));
+    scene_list.push_back(
+        {.name = std::string("ladder ") + method,
+         .def = d,
+         .build = build_ladder,
+         .lines = {line(std::string("electricity (") + method + " LU)", "electricity",
+                        std::string(method) == "dense" ? "quadratic" : "linear")},
+         .warmup = 2,
+         // Dense LU of 2n unknowns: n = 3000 would take minutes to factorise.
+         .max_n = std::string(method) == "dense" ? 1000 : 1 << 30});
+  }
+  {
+    WorldDef d = def_with({"sound"});
+    d.settings["sound"].set("max_voices", std::int64_t(100000));
+    scene_list.push_back({.name = "voices",
+                          .def = d,
+                          .build = build_voices,
+                          .lines = {line("sound (n voices)", "sound", "linear")},
+                          .warmup = 1,
+                          .after_start = strike_all});
+  }
+  const std::size_t l_magnetism = line("magnetism", "magnetism", "linear");
+  const std::size_t l_tree = line("magnetic_forces (tree)", "magnetic_forces", "n log n");
+  const std::size_t l_direct = line("magnetic_forces (direct)", "magnetic_forces", "quadratic");
+  const std::size_t l_rbm =
+      line("rigid_body_from_magnetism", "rigid_body_from_magnetism", "linear");
+
+  Progress progress("scaling", ns.size() * (scene_list.size() + 1), opt.progress);
+
+  // 1. The scenes, stage by stage.
+  std::vector<std::string> notes;
+  for (const Scene& sc : scene_list) {
+    for (int n : ns) {
+      progress.tick();
+      if (n > sc.max_n) {
+        for (std::size_t li : sc.lines)
+          lines[li].skipped.push_back("n = " + std::to_string(n) + ": not run (dense LU of " +
+                                      std::to_string(2 * n) + "+ unknowns)");
+        continue;
+      }
+      double predicted = 0;
+      for (std::size_t li : sc.lines) predicted = std::max(predicted, predict(lines[li], n));
+      if (predicted > kSkipSeconds) {
+        for (std::size_t li : sc.lines)
+          lines[li].skipped.push_back("n = " + std::to_string(n) + ": skipped (predicted " +
+                                      fmt(predicted) + " s per step)");
+        continue;
+      }
+      scenes::Sim sim(sc.def);
+      World& w = *sim;
+      sc.build(w, n);
+      w.start();
+      if (sc.after_start) sc.after_start(w);
+      w.run(sc.warmup);
+      const Timed t = time_steps(w, budget, max_steps);
+      for (std::size_t li : sc.lines) {
+        const auto it = t.per_step.find(lines[li].stage);
+        if (it == t.per_step.end()) continue;
+        lines[li].n.push_back(n);
+        lines[li].seconds.push_back(it->second);
+      }
+    }
+  }
+
+  // 2. The magnets: after one step, the error of the tree against the direct
+  //    sum on the same poles; then the same world timed with the tree, then
+  //    with the direct sum.
+  std::vector<MagneticPoint> mag;
+  const double theta = magnetism::kDefaultTheta;
+  for (int n : ns) {
+    progress.tick();
+    WorldDef d =
+        def_with({"rigid_body", "magnetism", "magnetic_forces", "rigid_body_from_magnetism"});
+    d.settings["magnetic_forces"].set("method", std::string("tree"));
+    scenes::Sim sim(d);
+    World& w = *sim;
+    build_magnets(w, n);
+    w.start();
+    w.run(1);
+    auto& forces = dynamic_cast<magnetism::MagneticForces&>(*w.stage("magnetic_forces"));
+    MagneticPoint p{.n = double(n)};
+    {
+      // The error, on the configuration after one step (the same whatever the
+      // timing does later): direct, then tree, on the same poles.
+      std::vector<Vec3> exact_f, exact_t, approx_f, approx_t;
+      forces.set_summation({.method = magnetism::Summation::Direct});
+      forces.update(w.view());
+      for (const auto& b : forces.bodies()) exact_f.push_back(b.force), exact_t.push_back(b.torque);
+      forces.set_summation({.method = magnetism::Summation::Tree, .theta = theta});
+      forces.update(w.view());
+      for (const auto& b : forces.bodies())
+        approx_f.push_back(b.force), approx_t.push_back(b.torque);
+      p.error = rms_relative(approx_f, exact_f);
+      p.torque_error = rms_relative(approx_t, exact_t);
+    }
+    const Timed tt = time_steps(w, budget, max_steps);
+    p.tree = tt.per_step.at("magnetic_forces");
+    for (auto [li, stage] :
+         {std::pair{l_magnetism, "magnetism"}, std::pair{l_rbm, "rigid_body_from_magnetism"}}) {
+      lines[li].n.push_back(n);
+      lines[li].seconds.push_back(tt.per_step.at(stage));
+    }
+    lines[l_tree].n.push_back(n);
+    lines[l_tree].seconds.push_back(p.tree);
+
+    const double predicted = predict(lines[l_direct], n);
+    if (predicted > kSkipSeconds) {
+      p.direct_skipped = true;
+      lines[l_direct].skipped.push_back("n = " + std::to_string(n) + ": skipped (predicted " +
+                                        fmt(predicted) + " s per step)");
+    } else {
+      forces.set_summation({.method = magnetism::Summation::Direct});
+      // One step at most at the largest n: the direct sum is the slow one.
+      const Timed td = time_steps(w, budget, predicted > 1 ? 1 : max_steps);
+      p.direct = td.per_step.at("magnetic_forces");
+      lines[l_direct].n.push_back(n);
+      lines[l_direct].seconds.push_back(p.direct);
+    }
+    mag.push_back(p);
+  }
+  // Where the tree starts to win: log-log interpolation between the last n
+  // where direct was faster and the first where the tree was.
+  double crossover = NAN;
+  for (std::size_t i = 1; i < mag.size(); ++i) {
+    const MagneticPoint &a = mag[i - 1], &b = mag[i];
+    if (a.direct_skipped || b.direct_skipped) continue;
+    const double ra = std::log(a.tree / a.direct), rb = std::log(b.tree / b.direct);
+    if (ra >= 0 && rb < 0) {
+      const double f = ra / (ra - rb);
+      crossover = std::exp(std::log(a.n) + f * (std::log(b.n) - std::log(a.n)));
+    }
+  }
+  double packed = NAN;
+  if (!opt.quick) packed = packed_error(25, 20, 20, theta);
+
+  // 3. Output.
+  {
+    Csv csv(opt.file("scaling.csv"),
+            {"stage", "expected", "n", "seconds_per_step", "fitted_slope_upper_half"});
+    for (const Line& l : lines) {
+      const double s = upper_slope(l);
+      for (std::size_t i = 0; i < l.n.size(); ++i)
+        csv.row({l.label, l.expected, Csv::cell(l.n[i]), Csv::cell(l.seconds[i]), Csv::cell(s)});
+    }
+  }
+  {
+    Csv csv(opt.file("magnetic_crossover.csv"),
+            {"magnets", "direct_seconds_per_step", "tree_seconds_per_step", "theta",
+             "rms_relative_force_error", "rms_relative_torque_error"});
+    for (const MagneticPoint& p : mag)
+      csv.row({Csv::cell(p.n), p.direct_skipped ? "" : Csv::cell(p.direct), Csv::cell(p.tree),
+               Csv::cell(theta), Csv::cell(p.error), Csv::cell(p.torque_error)});
+  }
+  {
+    Plot plot{.title = "Time per step against the number of objects",
+              .x_label = "objects n",
+              .y_label = "CPU time per step (s)"};
+    for (const Line& l : lines)
+      plot.series.push_back(
+          {.name = l.label, .x = l.n, .y = l.seconds, .dashed = l.expected == "quadratic"});
+    write_svg(plot, opt.file("scaling.svg"));
+  }
+  {
+    Plot plot{.title = "magnetic_forces: direct sum against Barnes-Hut tree",
+              .x_label = "magnets n",
+              .y_label = "CPU time per step of magnetic_forces (s)"};
+    Series d{.name = "direct (every pole pair)"}, t{.name = "tree, theta " + fmt(theta)};
+    for (const MagneticPoint& p : mag) {
+      if (!p.direct_skipped) d.x.push_back(p.n), d.y.push_back(p.direct);
+      t.x.push_back(p.n), t.y.push_back(p.tree);
+    }
+    plot.series = {d, t};
+    if (std::isfinite(crossover)) {
+      // The crossover on the direct line (interpolated in log-log).
+      for (std::size_t i = 1; i < d.x.size(); ++i)
+        if (d.x[i - 1] <= crossover && crossover <= d.x[i]) {
+          const double f = std::log(crossover / d.x[i - 1]) / std::log(d.x[i] / d.x[i - 1]);
+          const double y = std::exp(std::log(d.y[i - 1]) + f * std::log(d.y[i] / d.y[i - 1]));
+          plot.markers.push_back({crossover, y, "crossover n = " + fmt(crossover, 2)});
+        }
+    }
+    write_svg(plot, opt.file("magnetic_crossover.svg"));
+  }
+
+  std::string md;
+  {
+    std::vector<std::string> header = {"stage", "expected"};
+    for (int n : ns) header.push_back("n = " + std::to_string(n));
+    header.push_back("slope (upper half)");
+    header.push_back("measured class");
+    Table table(header);
+    for (const Line& l : lines) {
+      std::vector<std::string> row = {l.label, l.expected};
+      for (int n : ns) {
+        const auto it = std::find(l.n.begin(), l.n.end(), double(n));
+        row.push_back(it == l.n.end() ? "-" : fmt(1e3 * l.seconds[it - l.n.begin()]));
+      }
+      const double s = upper_slope(l);
+      row.push_back(std::isfinite(s) ? fmt(s, 2) : "-");
+      row.push_back(growth_class(s));
+      table.row(row);
+    }
+    md += "Milliseconds of CPU per step (dt = 1/240 s); `-`: not measured.\n\n" + table.str();
+    std::string skipped;
+    for (const Line& l : lines)
+      for (const std::string& s : l.skipped) skipped += "- " + l.label + ", " + s + "\n";
+    if (!skipped.empty()) md += "\nNot measured:\n\n" + skipped;
+  }
+  {
+    Table table({"magnets", "direct ms/step", "tree ms/step", "direct / tree",
+                 "RMS rel. force error", "RMS rel. torque error"});
+    for (const MagneticPoint& p : mag)
+      table.row({fmt(p.n), p.direct_skipped ? "-" : fmt(1e3 * p.direct), fmt(1e3 * p.tree),
+                 p.direct_skipped ? "-" : fmt(p.direct / p.tree), fmt(p.error),
+                 fmt(p.torque_error)});
+    md += "\nmagnetic_forces, theta = " + fmt(theta) + " (random magnets):\n\n" + table.str();
+    md += "\nCrossover (tree faster from): n = " +
+          (std::isfinite(crossover) ? fmt(crossover, 2) + " magnets" : std::string("not reached")) +
+          "; `method = \"auto\"` switches at " +
+          std::to_string(magnetism::kTreeCrossoverPoles / 2) + " magnets (" +
+          std::to_string(magnetism::kTreeCrossoverPoles) + " poles).\n";
+    if (std::isfinite(packed))
+      md += "Packed block of 10,000 aligned bars (25 x 20 x 20, touching), theta " + fmt(theta) +
+            ": RMS relative force error " + fmt(packed) + ".\n";
+  }
+  std::printf("%s", md.c_str());
+  if (!opt.quick && !opt.docs.empty()) splice(opt.docs, "scaling", md);
+
+  // Goal of issue 6: the tree within 1e-3 at 10,000 magnets.
+  for (const MagneticPoint& p : mag)
+    if (p.n >= 10000 && !(p.error <= 1e-3)) return 1;
+  return 0;
+}
