@@ -17,7 +17,7 @@ namespace {
 const abi::Api kApi = {
     &LuaStage::api_fetch,    &LuaStage::api_set_scalar, &LuaStage::api_set_vec3,
     &LuaStage::api_set_quat, &LuaStage::api_has,        &LuaStage::api_grow,
-    &LuaStage::api_commands, &LuaStage::api_contacts,
+    &LuaStage::api_commands, &LuaStage::api_contacts,   &LuaStage::api_bulk,
 };
 
 constexpr std::size_t kCommandBuffer = 8192;  // doubles: grows when a call queues more
@@ -197,6 +197,8 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
   infos_ = static_cast<abi::Column*>(lua_newuserdata(L, n * sizeof(abi::Column)));
   std::memset(static_cast<void*>(infos_), 0, n * sizeof(abi::Column));
   call_ = new (lua_newuserdata(L, sizeof(abi::Call))) abi::Call{};
+  bulks_ = static_cast<abi::Bulk*>(lua_newuserdata(L, kMaxBulk * sizeof(abi::Bulk)));
+  std::memset(static_cast<void*>(bulks_), 0, kMaxBulk * sizeof(abi::Bulk));
 
   // The declarations, as the prelude wants them.
   lua_createtable(L, 0, 10);
@@ -251,7 +253,7 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
   lua_setfield(L, d, "settings");
 
   mod_->push_state();
-  mod_->host().call(5, 1, where_);
+  mod_->host().call(6, 1, where_);
   record_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
   (void)fn;
   rebind(decl);
@@ -308,6 +310,7 @@ LuaStage::~LuaStage() {
   ++call_->epoch;
   call_->cmd = nullptr;
   call_->contacts = nullptr;
+  for (int b = 0; b < kMaxBulk; ++b) bulks_[b] = abi::Bulk{};
   luaL_unref(mod_->state(), LUA_REGISTRYINDEX, record_ref_);
 }
 
@@ -354,10 +357,12 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
   // The commands are performed when the call succeeded, all of them; a
   // failed call queues nothing.
-  if (ok && kind_ == StageKind::Interaction && !perform_commands()) {
+  if (ok && kind_ == StageKind::Interaction && !(perform_commands() && perform_bulk())) {
     ok = false;
     failure = InputError(ErrorLocation{where_.file, 0, ""}, last_error_);
   }
+  for (int b = 0; b < bulk_used_; ++b) bulks_[b] = abi::Bulk{};
+  bulk_used_ = 0;
   call_->buf = nullptr;
   call_->buf_len = call_->buf_cap = 0;
   for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
@@ -492,6 +497,29 @@ bool LuaStage::perform_commands() {
       return error(problem), false;
     }
     o += stride;
+  }
+  return true;
+}
+
+bool LuaStage::perform_bulk() {
+  for (int b = 0; b < bulk_used_; ++b) {
+    const abi::Bulk& bulk = bulks_[b];
+    const abi::Column& col = infos_[bulk.column];
+    // The column's members as fetched for this call: live objects in the
+    // stage's area; the prelude refused writes to any other slot, and
+    // values that are not finite.
+    const std::span<const std::uint32_t> members(col.members, col.count);
+    if (native_target_) {
+      native_target_->perform_each(bulk.function, members, bulk.present, bulk.values, bulk.width,
+                                   view_->store());
+      continue;
+    }
+    for (std::uint32_t s : members)
+      if (bulk.present[s] == 1)
+        if (std::string problem = lua_target_->push(
+                bulk.function, s, bulk.values + std::size_t(bulk.width) * s, bulk.width);
+            !problem.empty())
+          return error(problem), false;
   }
   return true;
 }
@@ -683,6 +711,53 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
     return 0;
   } catch (const std::exception& e) {
     return st->error(e.what());
+  }
+}
+
+std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) noexcept {
+  auto* st = static_cast<LuaStage*>(p);
+  try {
+    if (!st->view_ || st->kind_ != StageKind::Interaction) {
+      st->error("only an interaction may queue commands, while it runs");
+      return -1;
+    }
+    if (fn < 0 || std::size_t(fn) >= st->target_functions_.size()) {
+      st->error("no such interaction function");
+      return -1;
+    }
+    const FunctionDecl& f = st->target_functions_[std::size_t(fn)];
+    if (f.args.size() != 1 || f.args[0] == ArgKind::Object) {
+      st->error("'" + f.name + "' has no bulk form (only functions of one number or vec3 have)");
+      return -1;
+    }
+    if (column < 0 || std::size_t(column) >= st->sources_.size() ||
+        st->sources_[std::size_t(column)].what == Source::Output) {
+      st->error("the bulk form of '" + f.name + "' takes a column the stage reads");
+      return -1;
+    }
+    for (int b = 0; b < st->bulk_used_; ++b)  // the same buffer again in the same call
+      if (st->bulks_[b].function == fn && st->bulks_[b].column == column) return b;
+    if (st->bulk_used_ == kMaxBulk) {
+      st->error("more than " + std::to_string(kMaxBulk) + " bulk buffers in one call");
+      return -1;
+    }
+    abi::Column& info = st->infos_[column];
+    if (info.n == 0) st->fetch(std::size_t(column));
+    const int b = st->bulk_used_;
+    BulkStore& store = st->bulk_store_[b];
+    const int width = ::alloy::lua::width(f.args[0]);
+    // 2 everywhere, then 0 on the members: a write is refused outside them.
+    // Storage is kept between calls (no allocation once it has grown).
+    store.present.assign(info.n, 2);
+    for (std::uint32_t j = 0; j < info.count; ++j) store.present[info.members[j]] = 0;
+    if (store.values.size() < std::size_t(width) * info.n)
+      store.values.resize(std::size_t(width) * info.n);
+    st->bulks_[b] = abi::Bulk{store.values.data(), store.present.data(), info.n, width, fn, column};
+    ++st->bulk_used_;
+    return b;
+  } catch (const std::exception& e) {
+    st->error(e.what());
+    return -1;
   }
 }
 

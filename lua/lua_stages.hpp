@@ -82,6 +82,7 @@ class LuaStage {
   static std::int32_t api_grow(void* stage) noexcept;
   static std::int32_t api_commands(void* stage, std::int32_t function) noexcept;
   static std::int32_t api_contacts(void* stage, std::int32_t which) noexcept;
+  static std::int32_t api_bulk(void* stage, std::int32_t function, std::int32_t column) noexcept;
   static int host_last_error(lua_State* L);
   static int host_name(lua_State* L);
   static int host_find(lua_State* L);
@@ -119,6 +120,9 @@ class LuaStage {
   /// target's interaction functions). Returns false with last_error_ set if
   /// one is refused (an object that died).
   bool perform_commands();
+  /// Performs the call's bulk buffers (add_force_each and the like), after
+  /// its single commands. Returns false with last_error_ set if one is refused.
+  bool perform_bulk();
   virtual void fill_outputs(std::size_t k, abi::Column& info) {}
   virtual std::int32_t commands(std::int32_t fn) { return error("only a resolver has commands"); }
 
@@ -150,6 +154,15 @@ class LuaStage {
   LuaResolver* lua_target_ = nullptr;
   std::vector<FunctionDecl> target_functions_;
   std::vector<double> commands_;  // the call's command buffer (abi::Call::buf)
+  // Bulk buffers (abi::Bulk): a few per call, their storage kept between calls.
+  static constexpr int kMaxBulk = 8;
+  struct BulkStore {
+    std::vector<double> values;
+    std::vector<std::uint8_t> present;
+  };
+  abi::Bulk* bulks_ = nullptr;  // userdata in the mod's state, kMaxBulk of them
+  BulkStore bulk_store_[kMaxBulk];
+  int bulk_used_ = 0;
   // The collisions derived set, if declared.
   const rigid::CollisionSet* collisions_ = nullptr;
   std::vector<abi::Contact> contacts_;

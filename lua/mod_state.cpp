@@ -688,7 +688,7 @@ void ModState::begin_loading() {
 void ModState::charge() {
   const std::int64_t spent = std::int64_t(granted_) - std::int64_t(abi_budget_->ticks);
   if (spent > 0) step_ticks_ += std::uint64_t(spent);
-  granted_ = abi_budget_->ticks;
+  granted_ = std::int32_t(abi_budget_->ticks);
 }
 
 void ModState::end_call() {

@@ -55,6 +55,27 @@ class RigidBodyTarget final : public NativeTarget {
     }
     return "";
   }
+  void perform_each(std::int32_t fn, std::span<const std::uint32_t> members,
+                    const std::uint8_t* present, const double* v, int width,
+                    const PropertyStore& store) override {
+    if (width != 3) throw AccessError("rigid_body's interaction functions take a vec3");
+    // The members are live (a column's, in this phase): the slot fast path,
+    // as a native stage looping over a column uses it.
+    switch (fn) {
+      case 0:
+        for (std::uint32_t s : members)
+          if (present[s] == 1) rigid_.add_force(s, Vec3{v[3 * s], v[3 * s + 1], v[3 * s + 2]});
+        return;
+      case 1: {
+        for (std::uint32_t s : members)
+          if (present[s] == 1)
+            rigid_.add_torque(store.id_at(s), Vec3{v[3 * s], v[3 * s + 1], v[3 * s + 2]});
+        return;
+      }
+    }
+    throw AccessError("rigid_body's interaction function #" + std::to_string(fn) +
+                      " has no bulk form");
+  }
 
  private:
   rigid::RigidBodyResolver& rigid_;

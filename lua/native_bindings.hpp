@@ -11,6 +11,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -32,6 +33,13 @@ class NativeTarget {
   /// [b, b + n), checked by the prelude except for the objects being alive.
   /// Returns "" or what was refused.
   virtual std::string perform(const double* b, std::size_t n, const PropertyStore& store) = 0;
+  /// Performs a bulk buffer of function `fn` (one argument): for each slot
+  /// in `members` (live objects, from a column fetched in this call) whose
+  /// `present` is 1, the call with the slot's `width` values. The values
+  /// were checked by the prelude.
+  virtual void perform_each(std::int32_t fn, std::span<const std::uint32_t> members,
+                            const std::uint8_t* present, const double* values, int width,
+                            const PropertyStore& store) = 0;
 };
 
 /// The interaction functions Lua may call on the native resolver `resolver`,

@@ -85,9 +85,28 @@ struct Contact {
   Vec3 point;            ///< the first point, m
 };
 
+/// An interaction's bulk buffer: one value per object slot for one of its
+/// target's interaction functions (`add_force_each`), queued for the members
+/// of one column when the call returns. `present` is 0 for a member not yet
+/// written, 1 for a member written, 2 for a slot that is not a member (a
+/// write there is refused at the mod's line).
+struct Bulk {
+  double* values;         ///< width doubles per slot
+  std::uint8_t* present;  ///< one per slot
+  std::uint32_t n;        ///< slots while valid in the current call, 0 otherwise
+  std::int32_t width;     ///< 1 (a number) or 3 (a vec3)
+  std::int32_t function;  ///< the target's interaction function
+  std::int32_t column;    ///< the column whose members it covers
+};
+
 /// A mod's budget as its ticks see it (budget_ticks.hpp).
 struct Budget {
-  std::int32_t ticks = 0;    ///< ticks left before the host checks the budgets
+  /// Ticks left before the host checks the budgets. A double, not an int:
+  /// the tick stores it in every loop iteration of a mod, and LuaJIT takes an
+  /// integer store as possibly changing the uint32 counts and sizes of
+  /// columns the loop reads, reloading them each iteration; a double store
+  /// lets it hoist them out of the loop.
+  double ticks = 0;
   std::int32_t stopped = 0;  ///< 1 once the mod is stopped: every tick fails
 };
 
@@ -107,12 +126,16 @@ struct Api {
   std::int32_t (*grow)(void* stage) noexcept;  ///< more room in Call::buf
   std::int32_t (*commands)(void* stage, std::int32_t function) noexcept;
   std::int32_t (*contacts)(void* stage, std::int32_t which) noexcept;
+  /// A bulk buffer (Bulk) of `function` over the members of `column`: its
+  /// index, or -1 on error.
+  std::int32_t (*bulk)(void* stage, std::int32_t function, std::int32_t column) noexcept;
 };
 
 static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
 static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
 static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 &&
               offsetof(Call, in_call) == 80 && sizeof(Call) == 88);
+static_assert(offsetof(Bulk, n) == 16 && offsetof(Bulk, column) == 28 && sizeof(Bulk) == 32);
 static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 &&
               sizeof(Contact) == 96);
 
@@ -141,7 +164,11 @@ typedef struct alloy_contact {
   double speed, depth, impulse, total_impulse;
   alloy_vec3 normal, point;
 } alloy_contact;
-typedef struct alloy_budget { int32_t ticks, stopped; } alloy_budget;
+typedef struct alloy_bulk {
+  double* values; uint8_t* present;
+  uint32_t n; int32_t width, fn, column;
+} alloy_bulk;
+typedef struct alloy_budget { double ticks; int32_t stopped; } alloy_budget;
 typedef struct alloy_api {
   int32_t (*fetch)(void*, int32_t);
   int32_t (*set_scalar)(void*, int32_t, double, double);
@@ -151,6 +178,7 @@ typedef struct alloy_api {
   int32_t (*grow)(void*);
   int32_t (*commands)(void*, int32_t);
   int32_t (*contacts)(void*, int32_t);
+  int32_t (*bulk)(void*, int32_t, int32_t);
 } alloy_api;
 )C";
 

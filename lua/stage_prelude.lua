@@ -18,6 +18,7 @@ local column_ptr = ffi.typeof("alloy_column*")
 local call_ptr = ffi.typeof("alloy_call*")
 local contact_ptr = ffi.typeof("const alloy_contact*")
 local cmd_ptr = ffi.typeof("const double*")
+local bulk_ptr = ffi.typeof("alloy_bulk*")
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
 local floor, sqrt, huge = math.floor, math.sqrt, math.huge
@@ -431,6 +432,84 @@ local function target_function(rec, index, fname, kinds)
   end
 end
 
+-- The bulk form of interaction function `index` (one number or vec3
+-- argument): fname_each(col) gives a buffer indexed by slot, whose entries
+-- written during the call are queued, for the members of `col`, when the call
+-- returns (one C++ loop, no command record per object). The same buffer comes
+-- back for the same column within a call; a buffer is only valid in its call.
+-- The proxies are made once per buffer index and column, not per call.
+local function bulk_function(rec, index, fname, kind, column_of)
+  local ptr, call = rec.ptr, rec.call
+  local what = "'" .. fname .. "_each'"
+  local proxies = {}  -- [buffer index][column] -> proxy
+  local function proxy(b, col, cname)
+    local bk = rec.bulks + b
+    local function check(i)
+      if bk.n == 0 or bk.fn ~= index or bk.column ~= col then
+        error(what .. ": a buffer can only be used in the call that got it", 3)
+      end
+      if type(i) ~= "number" then error(what .. ": index with an object (a slot number), got " .. type(i), 3) end
+      if not (i >= 0 and i < bk.n and i == floor(i)) or bk.present[i] == 2 then
+        error(what .. ": the object in slot " .. tostring(i) .. " is not a member of column '" .. cname .. "'", 3)
+      end
+    end
+    local newindex, get
+    if kind == "vec3" then
+      newindex = function(_, i, v)
+        check(i)
+        v = to_vec3(v, what)
+        local x, y, z = v.x, v.y, v.z
+        if not (x - x == 0 and y - y == 0 and z - z == 0) then
+          error(what .. ": values must be finite, got " .. tostring(v), 2)
+        end
+        local o = i * 3
+        local vals = bk.values
+        vals[o], vals[o + 1], vals[o + 2] = x, y, z
+        bk.present[i] = 1
+      end
+      get = function(_, i)
+        check(i)
+        if bk.present[i] ~= 1 then return nil end
+        local vals, o = bk.values, i * 3
+        local r = vec3_t(vals[o], vals[o + 1], vals[o + 2])
+        return r
+      end
+    else
+      newindex = function(_, i, v)
+        check(i)
+        if type(v) ~= "number" then error(what .. " takes numbers, got " .. type(v), 2) end
+        if not (v - v == 0) then error(what .. ": values must be finite, got " .. tostring(v), 2) end
+        bk.values[i] = v
+        bk.present[i] = 1
+      end
+      get = function(_, i)
+        check(i)
+        if bk.present[i] ~= 1 then return nil end
+        return bk.values[i]
+      end
+    end
+    return setmetatable({}, {
+      __index = get,
+      __newindex = newindex,
+      __metatable = "bulk buffer",
+      __tostring = function() return "buffer of " .. what .. " over column '" .. cname .. "'" end,
+    })
+  end
+  return function(col)
+    if call.in_call == 0 then not_in_call(what) end
+    local e = column_of[col]
+    if not e then error(what .. " takes a column the stage reads (w:read(name)), got " .. type(col), 2) end
+    local k = e.k
+    local b = api.bulk(ptr, index, k)
+    if b < 0 then fail(rec, 1) end
+    local by_col = proxies[b]
+    if not by_col then by_col = {} proxies[b] = by_col end
+    local p = by_col[k]
+    if not p then p = proxy(b, k, e.c.name) by_col[k] = p end
+    return p
+  end
+end
+
 -- Iterator over a resolver's queued commands of one function: slot, args...
 local function command_iterator(rec, fname, f)
   local call = rec.call
@@ -476,20 +555,27 @@ end
 -- decl (from C++): name, kind, columns = { {name, kind, writable, output, values, set}, ... },
 -- functions (a resolver's own, for w:commands), target = { name, functions },
 -- contacts (bool), settings, area. state: the mod's state table.
-function M.new_stage(handle, infos_ud, call_ud, decl, state)
+function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
   local rec = {
     handle = handle,  -- a lightuserdata, for the host's C functions
     ptr = ffi.cast("void*", handle),  -- the same as a cdata, for FFI calls (the JIT compiles only these)
     infos = ffi.cast(column_ptr, infos_ud),
     call = ffi.cast(call_ptr, call_ud),
-    keep = { infos_ud, call_ud },  -- the C++ side writes into these: keep them alive with the record
+    bulks = ffi.cast(bulk_ptr, bulks_ud),
+    keep = { infos_ud, call_ud, bulks_ud },  -- the C++ side writes into these: keep them alive with the record
     decl = decl,
     def = {},
   }
   local reads, writes, outputs, derived = {}, {}, {}, {}
+  local column_of = {}  -- proxy or name -> entry, for the bulk forms
   for k, c in ipairs(decl.columns) do
     local reader, writer = column_proxy(rec, k - 1, c)
     local entry = { k = k - 1, reader = reader, writer = writer, c = c }
+    if not c.output then
+      column_of[reader] = entry
+      if writer then column_of[writer] = entry end
+      if not c.set then column_of[c.name] = entry end
+    end
     if c.set then
       derived[c.set] = derived[c.set] or {}
       derived[c.set][c.name] = entry
@@ -591,6 +677,12 @@ function M.new_stage(handle, infos_ud, call_ud, decl, state)
     local t = {}
     for _, f in ipairs(decl.target.functions) do
       t[f.name] = target_function(rec, f.index, f.name, f.kinds)
+    end
+    for _, f in ipairs(decl.target.functions) do
+      local kind = f.kinds[1]
+      if #f.kinds == 1 and (kind == "vec3" or kind == "number") and t[f.name .. "_each"] == nil then
+        t[f.name .. "_each"] = bulk_function(rec, f.index, f.name, kind, column_of)
+      end
     end
     w.target = frozen(t, "target '" .. decl.target.name .. "'")
   end
