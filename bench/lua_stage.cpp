@@ -364,5 +364,6 @@ int main(int argc, char** argv) {
   }
   if (!opt.quick) bench::splice(opt.docs, "lua_stage", table.str());
   std::printf("goal (Lua at most 2x C++ at 1,000 and 10,000 bodies): %s\n", met ? "met" : "missed");
-  return met ? 0 : 1;
+  // --quick is a smoke run (a few rounds, noisy ratios): it does not judge the goal.
+  return met || opt.quick ? 0 : 1;
 }
