@@ -106,7 +106,7 @@ class ColumnWriter {
     }
     if (!c_->has(slot)) {
       c_->values_[slot] = value;
-      c_->mark_present(slot, true);
+      c_->mark_present_by_resolver(slot, true);
       ++c_->version_;
     } else if (!(c_->values_[slot] == value)) {
       c_->values_[slot] = value;
@@ -121,7 +121,7 @@ class ColumnWriter {
       return;
     }
     c_->values_[slot] = T{};
-    c_->mark_present(slot, false);
+    c_->mark_present_by_resolver(slot, false);
     ++c_->version_;
   }
   /// The objects carrying the property (in scope), ascending.

@@ -108,7 +108,7 @@ ObjectId PropertyStore::create() {
   }
   alive_[slot] = 1;
   ++live_count_;
-  ++structure_version_;
+  ++log_.structure;
   return ObjectId{slot, generations_[slot]};
 }
 
@@ -122,15 +122,14 @@ void PropertyStore::destroy(ObjectId id) {
   if (++generations_[id.index] == 0) generations_[id.index] = 1;
   free_slots_.push_back(id.index);
   --live_count_;
-  ++structure_version_;
+  ++log_.structure;
 }
 
-void PropertyStore::check_alive(ObjectId id) const {
+void PropertyStore::not_alive(ObjectId id) const {
   if (id.is_null()) throw AccessError("null object id");
   if (id.index >= generations_.size()) throw AccessError("object #" + std::to_string(id.index) + " never existed");
-  if (!alive(id))
-    throw AccessError("object #" + std::to_string(id.index) + " (generation " +
-                      std::to_string(id.generation) + ") was destroyed");
+  throw AccessError("object #" + std::to_string(id.index) + " (generation " +
+                    std::to_string(id.generation) + ") was destroyed");
 }
 
 ObjectId PropertyStore::id_at(std::uint32_t slot) const {
@@ -160,14 +159,15 @@ std::string PropertyStore::describe(ObjectId id) const {
   return "#" + std::to_string(id.index);
 }
 
-ColumnBase& PropertyStore::column(PropertyId id) const {
+ColumnBase& PropertyStore::make_column(PropertyId id) const {
   if (id >= registry_.size()) throw AccessError("no property with id " + std::to_string(id));
   if (columns_.size() <= id) columns_.resize(registry_.size());
   auto& c = columns_[id];
   if (!c) {
-    c = dispatch(registry_.def(id).kind, [&]<class T>(std::type_identity<T>) -> std::unique_ptr<ColumnBase> {
-      return std::make_unique<Column<T>>(id, &structure_version_);
-    });
+    c = dispatch(registry_.def(id).kind,
+                 [&]<class T>(std::type_identity<T>) -> std::unique_ptr<ColumnBase> {
+                   return std::make_unique<Column<T>>(id, &log_);
+                 });
     c->resize(generations_.size());
   }
   return *c;
@@ -230,8 +230,19 @@ PropertyValue PropertyStore::get(ObjectId id, PropertyId prop) const {
 }
 
 void PropertyStore::refresh() {
+  // Every membership change moves the structure counter: nothing moved, nothing to do.
+  const std::uint64_t now = log_.structure + log_.by_resolvers;
+  if (refreshed_at_ == now) return;
   for (auto& c : columns_)
     if (c) c->refresh_members();
+  refreshed_at_ = now;
+}
+
+std::vector<PropertyId> PropertyStore::take_resolver_changes() {
+  std::vector<PropertyId> out;
+  out.swap(log_.columns);
+  for (PropertyId p : out) columns_[p]->logged_ = false;
+  return out;
 }
 
 }  // namespace alloy

@@ -24,10 +24,20 @@
 
 namespace alloy {
 
+/// The store's record of membership changes, which the columns update: an
+/// edit's (scene, player, timeline) or an object's creation or destruction is
+/// structural and rebuilds every resolver; a resolver's, through a
+/// ColumnWriter, is logged by column, so that the world rebuilds only the
+/// stages that read or write those columns.
+struct MembershipLog {
+  std::uint64_t structure = 0;      ///< objects created or destroyed, memberships edited
+  std::uint64_t by_resolvers = 0;   ///< memberships changed through ColumnWriter
+  std::vector<PropertyId> columns;  ///< columns behind by_resolvers since the last take
+};
+
 class ColumnBase {
  public:
-  ColumnBase(PropertyId id, std::uint64_t* structure_counter)
-      : id_(id), structure_counter_(structure_counter) {}
+  ColumnBase(PropertyId id, MembershipLog* log) : id_(id), log_(log) {}
   virtual ~ColumnBase() = default;
 
   PropertyId id() const { return id_; }
@@ -54,13 +64,24 @@ class ColumnBase {
       present_[slot] = on;
       members_dirty_ = true;
       ++membership_version_;
-      ++*structure_counter_;
+      ++log_->structure;
+    }
+  }
+  /// The same, made by a resolver (ColumnWriter): logged, not structural.
+  void mark_present_by_resolver(std::uint32_t slot, bool on) {
+    if (present_[slot] != on) {
+      present_[slot] = on;
+      members_dirty_ = true;
+      ++membership_version_;
+      ++log_->by_resolvers;
+      if (!logged_) logged_ = true, log_->columns.push_back(id_);
     }
   }
   void refresh_members();
 
   PropertyId id_;
-  std::uint64_t* structure_counter_;  // the store's: any membership change is structural
+  MembershipLog* log_;   // the store's
+  bool logged_ = false;  // in log_->columns
   std::vector<std::uint8_t> present_;
   std::vector<std::uint32_t> members_;
   bool members_dirty_ = false;
@@ -115,13 +136,23 @@ class PropertyStore {
            alive_[id.index];
   }
   /// Throws AccessError naming the object if `id` is stale or null.
-  void check_alive(ObjectId id) const;
+  void check_alive(ObjectId id) const {
+    if (!alive(id)) [[unlikely]]
+      not_alive(id);
+  }
   /// The live id in `slot`, or a null id.
   ObjectId id_at(std::uint32_t slot) const;
   std::size_t slot_count() const { return generations_.size(); }
   std::size_t object_count() const { return live_count_; }
-  /// Moves when objects are created or destroyed or any membership changes.
-  std::uint64_t structure_version() const { return structure_version_; }
+  /// Moves when objects are created or destroyed or an edit changes a
+  /// membership (not when a resolver does: resolver_membership_version).
+  std::uint64_t structure_version() const { return log_.structure; }
+  /// Moves when a resolver, through a ColumnWriter, gives an object a
+  /// property or takes one away.
+  std::uint64_t resolver_membership_version() const { return log_.by_resolvers; }
+  /// The columns whose membership resolvers changed since the last call, and
+  /// forgets them.
+  std::vector<PropertyId> take_resolver_changes();
 
   // --- names (the "name" convenience property, indexed) ----------------------
   /// Sets the unique scene name; throws InputError on a duplicate.
@@ -134,7 +165,11 @@ class PropertyStore {
   /// The column of a property, created on first use. The typed form checks the
   /// requested type against the property's kind and throws AccessError.
   /// Columns are created on first use, so this is logically const.
-  ColumnBase& column(PropertyId id) const;
+  ColumnBase& column(PropertyId id) const {
+    if (id < columns_.size() && columns_[id]) [[likely]]
+      return *columns_[id];
+    return make_column(id);
+  }
   const ColumnBase* find_column(PropertyId id) const {
     return id < columns_.size() ? columns_[id].get() : nullptr;
   }
@@ -160,6 +195,8 @@ class PropertyStore {
  private:
   friend class ResolverAccess;  // the only way to a writable column
   template <class T> Column<T>& typed_mut(PropertyId id) const;
+  ColumnBase& make_column(PropertyId id) const;
+  [[noreturn]] void not_alive(ObjectId id) const;
 
   PropertyRegistry& registry_;
   mutable std::vector<std::unique_ptr<ColumnBase>> columns_;
@@ -169,7 +206,8 @@ class PropertyStore {
   std::vector<std::string> names_;
   std::map<std::string, ObjectId, std::less<>> by_name_;
   std::size_t live_count_ = 0;
-  mutable std::uint64_t structure_version_ = 0;  // columns bump it (see ColumnBase)
+  mutable MembershipLog log_;           // columns update it (see ColumnBase)
+  std::uint64_t refreshed_at_ = ~0ull;  // log_.structure + log_.by_resolvers at the last refresh()
 };
 
 // ---------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 #include "runtime/property_types.hpp"
 
 #include <algorithm>
+#include <bit>
 
 #include "runtime/error.hpp"
 
@@ -49,17 +50,26 @@ PropertyId PropertyRegistry::add(PropertyDef def) {
   const auto id = PropertyId(defs_.size());
   by_name_.emplace(def.name, id);
   defs_.push_back(std::move(def));
+  index(id);
   return id;
 }
 
-std::optional<PropertyId> PropertyRegistry::find(std::string_view name) const {
-  auto it = by_name_.find(name);
-  if (it == by_name_.end()) return std::nullopt;
-  return it->second;
+void PropertyRegistry::index(PropertyId id) {
+  if (2 * (defs_.size()) > table_.size()) {  // grow: rehash everything
+    table_.assign(std::bit_ceil(std::max<std::size_t>(64, 4 * defs_.size())), kNoProperty);
+    for (PropertyId p = 0; p < defs_.size(); ++p) {
+      std::size_t i = hash(defs_[p].name) & (table_.size() - 1);
+      while (table_[i] != kNoProperty) i = (i + 1) & (table_.size() - 1);
+      table_[i] = p;
+    }
+    return;
+  }
+  std::size_t i = hash(defs_[id].name) & (table_.size() - 1);
+  while (table_[i] != kNoProperty) i = (i + 1) & (table_.size() - 1);
+  table_[i] = id;
 }
 
-PropertyId PropertyRegistry::id(std::string_view name) const {
-  if (auto id = find(name)) return *id;
+void PropertyRegistry::unknown(std::string_view name) const {
   std::string msg = "unknown property '" + std::string(name) + "'";
   if (auto near = closest_name(name, names()); !near.empty()) msg += " (did you mean '" + near + "'?)";
   throw InputError(msg);

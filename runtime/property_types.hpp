@@ -92,9 +92,13 @@ struct PropertyDef {
 class PropertyRegistry {
  public:
   PropertyId add(PropertyDef def);
+  /// Inline and hashed: stages look properties up by name in their steps.
   std::optional<PropertyId> find(std::string_view name) const;
   /// Throws InputError("unknown property 'x'") if missing.
-  PropertyId id(std::string_view name) const;
+  PropertyId id(std::string_view name) const {
+    if (const auto found = find(name)) return *found;
+    unknown(name);
+  }
   const PropertyDef& def(PropertyId id) const { return defs_.at(id); }
   std::size_t size() const { return defs_.size(); }
   /// Index of an enum value by name, or nullopt.
@@ -103,9 +107,29 @@ class PropertyRegistry {
   std::vector<std::string> names() const;
 
  private:
+  [[noreturn]] void unknown(std::string_view name) const;
+  static std::size_t hash(std::string_view s) {  // FNV-1a: names are short
+    std::size_t h = 1469598103934665603ull;
+    for (char c : s) h = (h ^ std::uint8_t(c)) * 1099511628211ull;
+    return h;
+  }
+  void index(PropertyId id);
+
   std::vector<PropertyDef> defs_;
-  std::map<std::string, PropertyId, std::less<>> by_name_;
+  std::map<std::string, PropertyId, std::less<>> by_name_;  // sorted, for names()
+  /// Open addressing on hash(name), at most half full; kNoProperty: empty.
+  std::vector<PropertyId> table_;
 };
+
+inline std::optional<PropertyId> PropertyRegistry::find(std::string_view name) const {
+  if (table_.empty()) return std::nullopt;
+  const std::size_t mask = table_.size() - 1;
+  for (std::size_t i = hash(name) & mask;; i = (i + 1) & mask) {
+    const PropertyId id = table_[i];
+    if (id == kNoProperty) return std::nullopt;
+    if (defs_[id].name == name) return id;
+  }
+}
 
 /// Closest registered name to `name` by edit distance (for "did you mean"), or "".
 std::string closest_name(std::string_view name, const std::vector<std::string>& candidates);

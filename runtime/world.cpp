@@ -397,7 +397,18 @@ void World::publish_phase() {
 // --- structure and activation ----------------------------------------------------
 
 void World::sync_structure() {
-  if (synced_ && seen_structure_ == store_.structure_version() && !frozen_changed_) return;
+  // Objects created or destroyed, memberships edited from outside or by
+  // resolvers (the store counts the two apart), objects frozen or unfrozen,
+  // stages swapped: every resolver rebuilds. Rebuilding, after a resolver's
+  // own membership change, only the stages that read, write or need the
+  // changed columns (store_.take_resolver_changes()) was tried and measured:
+  // it changes results (the doorbell at dt = 1/60 rings, tests/coupled),
+  // because a rebuild of the rigid body is not neutral (docs/performance.md,
+  // "Harness overhead on rigid bodies"). It waits for that.
+  const bool structural = !synced_ || seen_structure_ != store_.structure_version() ||
+                          frozen_changed_ ||
+                          seen_by_resolvers_ != store_.resolver_membership_version();
+  if (!structural) return;
   synced_ = true;
   if (frozen_changed_ || !frozen_.empty()) {
     // Frozen objects leave every scope: global stages act on live_ (every
@@ -411,12 +422,12 @@ void World::sync_structure() {
   }
   // A resolver's build may give objects a column that makes another plugin
   // needed (gravity publishes `gravity`); settle that in a few rounds. Only
-  // the first round rebuilds every resolver: later rounds see memberships that
+  // the first round rebuilds resolvers: later rounds see memberships that
   // resolvers wrote themselves, so only resolvers created in them are built.
   for (int round = 0; round < 4; ++round) {
     store_.refresh();
     activate_needed();
-    seen_structure_ = store_.structure_version();
+    const std::uint64_t before = store_.resolver_membership_version();
     for (Slot* s : resolvers_) {
       if (round > 0 && s->built) continue;
       s->built = true;
@@ -425,9 +436,11 @@ void World::sync_structure() {
       s->resolver->build(access);
     }
     store_.refresh();
-    if (seen_structure_ == store_.structure_version()) break;
+    if (store_.resolver_membership_version() == before) break;
   }
+  store_.take_resolver_changes();  // seen
   seen_structure_ = store_.structure_version();
+  seen_by_resolvers_ = store_.resolver_membership_version();
   for (auto& s : slots_)
     if (!s->resolver) s->stage->on_structure_changed(WorldView(*this, s->scope));
   current_stage_ = nullptr;

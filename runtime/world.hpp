@@ -297,6 +297,7 @@ class World {
   bool synced_ = false;
   bool primed_ = false;  // start() has primed the pipeline
   std::uint64_t seen_structure_ = 0;
+  std::uint64_t seen_by_resolvers_ = 0;  // store_.resolver_membership_version() at the last sync
   std::vector<ObjectId> frozen_;  // by slot
   bool frozen_changed_ = false;   // since the last structure sync
   Scope live_;  // every object not frozen: the scope of global stages while any is frozen

@@ -154,5 +154,20 @@ TEST_F(PropertyStoreTest, OwnersDeclareBoundsThatEveryEditObeys) {
   EXPECT_EQ(message(axis, Vec3{0, 0, 1}), "accepted");
 }
 
+TEST(PropertyRegistryTest, FindsEveryNameAmongManyAndNoOther) {
+  // The name index grows as properties are registered (a scene with every
+  // plugin has over a hundred): each stays findable, unknown names are not.
+  PropertyRegistry r;
+  for (int i = 0; i < 300; ++i) {
+    const PropertyId id = r.add({.name = "p" + std::to_string(i)});
+    for (int j = 0; j <= i; j += 37) EXPECT_EQ(r.find("p" + std::to_string(j)), PropertyId(j));
+    EXPECT_EQ(id, PropertyId(i));
+  }
+  for (int i = 0; i < 300; ++i) EXPECT_EQ(r.id("p" + std::to_string(i)), PropertyId(i));
+  EXPECT_FALSE(r.find("p300").has_value());
+  EXPECT_FALSE(r.find("").has_value());
+  EXPECT_THROW(r.id("p3000"), InputError);
+}
+
 }  // namespace
 }  // namespace alloy
