@@ -28,6 +28,8 @@ struct CollisionSet::Impl {
     ObjectId id;
     bool capsule = false;
     bool placed = false;
+    bool movable = false;
+    double inscribed = 0;  ///< radius of the largest sphere inside the shape, m
     Vec3 pos;
     Quat q;
   };
@@ -38,6 +40,7 @@ struct CollisionSet::Impl {
   }
   ~Impl() {
     clear_geoms();
+    if (ray) dGeomDestroy(ray);
     dSpaceDestroy(space);
   }
 
@@ -87,21 +90,25 @@ struct CollisionSet::Impl {
           const Vec3 e = sz.value_or(s, {});
           if (!(e.x > 0 && e.y > 0 && e.z > 0)) throw InputError(where, "a box needs a size with every extent > 0");
           g.geom = dCreateBox(space, e.x, e.y, e.z);
+          g.inscribed = 0.5 * std::min({e.x, e.y, e.z});
           break;
         }
         case Shape::Sphere:
           if (!(rad.value_or(s, 0) > 0)) throw InputError(where, "a sphere needs a radius > 0");
           g.geom = dCreateSphere(space, rad[s]);
+          g.inscribed = rad[s];
           break;
         case Shape::Capsule:
           if (!(rad.value_or(s, 0) > 0) || !(len.value_or(s, 0) >= 0))
             throw InputError(where, "a capsule needs a radius > 0 and a length >= 0");
           g.geom = dCreateCapsule(space, rad[s], len.value_or(s, 0));
           g.capsule = true;
+          g.inscribed = rad[s];
           break;
       }
       g.id = id;
       const bool is_static = stat.value_or(s, 0);
+      g.movable = !is_static;
       dGeomSetCategoryBits(g.geom, is_static ? kStaticBit : kMovableBit);
       dGeomSetCollideBits(g.geom, is_static ? kMovableBit : kStaticBit | kMovableBit);
       dGeomSetData(g.geom, reinterpret_cast<void*>(std::uintptr_t(s)));
@@ -118,6 +125,10 @@ struct CollisionSet::Impl {
       if (!a.has(s) || !b.has(s) || a[s].is_null() || b[s].is_null()) continue;
       joined.push_back(pair_key(a[s].index, b[s].index));
     }
+    jointed.assign(geoms.size(), false);
+    for (std::uint32_t s : j.members())
+      for (const ObjectId o : {a.value_or(s, {}), b.value_or(s, {})})
+        if (!o.is_null() && o.index < jointed.size()) jointed[o.index] = true;
     std::sort(joined.begin(), joined.end());
   }
 
@@ -130,6 +141,12 @@ struct CollisionSet::Impl {
       const Quat q = rot.value_or(s, Quat{});
       // Unchanged parts (static ones, resting ones) keep their cached bounds.
       if (g.placed && x == g.pos && q == g.q) continue;
+      // Far enough in one step to have crossed a thin part: sweep it after the
+      // narrow phase (a quarter of the inscribed radius squared: half of it).
+      if (ccd && g.placed && g.movable && !(s < jointed.size() && jointed[s])) {
+        const Vec3 d = x - g.pos;
+        if (dot(d, d) > 0.25 * g.inscribed * g.inscribed) candidates.push_back({s, g.pos});
+      }
       g.placed = true, g.pos = x, g.q = q;
       dGeomSetPosition(g.geom, x.x, x.y, x.z);
       dQuaternion oq;
@@ -171,10 +188,48 @@ struct CollisionSet::Impl {
     m.pairs->push_back(pair);
   }
 
+  // --- continuous detection -----------------------------------------------------
+  struct Candidate {
+    std::uint32_t slot;
+    Vec3 from;  ///< the centre's position at the previous update
+  };
+  /// The first surface a ray from a swept part's centre meets.
+  struct RayHit {
+    const Impl* m = nullptr;
+    std::uint32_t self = 0;
+    const std::vector<ContactPair>* touching = nullptr;  ///< pairs of the previous update, sorted
+    double t = 1e300;  ///< distance along the ray, m
+    std::uint32_t slot = 0;
+    Vec3 position, normal;
+  };
+
+  static void ray_callback(void* data, dGeomID o1, dGeomID o2) {
+    auto& h = *static_cast<RayHit*>(data);
+    const Impl& m = *h.m;
+    dGeomID other = o1 == m.ray ? o2 : o1;
+    const auto s = std::uint32_t(reinterpret_cast<std::uintptr_t>(dGeomGetData(other)));
+    if (s == h.self) return;
+    if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(h.self, s))) return;
+    // Parts it touched already: the discrete contact is handling them.
+    ContactPair key;
+    key.a = m.geoms[std::min(s, h.self)].id, key.b = m.geoms[std::max(s, h.self)].id;
+    if (std::binary_search(h.touching->begin(), h.touching->end(), key, by_pair)) return;
+    dContactGeom c;
+    if (dCollide(m.ray, other, 1, &c, sizeof(dContactGeom)) <= 0 || !(c.depth < h.t)) return;
+    h.t = c.depth, h.slot = s, h.position = to_vec3(c.pos), h.normal = to_vec3(c.normal);
+  }
+
+  bool ccd = true;
+  dGeomID ray = nullptr;  // not in the space; made at the first sweep
+  std::vector<Candidate> candidates;
+
   dSpaceID space = nullptr;
   std::vector<Geom> geoms;  // by slot
   std::vector<std::uint32_t> geom_slots;
   std::vector<std::uint64_t> joined;  // slot pairs held by a joint, sorted
+  // Parts held by a joint are not swept: moving one back would tear the joint
+  // open, and a swinging chain's links are not projectiles.
+  std::vector<bool> jointed;  // by slot
   std::vector<dContactGeom> buffer;
   bool geoms_dirty = true, joints_dirty = true;
 
@@ -212,6 +267,8 @@ void CollisionSet::update(const WorldView& world) {
   ensure_ode();
   Impl& m = *impl_;
   m.resolve_ids(world);
+  m.ccd = rigid_.config().ccd;
+  m.candidates.clear();
   if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
     m.rebuild_geoms(world);
     m.geoms_dirty = false;
@@ -231,6 +288,7 @@ void CollisionSet::update(const WorldView& world) {
   m.pairs = &current_;
   m.points = &points_;
   dSpaceCollide(m.space, &m, &Impl::near_callback);
+  sweep(world);
   std::sort(current_.begin(), current_.end(), by_pair);
 
   // The rigid body's impulses are for the pairs it was given, i.e. those that
@@ -296,6 +354,57 @@ void CollisionSet::update(const WorldView& world) {
     world.emit(std::move(e));
   }
   step_ = step;
+}
+
+void CollisionSet::sweep(const WorldView& world) {
+  Impl& m = *impl_;
+  sweeps_.clear();
+  if (m.candidates.empty()) return;
+  if (!m.ray) m.ray = dCreateRay(nullptr, 1);
+  const double dt = world.dt();
+  // The overlap a swept part is left with: the rigid body's resting overlap,
+  // so that the next narrow phase finds the contact and the solver keeps it.
+  const double layer = rigid_.config().surface_layer;
+  for (const Impl::Candidate& cand : m.candidates) {
+    const Impl::Geom& g = m.geoms[cand.slot];
+    const Vec3 d = g.pos - cand.from;
+    const double len = length(d);
+    // Only motion along the part's velocity is swept: an edit that moves a
+    // part (a player carrying it through a wall) is not undone.
+    if (length(d - m.vel.value_or(cand.slot, {}) * dt) > 0.5 * len) continue;
+    const Vec3 dir = d / len;
+    dGeomRaySet(m.ray, cand.from.x, cand.from.y, cand.from.z, dir.x, dir.y, dir.z);
+    dGeomRaySetLength(m.ray, len);
+    Impl::RayHit hit{.m = &m, .self = cand.slot, .touching = &previous_};
+    dSpaceCollide2(m.ray, reinterpret_cast<dGeomID>(m.space), &hit, &Impl::ray_callback);
+    if (!(hit.t <= len)) continue;  // the centre crossed no surface: the discrete test sees it
+
+    // Back along the path to where the part, a sphere of its inscribed radius,
+    // touches the surface it crossed with the resting overlap.
+    Vec3 n = hit.normal;
+    if (dot(n, dir) > 0) n = -n;  // out of the surface, towards where the part came from
+    const double incidence = std::max(-dot(n, dir), 0.05);
+    const double along = std::max(0.0, hit.t - (g.inscribed - layer) / incidence);
+    const Vec3 centre = cand.from + dir * along;
+    sweeps_.push_back({g.id, centre - g.pos});
+
+    // Its discrete pairs were found at the tunnelled pose: the swept contact replaces them.
+    std::erase_if(current_, [&](const ContactPair& p) { return p.a == g.id || p.b == g.id; });
+    const bool self_first = cand.slot < hit.slot;
+    ContactPair pair;
+    pair.a = m.geoms[self_first ? cand.slot : hit.slot].id;
+    pair.b = m.geoms[self_first ? hit.slot : cand.slot].id;
+    const ContactPoint p{centre - n * g.inscribed, self_first ? n : -n,
+                         std::max(0.0, g.inscribed - dot(centre - hit.position, n))};
+    pair.first = std::uint32_t(points_.size());
+    pair.count = 1;
+    pair.depth = p.depth;
+    const std::uint32_t sa = self_first ? cand.slot : hit.slot, sb = self_first ? hit.slot : cand.slot;
+    pair.normal_speed = dot(m.point_velocity(sb, p.position) - m.point_velocity(sa, p.position), p.normal);
+    points_.push_back(p);
+    current_.push_back(pair);
+  }
+  std::sort(sweeps_.begin(), sweeps_.end(), [](const Sweep& x, const Sweep& y) { return x.part < y.part; });
 }
 
 }  // namespace alloy::rigid

@@ -14,6 +14,16 @@
 // Emits    contact_began {speed, depth} and contact_ended {impulse, duration}.
 //
 // Pairs of two static parts are never tested (floor against wall).
+//
+// Continuous detection (rigid_body setting `ccd`, on by default): a movable
+// part that moved more than half its inscribed radius in the last step, along
+// its velocity, is swept: a ray from its centre's previous position to its
+// current one against the space. If the centre crossed a surface, the part has
+// tunnelled (or sunk past the point where the discrete contact's normal can be
+// trusted): its discrete pairs are replaced by one contact with the surface it
+// crossed first, at the pose where it first touches it, and sweeps() says how
+// far the part must move back to that pose (the rigid body applies it before
+// its next advance, Box2D's time-of-impact idea without the sub-step).
 #pragma once
 
 #include <memory>
@@ -27,6 +37,12 @@
 namespace alloy::rigid {
 
 class RigidBodyResolver;
+
+/// A part moved back along its path to where it first touched a surface.
+struct Sweep {
+  ObjectId part;
+  Vec3 displacement;  ///< from its current position to the touching one, m
+};
 
 /// Two parts in contact (or, in ended(), no longer in contact).
 struct ContactPair {
@@ -64,6 +80,8 @@ class CollisionSet final : public DerivedSet {
   /// The world step of the last update: began() and ended() are about that
   /// step (the set is skipped, and keeps its lists, while nothing moves).
   std::uint64_t step() const { return step_; }
+  /// Parts that tunnelled in the last step, in ObjectId order (see the header).
+  std::span<const Sweep> sweeps() const { return sweeps_; }
   /// Whether a and b touch (in either order), and the pair if so.
   const ContactPair* find(ObjectId a, ObjectId b) const;
 
@@ -74,7 +92,10 @@ class CollisionSet final : public DerivedSet {
   std::vector<ContactPair> began_, ongoing_, ended_;
   std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; scratch for the merge
   std::vector<ContactPoint> points_;
+  std::vector<Sweep> sweeps_;
   std::uint64_t step_ = 0;
+
+  void sweep(const WorldView& world);
 };
 
 }  // namespace alloy::rigid

@@ -40,7 +40,7 @@ const std::vector<std::string>& RigidBodyConfig::keys() {
   static const std::vector<std::string> k = {"solver", "iterations", "sor", "erp", "cfm",
                                              "max_contacts", "surface_layer", "max_correcting_velocity",
                                              "substeps", "auto_disable", "auto_disable_linear",
-                                             "auto_disable_angular", "auto_disable_steps"};
+                                             "auto_disable_angular", "auto_disable_steps", "ccd"};
   return k;
 }
 
@@ -69,6 +69,7 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   c.substeps = int(s.integer("substeps", c.substeps));
   if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be between 1 and 1000");
   c.auto_disable = s.boolean("auto_disable", c.auto_disable);
+  c.ccd = s.boolean("ccd", c.ccd);
   c.auto_disable_linear = s.number("auto_disable_linear", c.auto_disable_linear);
   if (!(c.auto_disable_linear >= 0)) bad("auto_disable_linear must be >= 0 m/s");
   c.auto_disable_angular = s.number("auto_disable_angular", c.auto_disable_angular);
@@ -651,6 +652,30 @@ void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const 
   contacts_.push_back(c);
 }
 
+void RigidBodyResolver::displace(ObjectId part, Vec3 displacement) {
+  displacements_.emplace_back(part, displacement);
+}
+
+void RigidBodyResolver::apply_displacements() {
+  Impl& m = *impl_;
+  // Of several parts of one body (an assembly) the one moved back furthest wins.
+  std::vector<std::pair<std::int32_t, Vec3>> moves;
+  for (const auto& [part, d] : displacements_) {
+    const std::int32_t b = m.body_of(part);
+    if (b < 0 || m.bodies[b].kinematic) continue;
+    auto it = std::find_if(moves.begin(), moves.end(), [&](const auto& mv) { return mv.first == b; });
+    if (it == moves.end()) moves.emplace_back(b, d);
+    else if (length(d) > length(it->second)) it->second = d;
+  }
+  for (const auto& [b, d] : moves) {
+    const dBodyID id = m.bodies[b].id;
+    const dReal* x = dBodyGetPosition(id);
+    dBodySetPosition(id, x[0] + d.x, x[1] + d.y, x[2] + d.z);
+    dBodyEnable(id);
+  }
+  displacements_.clear();
+}
+
 void RigidBodyResolver::apply_loads() {
   Impl& m = *impl_;
   for (const LoadCommand& c : forces_) {
@@ -811,6 +836,7 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
     m.damping_dt = h;
   }
   if (config_.auto_disable) wake_on_load_change();
+  if (!displacements_.empty()) apply_displacements();
 
   // Contact points as queued; their depth is carried forward between substeps.
   m.depth.resize(contact_points_.size());

@@ -31,6 +31,8 @@ void RigidBodyFromCollisions::apply(const WorldView& world) {
     c.bounce_velocity = bounce_velocity_;
     target_.add_contact(c, points.subspan(p.first, p.count));
   };
+  // Parts that tunnelled go back to where they first touched (continuous detection).
+  for (const Sweep& s : contacts_.sweeps()) target_.displace(s.part, s.displacement);
   // Every touching pair, began and ongoing merged so that commands stay in (a, b) order.
   const auto began = contacts_.began(), ongoing = contacts_.ongoing();
   std::size_t i = 0, j = 0;
