@@ -171,7 +171,7 @@ ElectricityResolver::InputVersions ElectricityResolver::input_versions(const Wor
   for (std::size_t i = 0; i < kNetworkInputCount; ++i) {
     const ColumnBase& c = view.store().column(input_ids_[i]);
     // emf values enter only the right-hand side; its membership is structural.
-    v[2 * i] = kNetworkInputs[i] == std::string_view(prop::kEmf) ? 0 : c.version();
+    v[2 * i] = input_ids_[i] == emf_id_(view) ? 0 : c.version();
     v[2 * i + 1] = c.membership_version();
   }
   return v;
@@ -378,10 +378,10 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   // The coil's state is its `current` property (written at the end of every
   // advance, or edited from outside): reading it here makes a rebuild, a swap
   // or an edit lose nothing.
-  const auto current = access.column<double>(prop::kCurrent);
+  const auto current = current_id_.column<double>(access);
   for (Coil& c : coils_) c.current = current.value_or(c.slot, 0.0);
 
-  const auto emf = access.column<double>(prop::kEmf);
+  const auto emf = emf_id_.column<double>(access);
   const std::size_t nb = batteries_.size();
   for (std::size_t k = 0; k < nb; ++k) e_[k] = emf[batteries_[k]];
   for (int step = 0; step < config_.substeps; ++step) {
@@ -396,9 +396,9 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
 }
 
 void ElectricityResolver::write_outputs(ResolverAccess& access) {
-  auto current = access.writer<double>(prop::kCurrent);
-  auto voltage = access.writer<double>(prop::kVoltage);
-  auto powered = access.writer<std::uint8_t>(prop::kPowered);
+  auto current = current_id_.writer<double>(access);
+  auto voltage = voltage_id_.writer<double>(access);
+  auto powered = powered_id_.writer<std::uint8_t>(access);
   const double threshold = config_.powered_threshold;
   const auto& p = potential_;
 

@@ -37,6 +37,7 @@
 
 #include "resolvers/electricity/mna.hpp"
 #include "runtime/plugin_registry.hpp"
+#include "runtime/property_ref.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -187,6 +188,9 @@ class ElectricityResolver final : public Resolver {
   InputVersions seen_versions_{};
   std::array<PropertyId, kNetworkInputCount> input_ids_{};  // resolved at the first use
   bool input_ids_resolved_ = false;
+  // The columns of every advance, resolved at the first use.
+  PropertyRef current_id_{prop::kCurrent}, voltage_id_{prop::kVoltage}, powered_id_{prop::kPowered},
+      emf_id_{prop::kEmf};
   std::uint64_t seen_current_version_ = 0;
   std::uint64_t network_builds_ = 0;
   Network network_;

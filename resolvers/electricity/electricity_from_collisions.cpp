@@ -15,9 +15,9 @@ int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orienta
 }
 
 void ElectricityFromCollisions::apply(const WorldView& world) {
-  const auto conductive = world.column<std::uint8_t>(prop::kConductive);
-  const auto position = world.column<Vec3>("position");
-  const auto orientation = world.column<Quat>("orientation");
+  const auto conductive = conductive_.column<std::uint8_t>(world);
+  const auto position = position_.column<Vec3>(world);
+  const auto orientation = orientation_.column<Quat>(world);
   auto conducts = [&](ObjectId o) { return conductive.has(o.index) && conductive[o.index] != 0; };
 
   // The touching pairs of two conductive parts, in (a, b) order: began and

@@ -44,6 +44,7 @@ class ElectricityFromCollisions final : public Interaction {
   ElectricityResolver& target_;
   const rigid::CollisionSet& contacts_;
   std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
+  PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};
 };
 
 /// Registers the `electricity` resolver and the `electricity_from_collisions`

@@ -96,7 +96,8 @@ void NBodyGravity::advance(ResolverAccess& access, double) {
 }
 
 void NBodyGravity::on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) {
-  auto gravity = access.writer<Vec3>("gravity");
+  resolve_ids(access);
+  auto gravity = access.writer<Vec3>(gravity_);
   for (std::uint32_t s : left) gravity.erase(s);
 }
 

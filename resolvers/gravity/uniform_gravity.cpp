@@ -39,7 +39,8 @@ void UniformGravity::advance(ResolverAccess& access, double) {
 }
 
 void UniformGravity::on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) {
-  auto gravity = access.writer<Vec3>("gravity");
+  if (gravity_ == kNoProperty) gravity_ = access.property("gravity");
+  auto gravity = access.writer<Vec3>(gravity_);
   for (std::uint32_t s : left) gravity.erase(s);
 }
 

@@ -87,30 +87,50 @@ void ensure_geometry_properties(PropertyRegistry& registry) {
     }
 }
 
-MagnetColumns MagnetColumns::bind(const WorldView& w) {
-  MagnetColumns c;
-  c.magnet = w.column<EnumValue>(prop::kMagnet);
-  c.pole_strength = w.column<double>(prop::kPoleStrength);
-  c.pole_separation = w.column<double>(prop::kPoleSeparation);
-  c.turns = w.column<double>(prop::kTurns);
-  c.coil_factor = w.column<double>(prop::kCoilFactor);
-  c.coil_time_constant = w.column<double>(prop::kCoilTimeConstant);
-  c.susceptibility = w.column<double>(prop::kSusceptibility);
-  c.saturation_pole = w.column<double>(prop::kSaturationPole);
-  c.position = w.column<Vec3>(prop::kPosition);
-  c.orientation = w.column<Quat>(prop::kOrientation);
-  c.shape = w.column<EnumValue>(prop::kShape);
-  c.size = w.column<Vec3>(prop::kSize);
-  c.radius = w.column<double>(prop::kRadius);
-  c.length = w.column<double>(prop::kLength);
-  const PropertyId shape = w.property(prop::kShape);
+MagnetColumns::Ids MagnetColumns::Ids::resolve(const WorldView& w) {
+  Ids i{.magnet = w.property(prop::kMagnet),
+        .pole_strength = w.property(prop::kPoleStrength),
+        .pole_separation = w.property(prop::kPoleSeparation),
+        .turns = w.property(prop::kTurns),
+        .coil_factor = w.property(prop::kCoilFactor),
+        .coil_time_constant = w.property(prop::kCoilTimeConstant),
+        .susceptibility = w.property(prop::kSusceptibility),
+        .saturation_pole = w.property(prop::kSaturationPole),
+        .position = w.property(prop::kPosition),
+        .orientation = w.property(prop::kOrientation),
+        .shape = w.property(prop::kShape),
+        .size = w.property(prop::kSize),
+        .radius = w.property(prop::kRadius),
+        .length = w.property(prop::kLength)};
   auto index = [&](const char* name) {
-    auto v = w.properties().enum_value(shape, name);
+    auto v = w.properties().enum_value(i.shape, name);
     return v ? v->index : -1;
   };
-  c.shape_box = index("box");
-  c.shape_sphere = index("sphere");
-  c.shape_capsule = index("capsule");
+  i.shape_box = index("box");
+  i.shape_sphere = index("sphere");
+  i.shape_capsule = index("capsule");
+  return i;
+}
+
+MagnetColumns MagnetColumns::bind(const WorldView& w, const Ids& i) {
+  MagnetColumns c;
+  c.magnet = w.column<EnumValue>(i.magnet);
+  c.pole_strength = w.column<double>(i.pole_strength);
+  c.pole_separation = w.column<double>(i.pole_separation);
+  c.turns = w.column<double>(i.turns);
+  c.coil_factor = w.column<double>(i.coil_factor);
+  c.coil_time_constant = w.column<double>(i.coil_time_constant);
+  c.susceptibility = w.column<double>(i.susceptibility);
+  c.saturation_pole = w.column<double>(i.saturation_pole);
+  c.position = w.column<Vec3>(i.position);
+  c.orientation = w.column<Quat>(i.orientation);
+  c.shape = w.column<EnumValue>(i.shape);
+  c.size = w.column<Vec3>(i.size);
+  c.radius = w.column<double>(i.radius);
+  c.length = w.column<double>(i.length);
+  c.shape_box = i.shape_box;
+  c.shape_sphere = i.shape_sphere;
+  c.shape_capsule = i.shape_capsule;
   return c;
 }
 

@@ -20,7 +20,8 @@ Vec3 MagneticForces::field(Vec3 point) const {
 
 void MagneticForces::update(const WorldView& world) {
   ++updates_;
-  const MagnetColumns c = MagnetColumns::bind(world);
+  if (!ids_) ids_ = MagnetColumns::Ids::resolve(world);
+  const MagnetColumns c = MagnetColumns::bind(world, *ids_);
   const PropertyStore& store = world.store();
 
   bodies_.clear();

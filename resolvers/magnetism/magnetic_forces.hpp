@@ -21,9 +21,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
+#include "resolvers/magnetism/magnet_parts.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
@@ -83,6 +85,7 @@ class MagneticForces : public DerivedSet {
   int induction_iterations_ = 0;
   bool induction_converged_ = true;
   std::uint64_t updates_ = 0;
+  std::optional<MagnetColumns::Ids> ids_;  // resolved at the first update
 };
 
 }  // namespace alloy::magnetism

@@ -5,8 +5,8 @@
 namespace alloy::magnetism {
 
 void MagnetismFromElectricity::apply(const WorldView& world) {
-  const auto magnet = world.column<EnumValue>(prop::kMagnet);
-  const auto current = world.column<double>(prop::kCurrent);
+  const auto magnet = magnet_.column<EnumValue>(world);
+  const auto current = current_.column<double>(world);
   const PropertyStore& store = world.store();
   // Every step, not only on change: the resolver keeps the last command, but a
   // swapped-in resolver starts with none, and coils are few.

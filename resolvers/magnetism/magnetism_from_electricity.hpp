@@ -14,6 +14,8 @@
 #pragma once
 
 #include "resolvers/magnetism/magnetism_resolver.hpp"
+#include "resolvers/magnetism/magnet_parts.hpp"
+#include "runtime/property_ref.hpp"
 #include "runtime/stage.hpp"
 
 namespace alloy::magnetism {
@@ -28,6 +30,7 @@ class MagnetismFromElectricity : public Interaction {
 
  private:
   MagnetismResolver& target_;
+  PropertyRef magnet_{prop::kMagnet}, current_{prop::kCurrent};
 };
 
 }  // namespace alloy::magnetism

@@ -18,7 +18,8 @@ std::optional<double> MagnetismResolver::commanded_current(ObjectId id) const {
 }
 
 void MagnetismResolver::build(ResolverAccess& access) {
-  const MagnetColumns c = MagnetColumns::bind(access);
+  if (!ids_) ids_ = MagnetColumns::Ids::resolve(access);
+  const MagnetColumns c = MagnetColumns::bind(access, *ids_);
   const PropertyStore& store = access.store();
   // Refuse a part that cannot be simulated now, naming it, rather than letting
   // it exert nothing without a word.
@@ -37,9 +38,10 @@ void MagnetismResolver::build(ResolverAccess& access) {
 }
 
 void MagnetismResolver::advance(ResolverAccess& access, double dt) {
-  const MagnetColumns c = MagnetColumns::bind(access);
+  if (!ids_) ids_ = MagnetColumns::Ids::resolve(access);
+  const MagnetColumns c = MagnetColumns::bind(access, *ids_);
   const PropertyStore& store = access.store();
-  auto pole_strength = access.writer<double>(prop::kPoleStrength);
+  auto pole_strength = access.writer<double>(ids_->pole_strength);
 
   // 1. Perform the commands queued by the interactions of the last step.
   for (const Command& cmd : queue_) {

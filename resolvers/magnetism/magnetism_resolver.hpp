@@ -24,6 +24,7 @@
 #include <optional>
 #include <vector>
 
+#include "resolvers/magnetism/magnet_parts.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -65,6 +66,7 @@ class MagnetismResolver : public Resolver {
   };
   std::vector<Command> queue_;
   std::vector<Coil> coils_;
+  std::optional<MagnetColumns::Ids> ids_;  // resolved at the first build or advance
 };
 
 }  // namespace alloy::magnetism

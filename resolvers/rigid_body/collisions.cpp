@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 
 #include "resolvers/rigid_body/ode_support.hpp"
 #include "resolvers/rigid_body/properties.hpp"
@@ -155,10 +156,15 @@ struct CollisionSet::Impl {
     }
   }
 
-  Vec3 point_velocity(std::uint32_t s, Vec3 p) const {
-    const Vec3 v = vel.value_or(s, {});
-    if (!angvel.has(s)) return v;
-    return v + cross(angvel[s], p - geoms[s].pos);
+  /// A part's motion, read once per touching pair (not once per point).
+  struct Motion {
+    Vec3 v, w, x;
+    bool spins;
+    Vec3 at(Vec3 p) const { return spins ? v + cross(w, p - x) : v; }
+  };
+  Motion motion(std::uint32_t s) const {
+    const bool spins = angvel.has(s);
+    return {vel.value_or(s, {}), spins ? angvel[s] : Vec3{}, geoms[s].pos, spins};
   }
 
   static void near_callback(void* data, dGeomID g1, dGeomID g2) {
@@ -171,21 +177,20 @@ struct CollisionSet::Impl {
     if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
     const int n = dCollide(g1, g2, int(m.buffer.size()), m.buffer.data(), sizeof(dContactGeom));
     if (n <= 0) return;
-    ContactPair pair;
+    ContactPair& pair = m.pairs->emplace_back();
     pair.a = m.geoms[s1].id;
     pair.b = m.geoms[s2].id;
     pair.first = std::uint32_t(m.points->size());
     pair.count = std::uint32_t(n);
     pair.normal_speed = -1e300;
+    const Motion m1 = m.motion(s1), m2 = m.motion(s2);
     for (int k = 0; k < n; ++k) {
       const dContactGeom& c = m.buffer[std::size_t(k)];
-      const ContactPoint p{to_vec3(c.pos), to_vec3(c.normal), c.depth};
-      m.points->push_back(p);
+      const ContactPoint& p = m.points->emplace_back(to_vec3(c.pos), to_vec3(c.normal), c.depth);
       pair.depth = std::max(pair.depth, p.depth);
-      const double closing = dot(m.point_velocity(s2, p.position) - m.point_velocity(s1, p.position), p.normal);
+      const double closing = dot(m2.at(p.position) - m1.at(p.position), p.normal);
       pair.normal_speed = std::max(pair.normal_speed, closing);
     }
-    m.pairs->push_back(pair);
   }
 
   // --- continuous detection -----------------------------------------------------
@@ -231,6 +236,8 @@ struct CollisionSet::Impl {
   // open, and a swinging chain's links are not projectiles.
   std::vector<bool> jointed;  // by slot
   std::vector<dContactGeom> buffer;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // sort keys of the step's pairs
+  std::vector<ContactPair> sorted;
   bool geoms_dirty = true, joints_dirty = true;
 
   bool have_ids = false;
@@ -289,7 +296,15 @@ void CollisionSet::update(const WorldView& world) {
   m.points = &points_;
   dSpaceCollide(m.space, &m, &Impl::near_callback);
   sweep(world);
-  std::sort(current_.begin(), current_.end(), by_pair);
+  // Sorted by slot pair (the same order as by (a, b): live objects have
+  // distinct slots) through 16-byte keys, not by moving the pairs themselves.
+  m.order.clear();
+  for (std::uint32_t k = 0; k < current_.size(); ++k)
+    m.order.push_back({(std::uint64_t(current_[k].a.index) << 32) | current_[k].b.index, k});
+  std::sort(m.order.begin(), m.order.end());
+  m.sorted.clear();
+  for (const auto& [key, k] : m.order) m.sorted.push_back(current_[k]);
+  std::swap(current_, m.sorted);
 
   // The rigid body's impulses are for the pairs it was given, i.e. those that
   // touched at the previous update: merge them in by pair.
@@ -400,7 +415,7 @@ void CollisionSet::sweep(const WorldView& world) {
     pair.count = 1;
     pair.depth = p.depth;
     const std::uint32_t sa = self_first ? cand.slot : hit.slot, sb = self_first ? hit.slot : cand.slot;
-    pair.normal_speed = dot(m.point_velocity(sb, p.position) - m.point_velocity(sa, p.position), p.normal);
+    pair.normal_speed = dot(m.motion(sb).at(p.position) - m.motion(sa).at(p.position), p.normal);
     points_.push_back(p);
     current_.push_back(pair);
   }

@@ -781,8 +781,8 @@ void RigidBodyResolver::add_contact_joints(double h, bool first) {
       contact.surface.mode = mode;
       contact.surface.motionN = 0;
       if (depth < 0.5 * config_.surface_layer) {
-        const double approach = approach_speed(b1, b2, p.position, sign * p.normal);
-        if (c.restitution <= 0 || approach <= c.bounce_velocity) {
+        // The approach speed matters only to a point that may bounce.
+        if (c.restitution <= 0 || approach_speed(b1, b2, p.position, sign * p.normal) <= c.bounce_velocity) {
           contact.surface.mode |= dContactMotionN;
           contact.surface.motionN = -(config_.surface_layer - depth) / h;
         }

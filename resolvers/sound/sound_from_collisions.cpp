@@ -28,7 +28,7 @@ void SoundFromCollisions::apply(const WorldView& world) {
   });
 
   // 3. New impacts (began is sorted by pair, so pending_ is in a fixed order).
-  const auto acoustic = world.column<EnumValue>("acoustic");
+  const auto acoustic = acoustic_.column<EnumValue>(world);
   const double min_speed = sound_.settings().min_speed;
   for (const rigid::ContactPair& p : collisions_.began()) {
     const Key k{p.a, p.b, p.began_step};
@@ -42,7 +42,7 @@ void SoundFromCollisions::apply(const WorldView& world) {
 }
 
 void SoundFromCollisions::strike(const WorldView& world, const Impact& impact, double impulse) {
-  const auto acoustic = world.column<EnumValue>("acoustic");
+  const auto acoustic = acoustic_.column<EnumValue>(world);
   const ObjectId a = impact.key.a, b = impact.key.b;
   if (acoustic.has(a))
     sound_.strike({.part = a, .other = b, .normal_speed = impact.normal_speed, .impulse = impulse});

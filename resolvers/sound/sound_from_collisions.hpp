@@ -24,6 +24,7 @@
 
 #include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
+#include "runtime/property_ref.hpp"
 
 namespace alloy::sound {
 
@@ -49,6 +50,8 @@ class SoundFromCollisions final : public Interaction {
   };
 
   void strike(const WorldView& world, const Impact& impact, double impulse);
+
+  PropertyRef acoustic_{"acoustic"};
 
   SoundResolver& sound_;
   const rigid::CollisionSet& collisions_;
