@@ -349,6 +349,8 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   ++call_->epoch;
   if (kind_ == StageKind::Interaction) {
     if (commands_.size() < kCommandBuffer) commands_.resize(kCommandBuffer);
+    refresh_alive(view.store());
+    call_->alive = alive_.data();
     call_->buf = commands_.data();
     call_->buf_len = 0;
     call_->buf_cap = double(commands_.size());
@@ -365,6 +367,7 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   bulk_used_ = 0;
   call_->buf = nullptr;
   call_->buf_len = call_->buf_cap = 0;
+  call_->alive = nullptr;
   for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
   call_->in_call = 0;
   call_->cmd = nullptr;
@@ -458,12 +461,25 @@ void LuaStage::fetch(std::size_t k) {
   }
 }
 
+void LuaStage::refresh_alive(const PropertyStore& store) {
+  const std::size_t slots = store.slot_count();
+  if (alive_version_ == store.structure_version() && alive_.size() == slots) return;
+  alive_.resize(std::max<std::size_t>(1, slots));  // never empty: data() is non-null
+  for (std::size_t s = 0; s < slots; ++s) alive_[s] = store.id_at(std::uint32_t(s)) ? 1 : 0;
+  alive_.resize(slots);
+  alive_version_ = store.structure_version();
+}
+
 bool LuaStage::perform_commands() {
   const double* b = commands_.data();
   const auto n = std::size_t(call_->buf_len);
   const PropertyStore& store = view_->store();
   if (native_target_) {
-    if (std::string problem = native_target_->perform(b, n, store); !problem.empty())
+    // The prelude checked every slot against alive_ as it queued; those
+    // flags still hold if no object came or went since (nothing can in a
+    // stage's call, but the check is one comparison).
+    const bool checked = alive_version_ == store.structure_version();
+    if (std::string problem = native_target_->perform(b, n, store, checked); !problem.empty())
       return error(problem), false;
     return true;
   }

@@ -668,7 +668,7 @@ void ModState::begin_call(std::uint64_t step) {
       std::chrono::duration_cast<std::chrono::steady_clock::duration>(
           std::chrono::duration<double>(std::max(0.0, budget_.seconds_per_step - step_seconds_)));
   granted_ = stopped_ ? 0 : kQuantum;
-  abi_budget_->ticks = granted_;
+  abi_budget_->ticks = float(granted_);
   abi_budget_->stopped = stopped_ ? 1 : 0;
 }
 
@@ -681,7 +681,7 @@ void ModState::begin_loading() {
   deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                 std::chrono::duration<double>(budget_.seconds_to_load));
   granted_ = stopped_ ? 0 : kQuantum;
-  abi_budget_->ticks = granted_;
+  abi_budget_->ticks = float(granted_);
   loading_ = true;
 }
 
@@ -741,7 +741,7 @@ int ModState::over_budget(lua_State* L) {
                         std::to_string(limit >> 20) + " MiB (an allocation bomb?)");
   }
   self->granted_ = kQuantum;
-  self->abi_budget_->ticks = kQuantum;
+  self->abi_budget_->ticks = float(kQuantum);
   return 0;
 }
 

@@ -30,10 +30,16 @@ class RigidBodyTarget final : public NativeTarget {
     }
     throw AccessError("rigid_body has no interaction function #" + std::to_string(fn));
   }
-  std::string perform(const double* b, std::size_t n, const PropertyStore& store) override {
+  std::string perform(const double* b, std::size_t n, const PropertyStore& store,
+                      bool alive_checked) override {
     for (std::size_t o = 0; o < n;) {
       const auto fn = std::int32_t(b[o]);
       const auto slot = std::uint32_t(b[o + 1]);
+      if (alive_checked && fn == 0) {  // the fast path, as a native stage's loop over a column
+        rigid_.add_force(slot, Vec3{b[o + 2], b[o + 3], b[o + 4]});
+        o += 5;
+        continue;
+      }
       const ObjectId id = store.id_at(slot);
       if (!id)
         return "'" + kRigidBody[std::size_t(fn < 0 || fn > 2 ? 0 : fn)].name +

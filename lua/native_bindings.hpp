@@ -30,9 +30,11 @@ class NativeTarget {
   /// with its packed arguments. Throws AccessError or InputError.
   virtual void call(std::int32_t fn, ObjectId object, const double* args) = 0;
   /// Performs a call's command records {function, slot, arguments...}
-  /// [b, b + n), checked by the prelude except for the objects being alive.
-  /// Returns "" or what was refused.
-  virtual std::string perform(const double* b, std::size_t n, const PropertyStore& store) = 0;
+  /// [b, b + n), checked by the prelude, the objects being alive included if
+  /// `alive_checked` (else they are checked here). Returns "" or what was
+  /// refused.
+  virtual std::string perform(const double* b, std::size_t n, const PropertyStore& store,
+                              bool alive_checked) = 0;
   /// Performs a bulk buffer of function `fn` (one argument): for each slot
   /// in `members` (live objects, from a column fetched in this call) whose
   /// `present` is 1, the call with the slot's `width` values. The values

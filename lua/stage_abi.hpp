@@ -70,6 +70,10 @@ struct Call {
   std::uint32_t slots = 0;   ///< object slots in the world
   std::int32_t in_call = 0;  ///< 1 while the stage runs
   std::uint32_t epoch = 0;   ///< moves at every call: lists of an older call are refused
+  /// An interaction's per-slot flags, `slots` of them: 1 if the slot holds a
+  /// live object, else 0. Its functions check a slot against them as they
+  /// queue a command (kept between calls, rebuilt when objects come or go).
+  const std::uint8_t* alive = nullptr;
 };
 
 /// A contact pair of the collisions derived set, copied for Lua.
@@ -101,12 +105,16 @@ struct Bulk {
 
 /// A mod's budget as its ticks see it (budget_ticks.hpp).
 struct Budget {
-  /// Ticks left before the host checks the budgets. A double, not an int:
-  /// the tick stores it in every loop iteration of a mod, and LuaJIT takes an
-  /// integer store as possibly changing the uint32 counts and sizes of
-  /// columns the loop reads, reloading them each iteration; a double store
-  /// lets it hoist them out of the loop.
-  double ticks = 0;
+  /// Ticks left before the host checks the budgets (at most a quantum, a
+  /// few thousand: exact in a float). A float, neither an int nor a double:
+  /// the tick stores it in every loop iteration of a mod, and LuaJIT takes
+  /// a store as possibly changing any field of the same type. An integer
+  /// store would make it reload the uint32 counts and sizes of the columns
+  /// the loop reads; a double store would make it reload the tick itself
+  /// after every double the loop stores (the command buffer), a chain
+  /// through memory in every iteration. No other float is stored in a
+  /// loop, so LuaJIT keeps the count in a register between iterations.
+  float ticks = 0;
   std::int32_t stopped = 0;  ///< 1 once the mod is stopped: every tick fails
 };
 
@@ -134,7 +142,7 @@ struct Api {
 static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
 static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
 static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 &&
-              offsetof(Call, in_call) == 80 && sizeof(Call) == 88);
+              offsetof(Call, in_call) == 80 && offsetof(Call, alive) == 88 && sizeof(Call) == 96);
 static_assert(offsetof(Bulk, n) == 16 && offsetof(Bulk, column) == 28 && sizeof(Bulk) == 32);
 static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 &&
               sizeof(Contact) == 96);
@@ -158,6 +166,7 @@ typedef struct alloy_call {
   double* buf; const double* cmd; const void* contacts;
   uint32_t cmd_count, cmd_stride, contact_count, slots;
   int32_t in_call; uint32_t epoch;
+  const uint8_t* alive;
 } alloy_call;
 typedef struct alloy_contact {
   uint32_t a, b; int32_t points, began;
@@ -168,7 +177,7 @@ typedef struct alloy_bulk {
   double* values; uint8_t* present;
   uint32_t n; int32_t width, fn, column;
 } alloy_bulk;
-typedef struct alloy_budget { double ticks; int32_t stopped; } alloy_budget;
+typedef struct alloy_budget { float ticks; int32_t stopped; } alloy_budget;
 typedef struct alloy_api {
   int32_t (*fetch)(void*, int32_t);
   int32_t (*set_scalar)(void*, int32_t, double, double);

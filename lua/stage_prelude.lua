@@ -264,6 +264,11 @@ local function column_proxy(rec, k, c)
   end
   -- for i in col:each(): the slots of the members; the position is kept in
   -- a small table (a closure per loop would keep the caller out of the JIT).
+  -- A loop that ran to its end gives its table back for the next loop, so
+  -- that a stage's call allocates nothing (each allocation brings the
+  -- garbage collector's next step closer, paid for in some later call).
+  -- A table is given back once; a loop left early leaves its own to the GC.
+  local free, nfree = {}, 0
   local function step(st)
     local j = st[1] + 1
     st[1] = j
@@ -271,9 +276,26 @@ local function column_proxy(rec, k, c)
       local m = info.members[j]
       return m
     end
+    if st[2] then
+      st[2] = false
+      nfree = nfree + 1
+      free[nfree] = st
+    end
+  end
+  local function each()
+    local st
+    if nfree > 0 then
+      st = free[nfree]
+      free[nfree] = nil
+      nfree = nfree - 1
+      st[1], st[2] = -1, true
+    else
+      st = { -1, true }
+    end
+    return step, st, nil
   end
   local methods = {
-    each = function() return step, { -1 }, nil end,
+    each = each,
     count = function() return info.count end,
     has = function(_, i)
       if info.n == 0 then not_in_call("column '" .. name .. "'") end
@@ -354,19 +376,21 @@ local function column_proxy(rec, k, c)
     end
     return methods[i]
   end
-  local reader = setmetatable({}, {
+  local function proxy(mt)
+    mt.__metatable = "column"
+    return setmetatable({}, mt)
+  end
+  local reader = proxy({
     __index = index,
     __newindex = function() error("column '" .. name .. "' is read-only here (declare it in writes)", 2) end,
     __len = function() return info.count end,
-    __metatable = "column",
     __tostring = function() return "column '" .. name .. "'" end,
   })
   if not write then return reader end
-  local writer = setmetatable({}, {
+  local writer = proxy({
     __index = index,
     __newindex = write,
     __len = function() return info.count end,
-    __metatable = "column",
     __tostring = function() return "column '" .. name .. "' (writable)" end,
   })
   return reader, writer
@@ -391,7 +415,8 @@ local packers = {
   vec3 = function(b, o, v, what)
     v = to_vec3(v, what)
     local x, y, z = v.x, v.y, v.z
-    if not (finite(x) and finite(y) and finite(z)) then
+    -- 0 if all three are finite, NaN otherwise: one test instead of three.
+    if not ((x - x) + (y - y) + (z - z) == 0) then
       error(what .. ": arguments must be finite, got " .. tostring(v), 3)
     end
     b[o], b[o + 1], b[o + 2] = x, y, z
@@ -401,35 +426,60 @@ local packers = {
 }
 local width = { number = 1, object = 1, vec3 = 3 }
 
--- The function that queues interaction function `index` of the stage's target:
--- it appends {index, slot, arguments...} to the call's command buffer.
-local function target_function(rec, index, fname, kinds)
+-- The command buffer of an interaction's calls, and the functions that
+-- queue interaction functions of its target into it. The write position and
+-- the room left live in upvalues of these closures during a call, not in the
+-- C struct: LuaJIT keeps them in registers across the iterations of a mod's
+-- loop, where a field of the struct would be stored and reloaded (through
+-- memory) after every double written into the buffer. begin() takes them
+-- from the struct when a call starts, finish() hands the length back when the
+-- mod's function returns (a call that fails performs nothing, so a length
+-- left behind by an error is never read).
+local function command_queue(rec)
   local call, ptr = rec.call, rec.ptr
-  local n = #kinds
-  if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
-  local stride = 2
-  for j = 1, n do stride = stride + width[kinds[j]] end
-  local p1, p2, p3, p4 = packers[kinds[1] or "none"], packers[kinds[2] or "none"], packers[kinds[3] or "none"], packers[kinds[4] or "none"]
-  local what = "'" .. fname .. "'"
-  return function(i, a1, a2, a3, a4)
-    if call.in_call == 0 then not_in_call(what) end
-    if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
-    if not (i >= 0 and i < call.slots and i == floor(i)) then
-      error(what .. ": no object in slot " .. tostring(i), 2)
-    end
-    local o = call.buf_len
-    if o + stride > call.buf_cap then
-      if api.grow(ptr) ~= 0 then fail(rec, 1) end
-    end
-    local b = call.buf
-    b[o] = index
-    b[o + 1] = i
-    o = p1(b, o + 2, a1, what)
-    o = p2(b, o, a2, what)
-    o = p3(b, o, a3, what)
-    o = p4(b, o, a4, what)
-    call.buf_len = o
+  local len, cap = 0, 0
+  local q = {}
+  function q.begin()
+    len, cap = call.buf_len, call.buf_cap
   end
+  function q.finish()
+    call.buf_len = len
+  end
+  -- The function that queues interaction function `index`: it appends
+  -- {index, slot, arguments...} to the buffer. The slot must hold a live
+  -- object (call.alive, the host's per-slot flags for this call), checked
+  -- here where the mod's line is known, so that the host performs the
+  -- records without looking each object up again.
+  function q.target_function(index, fname, kinds)
+    local n = #kinds
+    if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
+    local stride = 2
+    for j = 1, n do stride = stride + width[kinds[j]] end
+    local p1, p2, p3, p4 = packers[kinds[1] or "none"], packers[kinds[2] or "none"], packers[kinds[3] or "none"], packers[kinds[4] or "none"]
+    local what = "'" .. fname .. "'"
+    return function(i, a1, a2, a3, a4)
+      if call.in_call == 0 then not_in_call(what) end
+      if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+      if not (i >= 0 and i < call.slots and i == floor(i)) then
+        error(what .. ": no object in slot " .. tostring(i), 2)
+      end
+      if call.alive[i] == 0 then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      local o = len
+      if o + stride > cap then
+        if api.grow(ptr) ~= 0 then fail(rec, 1) end
+        cap = call.buf_cap
+      end
+      local b = call.buf
+      b[o] = index
+      b[o + 1] = i
+      o = p1(b, o + 2, a1, what)
+      o = p2(b, o, a2, what)
+      o = p3(b, o, a3, what)
+      o = p4(b, o, a4, what)
+      len = o
+    end
+  end
+  return q
 end
 
 -- The bulk form of interaction function `index` (one number or vec3
@@ -459,7 +509,7 @@ local function bulk_function(rec, index, fname, kind, column_of)
         check(i)
         v = to_vec3(v, what)
         local x, y, z = v.x, v.y, v.z
-        if not (x - x == 0 and y - y == 0 and z - z == 0) then
+        if not ((x - x) + (y - y) + (z - z) == 0) then
           error(what .. ": values must be finite, got " .. tostring(v), 2)
         end
         local o = i * 3
@@ -675,8 +725,10 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
   end
   if decl.target then
     local t = {}
+    local q = command_queue(rec)
+    rec.queue = q
     for _, f in ipairs(decl.target.functions) do
-      t[f.name] = target_function(rec, f.index, f.name, f.kinds)
+      t[f.name] = q.target_function(f.index, f.name, f.kinds)
     end
     for _, f in ipairs(decl.target.functions) do
       local kind = f.kinds[1]
@@ -706,7 +758,9 @@ function M.run(rec, phase, dt, time, step)
   if f == nil then return end
   local w = rec.w
   w.dt, w.time, w.step = dt, time, step
+  if rec.queue then rec.queue.begin() end
   f(w, dt)
+  if rec.queue then rec.queue.finish() end
 end
 
 return M
