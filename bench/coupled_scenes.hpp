@@ -38,6 +38,10 @@ struct Rates {
   int electricity_substeps = 0;   ///< electricity substeps; 0: the scene's
   int rigid_substeps = 0;         ///< rigid_body substeps; 0: the scene's
   std::map<std::string, int> every;  ///< world every = { stage = n }
+  /// magnetic_forces rates = true: the magnetic loads reach the rigid body
+  /// with their rates, a first-order hold over its substeps; false: the scene's
+  bool load_rates = false;
+  std::string substep_contacts;  ///< rigid_body substep_contacts "kept" | "found"; empty: the scene's
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
@@ -59,6 +63,9 @@ inline std::string rate_prelude(const Rates& r) {
   if (r.rigid_substeps > 0) setting("rigid_body", "substeps", std::to_string(r.rigid_substeps));
   if (r.electricity_substeps > 0)
     setting("electricity", "substeps", std::to_string(r.electricity_substeps));
+  if (r.load_rates) setting("magnetic_forces", "rates", "true");
+  if (!r.substep_contacts.empty())
+    setting("rigid_body", "substep_contacts", "\"" + r.substep_contacts + "\"");
   if (!r.every.empty()) {
     s << "    w.every = w.every or {}\n";
     for (const auto& [stage, n] : r.every) s << "    w.every[\"" << stage << "\"] = " << n << "\n";
@@ -124,6 +131,8 @@ inline Rates with(Rates base, const Rates& over) {
   if (over.electricity_substeps > 0) base.electricity_substeps = over.electricity_substeps;
   if (over.rigid_substeps > 0) base.rigid_substeps = over.rigid_substeps;
   for (const auto& [stage, n] : over.every) base.every[stage] = n;
+  base.load_rates = base.load_rates || over.load_rates;
+  if (!over.substep_contacts.empty()) base.substep_contacts = over.substep_contacts;
   return base;
 }
 
@@ -160,7 +169,8 @@ inline double process_cpu() {
 /// (its `sound` events) whose times fall in [from, to]. Runs the scene to `to`.
 /// Fails (NaN) with fewer than 3 strikes in the window: it does not ring.
 inline Measure doorbell_period(const Rates& rates, double from = 1.0, double to = 5.0);
-inline Measure motor_speed(const Rates& rates, double from = 1.0, double to = 8.0);
+inline Measure motor_speed(const Rates& rates, double from = 1.0, double to = 8.0,
+                           const std::string& mod = "motor");
 
 /// The two scenes by name, for the sweeps: "doorbell" or "motor".
 struct Scene {
@@ -184,7 +194,10 @@ struct Scene {
 inline Scene doorbell_scene() {
   return {"doorbell", "strike period (s)", 1.0, 5.0, &doorbell_period};
 }
-inline Scene motor_scene() { return {"motor", "steady speed (rad/s)", 1.0, 8.0, &motor_speed}; }
+inline Scene motor_scene() {
+  return {"motor", "steady speed (rad/s)", 1.0, 8.0,
+          [](const Rates& r, double from, double to) { return motor_speed(r, from, to); }};
+}
 
 inline Measure doorbell_period(const Rates& rates, double from, double to) {
   PluginRegistry registry;
@@ -216,10 +229,10 @@ inline Measure doorbell_period(const Rates& rates, double from, double to) {
 /// `to`, each turn's end found by linear interpolation between steps (so the
 /// figure does not carry a step's worth of quantisation). Runs the scene to
 /// `to`. Fails (NaN) if the rotor does not make one whole anticlockwise turn.
-inline Measure motor_speed(const Rates& rates, double from, double to) {
+inline Measure motor_speed(const Rates& rates, double from, double to, const std::string& mod) {
   PluginRegistry registry;
   register_native_plugins(registry);
-  lua::LoadedScene loaded = load("motor", rates, registry);
+  lua::LoadedScene loaded = load(mod, rates, registry);
   World& world = *loaded.world;
   const ObjectId axle = world.find("axle");
   Measure m;

@@ -45,14 +45,25 @@ Rates single_rate() {
 std::vector<Recipe> recipes(bool quick) {
   // 4 electricity substeps: h = 1 ms at a 1/240 s window, a quarter of the
   // shorter coil time constant (the motor's 4.3 ms, the doorbell's 6.9 ms).
-  auto recipe = [](std::string name, int rigid, int magnetism) {
+  auto recipe = [](std::string name, int rigid, int magnetism, bool rates = false,
+                   std::string contacts = "") {
     return Recipe{std::move(name), {.electricity_substeps = 4,
                                     .rigid_substeps = rigid,
-                                    .every = {{"magnetism", magnetism}}}};
+                                    .every = {{"magnetism", magnetism}},
+                                    .load_rates = rates,
+                                    .substep_contacts = std::move(contacts)}};
   };
-  if (quick) return {recipe("elec 4, rigid 2", 2, 1)};
-  return {recipe("elec 4", 1, 1), recipe("elec 4, magnetism every 2", 1, 2),
-          recipe("elec 4, rigid 2", 2, 1), recipe("elec 4, rigid 4", 4, 1)};
+  // "load rates": magnetic_forces publishes d/dt of each load along the
+  // present motion and the rigid body's substeps follow it (a first-order
+  // hold); "contacts found": the rigid body finds the window's contact pairs'
+  // points again before each substep.
+  if (quick) return {recipe("elec 4, rigid 2, load rates", 2, 1, true)};
+  return {recipe("elec 4", 1, 1),
+          recipe("elec 4, magnetism every 2", 1, 2),
+          recipe("elec 4, rigid 2", 2, 1),
+          recipe("elec 4, rigid 4", 4, 1),
+          recipe("elec 4, rigid 2, load rates", 2, 1, true),
+          recipe("elec 4, rigid 4, load rates, contacts found", 4, 1, true, "found")};
 }
 
 struct Point {
@@ -99,7 +110,7 @@ int main(int argc, char** argv) {
                     o.progress);
   Csv csv(o.file("multirate.csv"),
           {"scene", "configuration", "window", "electricity_substeps", "rigid_substeps",
-           "magnetism_every", "value", "relative_error", "cpu_per_simulated_s",
+           "magnetism_every", "load_rates", "substep_contacts", "value", "relative_error", "cpu_per_simulated_s",
            "single_rate_cost_at_equal_error", "speedup", "status"});
   std::ostringstream md;
   md << "\nCommand: `build/bench/alloy_bench_multirate` (or `make bench`); raw data "
@@ -129,7 +140,8 @@ int main(int argc, char** argv) {
       const auto every = r.every.find("magnetism");
       csv.row({scene.mod, name, Csv::cell(r.dt), Csv::cell(r.electricity_substeps),
                Csv::cell(r.rigid_substeps),
-               Csv::cell(every == r.every.end() ? 1 : every->second), Csv::cell(m.value),
+               Csv::cell(every == r.every.end() ? 1 : every->second), r.load_rates ? "yes" : "no",
+               r.substep_contacts.empty() ? "kept" : r.substep_contacts, Csv::cell(m.value),
                Csv::cell(err), Csv::cell(m.cost()), Csv::cell(equal_cost),
                Csv::cell(equal_cost / m.cost()), m.ok() ? "ok" : "fails"});
     };

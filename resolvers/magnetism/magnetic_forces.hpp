@@ -11,6 +11,11 @@
 //             method ("auto" | "direct" | "tree", default "auto"): how pole pairs are
 //             summed; auto is direct below kTreeCrossoverPoles poles (pole_model.hpp)
 //             theta (default 0.5, in (0, 1)): the tree's opening angle
+//             rates (default false): also publish each part's force and torque
+//             rates, d/dt along the parts' present motion (velocity,
+//             angular_velocity), for a first-order hold over the rigid body's
+//             substeps (docs/performance.md "Multi-rate coupling"); one more
+//             evaluation of the pole model per update
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -37,6 +42,10 @@ struct MagneticBody {
   ObjectId id;                   ///< the object
   Vec3 force;                    ///< total magnetic force on it, N (world)
   Vec3 torque;                   ///< about its position (centre of mass), N*m (world)
+  /// With `rates`: d force / dt and d torque / dt as every part moves on with
+  /// its present velocity and angular velocity (pole strengths held), N/s and
+  /// N*m/s; zero without.
+  Vec3 force_rate, torque_rate;
   double pole_strength = 0;      ///< its present pole strength, A*m (induced for soft iron)
   std::uint32_t first_pole = 0;  ///< index of its north pole in poles(); south follows
   std::uint32_t pole_count = 0;  ///< 2, or 0 if its pole strength is zero
@@ -49,8 +58,9 @@ class MagneticForces : public DerivedSet {
   static constexpr double kDefaultSoftening = 0.005;
 
   explicit MagneticForces(double softening = kDefaultSoftening,
-                          SummationOptions summation = {.method = Summation::Auto})
-      : softening_(softening), summation_(summation) {}
+                          SummationOptions summation = {.method = Summation::Auto},
+                          bool rates = false)
+      : softening_(softening), summation_(summation), rates_(rates) {}
 
   void update(const WorldView& world) override;
 
@@ -71,12 +81,15 @@ class MagneticForces : public DerivedSet {
   /// Newton iterations of the last soft-iron solve, and whether it converged.
   int induction_iterations() const { return induction_iterations_; }
   bool induction_converged() const { return induction_converged_; }
+  /// Whether force_rate and torque_rate are computed (setting `rates`).
+  bool rates() const { return rates_; }
   /// Times update() ran (the harness skips it when the inputs did not change).
   std::uint64_t updates() const { return updates_; }
 
  private:
   double softening_;
   SummationOptions summation_;
+  bool rates_ = false;
   multipole::Tree tree_;  // its memory, kept between updates
   bool used_tree_ = false;
   std::vector<MagneticBody> bodies_;

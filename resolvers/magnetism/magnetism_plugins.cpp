@@ -51,7 +51,7 @@ void register_magnetism_plugins(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
-            s.check_known(MagneticForces::kName, {"softening", "method", "theta"});
+            s.check_known(MagneticForces::kName, {"softening", "method", "theta", "rates"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
@@ -69,7 +69,7 @@ void register_magnetism_plugins(PluginRegistry& registry) {
             sum.theta = s.number("theta", kDefaultTheta);
             if (!(sum.theta > 0 && sum.theta < 1))
               throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
-            return std::make_unique<MagneticForces>(eps, sum);
+            return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false));
           },
   });
 

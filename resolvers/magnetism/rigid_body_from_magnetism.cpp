@@ -11,6 +11,12 @@ void RigidBodyFromMagnetism::apply(const WorldView& world) {
     // The set was updated this step or, if skipped, its inputs did not change;
     // either way its parts are alive unless one was destroyed since.
     if (!store.alive(b.id)) continue;
+    if (forces_.rates()) {
+      // With rates the rigid body follows the load over its substeps.
+      if (!(b.force == Vec3{} && b.torque == Vec3{}))
+        target_.add_load(b.id, b.force, b.torque, b.force_rate, b.torque_rate);
+      continue;
+    }
     if (!(b.force == Vec3{})) target_.add_force(b.id, b.force);
     if (!(b.torque == Vec3{})) target_.add_torque(b.id, b.torque);
   }

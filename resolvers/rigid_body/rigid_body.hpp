@@ -67,11 +67,24 @@ struct RigidBodyConfig {
   double max_correcting_velocity = 2.0;
   /// ODE steps of dt / substeps per advance. The coupling window stays the
   /// world's step: forces queued by interactions are held over the window (a
-  /// zero-order hold), and the contacts found at its start are kept, their
+  /// zero-order hold; a load queued with its rate by add_load follows it, a
+  /// first-order hold), and the contacts found at its start are kept, their
   /// depth carried forward by the parts' approach speed. For stiff mechanisms
   /// (heavy on light, long chains) where the contact and joint solve needs a
-  /// shorter step than the rest of the world.
+  /// shorter step than the rest of the world, and for loads that change with
+  /// the pose faster than the coupling window resolves (a magnet's torque on
+  /// a turning rotor) when queued with their rates.
   int substeps = 1;
+  /// With substeps: "kept" keeps the contact points found at the window's
+  /// start (their depth carried by the approach speed); "found" finds each
+  /// queued pair's points again before every substep from the parts' present
+  /// poses (ODE's narrow phase on the pair's two shapes), so that a contact
+  /// that slides along a turning part, or ends within the window, is where
+  /// the parts are. New pairs are still found once a window (the collisions
+  /// set), so with "found" the error reduction (erp) acts at the window's
+  /// pace, erp / substeps per substep. No effect with one substep.
+  enum class SubstepContacts : std::uint8_t { Kept, Found };
+  SubstepContacts substep_contacts = SubstepContacts::Kept;
   /// Bodies at rest stop being simulated (ODE's auto-disable) until something
   /// touches them, an edit moves them, or the load queued on them changes. A
   /// settled pile then costs little more than its collision detection.
@@ -128,6 +141,13 @@ class RigidBodyResolver final : public Resolver {
   }
   /// Torque, N*m, world frame.
   void add_torque(ObjectId part, Vec3 torque);
+  /// A force at the part's centre of mass and a torque (world frame) with
+  /// their rates of change, N/s and N*m/s (a derived set's d/dt along the
+  /// present motion). Substep s of the window (s = 0 .. substeps - 1) applies
+  /// value + rate * s * dt / substeps: a first-order hold, so that a load
+  /// that depends on the pose follows the parts as they move within the
+  /// window; with one substep it is exactly the value.
+  void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate);
   /// A contact pair with its points; the resolver makes ODE contact joints of
   /// them for one advance. Pairs within one assembly or of two immovable parts
   /// are ignored.
@@ -160,23 +180,38 @@ class RigidBodyResolver final : public Resolver {
     Vec3 value, point;
     Load kind;
   };
+  /// A load queued by add_load.
+  struct RatedLoad {
+    std::uint32_t slot, generation;
+    Vec3 force, torque, force_rate, torque_rate;
+  };
   struct Impl;
 
   void queue(ObjectId part, Vec3 value, Vec3 point, Load kind);
   // The parts of advance().
   void apply_loads();
+  void apply_rated_loads(double tau);
   void wake_on_load_change();
   void add_contact_joints(double h, bool first);
   void apply_displacements();
   void carry_depths(double h);
+  void find_substep_contacts(ResolverAccess& access);
 
   const PropertyStore& store_;
   RigidBodyConfig config_;
   std::unique_ptr<Impl> impl_;
   std::vector<LoadCommand> forces_;
+  std::vector<RatedLoad> rated_loads_;
   std::vector<ContactCommand> contacts_;
   std::vector<ContactPoint> contact_points_;
   std::vector<std::pair<ObjectId, Vec3>> displacements_;
+  // substep_contacts = found: the window's queued pairs and points, kept
+  // while contacts_ / contact_points_ hold a substep's, and each pair's force
+  // summed over the substeps (on a, and its normal part).
+  std::vector<ContactCommand> window_contacts_;
+  std::vector<ContactPoint> window_points_;
+  std::vector<Vec3> pair_force_;
+  std::vector<double> pair_normal_;
   std::vector<PairImpulse> impulses_;
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
