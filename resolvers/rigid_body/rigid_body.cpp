@@ -210,6 +210,12 @@ struct RigidBodyResolver::Impl {
   void write_hinges(ResolverAccess& access);
   void fix_planar();
 
+  /// Whether body `b` (an index into bodies, -1: a static part) does not move:
+  /// static, or a dynamic body ODE has put to sleep.
+  bool sleeping_or_static(std::int32_t b) const {
+    return b < 0 || (!bodies[b].kinematic && !dBodyIsEnabled(bodies[b].id));
+  }
+
   /// The body index of the part in `slot` if it is the live object `id`, else -1.
   std::int32_t body_of(ObjectId obj) const {
     if (obj.index >= part_of_slot.size()) return -1;
@@ -802,6 +808,12 @@ void RigidBodyResolver::add_contact_joints(double h, bool first) {
     if (ba == bb) continue;  // one assembly, or two parts that are not bodies
     const bool fixed_a = ba < 0 || m.bodies[ba].kinematic, fixed_b = bb < 0 || m.bodies[bb].kinematic;
     if (fixed_a && fixed_b) continue;
+    // Two sleeping bodies (or one on a static part) need no joint: ODE would
+    // skip their island anyway, and without the joints a settled pile
+    // publishes no impulses, so the stages that read them (collisions, and
+    // through it everything else) are skipped while it sleeps. A moving body
+    // that touches a sleeper gets its joint, and ODE wakes the sleeper.
+    if (config_.auto_disable && m.sleeping_or_static(ba) && m.sleeping_or_static(bb)) continue;
     const bool swapped = ba < 0;
     dBodyID b1 = m.bodies[swapped ? bb : ba].id;
     dBodyID b2 = swapped ? nullptr : (bb >= 0 ? m.bodies[bb].id : nullptr);

@@ -296,19 +296,19 @@ Shot build_shot(World& w, int k, int shots, double dt, double speed) {
   return s;
 }
 
-MagnetPack build_magnet_pack(World& w, int n, double edge) {
+MagnetPack build_magnet_pack(World& w, int n, double edge, double gap) {
   MagnetPack m;
   add_floor(w);
   constexpr double br = 1.2, density = 7500, mu0 = 4e-7 * std::numbers::pi, magnetic_length = 0.85;
   // As kit.magnet: magnetisation Br / mu0, moment M V carried by poles 0.85 L apart.
   m.pole_strength = br / mu0 * edge * edge / magnetic_length;
   const int side = std::max(1, int(std::ceil(std::cbrt(double(n)) - 1e-9)));
-  const double pitch = edge + 0.001;
+  const double pitch = edge + gap;
   const PropertyRegistry& reg = w.properties();
   const EnumValue permanent = *reg.enum_value(reg.id("magnet"), "permanent");
   for (int i = 0; i < n; ++i) {
     const int ix = i % side, iz = (i / side) % side, iy = i / (side * side);
-    const Vec3 at{(ix - (side - 1) / 2.0) * pitch, edge / 2 + 0.0005 + iy * pitch,
+    const Vec3 at{(ix - (side - 1) / 2.0) * pitch, edge / 2 + gap / 2 + iy * pitch,
                   (iz - (side - 1) / 2.0) * pitch};
     const ObjectId o = add_box(w, at, {edge, edge, edge}, density * edge * edge * edge, {},
                                "magnet" + std::to_string(i));

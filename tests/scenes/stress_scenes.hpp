@@ -113,7 +113,9 @@ struct MagnetPack {
   std::vector<ObjectId> magnets;
   double pole_strength = 0;  ///< A*m
 };
-MagnetPack build_magnet_pack(World& w, int n = 1000, double edge = 0.01);
+/// `gap`: between neighbours, m; negative: they start pressed together by
+/// that much (within the rigid body's surface layer, so at rest).
+MagnetPack build_magnet_pack(World& w, int n = 1000, double edge = 0.01, double gap = 0.001);
 
 /// A battery (emf `e`, 0.1 ohm) on a coil whose L / R is `tau` (s), wired with
 /// 0.01 ohm wires: a loop far stiffer than the step when tau << dt.

@@ -90,6 +90,30 @@ TEST(RigidBodySleep, SettledPileSleepsAndStaysPut) {
   EXPECT_EQ(s->store().column(s->properties().find("position").value()).version(), pos);
 }
 
+TEST(RigidBodySleep, ASleepingPileRunsNoDerivedSet) {
+  // No contact joints between sleepers: no impulses change, so the collisions
+  // set (and what reads it) is skipped while the pile sleeps.
+  Sim s(sleepy());
+  build_pile(*s, pile_layout(64, 3));
+  s.run_for(6.0);
+  ASSERT_EQ(rigid_of(*s).awake_count(), 0u);
+  auto collision_runs = [&] {
+    for (const StageTiming& t : s->profile().stages)
+      if (t.name == "collisions") return t.runs;
+    return std::uint64_t(0);
+  };
+  const std::uint64_t before = collision_runs();
+  s.run_for(1.0);
+  EXPECT_EQ(collision_runs(), before);
+  // A ball dropped on it: the pile's top wakes, and the ball comes to rest on it.
+  const ObjectId ball = add_sphere(*s, {0, 3, 0}, 0.1, 1.0, "ball");
+  s.run_for(0.6);
+  EXPECT_GT(collision_runs(), before);
+  EXPECT_GT(rigid_of(*s).awake_count(), 0u);
+  s.run_for(3.0);
+  EXPECT_GT(s.position(ball).y, 0.2) << "it lands on the pile, not through it";
+}
+
 TEST(RigidBodySleep, AnEditWakesABody) {
   Sim s(sleepy());
   const Bounce b = build_bounce(*s, 0.0, 0.0);
