@@ -42,6 +42,10 @@ struct Rates {
   /// with their rates, a first-order hold over its substeps; false: the scene's
   bool load_rates = false;
   std::string substep_contacts;  ///< rigid_body substep_contacts "kept" | "found"; empty: the scene's
+  /// electricity rates = true and magnetism rates = true: a coil's current
+  /// reaches the magnetism with its rate, and its pole strength moves on
+  /// between windows; false: the scene's
+  bool current_rates = false;
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
@@ -64,6 +68,10 @@ inline std::string rate_prelude(const Rates& r) {
   if (r.electricity_substeps > 0)
     setting("electricity", "substeps", std::to_string(r.electricity_substeps));
   if (r.load_rates) setting("magnetic_forces", "rates", "true");
+  if (r.current_rates) {
+    setting("electricity", "rates", "true");
+    setting("magnetism", "rates", "true");
+  }
   if (!r.substep_contacts.empty())
     setting("rigid_body", "substep_contacts", "\"" + r.substep_contacts + "\"");
   if (!r.every.empty()) {
@@ -132,6 +140,7 @@ inline Rates with(Rates base, const Rates& over) {
   if (over.rigid_substeps > 0) base.rigid_substeps = over.rigid_substeps;
   for (const auto& [stage, n] : over.every) base.every[stage] = n;
   base.load_rates = base.load_rates || over.load_rates;
+  base.current_rates = base.current_rates || over.current_rates;
   if (!over.substep_contacts.empty()) base.substep_contacts = over.substep_contacts;
   return base;
 }

@@ -69,6 +69,8 @@ std::vector<PropertyDef> electricity_property_defs() {
       {.name = prop::kPowered,
        .kind = PropertyKind::Bool,
        .doc = "written by electricity: |current| is above the powered threshold (1 mA)"},
+      number(prop::kCurrentRate, "A/s",
+             "written by electricity with rates = true: a coil's dI/dt at the end of the step"),
   };
 }
 
@@ -77,7 +79,8 @@ std::vector<PropertyDef> electricity_property_defs() {
 const std::vector<std::string>& ElectricityConfig::keys() {
   static const std::vector<std::string> k = {"powered_threshold", "contact_resistance",
                                              "wire_resistance",   "internal_resistance",
-                                             "substeps",          "dense_limit"};
+                                             "substeps",          "dense_limit",
+                                             "rates"};
   return k;
 }
 
@@ -90,6 +93,7 @@ ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
   c.internal_resistance = s.number("internal_resistance", c.internal_resistance);
   c.substeps = int(s.integer("substeps", c.substeps));
   c.dense_limit = s.integer("dense_limit", c.dense_limit);
+  c.rates = s.boolean("rates", c.rates);
   auto non_negative = [&](const char* key, double v) {
     if (!(v >= 0) || !std::isfinite(v))
       throw InputError(
@@ -158,6 +162,11 @@ void ElectricityResolver::build(ResolverAccess& access) {
   for (std::uint32_t s : access.column<double>(prop::kInductance).members()) give(s);
   for (std::uint32_t s : access.column<ObjectId>(prop::kWireFrom).members()) give(s);
   for (std::uint32_t s : access.column<ObjectId>(prop::kWireTo).members()) give(s);
+  if (config_.rates) {
+    auto rate = access.writer<double>(prop::kCurrentRate);
+    for (std::uint32_t s : access.column<double>(prop::kInductance).members())
+      if (!rate.has(s)) rate.set(s, 0.0);
+  }
 }
 
 ElectricityResolver::InputVersions ElectricityResolver::input_versions(const WorldView& view) {
@@ -390,9 +399,22 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     solver_.solve(e_, potential_, branch_current_);
     for (std::size_t k = 0; k < branch_current_.size(); ++k)
       if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+    if (config_.rates && step + 1 == config_.substeps) write_current_rates(access, h);
     for (std::size_t i = 0; i < coils_.size(); ++i) coils_[i].current = branch_current_[nb + i];
   }
   write_outputs(access);
+}
+
+void ElectricityResolver::write_current_rates(ResolverAccess& access, double h) {
+  // Backward Euler's last substep: L (I - I_prev) / h = V - R I holds at the
+  // substep's end, so the difference quotient is the coil's dI/dt at the end
+  // of the advance (0 on an opened coil, whose current is exactly 0).
+  auto rate = current_rate_id_.writer<double>(access);
+  const std::size_t nb = batteries_.size();
+  for (std::size_t i = 0; i < coils_.size(); ++i) {
+    const double next = branch_current_[nb + i];
+    rate.set(coils_[i].slot, branch_on_loop_[nb + i] ? (next - coils_[i].current) / h : 0.0);
+  }
 }
 
 void ElectricityResolver::write_outputs(ResolverAccess& access) {
@@ -473,7 +495,7 @@ void register_electricity_resolver(PluginRegistry& registry) {
            .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance, prop::kInductance,
                      prop::kResistance, prop::kContactResistance, prop::kWireFrom, prop::kWireTo,
                      prop::kWireFromTerminal, prop::kWireToTerminal, prop::kCurrent},
-           .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered},
+           .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered, prop::kCurrentRate},
            // Without a battery or a coil (which may hold a current) no
            // current can flow: bars that merely conduct need no solver.
            .needs = {prop::kEmf, prop::kInductance},

@@ -21,6 +21,11 @@
 // Events  connected / disconnected (a, b) when a contact is made / broken;
 //         circuit_closed / circuit_opened (a = battery, coil or resistor, value
 //         "current") when the element joins / leaves a closed loop.
+// Rates   with the setting `rates = true`, a coil also publishes
+//         `current_rate`, dI/dt at the end of the advance (A/s), so that
+//         magnetism_from_electricity can pass the current on with its rate
+//         and the coil's magnet follows it between windows instead of a
+//         window late (docs/performance.md "Multi-rate coupling").
 //
 // State that matters lives in properties: a coil's current is its `current`,
 // so build() loses nothing. Contacts are not stored: they are the touching
@@ -59,6 +64,7 @@ inline constexpr const char* kWireToTerminal = "wire_to_terminal";
 inline constexpr const char* kCurrent = "current";
 inline constexpr const char* kVoltage = "voltage";
 inline constexpr const char* kPowered = "powered";
+inline constexpr const char* kCurrentRate = "current_rate";
 }  // namespace prop
 
 /// Plugin names.
@@ -102,6 +108,9 @@ struct ElectricityConfig {
   /// Components with at most this many unknowns are solved with dense LU,
   /// larger ones with sparse LU.
   std::int64_t dense_limit = 64;
+  /// Publish each coil's `current_rate` (dI/dt at the end of the advance,
+  /// A/s): off by default; see the header.
+  bool rates = false;
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static ElectricityConfig from(const PluginSettings& settings);
@@ -172,6 +181,7 @@ class ElectricityResolver final : public Resolver {
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
+  void write_current_rates(ResolverAccess& access, double h);
   /// Value and membership counters of the columns that define the network.
   static constexpr std::size_t kNetworkInputCount = 10;
   using InputVersions = std::array<std::uint64_t, 2 * kNetworkInputCount>;
@@ -190,7 +200,7 @@ class ElectricityResolver final : public Resolver {
   bool input_ids_resolved_ = false;
   // The columns of every advance, resolved at the first use.
   PropertyRef current_id_{prop::kCurrent}, voltage_id_{prop::kVoltage}, powered_id_{prop::kPowered},
-      emf_id_{prop::kEmf};
+      emf_id_{prop::kEmf}, current_rate_id_{prop::kCurrentRate};
   std::uint64_t seen_current_version_ = 0;
   std::uint64_t network_builds_ = 0;
   Network network_;

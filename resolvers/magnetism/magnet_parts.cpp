@@ -52,6 +52,10 @@ std::vector<PropertyDef> magnetism_property_defs() {
        .doc = "soft iron: largest induced pole strength; default from iron's saturation "
               "magnetisation 1.71e6 A/m x volume / pole_separation",
        .min = 0.0},
+      {.name = prop::kPoleStrengthRate,
+       .kind = K::Number,
+       .unit = "A*m/s",
+       .doc = "written by magnetism with rates = true: an electromagnet's d pole_strength / dt"},
   };
 }
 

@@ -44,6 +44,9 @@ inline constexpr const char* kRadius = "radius";
 inline constexpr const char* kLength = "length";
 // Read, owned by electricity.
 inline constexpr const char* kCurrent = "current";
+inline constexpr const char* kCurrentRate = "current_rate";
+// Written by magnetism with rates = true.
+inline constexpr const char* kPoleStrengthRate = "pole_strength_rate";
 }  // namespace prop
 
 /// Values of the `magnet` enum, in registration order.

@@ -115,51 +115,71 @@ void MagneticForces::update(const WorldView& world) {
   //    assembly's load as they do in its value).
   const auto velocity_id = world.properties().find("velocity");
   const auto spin_id = world.properties().find("angular_velocity");
-  if (!velocity_id || !spin_id) return;  // no rigid body: nothing moves
-  const auto velocity = world.column<Vec3>(*velocity_id);
-  const auto spin = world.column<Vec3>(*spin_id);
-  constexpr double kRateTime = 1e-5;  // s: micrometres at kit speeds, well inside the softening
-  std::vector<Frame> moved = frames;
+  // The electromagnets' pole-strength rates (magnetism with rates = true):
+  // a coil whose current is rising moves its poles' strength on as well.
+  const auto q_rate = pole_strength_rate_.column<double>(world);
+  std::vector<double> strength_rate(bodies_.size(), 0.0);
   bool any = false;
   for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
     const std::uint32_t slot = bodies_[b].id.index;
-    const Vec3 v = velocity.value_or(slot, Vec3{});
-    const Vec3 w = spin.value_or(slot, Vec3{});
-    if (!is_finite(v) || !is_finite(w) || (v == Vec3{} && w == Vec3{})) continue;
-    any = true;
-    moved[b].centre = frames[b].centre + kRateTime * v;
-    const Vec3 axis = frames[b].axis + kRateTime * cross(w, frames[b].axis);
-    moved[b].axis = axis / length(axis);
+    if (c.kind(slot) == MagnetKind::SoftIron || !q_rate.has(slot)) continue;
+    const double r = q_rate[slot];
+    if (r != 0 && std::isfinite(r)) strength_rate[b] = r, any = true;
+  }
+  if ((!velocity_id || !spin_id) && !any) return;  // nothing moves
+  constexpr double kRateTime = 1e-5;  // s: micrometres at kit speeds, well inside the softening
+  std::vector<Frame> moved = frames;
+  if (velocity_id && spin_id) {
+    const auto velocity = world.column<Vec3>(*velocity_id);
+    const auto spin = world.column<Vec3>(*spin_id);
+    for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+      const std::uint32_t slot = bodies_[b].id.index;
+      const Vec3 v = velocity.value_or(slot, Vec3{});
+      const Vec3 w = spin.value_or(slot, Vec3{});
+      if (!is_finite(v) || !is_finite(w) || (v == Vec3{} && w == Vec3{})) continue;
+      any = true;
+      moved[b].centre = frames[b].centre + kRateTime * v;
+      const Vec3 axis = frames[b].axis + kRateTime * cross(w, frames[b].axis);
+      moved[b].axis = axis / length(axis);
+    }
   }
   if (!any) return;
+  // The fixed poles (magnets, coils) at their moved places and strengths.
   std::vector<Pole> fixed_moved;
   std::vector<InducedBar> bars_moved = bars;
   for (InducedBar& bar : bars_moved) bar.centre = moved[bar.body].centre, bar.axis = moved[bar.body].axis;
-  for (const Pole& p : fixed) {
-    const BarPoles bp = bar_poles(moved[p.body].centre, moved[p.body].axis, moved[p.body].separation);
-    fixed_moved.push_back({p.strength > 0 ? bp.north : bp.south, p.strength, p.body});
+  std::vector<double> strength_moved = strength;
+  for (std::uint32_t b = 0; b < bodies_.size(); ++b) strength_moved[b] += kRateTime * strength_rate[b];
+  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+    if (c.kind(bodies_[b].id.index) == MagnetKind::SoftIron || strength_moved[b] == 0) continue;
+    const BarPoles bp = bar_poles(moved[b].centre, moved[b].axis, moved[b].separation);
+    fixed_moved.push_back({bp.north, strength_moved[b], b});
+    fixed_moved.push_back({bp.south, -strength_moved[b], b});
   }
   const InductionResult induced_moved = solve_induction(fixed_moved, bars_moved, softening_, summation_);
-  std::vector<double> strength_moved = strength;
   for (std::size_t i = 0; i < bars_moved.size(); ++i)
     strength_moved[bars_moved[i].body] = induced_moved.converged || !induced.converged
                                              ? induced_moved.strength[i]
                                              : strength[bars_moved[i].body];
   std::vector<Pole> poles_moved;
-  poles_moved.reserve(poles_.size());
+  std::vector<std::uint32_t> first_moved(bodies_.size(), 0), count_moved(bodies_.size(), 0);
+  poles_moved.reserve(poles_.size() + 2);
   for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
-    if (bodies_[b].pole_count == 0) continue;
+    first_moved[b] = std::uint32_t(poles_moved.size());
+    if (strength_moved[b] == 0 || (bodies_[b].pole_count == 0 && strength_rate[b] == 0)) continue;
     const BarPoles p = bar_poles(moved[b].centre, moved[b].axis, moved[b].separation);
     poles_moved.push_back({p.north, strength_moved[b], b});
     poles_moved.push_back({p.south, -strength_moved[b], b});
+    count_moved[b] = 2;
   }
   std::vector<Vec3> force_moved(poles_moved.size());
   accumulate_pole_forces(poles_moved, softening_, force_moved, summation_, &tree_);
   for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
     MagneticBody& body = bodies_[b];
-    if (body.pole_count == 0 || (body.force == Vec3{} && body.torque == Vec3{})) continue;
+    if (count_moved[b] == 0 || (body.pole_count != 0 && body.force == Vec3{} && body.torque == Vec3{}))
+      continue;
     Vec3 f{}, t{};
-    for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
+    for (std::uint32_t i = first_moved[b]; i < first_moved[b] + count_moved[b]; ++i) {
       f += force_moved[i];
       t += cross(poles_moved[i].position - moved[b].centre, force_moved[i]);
     }

@@ -15,7 +15,10 @@
 //             rates, d/dt along the parts' present motion (velocity,
 //             angular_velocity), for a first-order hold over the rigid body's
 //             substeps (docs/performance.md "Multi-rate coupling"); one more
-//             evaluation of the pole model per update
+//             evaluation of the pole model per update. With the magnetism
+//             resolver's rates, the electromagnets' pole_strength_rate moves
+//             their strengths on in the same evaluation, so the loads' rates
+//             also carry a coil's rising or falling current
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -32,6 +35,7 @@
 
 #include "resolvers/magnetism/magnet_parts.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
+#include "runtime/property_ref.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -99,6 +103,7 @@ class MagneticForces : public DerivedSet {
   bool induction_converged_ = true;
   std::uint64_t updates_ = 0;
   std::optional<MagnetColumns::Ids> ids_;  // resolved at the first update
+  PropertyRef pole_strength_rate_{prop::kPoleStrengthRate};
 };
 
 }  // namespace alloy::magnetism

@@ -31,11 +31,16 @@ void register_magnetism_plugins(PluginRegistry& registry) {
                .kind = StageKind::Resolver,
                .reads = with_shape({prop::kMagnet, prop::kTurns, prop::kCoilFactor,
                                     prop::kCoilTimeConstant, prop::kPoleSeparation}),
-               .writes = {prop::kPoleStrength},
+               .writes = {prop::kPoleStrength, prop::kPoleStrengthRate},
                .needs = {prop::kMagnet},
                .doc = "magnets: electromagnets' pole strength follows their coil current"},
       .properties = magnetism_property_defs(),
-      .create = [](PluginContext&) { return std::make_unique<MagnetismResolver>(); },
+      .create =
+          [](PluginContext& ctx) {
+            const PluginSettings& s = ctx.settings();
+            s.check_known(MagnetismResolver::kName, {"rates"});
+            return std::make_unique<MagnetismResolver>(s.boolean("rates", false));
+          },
   });
 
   registry.add({
@@ -43,7 +48,7 @@ void register_magnetism_plugins(PluginRegistry& registry) {
                .kind = StageKind::Derived,
                .reads = with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
                                     prop::kSusceptibility, prop::kSaturationPole, prop::kPosition,
-                                    prop::kOrientation}),
+                                    prop::kOrientation, prop::kPoleStrengthRate}),
                .needs = {prop::kMagnet},
                .resolvers = {MagnetismResolver::kName},
                .doc =

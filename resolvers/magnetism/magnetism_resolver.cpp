@@ -7,7 +7,11 @@
 namespace alloy::magnetism {
 
 void MagnetismResolver::set_coil_current(ObjectId id, double current) {
-  queue_.push_back({id, current});
+  queue_.push_back({id, current, 0.0});
+}
+
+void MagnetismResolver::set_coil_current(ObjectId id, double current, double rate) {
+  queue_.push_back({id, current, std::isfinite(rate) ? rate : 0.0});
 }
 
 std::optional<double> MagnetismResolver::commanded_current(ObjectId id) const {
@@ -27,6 +31,13 @@ void MagnetismResolver::build(ResolverAccess& access) {
     if (std::string why = check_part(c, slot); !why.empty())
       throw InputError(ErrorLocation{.object = store.describe(store.id_at(slot))}, why);
   }
+  // With rates every electromagnet carries its rate from the start, so that
+  // advance() changes values only (a new member would be a structural change).
+  if (rates_) {
+    auto rate = access.writer<double>(prop::kPoleStrengthRate);
+    for (std::uint32_t slot : c.magnet.members())
+      if (c.kind(slot) == MagnetKind::Electromagnet && !rate.has(slot)) rate.set(slot, 0.0);
+  }
   // Commanded currents survive a rebuild for the coils that are still coils.
   coils_.resize(store.slot_count());
   for (std::uint32_t slot = 0; slot < coils_.size(); ++slot) {
@@ -42,6 +53,8 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
   const MagnetColumns c = MagnetColumns::bind(access, *ids_);
   const PropertyStore& store = access.store();
   auto pole_strength = access.writer<double>(ids_->pole_strength);
+  std::optional<ColumnWriter<double>> pole_rate;
+  if (rates_) pole_rate.emplace(access.writer<double>(prop::kPoleStrengthRate));
 
   // 1. Perform the commands queued by the interactions of the last step.
   for (const Command& cmd : queue_) {
@@ -66,6 +79,7 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     const bool now_on = cmd.current != 0;
     coil.commanded = true;
     coil.current = cmd.current;
+    coil.rate = cmd.rate;
     if (was_on != now_on) {
       const double target = coil_factor(c, cmd.id.index).value_or(0) *
                             c.turns.value_or(cmd.id.index, 0.0) * cmd.current;
@@ -81,8 +95,11 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     if (slot >= coils_.size() || c.kind(slot) != MagnetKind::Electromagnet) continue;
     const Coil& coil = coils_[slot];
     if (!coil.commanded || coil.id != store.id_at(slot)) continue;
-    const double target =
-        coil_factor(c, slot).value_or(0) * c.turns.value_or(slot, 0.0) * coil.current;
+    const double per_ampere = coil_factor(c, slot).value_or(0) * c.turns.value_or(slot, 0.0);
+    // With rates the command's current is as of the advance's start: the
+    // pole strength is set for its end, the current moved on by its rate.
+    const double current = rates_ ? coil.current + coil.rate * dt : coil.current;
+    const double target = per_ampere * current;
     const double tau = c.coil_time_constant.value_or(slot, 0.0);
     const double present = pole_strength.has(slot) ? pole_strength[slot] : 0.0;
     double next = target;
@@ -95,6 +112,10 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
       if (std::abs(next - target) <= 1e-9 * std::abs(target) + 1e-12) next = target;
     }
     pole_strength.set(slot, next);
+    // dq/dt at the end: the target's own rate, or with a time constant the
+    // relaxation toward the (moving) target.
+    if (pole_rate)
+      pole_rate->set(slot, tau > 0 ? (target - next) / tau : per_ampere * coil.rate);
   }
 }
 

@@ -18,6 +18,15 @@
 // circuit drives it. Once commanded it keeps the last commanded current until
 // told otherwise, so commands need only be sent when the current changes
 // (magnetism_from_electricity sends every step, which is also correct).
+//
+// Rates (setting `rates = true`, off by default): a command may carry the
+// current's rate dI/dt as of the command's time (the start of the next
+// advance). The pole strength is then set for the end of the advance, the
+// current moved on by its rate (a first-order prediction over the window
+// that the command waited), and every electromagnet publishes
+// `pole_strength_rate` (A*m/s), which magnetic_forces with rates folds into
+// the loads' rates. Without it a coil's magnet lags its current by a window
+// (docs/performance.md "Multi-rate coupling").
 #pragma once
 
 #include <cstdint>
@@ -42,6 +51,12 @@ class MagnetismResolver : public Resolver {
   /// electromagnet (or is gone by then), or with a non-finite current, is
   /// refused when performed and reported as a "magnetism_command_refused" event.
   void set_coil_current(ObjectId id, double current);
+  /// The same with the current's rate, A/s (used with the setting `rates`;
+  /// without it the rate is ignored).
+  void set_coil_current(ObjectId id, double current, double rate);
+
+  explicit MagnetismResolver(bool rates = false) : rates_(rates) {}
+  bool rates() const { return rates_; }
 
   // --- Resolver ------------------------------------------------------------------
   void build(ResolverAccess& access) override;
@@ -57,13 +72,16 @@ class MagnetismResolver : public Resolver {
   struct Command {
     ObjectId id;
     double current = 0;
+    double rate = 0;
   };
   /// Per slot: the coil's commanded current, valid while `id` is the live object.
   struct Coil {
     ObjectId id{};
     bool commanded = false;
     double current = 0;
+    double rate = 0;
   };
+  bool rates_ = false;
   std::vector<Command> queue_;
   std::vector<Coil> coils_;
   std::optional<MagnetColumns::Ids> ids_;  // resolved at the first build or advance
