@@ -24,6 +24,12 @@
 //     settled, then STEPS steps inside CALLGRIND_START_INSTRUMENTATION, for
 //     valgrind --tool=callgrind --instr-atstart=no (docs/performance.md).
 //   build/bench/alloy_bench_rigid --profile-raw STEPS   the same for the raw ODE loop.
+//   build/bench/alloy_bench_rigid --profile-impulses STEPS   the harness with a
+//     reader of contact impulses (what the sound of strikes costs); the pose
+//     digest must equal --profile's: impulses are read out, never fed back.
+//
+// Nothing in the pile reads impulses, so the harness computes none (no joint
+// feedback), and the raw loop computes none either.
 #include <ode/ode.h>
 
 #include <algorithm>
@@ -167,6 +173,7 @@ struct HarnessPile {
   PluginRegistry registry;
   std::unique_ptr<World> world;
   const rigid::CollisionSet* contacts = nullptr;
+  rigid::ImpulseDemand impulses;  // held only by --profile-impulses
 
   HarnessPile(const scenes::PileLayout& layout, bool all_plugins) {
     if (all_plugins)
@@ -243,8 +250,9 @@ Result measure(int boxes, int settle, int rounds, int per_round, bench::Progress
   return r;
 }
 
-int profile(int steps) {
+int profile(int steps, bool impulses) {
   HarnessPile pile(scenes::pile_layout(1'000), false);
+  if (impulses) pile.impulses = pile.contacts->demand_impulses();
   for (int i = 0; i < 240; ++i) pile.step();
   CALLGRIND_START_INSTRUMENTATION;
   for (int i = 0; i < steps; ++i) pile.step();
@@ -266,9 +274,10 @@ int profile(int steps) {
     for (double c : {x.x, x.y, x.z, q.w, q.x, q.y, q.z}) mix(c);
   }
   std::printf(
-      "1,000-box pile: %d steps profiled after 240; %llu contact points in the last; pose digest "
-      "%016llx\n",
-      steps, (unsigned long long)pile.contacts_this_step(), (unsigned long long)digest);
+      "1,000-box pile: %d steps profiled after 240; %llu contact points in the last; impulses %s; pose "
+      "digest %016llx\n",
+      steps, (unsigned long long)pile.contacts_this_step(), pile.contacts->impulses_known() ? "computed" : "not computed",
+      (unsigned long long)digest);
   return 0;
 }
 
@@ -289,7 +298,8 @@ int profile_raw(int steps) {
 int main(int argc, char** argv) {
   // --profile STEPS: outside Options, which knows flags without values.
   for (int i = 1; i + 1 < argc; ++i)
-    if (std::strcmp(argv[i], "--profile") == 0) return profile(std::atoi(argv[i + 1]));
+    if (std::strcmp(argv[i], "--profile") == 0) return profile(std::atoi(argv[i + 1]), false);
+    else if (std::strcmp(argv[i], "--profile-impulses") == 0) return profile(std::atoi(argv[i + 1]), true);
     else if (std::strcmp(argv[i], "--profile-raw") == 0) return profile_raw(std::atoi(argv[i + 1]));
   const bench::Options opt = bench::Options::parse(argc, argv, "alloy_bench_rigid");
   // Full: the 1,000-box pile, 1 s to fall, then 3 s (720 steps) timed

@@ -159,7 +159,10 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
   for (const auto& p : decl.info.needs) add_property(p, false);
   for (const auto& d : decl.info.derived) {
     if (native_derived_readable(d)) {
-      if (d == "collisions") collisions_ = &ctx.dependency<rigid::CollisionSet>(d);
+      if (d == "collisions") {
+        collisions_ = &ctx.dependency<rigid::CollisionSet>(d);
+        impulses_ = collisions_->demand_impulses();
+      }
       continue;
     }
     const auto& set = ctx.dependency<LuaDerivedSet>(d);

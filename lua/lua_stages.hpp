@@ -29,6 +29,7 @@
 
 #include "lua/mod_state.hpp"
 #include "lua/stage_abi.hpp"
+#include "resolvers/rigid_body/contact.hpp"
 #include "runtime/plugin_registry.hpp"
 #include "runtime/world.hpp"
 
@@ -171,6 +172,8 @@ class LuaStage {
   int bulk_used_ = 0;
   // The collisions derived set, if declared.
   const rigid::CollisionSet* collisions_ = nullptr;
+  // Contacts reach Lua with their impulses, which a stage may read: declared.
+  rigid::ImpulseDemand impulses_;
   std::vector<abi::Contact> contacts_;
 };
 

@@ -59,9 +59,12 @@ PluginDef collisions_plugin() {
               .doc = "contact pairs that began, continue and ended, with points and impulses"};
   def.properties = concat({body_properties(), joint_properties()});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
-    ctx.settings().check_known("collisions", {});
+    ctx.settings().check_known("collisions", {"impulses"});
     auto& rigid = ctx.dependency<RigidBodyResolver>("rigid_body");
-    return std::make_unique<CollisionSet>(rigid, rigid.config().max_contacts);
+    // impulses = true: computed even if no stage demands them (for handlers of
+    // contact_ended events, which cannot declare it); default: for readers only.
+    return std::make_unique<CollisionSet>(rigid, rigid.config().max_contacts,
+                                          ctx.settings().boolean("impulses", false));
   };
   return def;
 }

@@ -13,6 +13,7 @@
 
 #include "apps/viewer/scene_writer.hpp"
 #include "lua/mod_runtime.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 
@@ -409,6 +410,10 @@ void Viewer::simulate(double frame_seconds) {
 
 void Viewer::step_world() {
   World* w = world();
+  // Taken again each step: the collisions stage may have been replaced.
+  const auto* contacts =
+      draw_options_.contact_forces ? dynamic_cast<const rigid::CollisionSet*>(w->stage("collisions")) : nullptr;
+  contact_impulses_ = contacts ? contacts->demand_impulses() : rigid::ImpulseDemand{};
   try {
     w->step();
     failing_steps_ = 0;

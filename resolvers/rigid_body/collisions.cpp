@@ -252,8 +252,12 @@ struct CollisionSet::Impl {
   std::vector<ContactPoint>* points = nullptr;
 };
 
-CollisionSet::CollisionSet(const RigidBodyResolver& rigid, int max_contacts)
-    : rigid_(rigid), impl_(std::make_unique<Impl>(max_contacts)) {}
+CollisionSet::CollisionSet(const RigidBodyResolver& rigid, int max_contacts, bool always_impulses)
+    : rigid_(rigid), impl_(std::make_unique<Impl>(max_contacts)) {
+  if (always_impulses) always_ = rigid_.demand_impulses();
+}
+
+ImpulseDemand CollisionSet::demand_impulses() const { return rigid_.demand_impulses(); }
 
 CollisionSet::~CollisionSet() = default;
 
@@ -307,7 +311,11 @@ void CollisionSet::update(const WorldView& world) {
   std::swap(current_, m.sorted);
 
   // The rigid body's impulses are for the pairs it was given, i.e. those that
-  // touched at the previous update: merge them in by pair.
+  // touched at the previous update: merge them in by pair. Empty when nobody
+  // demanded them.
+  const std::uint64_t step = world.step();
+  if (rigid_.impulses_computed() && !impulses_known_) impulses_since_ = step;
+  impulses_known_ = rigid_.impulses_computed();
   const auto impulses = rigid_.impulses();
   // A merge cursor over the impulses, for one ascending pass over pairs.
   auto impulse_cursor = [&] {
@@ -324,7 +332,6 @@ void CollisionSet::update(const WorldView& world) {
 
   // began / ongoing / ended by a merge of two sorted lists.
   began_.clear(), ongoing_.clear(), ended_.clear();
-  const std::uint64_t step = world.step();
   std::size_t i = 0, j = 0;
   while (i < current_.size() || j < previous_.size()) {
     const bool take_new = j == previous_.size() ||
@@ -365,7 +372,10 @@ void CollisionSet::update(const WorldView& world) {
     Event e;
     e.type = "contact_ended";
     e.a = p.a, e.b = p.b;
-    e.values = {{"impulse", p.total_impulse}, {"duration", double(step - p.began_step) * world.dt()}};
+    // No impulse rather than a wrong one when it was not computed throughout.
+    const double duration = double(step - p.began_step) * world.dt();
+    if (total_known(p)) e.values = {{"impulse", p.total_impulse}, {"duration", duration}};
+    else e.values = {{"duration", duration}};
     world.emit(std::move(e));
   }
   step_ = step;

@@ -13,6 +13,15 @@
 //          impulse the rigid body applied to the pair in its last advance.
 // Emits    contact_began {speed, depth} and contact_ended {impulse, duration}.
 //
+// Impulses are computed only for their readers: a stage that reads them
+// declares it with demand_impulses() (sound_from_collisions, Lua stages that
+// read contacts, the viewer's contact forces), or a scene with the setting
+// `collisions { impulses = true }` (for handlers of contact_ended events).
+// Without a demand the rigid body skips ODE's joint feedback (about 2 % of a
+// pile's step): the pairs' impulse fields stay 0, impulses_known() is false,
+// and contact_ended carries only its duration. A pair that began before the
+// demand did has no complete total: its contact_ended has no impulse either.
+//
 // Pairs of two static parts are never tested (floor against wall).
 //
 // Continuous detection (rigid_body setting `ccd`, on by default): a movable
@@ -53,7 +62,8 @@ struct ContactPair {
   /// largest over the pair's points; at `began`, the impact speed.
   double normal_speed = 0;
   double depth = 0;  ///< deepest penetration, m
-  /// Impulse the rigid body applied to this pair in its last advance (on a, N*s).
+  /// Impulse the rigid body applied to this pair in its last advance (on a,
+  /// N*s). This and the next two are 0 unless CollisionSet::impulses_known().
   Vec3 impulse;
   double normal_impulse = 0;  ///< its normal part, N*s
   /// Normal impulse summed over every advance since the pair began, N*s.
@@ -63,7 +73,9 @@ struct ContactPair {
 
 class CollisionSet final : public DerivedSet {
  public:
-  CollisionSet(const RigidBodyResolver& rigid, int max_contacts);
+  /// always_impulses: demand impulses for the set's whole life (the scene's
+  /// setting `impulses = true`), whether or not a stage reads them.
+  CollisionSet(const RigidBodyResolver& rigid, int max_contacts, bool always_impulses = false);
   ~CollisionSet() override;
 
   void update(const WorldView& world) override;
@@ -85,6 +97,16 @@ class CollisionSet final : public DerivedSet {
   /// Whether a and b touch (in either order), and the pair if so.
   const ContactPair* find(ObjectId a, ObjectId b) const;
 
+  /// Declares that the caller reads the pairs' impulses (see the header):
+  /// they are computed from the rigid body's next advance on while it is held.
+  ImpulseDemand demand_impulses() const;
+  /// Whether the pairs of the last update carry the impulses the rigid body
+  /// applied (some stage demanded them); if not, the impulse fields are 0.
+  bool impulses_known() const { return impulses_known_; }
+  /// Whether the pair's total_impulse covers every advance since it began
+  /// (impulses were computed for all of them).
+  bool total_known(const ContactPair& p) const { return impulses_known_ && p.began_step + 1 >= impulses_since_; }
+
  private:
   struct Impl;
   const RigidBodyResolver& rigid_;
@@ -94,6 +116,9 @@ class CollisionSet final : public DerivedSet {
   std::vector<ContactPoint> points_;
   std::vector<Sweep> sweeps_;
   std::uint64_t step_ = 0;
+  ImpulseDemand always_;
+  bool impulses_known_ = false;
+  std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
 
   void sweep(const WorldView& world);
 };

@@ -2,7 +2,9 @@
 // contacts to the rigid body, and the rigid body's published impulses.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "runtime/math.hpp"
 #include "runtime/object_id.hpp"
@@ -23,6 +25,36 @@ struct PairImpulse {
   ObjectId a, b;             ///< a < b
   Vec3 impulse;              ///< total contact impulse on a (normal and friction), N*s; b got -impulse
   double normal_impulse = 0; ///< its normal part, N*s (>= 0)
+};
+
+/// A stage's declaration that it reads contact impulses (ContactPair::impulse,
+/// normal_impulse, total_impulse, the impulse of contact_ended). The rigid
+/// body computes them (ODE's joint feedback on every contact joint, about 2 %
+/// of a pile's step) only while at least one demand is held: a scene pays
+/// nothing for impulses nobody reads. Hold it for as long as the stage reads
+/// them (a member); it may outlive the rigid body it was taken from.
+class ImpulseDemand {
+ public:
+  ImpulseDemand() = default;
+  explicit ImpulseDemand(std::shared_ptr<std::size_t> count) : count_(std::move(count)) {
+    if (count_) ++*count_;
+  }
+  ImpulseDemand(ImpulseDemand&& o) noexcept = default;
+  ImpulseDemand& operator=(ImpulseDemand&& o) noexcept {
+    if (this != &o) release(), count_ = std::move(o.count_);
+    return *this;
+  }
+  ImpulseDemand(const ImpulseDemand&) = delete;
+  ImpulseDemand& operator=(const ImpulseDemand&) = delete;
+  ~ImpulseDemand() { release(); }
+  /// Whether this holds a demand (a default-constructed one does not).
+  explicit operator bool() const { return bool(count_); }
+
+ private:
+  void release() {
+    if (count_) --*count_, count_.reset();
+  }
+  std::shared_ptr<std::size_t> count_;
 };
 
 /// Orders pairs by (a, b): the deterministic order of every contact list.

@@ -799,7 +799,7 @@ void RigidBodyResolver::wake_on_load_change() {
   }
 }
 
-void RigidBodyResolver::add_contact_joints(double h, bool first) {
+void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback) {
   Impl& m = *impl_;
   std::uint32_t fb = 0;
   for (std::uint32_t ci = 0; ci < contacts_.size(); ++ci) {
@@ -854,9 +854,12 @@ void RigidBodyResolver::add_contact_joints(double h, bool first) {
       contact.geom.depth = depth;
       dJointID j = dJointCreateContact(m.world, m.contact_group, &contact);
       dJointAttach(j, b1, b2);
-      dJointSetFeedback(j, &m.feedback[fb++]);
+      // The joint's force is reported only for readers of impulses; without
+      // feedback ODE skips copying its Jacobian and computing J^T lambda.
+      if (feedback) dJointSetFeedback(j, &m.feedback[fb]);
+      ++fb;
     }
-    if (first) m.records.push_back({ci, first_feedback, fb - first_feedback, swapped});
+    if (record) m.records.push_back({ci, first_feedback, fb - first_feedback, swapped});
   }
 }
 
@@ -964,19 +967,26 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
   if (config_.auto_disable) wake_on_load_change();
   if (!displacements_.empty()) apply_displacements();
 
+  // Impulses only for their readers (demand_impulses): the feedback below is
+  // work the solve itself does not need.
+  const bool feedback = *impulse_demand_ > 0;
   // Contact points as queued; their depth is carried forward between substeps.
   m.depth.resize(contact_points_.size());
   for (std::size_t k = 0; k < contact_points_.size(); ++k) m.depth[k] = contact_points_[k].depth;
-  m.feedback.resize(contact_points_.size());  // joints keep pointers into it: no growth below
-  m.feedback_force.assign(contact_points_.size(), Vec3{});
+  if (feedback) {
+    m.feedback.resize(contact_points_.size());  // joints keep pointers into it: no growth below
+    m.feedback_force.assign(contact_points_.size(), Vec3{});
+  }
   m.records.clear();
 
   const bool found = n > 1 && config_.substep_contacts == RigidBodyConfig::SubstepContacts::Found;
   if (found) {
     window_contacts_ = contacts_;
     window_points_ = contact_points_;
-    pair_force_.assign(contacts_.size(), Vec3{});
-    pair_normal_.assign(contacts_.size(), 0.0);
+    if (feedback) {
+      pair_force_.assign(contacts_.size(), Vec3{});
+      pair_normal_.assign(contacts_.size(), 0.0);
+    }
     // New pairs are still found once a window, a window's travel deep: push
     // such overlaps out at the window's pace, as one step of dt would, and not
     // n times faster (which throws a sliding contact off: measured on the
@@ -989,12 +999,13 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
       find_substep_contacts(access);
       m.depth.resize(contact_points_.size());
       for (std::size_t k = 0; k < contact_points_.size(); ++k) m.depth[k] = contact_points_[k].depth;
-      m.feedback.resize(std::max(m.feedback.size(), contact_points_.size()));  // no joints left
+      if (feedback) m.feedback.resize(std::max(m.feedback.size(), contact_points_.size()));  // no joints left
       m.records.clear();
     }
     apply_loads();
     if (!rated_loads_.empty()) apply_rated_loads(sub * h);
-    add_contact_joints(h, sub == 0 || found);
+    // Records serve the impulses and, with kept substeps, carry_depths.
+    add_contact_joints(h, (sub == 0 || found) && (feedback || (n > 1 && !found)), feedback);
     // QuickStep shuffles constraints with ODE's global random generator;
     // seeding it from the step number makes every world's step a function of
     // its own state (two worlds, or two runs, stay bit-identical).
@@ -1004,7 +1015,7 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
     if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, h);
     else dWorldStep(m.world, h);
     m.fix_planar();
-    if (found) {
+    if (feedback && found) {
       // Points differ from substep to substep: sum each pair's force instead.
       for (const auto& r : m.records) {
         const ContactCommand& c = contacts_[r.command];
@@ -1015,7 +1026,7 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
           pair_normal_[r.command] += sign * dot(f1, contact_points_[c.first + i].normal);
         }
       }
-    } else {
+    } else if (feedback) {
       for (std::size_t k = 0; k < m.records.size(); ++k) {
         const auto& r = m.records[k];
         for (std::uint32_t i = 0; i < r.count; ++i)
@@ -1032,9 +1043,10 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
   }
 
   // Publish the impulse each pair received over the window.
-  const bool had = !impulses_.empty();
+  const bool had = !impulses_.empty() || impulses_computed_ != feedback;
+  impulses_computed_ = feedback;
   impulses_.clear();
-  if (found) {
+  if (feedback && found) {
     // Every pair queued for the window that touched at some substep.
     for (std::size_t ci = 0; ci < contacts_.size(); ++ci) {
       const ContactCommand& c = contacts_[ci];
@@ -1043,7 +1055,7 @@ void RigidBodyResolver::advance(ResolverAccess& access, double dt) {
     }
   }
   for (const auto& r : m.records) {
-    if (found) break;
+    if (found || !feedback) break;
     const ContactCommand& c = contacts_[r.command];
     Vec3 f{};
     double fn = 0;

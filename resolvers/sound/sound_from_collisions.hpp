@@ -31,7 +31,7 @@ namespace alloy::sound {
 class SoundFromCollisions final : public Interaction {
  public:
   SoundFromCollisions(SoundResolver& sound, const rigid::CollisionSet& collisions)
-      : sound_(sound), collisions_(collisions) {}
+      : sound_(sound), collisions_(collisions), impulses_(collisions.demand_impulses()) {}
 
   void apply(const WorldView& world) override;
 
@@ -55,6 +55,7 @@ class SoundFromCollisions final : public Interaction {
 
   SoundResolver& sound_;
   const rigid::CollisionSet& collisions_;
+  rigid::ImpulseDemand impulses_;  // strikes are as hard as the impulse: declared to the rigid body
   std::vector<Impact> pending_;  // began at the last apply, struck at this one
   std::vector<Key> seen_;        // began pairs already handled, sorted; pruned when they end
 };

@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
@@ -16,8 +18,15 @@ using rigid::ContactPair;
 
 const CollisionSet& contacts_of(World& w) { return dynamic_cast<CollisionSet&>(*w.stage("collisions")); }
 
+/// A scene that asks for impulses whether or not a stage reads them.
+WorldDef with_impulses() {
+  WorldDef def;
+  def.settings["collisions"].set("impulses", true);
+  return def;
+}
+
 TEST(Collisions, BeganOngoingEndedAcrossABounce) {
-  Sim s;
+  Sim s(with_impulses());
   const Bounce b = build_bounce(*s, 0.5, 0.5);
   std::vector<Event> events;
   s->add_observer([&](const Event& e) { events.push_back(e); });
@@ -60,7 +69,7 @@ TEST(Collisions, BeganOngoingEndedAcrossABounce) {
 }
 
 TEST(Collisions, RestingContactStaysOngoing) {
-  Sim s;
+  Sim s(with_impulses());
   const Stack st = build_stack(*s, 3, 0.2);
   s.run_for(0.1);
   std::size_t events = 0;
@@ -77,6 +86,100 @@ TEST(Collisions, RestingContactStaysOngoing) {
   EXPECT_NEAR(top->normal_impulse, 9.81 * s->dt(), 0.02 * 9.81 * s->dt());
   for (std::size_t i = 1; i < c.ongoing().size(); ++i)
     EXPECT_TRUE(rigid::pair_less(c.ongoing()[i - 1].a, c.ongoing()[i - 1].b, c.ongoing()[i].a, c.ongoing()[i].b));
+}
+
+/// A ball dropped on a floor until the contact ends; records the
+/// contact_ended event and the set's state then. With `demand_at` >= 0, an
+/// impulse demand is taken after that many steps past the touch (0: before
+/// the first step).
+struct DropRun {
+  Event ended;
+  bool known_at_end = false;
+  std::vector<double> poses;  // every step's ball height, bit for bit
+};
+DropRun drop(bool demand, int demand_after_touch = -1) {
+  Sim s;
+  build_bounce(*s, 0.5, 0.5);
+  DropRun r;
+  s->add_observer([&](const Event& e) {
+    if (e.type == "contact_ended") r.ended = e;
+  });
+  s->step();
+  rigid::ImpulseDemand d;
+  if (demand && demand_after_touch < 0) d = contacts_of(*s).demand_impulses();
+  int touched = -1;
+  for (int i = 0; i < 240 && r.ended.type.empty(); ++i) {
+    s->step();
+    r.poses.push_back(std::get<Vec3>(s->get(s->find("ball"), "position")).y);
+    if (touched < 0 && !contacts_of(*s).began().empty()) touched = i;
+    if (demand && touched >= 0 && i == touched + demand_after_touch) d = contacts_of(*s).demand_impulses();
+  }
+  r.known_at_end = contacts_of(*s).impulses_known();
+  return r;
+}
+
+bool has_value(const Event& e, std::string_view key) {
+  return std::any_of(e.values.begin(), e.values.end(), [&](const auto& kv) { return kv.first == key; });
+}
+
+TEST(Collisions, ImpulsesAreComputedOnlyWhileAStageReadsThem) {
+  // Nobody reads them: the rigid body computes none, and contact_ended says
+  // so by carrying no impulse (rather than a wrong 0).
+  const DropRun without = drop(false);
+  ASSERT_EQ(without.ended.type, "contact_ended");
+  EXPECT_FALSE(without.known_at_end);
+  EXPECT_FALSE(has_value(without.ended, "impulse"));
+  EXPECT_TRUE(has_value(without.ended, "duration"));
+
+  // A reader from the start: the impulse over the contact, m (1 + e) v.
+  const DropRun with = drop(true);
+  ASSERT_EQ(with.ended.type, "contact_ended");
+  EXPECT_TRUE(with.known_at_end);
+  ASSERT_TRUE(has_value(with.ended, "impulse"));
+  const double expected = 0.5 * 1.5 * std::sqrt(2 * 9.81 * 0.5);
+  EXPECT_NEAR(with.ended.value("impulse"), expected, 0.05 * expected);
+  EXPECT_EQ(with.ended.value("duration"), without.ended.value("duration"));
+
+  // Impulses are read out of the solve, never fed back: the same motion, bit for bit.
+  EXPECT_EQ(with.poses, without.poses);
+}
+
+TEST(Collisions, APairThatBeganBeforeTheDemandEndsWithoutAnImpulse) {
+  // The demand comes one step into the contact: the pair's total misses the
+  // first advance, so its end reports no impulse; the set's impulses are known.
+  const DropRun late = drop(true, 1);
+  ASSERT_EQ(late.ended.type, "contact_ended");
+  EXPECT_TRUE(late.known_at_end);
+  EXPECT_FALSE(has_value(late.ended, "impulse"));
+  // Taken in the step that found the touch, before the rigid body resolved
+  // it: every advance of the pair computed its impulse.
+  const DropRun in_time = drop(true, 0);
+  EXPECT_TRUE(has_value(in_time.ended, "impulse"));
+}
+
+TEST(Collisions, ImpulsesStopWhenTheLastDemandIsDropped) {
+  Sim s;
+  build_bounce(*s, 0.0, 0.0);  // a ball resting on the floor
+  s->step();
+  const auto& rigid = dynamic_cast<const rigid::RigidBodyResolver&>(*s->stage("rigid_body"));
+  {
+    rigid::ImpulseDemand a = contacts_of(*s).demand_impulses();
+    rigid::ImpulseDemand b = rigid.demand_impulses();
+    s.run_for(0.1);
+    EXPECT_TRUE(contacts_of(*s).impulses_known());
+    ASSERT_EQ(rigid.impulses().size(), 1u);
+    EXPECT_NEAR(rigid.impulses()[0].normal_impulse, 0.5 * 9.81 * s->dt(), 1e-3 * 0.5 * 9.81 * s->dt());
+    a = {};  // one of two dropped: still demanded
+    s->step();
+    EXPECT_TRUE(contacts_of(*s).impulses_known());
+  }
+  s->step();
+  EXPECT_FALSE(rigid.impulses_computed());
+  EXPECT_TRUE(rigid.impulses().empty());
+  EXPECT_FALSE(contacts_of(*s).impulses_known());
+  const ContactPair* p = contacts_of(*s).find(s->find("floor"), s->find("ball"));
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->normal_impulse, 0.0);
 }
 
 TEST(Collisions, ABarLyingOnATurningCamStaysInContact) {

@@ -62,6 +62,7 @@ TEST(RigidBodySubstepContacts, FoundContactsKeepARestingBallAtRestAndReportTheIm
   WorldDef def;
   def.settings["rigid_body"].set("substeps", std::int64_t(4));
   def.settings["rigid_body"].set("substep_contacts", std::string("found"));
+  def.settings["collisions"].set("impulses", true);  // read below: computed for readers only
   Sim s(def);
   const Bounce b = build_bounce(*s, 0.0, 0.0);
   s.run_for(1.0);
