@@ -8,6 +8,7 @@
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_stages.hpp"
 #include "lua/native_bindings.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
 
 namespace alloy::lua {
 
@@ -239,6 +240,24 @@ void ModRuntime::commit(Loaded& l, std::unique_ptr<Program> p, bool first) {
     for (const auto& name : changed) world_->plugin_changed(name);
 }
 
+void ModRuntime::hold_impulses() {
+  // Asked again whenever the collisions stage is a new one (a swap, or the
+  // first time it exists): the demand then holds from the next advance, before
+  // any contact that began now can end.
+  if (world_->step_count() == impulses_checked_) return;  // once a step, not once an event
+  impulses_checked_ = world_->step_count();
+  bool wanted = false;
+  for (const auto& l : mods_)
+    if (!l->state->stopped() && l->state->program())
+      for (const auto& [type, ref] : l->state->program()->handlers)
+        wanted = wanted || type == "contact_ended" || type == "*";
+  const Stage* stage = wanted && world_->has_stage("collisions") ? world_->stage("collisions") : nullptr;
+  if (stage == impulses_from_) return;
+  impulses_from_ = stage;
+  const auto* set = dynamic_cast<const rigid::CollisionSet*>(stage);
+  impulses_ = set ? set->demand_impulses() : rigid::ImpulseDemand{};
+}
+
 void ModRuntime::attach(World& world) {
   world_ = &world;
   std::weak_ptr<ModRuntime*> weak = self_;
@@ -409,6 +428,7 @@ void ModRuntime::dispatch(const Event& e) {
       if (std::find(l->plugins.begin(), l->plugins.end(), plugin) != l->plugins.end())
         options_.log(l->state->name(), e.text);
   }
+  hold_impulses();
   const PropertyStore& store = world_->store();
   for (const auto& lp : mods_) {
     Loaded& l = *lp;

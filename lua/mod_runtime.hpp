@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "lua/mod_state.hpp"
+#include "resolvers/rigid_body/contact.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::lua {
@@ -131,12 +132,19 @@ class ModRuntime {
   /// world which plugins changed.
   void commit(Loaded& l, std::unique_ptr<Program> p, bool first);
   void dispatch(const Event& e);
+  /// Holds a demand for contact impulses on the world's collisions set while a
+  /// loaded mod handles contact_ended (or every event), whose impulse value
+  /// exists only if someone asks (resolvers/rigid_body/collisions.hpp).
+  void hold_impulses();
   void report(ModReport r);
 
   PluginRegistry& registry_;
   ModRuntimeOptions options_;
   std::vector<std::unique_ptr<Loaded>> mods_;
   World* world_ = nullptr;
+  rigid::ImpulseDemand impulses_;
+  const Stage* impulses_from_ = nullptr;  // the collisions stage impulses_ was asked of
+  std::uint64_t impulses_checked_ = ~std::uint64_t(0);  // the step hold_impulses last looked at
   std::shared_ptr<ModRuntime*> self_;  // the world's observer holds a weak_ptr
   std::unique_ptr<FileWatcher> watcher_;
   std::vector<ModReport> reports_;

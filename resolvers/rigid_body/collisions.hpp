@@ -15,8 +15,9 @@
 //
 // Impulses are computed only for their readers: a stage that reads them
 // declares it with demand_impulses() (sound_from_collisions, Lua stages that
-// read contacts, the viewer's contact forces), or a scene with the setting
-// `collisions { impulses = true }` (for handlers of contact_ended events).
+// read contacts, the viewer's contact forces, lua::ModRuntime while a mod
+// handles contact_ended or every event), or a scene with the setting
+// `collisions { impulses = true }` (for other observers of contact_ended).
 // Without a demand the rigid body skips ODE's joint feedback (about 2 % of a
 // pile's step): the pairs' impulse fields stay 0, impulses_known() is false,
 // and contact_ended carries only its duration. A pair that began before the

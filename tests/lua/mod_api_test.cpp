@@ -411,6 +411,46 @@ function mod.on_load(state) state.touches = 0 end
   EXPECT_GE(std::get<double>(world.get(counter, "count")), 1.0);  // the handler counted the landing
 }
 
+TEST_F(ModApi, AContactEndedHandlerGetsTheImpulseWithoutAskingForIt) {
+  // Impulses are computed only for their readers; a mod that handles
+  // contact_ended is one, without declaring anything.
+  TempMods m;
+  m.mod("bounces", R"LUA(
+mod.property { name = "last_impulse" }
+mod.resolver {
+  name = "bounces.show", reads = {}, writes = { "last_impulse" }, needs = { "last_impulse" },
+  advance = function(w)
+    local c = w:write("last_impulse")
+    for i in c:each() do c[i] = w.state.impulse end
+  end,
+}
+mod.on("contact_ended", function(e, state) state.impulse = e.values.impulse or -1 end)
+function mod.on_load(state) state.impulse = 0 end
+)LUA");
+  lua::ModRuntime runtime(registry, runtime_options(m, &log));
+  runtime.load("bounces");
+  World world(registry);
+  runtime.attach(world);
+  const ObjectId shown = world.create("shown");
+  world.set(shown, "last_impulse", 0.0);
+  const ObjectId floor = world.create("floor");
+  world.set(floor, "shape", std::string("box"));
+  world.set(floor, "size", Vec3{4, 0.1, 1});
+  world.set(floor, "static", true);
+  world.set(floor, "position", Vec3{0, 0, 0});
+  const ObjectId ball = world.create("ball");
+  world.set(ball, "shape", std::string("sphere"));
+  world.set(ball, "radius", 0.1);
+  world.set(ball, "mass", 1.0);
+  world.set(ball, "restitution", 0.8);
+  world.set(ball, "position", Vec3{0, 0.5, 0});
+  world.run(150);  // falls 0.35 m, lands at 2.6 m/s and bounces off
+  // The landing's impulse: m (v_in + v_out) = 1 kg * 2.6 m/s * 1.8, roughly.
+  const double impulse = std::get<double>(world.get(shown, "last_impulse"));
+  EXPECT_GT(impulse, 3.0) << "-1: the event came without an impulse";
+  EXPECT_LT(impulse, 6.0);
+}
+
 }  // namespace
 }  // namespace alloy::test
 
