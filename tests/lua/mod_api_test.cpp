@@ -373,6 +373,21 @@ mod.resolver {
   EXPECT_TRUE(contains(text, "column 'level': no object in slot -1")) << text;
 }
 
+/// A 1 kg ball of 0.1 m radius 0.5 m above a static floor, to land on it.
+void drop_ball(World& world, double restitution = 0) {
+  const ObjectId floor = world.create("floor");
+  world.set(floor, "shape", std::string("box"));
+  world.set(floor, "size", Vec3{4, 0.1, 1});
+  world.set(floor, "static", true);
+  world.set(floor, "position", Vec3{0, 0, 0});
+  const ObjectId ball = world.create("ball");
+  world.set(ball, "shape", std::string("sphere"));
+  world.set(ball, "radius", 0.1);
+  world.set(ball, "mass", 1.0);
+  world.set(ball, "restitution", restitution);
+  world.set(ball, "position", Vec3{0, 0.5, 0});
+}
+
 TEST_F(ModApi, LuaEventHandlersSeeThePublishedEventsWithTheModsState) {
   TempMods m;
   m.mod("listener", R"LUA(
@@ -397,16 +412,7 @@ function mod.on_load(state) state.touches = 0 end
   runtime.attach(world);
   const ObjectId counter = world.create("counter");
   world.set(counter, "count", 0.0);
-  const ObjectId floor = world.create("floor");
-  world.set(floor, "shape", std::string("box"));
-  world.set(floor, "size", Vec3{4, 0.1, 1});
-  world.set(floor, "static", true);
-  world.set(floor, "position", Vec3{0, 0, 0});
-  const ObjectId ball = world.create("ball");
-  world.set(ball, "shape", std::string("sphere"));
-  world.set(ball, "radius", 0.1);
-  world.set(ball, "mass", 1.0);
-  world.set(ball, "position", Vec3{0, 0.5, 0});
+  drop_ball(world);
   world.run(240);
   EXPECT_GE(std::get<double>(world.get(counter, "count")), 1.0);  // the handler counted the landing
 }
@@ -433,17 +439,7 @@ function mod.on_load(state) state.impulse = 0 end
   runtime.attach(world);
   const ObjectId shown = world.create("shown");
   world.set(shown, "last_impulse", 0.0);
-  const ObjectId floor = world.create("floor");
-  world.set(floor, "shape", std::string("box"));
-  world.set(floor, "size", Vec3{4, 0.1, 1});
-  world.set(floor, "static", true);
-  world.set(floor, "position", Vec3{0, 0, 0});
-  const ObjectId ball = world.create("ball");
-  world.set(ball, "shape", std::string("sphere"));
-  world.set(ball, "radius", 0.1);
-  world.set(ball, "mass", 1.0);
-  world.set(ball, "restitution", 0.8);
-  world.set(ball, "position", Vec3{0, 0.5, 0});
+  drop_ball(world, 0.8);
   world.run(150);  // falls 0.35 m, lands at 2.6 m/s and bounces off
   // The landing's impulse: m (v_in + v_out) = 1 kg * 2.6 m/s * 1.8, roughly.
   const double impulse = std::get<double>(world.get(shown, "last_impulse"));

@@ -21,11 +21,13 @@ struct Circuit {
   PluginRegistry registry;
   std::unique_ptr<World> world;
   ObjectId coil;
-  explicit Circuit(bool rates, double dt = 1.0 / 240) {
+  /// `force_rates`: magnetic_forces publishes its rates too.
+  explicit Circuit(bool rates, double dt = 1.0 / 240, bool force_rates = false) {
     electricity::register_electricity_resolver(registry);
     register_magnetism_plugins(registry);
     WorldDef def;
     def.dt = dt;
+    if (force_rates) def.settings["magnetic_forces"].set("rates", true);
     if (rates) {
       def.settings["electricity"].set("rates", true);
       def.settings["magnetism"].set("rates", true);
@@ -102,32 +104,9 @@ TEST(CurrentRates, TheForcesFollowThePoleStrengthRate) {
   // (nothing moves), so value + rate * dt predicts the next window's force
   // far better than the held value.
   for (bool rates : {false, true}) {
-    PluginRegistry registry;
-    electricity::register_electricity_resolver(registry);
-    register_magnetism_plugins(registry);
-    WorldDef def;
-    def.dt = 1.0 / 960;  // a tenth of the coil's tau: the rate is a window stale
-    def.settings["magnetic_forces"].set("rates", true);
-    if (rates) {
-      def.settings["electricity"].set("rates", true);
-      def.settings["magnetism"].set("rates", true);
-    }
-    World w(registry, def);
-    const ObjectId battery = w.create("battery");
-    w.set(battery, "emf", 6.0);
-    w.set(battery, "internal_resistance", 0.1);
-    const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 200);
-    w.set(coil, "inductance", 0.06);
-    w.set(coil, "resistance", 5.9);
-    for (auto [name, from, ft, to, tt] :
-         {std::tuple{"w1", battery, 1, coil, 0}, std::tuple{"w2", coil, 1, battery, 0}}) {
-      const ObjectId id = w.create(name);
-      w.set(id, "wire_from", from);
-      w.set(id, "wire_from_terminal", std::int64_t(ft));
-      w.set(id, "wire_to", to);
-      w.set(id, "wire_to_terminal", std::int64_t(tt));
-      w.set(id, "resistance", 0.0);
-    }
+    // A tenth of the coil's tau: the rate is a window stale.
+    Circuit c(rates, 1.0 / 960, /*force_rates=*/true);
+    World& w = *c.world;
     const ObjectId magnet = add_permanent(w, "magnet", {0.1, 0, 0}, 0, 10.0);
     w.run(4);
     ASSERT_NE(forces_of(w).find(magnet), nullptr);
