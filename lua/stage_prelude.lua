@@ -19,6 +19,7 @@ local call_ptr = ffi.typeof("alloy_call*")
 local contact_ptr = ffi.typeof("const alloy_contact*")
 local cmd_ptr = ffi.typeof("const double*")
 local bulk_ptr = ffi.typeof("alloy_bulk*")
+local load_ptr = ffi.typeof("alloy_load*")
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
 local floor, sqrt, huge = math.floor, math.sqrt, math.huge
@@ -447,10 +448,11 @@ local function command_queue(rec)
   end
   -- The function that queues interaction function `index`: it appends
   -- {index, slot, arguments...} to the buffer. The slot must hold a live
-  -- object (call.alive, the host's per-slot flags for this call), checked
+  -- object (call.ids, the host's per-slot ids for this call), checked
   -- here where the mod's line is known, so that the host performs the
   -- records without looking each object up again.
-  function q.target_function(index, fname, kinds)
+  function q.target_function(index, fname, kinds, record)
+    if record then return q.record_function(fname, kinds, record) end
     local n = #kinds
     if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
     local stride = 2
@@ -463,7 +465,7 @@ local function command_queue(rec)
       if not (i >= 0 and i < call.slots and i == floor(i)) then
         error(what .. ": no object in slot " .. tostring(i), 2)
       end
-      if call.alive[i] == 0 then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      if call.ids[i] == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
       local o = len
       if o + stride > cap then
         if api.grow(ptr) ~= 0 then fail(rec, 1) end
@@ -477,6 +479,53 @@ local function command_queue(rec)
       o = p3(b, o, a3, what)
       o = p4(b, o, a4, what)
       len = o
+    end
+  end
+  -- The same for a target that takes load records in place (the rigid
+  -- body, call.loads): each call writes one record of kind `record` into
+  -- the target's own queue, {id, value, point}, with the object's id
+  -- (slot and generation) copied from call.ids, so that the host keeps the
+  -- records as they are when the call returns. The room is zeroed by the
+  -- host: a force leaves point and kind as they are.
+  function q.record_function(fname, kinds, record)
+    local what = "'" .. fname .. "'"
+    local at = #kinds == 2
+    if not ((#kinds == 1 or at) and kinds[1] == "vec3" and (not at or kinds[2] == "vec3")) then
+      error("interaction function '" .. fname .. "' cannot be written in place")
+    end
+    return function(i, v, p)
+      if call.in_call == 0 then not_in_call(what) end
+      if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+      if not (i >= 0 and i < call.slots and i == floor(i)) then
+        error(what .. ": no object in slot " .. tostring(i), 2)
+      end
+      local id = call.ids[i]
+      if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      v = to_vec3(v, what)
+      local x, y, z = v.x, v.y, v.z
+      -- 0 if all three are finite, NaN otherwise: one test instead of three.
+      if not ((x - x) + (y - y) + (z - z) == 0) then
+        error(what .. ": arguments must be finite, got " .. tostring(v), 2)
+      end
+      local o = len
+      if o >= cap then
+        if api.grow(ptr) ~= 0 then fail(rec, 1) end
+        cap = call.buf_cap
+      end
+      local r = load_ptr(call.loads) + o
+      r.id, r.vx, r.vy, r.vz = id, x, y, z
+      if record ~= 0 then
+        r.kind = record
+        if at then
+          p = to_vec3(p, what)
+          local px, py, pz = p.x, p.y, p.z
+          if not ((px - px) + (py - py) + (pz - pz) == 0) then
+            error(what .. ": arguments must be finite, got " .. tostring(p), 2)
+          end
+          r.px, r.py, r.pz = px, py, pz
+        end
+      end
+      len = o + 1
     end
   end
   return q
@@ -728,7 +777,7 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
     local q = command_queue(rec)
     rec.queue = q
     for _, f in ipairs(decl.target.functions) do
-      t[f.name] = q.target_function(f.index, f.name, f.kinds)
+      t[f.name] = q.target_function(f.index, f.name, f.kinds, f.record)
     end
     for _, f in ipairs(decl.target.functions) do
       local kind = f.kinds[1]
