@@ -22,6 +22,7 @@ local bulk_ptr = ffi.typeof("alloy_bulk*")
 local load_ptr = ffi.typeof("alloy_load*")
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
+local newproxy, getmetatable = newproxy, getmetatable
 local floor, sqrt, huge = math.floor, math.sqrt, math.huge
 local sort, concat = table.sort, table.concat
 local format = string.format
@@ -377,9 +378,17 @@ local function column_proxy(rec, k, c)
     end
     return methods[i]
   end
+  -- A proxy is a userdata, not a table: indexing a table with a number
+  -- makes the compiled loop test the key against the table's array part
+  -- first (a conversion, a compare and a spilled size per column read);
+  -- a userdata goes straight to __index. It also has no raw fields a mod
+  -- could set, and # gives the count (Lua 5.1 ignores __len on tables).
   local function proxy(mt)
     mt.__metatable = "column"
-    return setmetatable({}, mt)
+    local u = newproxy(true)
+    local m = getmetatable(u)
+    for key, v in next, mt do m[key] = v end
+    return u
   end
   local reader = proxy({
     __index = index,
@@ -587,12 +596,13 @@ local function bulk_function(rec, index, fname, kind, column_of)
         return bk.values[i]
       end
     end
-    return setmetatable({}, {
-      __index = get,
-      __newindex = newindex,
-      __metatable = "bulk buffer",
-      __tostring = function() return "buffer of " .. what .. " over column '" .. cname .. "'" end,
-    })
+    local u = newproxy(true)  -- a userdata, as column proxies are (column_proxy)
+    local m = getmetatable(u)
+    m.__index = get
+    m.__newindex = newindex
+    m.__metatable = "bulk buffer"
+    m.__tostring = function() return "buffer of " .. what .. " over column '" .. cname .. "'" end
+    return u
   end
   return function(col)
     if call.in_call == 0 then not_in_call(what) end
