@@ -556,6 +556,8 @@ bool LuaStage::perform_bulk() {
     // stage's area; the prelude refused writes to any other slot, and
     // values that are not finite.
     const std::span<const std::uint32_t> members(col.members, col.count);
+    if (in_place_ && native_target_->record_kind(bulk.function) >= 0)
+      continue;  // written in place as load records, kept with the others
     if (native_target_) {
       native_target_->perform_each(bulk.function, members, bulk.present, bulk.values, bulk.width,
                                    view_->store());

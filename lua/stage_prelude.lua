@@ -537,6 +537,49 @@ local function command_queue(rec)
       len = o + 1
     end
   end
+  -- A bulk buffer's writer and reader for a target taking records in
+  -- place: the first write to a member's slot appends a record of kind
+  -- `record` (its index kept in the buffer's values, one per slot), a later
+  -- write overwrites it, a read gives it back. `check` has refused slots
+  -- that are not members; the values are checked here.
+  function q.bulk_records(bk, record, what, check)
+    local function set(_, i, v)
+      check(i)
+      v = to_vec3(v, what)
+      local x, y, z = v.x, v.y, v.z
+      if not ((x - x) + (y - y) + (z - z) == 0) then
+        error(what .. ": values must be finite, got " .. tostring(v), 2)
+      end
+      local o
+      if bk.present[i] == 1 then
+        o = bk.values[i]
+      else
+        local id = call.ids[i]
+        if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+        o = len
+        if o >= cap then
+          if api.grow(ptr) ~= 0 then fail(rec, 1) end
+          cap = call.buf_cap
+        end
+        len = o + 1
+        local r = load_ptr(call.loads) + o
+        r.id = id
+        if record ~= 0 then r.kind = record end
+        bk.values[i] = o
+        bk.present[i] = 1
+      end
+      local r = load_ptr(call.loads) + o
+      r.vx, r.vy, r.vz = x, y, z
+    end
+    local function get(_, i)
+      check(i)
+      if bk.present[i] ~= 1 then return nil end
+      local r = load_ptr(call.loads) + bk.values[i]
+      local v = vec3_t(r.vx, r.vy, r.vz)
+      return v
+    end
+    return set, get
+  end
   return q
 end
 
@@ -546,7 +589,7 @@ end
 -- returns (one C++ loop, no command record per object). The same buffer comes
 -- back for the same column within a call; a buffer is only valid in its call.
 -- The proxies are made once per buffer index and column, not per call.
-local function bulk_function(rec, index, fname, kind, column_of)
+local function bulk_function(rec, index, fname, kind, column_of, record)
   local ptr, call = rec.ptr, rec.call
   local what = "'" .. fname .. "_each'"
   local proxies = {}  -- [buffer index][column] -> proxy
@@ -562,7 +605,9 @@ local function bulk_function(rec, index, fname, kind, column_of)
       end
     end
     local newindex, get
-    if kind == "vec3" then
+    if record then
+      newindex, get = rec.queue.bulk_records(bk, record, what, check)
+    elseif kind == "vec3" then
       newindex = function(_, i, v)
         check(i)
         v = to_vec3(v, what)
@@ -792,7 +837,7 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
     for _, f in ipairs(decl.target.functions) do
       local kind = f.kinds[1]
       if #f.kinds == 1 and (kind == "vec3" or kind == "number") and t[f.name .. "_each"] == nil then
-        t[f.name .. "_each"] = bulk_function(rec, f.index, f.name, kind, column_of)
+        t[f.name .. "_each"] = bulk_function(rec, f.index, f.name, kind, column_of, f.record)
       end
     end
     w.target = frozen(t, "target '" .. decl.target.name .. "'")
