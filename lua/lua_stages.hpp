@@ -157,7 +157,7 @@ class LuaStage {
   // A native target taking load records in place (abi::Call::loads): the
   // room opened for a call, the last call's count (the next call's room).
   bool in_place_ = false;
-  std::size_t records_room_ = 256;
+  std::size_t records_room_ = 16;
   // Per slot, the live object's packed id or 0 (abi::Call::ids), as of the
   // store's structure version `ids_version_`: rebuilt only when objects
   // were created or destroyed since.

@@ -750,9 +750,18 @@ bool ModState::run_stage(int record_ref, const char* phase, double dt, double ti
                          std::uint64_t step, const ErrorLocation& fallback, InputError* error) {
   lua_State* L = host_->state();
   StackGuard guard(L);
-  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("run"));
+  if (run_ref_ == -2) run_ref_ = prelude_ref("run");
+  lua_rawgeti(L, LUA_REGISTRYINDEX, run_ref_);
   lua_rawgeti(L, LUA_REGISTRYINDEX, record_ref);
-  lua_pushstring(L, phase);
+  int phase_ref = -2;
+  for (const auto& [p, ref] : phases_)
+    if (p == phase) phase_ref = ref;
+  if (phase_ref == -2) {
+    lua_pushstring(L, phase);
+    phase_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+    phases_.emplace_back(phase, phase_ref);
+  }
+  lua_rawgeti(L, LUA_REGISTRYINDEX, phase_ref);
   lua_pushnumber(L, dt);
   lua_pushnumber(L, time);
   lua_pushnumber(L, double(step));

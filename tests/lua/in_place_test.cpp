@@ -14,7 +14,7 @@
 namespace alloy::test {
 namespace {
 
-constexpr int kBodies = 600;  // more than the first room (256 records)
+constexpr int kBodies = 600;  // more than the first room (16 records)
 
 const char* kLoads = R"LUA(
 mod.interaction {
