@@ -804,7 +804,10 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
     // 2 everywhere, then 0 on the members: a write is refused outside them.
     // Storage is kept between calls (no allocation once it has grown).
     store.present.assign(info.n, 2);
-    for (std::uint32_t j = 0; j < info.count; ++j) store.present[info.members[j]] = 0;
+    // Locals: through the fields, each byte stored would reload them (it may alias).
+    std::uint8_t* present = store.present.data();
+    const std::uint32_t* members = info.members;
+    for (std::uint32_t j = 0, count = info.count; j < count; ++j) present[members[j]] = 0;
     if (store.values.size() < std::size_t(width) * info.n)
       store.values.resize(std::size_t(width) * info.n);
     st->bulks_[b] = abi::Bulk{store.values.data(), store.present.data(), info.n, width, fn, column};
