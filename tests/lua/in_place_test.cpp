@@ -21,6 +21,7 @@ mod.interaction {
   name = "loads.lua", reads = { "position", "mass" }, target = "rigid_body",
   apply = function(w)
     local pos, mass, t = w:read("position"), w:read("mass"), w.target
+    assert(#mass == mass:count() and #mass > 0 and type(mass) == "userdata", "a column is a userdata with a length")
     for i in mass:each() do
       local p = pos[i]
       if i % 3 == 0 then t.add_force(i, p * (-2 * mass[i]))
