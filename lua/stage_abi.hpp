@@ -55,7 +55,8 @@ struct Column {
 /// an interaction function, and lists handed out for the call.
 struct Call {
   double dt = 0, time = 0, step = 0;
-  /// Doubles used / available in buf. Doubles, not integers: the prelude
+  /// Doubles used / available in buf (records used / available in loads,
+  /// when the target takes them in place). Doubles, not integers: the prelude
   /// reads and writes them back in hot loops, and a uint32 field doing that
   /// makes LuaJIT's traces type-unstable (they never compile).
   double buf_len = 0, buf_cap = 0;
