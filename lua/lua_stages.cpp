@@ -246,6 +246,18 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
     lua_pushstring(L, decl.info.target.c_str());
     lua_setfield(L, -2, "name");
     push_functions(L, target_functions_);
+    // Functions the native target takes as load records written in place.
+    in_place_ = native_target_ && native_target_->record_kind(0) >= 0;
+    if (in_place_) {
+      for (std::size_t i = 0; i < target_functions_.size(); ++i) {
+        const int kind = native_target_->record_kind(std::int32_t(i));
+        if (kind < 0) continue;
+        lua_rawgeti(L, -1, int(i) + 1);
+        lua_pushinteger(L, kind);
+        lua_setfield(L, -2, "record");
+        lua_pop(L, 1);
+      }
+    }
     lua_setfield(L, -2, "functions");
     lua_setfield(L, d, "target");
   }
@@ -352,11 +364,15 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   ++call_->epoch;
   if (kind_ == StageKind::Interaction) {
     if (commands_.size() < kCommandBuffer) commands_.resize(kCommandBuffer);
-    refresh_alive(view.store());
-    call_->alive = alive_.data();
+    refresh_ids(view.store());
+    call_->ids = ids_.data();
     call_->buf = commands_.data();
     call_->buf_len = 0;
     call_->buf_cap = double(commands_.size());
+    if (in_place_) {
+      call_->loads = native_target_->open_records(records_room_);
+      call_->buf_cap = double(records_room_);
+    }
   }
   InputError failure("");
   bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
@@ -370,7 +386,11 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
   bulk_used_ = 0;
   call_->buf = nullptr;
   call_->buf_len = call_->buf_cap = 0;
-  call_->alive = nullptr;
+  if (call_->loads) {  // a failed call queues nothing
+    native_target_->close_records(0, view.store(), true);
+    call_->loads = nullptr;
+  }
+  call_->ids = nullptr;
   for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
   call_->in_call = 0;
   call_->cmd = nullptr;
@@ -464,24 +484,35 @@ void LuaStage::fetch(std::size_t k) {
   }
 }
 
-void LuaStage::refresh_alive(const PropertyStore& store) {
+void LuaStage::refresh_ids(const PropertyStore& store) {
   const std::size_t slots = store.slot_count();
-  if (alive_version_ == store.structure_version() && alive_.size() == slots) return;
-  alive_.resize(std::max<std::size_t>(1, slots));  // never empty: data() is non-null
-  for (std::size_t s = 0; s < slots; ++s) alive_[s] = store.id_at(std::uint32_t(s)) ? 1 : 0;
-  alive_.resize(slots);
-  alive_version_ = store.structure_version();
+  if (ids_version_ == store.structure_version() && ids_.size() == slots) return;
+  ids_.resize(std::max<std::size_t>(1, slots));  // never empty: data() is non-null
+  for (std::size_t s = 0; s < slots; ++s) {
+    const ObjectId id = store.id_at(std::uint32_t(s));
+    ids_[s] = id ? std::uint64_t(id.generation) << 32 | id.index : 0;
+  }
+  ids_.resize(slots);
+  ids_version_ = store.structure_version();
 }
 
 bool LuaStage::perform_commands() {
   const double* b = commands_.data();
   const auto n = std::size_t(call_->buf_len);
   const PropertyStore& store = view_->store();
+  // The prelude checked every slot against ids_ as it queued; those ids
+  // still hold if no object came or went since (nothing can in a stage's
+  // call, but the check is one comparison).
+  const bool checked = ids_version_ == store.structure_version();
+  if (call_->loads) {
+    // The records are in the target's queue already: keep those written.
+    call_->loads = nullptr;
+    records_room_ = std::max<std::size_t>(16, n);  // zeroed at each call: no more than needed
+    if (std::string problem = native_target_->close_records(n, store, checked); !problem.empty())
+      return error(problem), false;
+    return true;
+  }
   if (native_target_) {
-    // The prelude checked every slot against alive_ as it queued; those
-    // flags still hold if no object came or went since (nothing can in a
-    // stage's call, but the check is one comparison).
-    const bool checked = alive_version_ == store.structure_version();
     if (std::string problem = native_target_->perform(b, n, store, checked); !problem.empty())
       return error(problem), false;
     return true;
@@ -528,6 +559,8 @@ bool LuaStage::perform_bulk() {
     // stage's area; the prelude refused writes to any other slot, and
     // values that are not finite.
     const std::span<const std::uint32_t> members(col.members, col.count);
+    if (in_place_ && native_target_->record_kind(bulk.function) >= 0)
+      continue;  // written in place as load records, kept with the others
     if (native_target_) {
       native_target_->perform_each(bulk.function, members, bulk.present, bulk.values, bulk.width,
                                    view_->store());
@@ -672,6 +705,12 @@ std::int32_t LuaStage::api_grow(void* p) noexcept {
   try {
     if (!st->view_ || st->kind_ != StageKind::Interaction)
       return st->error("only an interaction may queue commands, while it runs");
+    if (st->call_->loads) {
+      const auto room = std::size_t(st->call_->buf_cap) * 2;
+      st->call_->loads = st->native_target_->open_records(room);
+      st->call_->buf_cap = double(room);
+      return 0;
+    }
     st->commands_.resize(st->commands_.size() * 2);
     st->call_->buf = st->commands_.data();
     st->call_->buf_cap = double(st->commands_.size());
@@ -768,7 +807,10 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
     // 2 everywhere, then 0 on the members: a write is refused outside them.
     // Storage is kept between calls (no allocation once it has grown).
     store.present.assign(info.n, 2);
-    for (std::uint32_t j = 0; j < info.count; ++j) store.present[info.members[j]] = 0;
+    // Locals: through the fields, each byte stored would reload them (it may alias).
+    std::uint8_t* present = store.present.data();
+    const std::uint32_t* members = info.members;
+    for (std::uint32_t j = 0, count = info.count; j < count; ++j) present[members[j]] = 0;
     if (store.values.size() < std::size_t(width) * info.n)
       store.values.resize(std::size_t(width) * info.n);
     st->bulks_[b] = abi::Bulk{store.values.data(), store.present.data(), info.n, width, fn, column};

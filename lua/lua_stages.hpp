@@ -155,12 +155,16 @@ class LuaStage {
   LuaResolver* lua_target_ = nullptr;
   std::vector<FunctionDecl> target_functions_;
   std::vector<double> commands_;  // the call's command buffer (abi::Call::buf)
-  // Per slot, 1 if it holds a live object (abi::Call::alive), as of the
-  // store's structure version `alive_version_`: rebuilt only when objects
+  // A native target taking load records in place (abi::Call::loads): the
+  // room opened for a call, the last call's count (the next call's room).
+  bool in_place_ = false;
+  std::size_t records_room_ = 16;
+  // Per slot, the live object's packed id or 0 (abi::Call::ids), as of the
+  // store's structure version `ids_version_`: rebuilt only when objects
   // were created or destroyed since.
-  std::vector<std::uint8_t> alive_;
-  std::uint64_t alive_version_ = ~0ull;
-  void refresh_alive(const PropertyStore& store);
+  std::vector<std::uint64_t> ids_;
+  std::uint64_t ids_version_ = ~0ull;
+  void refresh_ids(const PropertyStore& store);
   // Bulk buffers (abi::Bulk): a few per call, their storage kept between calls.
   static constexpr int kMaxBulk = 8;
   struct BulkStore {

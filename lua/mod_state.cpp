@@ -19,6 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::int32_t kQuantum = 1000;  // ticks between two checks of the budgets
+static_assert(kQuantum <= INT16_MAX);  // abi::Budget::ticks
 
 std::string millions(std::uint64_t n) {
   if (n % 1000000 == 0) return std::to_string(n / 1000000) + " million";
@@ -668,7 +669,7 @@ void ModState::begin_call(std::uint64_t step) {
       std::chrono::duration_cast<std::chrono::steady_clock::duration>(
           std::chrono::duration<double>(std::max(0.0, budget_.seconds_per_step - step_seconds_)));
   granted_ = stopped_ ? 0 : kQuantum;
-  abi_budget_->ticks = float(granted_);
+  abi_budget_->ticks = std::int16_t(granted_);
   abi_budget_->stopped = stopped_ ? 1 : 0;
 }
 
@@ -681,7 +682,7 @@ void ModState::begin_loading() {
   deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                 std::chrono::duration<double>(budget_.seconds_to_load));
   granted_ = stopped_ ? 0 : kQuantum;
-  abi_budget_->ticks = float(granted_);
+  abi_budget_->ticks = std::int16_t(granted_);
   loading_ = true;
 }
 
@@ -741,7 +742,7 @@ int ModState::over_budget(lua_State* L) {
                         std::to_string(limit >> 20) + " MiB (an allocation bomb?)");
   }
   self->granted_ = kQuantum;
-  self->abi_budget_->ticks = float(kQuantum);
+  self->abi_budget_->ticks = std::int16_t(kQuantum);
   return 0;
 }
 
@@ -749,9 +750,18 @@ bool ModState::run_stage(int record_ref, const char* phase, double dt, double ti
                          std::uint64_t step, const ErrorLocation& fallback, InputError* error) {
   lua_State* L = host_->state();
   StackGuard guard(L);
-  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("run"));
+  if (run_ref_ == -2) run_ref_ = prelude_ref("run");
+  lua_rawgeti(L, LUA_REGISTRYINDEX, run_ref_);
   lua_rawgeti(L, LUA_REGISTRYINDEX, record_ref);
-  lua_pushstring(L, phase);
+  int phase_ref = -2;
+  for (const auto& [p, ref] : phases_)
+    if (p == phase) phase_ref = ref;
+  if (phase_ref == -2) {
+    lua_pushstring(L, phase);
+    phase_ref = luaL_ref(L, LUA_REGISTRYINDEX);
+    phases_.emplace_back(phase, phase_ref);
+  }
+  lua_rawgeti(L, LUA_REGISTRYINDEX, phase_ref);
   lua_pushnumber(L, dt);
   lua_pushnumber(L, time);
   lua_pushnumber(L, double(step));

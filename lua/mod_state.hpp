@@ -192,6 +192,10 @@ class ModState : public std::enable_shared_from_this<ModState> {
   int budget_ud_ref_ = -2;
   int prelude_ref_ = -2;
   mutable std::vector<std::pair<std::string, int>> prelude_fns_;  // refs of its entry points
+  int run_ref_ = -2;  // prelude_ref("run"), looked up at every call
+  // The phase names run_stage passed ("apply", ...: string literals), as refs
+  // to their Lua strings: a call pushes one without hashing it again.
+  std::vector<std::pair<const char*, int>> phases_;
   int state_ref_ = -2;
   std::unique_ptr<Program> program_;
   std::vector<LuaStage*> stages_;

@@ -1,5 +1,11 @@
 #include "lua/native_bindings.hpp"
 
+#include <algorithm>
+#include <bit>
+#include <cstddef>
+#include <type_traits>
+
+#include "lua/stage_abi.hpp"
 #include "resolvers/rigid_body/rigid_body.hpp"
 
 namespace alloy::lua {
@@ -12,9 +18,56 @@ const std::vector<FunctionDecl> kRigidBody = {
     {"add_force_at", {ArgKind::Vec3, ArgKind::Vec3}},
 };
 
+// The prelude writes the rigid body's load records in place as
+// abi::LoadRecord: the same bytes. The id packs slot and generation in that
+// order (little-endian); the kinds follow RigidBodyResolver::Load.
+using LoadCommand = rigid::RigidBodyResolver::LoadCommand;
+using Load = rigid::RigidBodyResolver::Load;
+static_assert(sizeof(LoadCommand) == sizeof(abi::LoadRecord) &&
+              offsetof(LoadCommand, slot) == 0 && offsetof(LoadCommand, generation) == 4 &&
+              offsetof(LoadCommand, value) == offsetof(abi::LoadRecord, vx) &&
+              offsetof(LoadCommand, point) == offsetof(abi::LoadRecord, px) &&
+              offsetof(LoadCommand, kind) == offsetof(abi::LoadRecord, kind) &&
+              sizeof(Load) == 1 && std::is_trivially_copyable_v<LoadCommand>);
+static_assert(std::endian::native == std::endian::little);
+
 class RigidBodyTarget final : public NativeTarget {
  public:
   explicit RigidBodyTarget(rigid::RigidBodyResolver& rigid) : rigid_(rigid) {}
+  void* open_records(std::size_t n) override {
+    open_ = rigid_.open_loads(n);
+    return open_.data();
+  }
+  std::string close_records(std::size_t used, const PropertyStore& store,
+                            bool ids_checked) override {
+    used = std::min(used, open_.size());
+    if (!ids_checked)
+      for (std::size_t r = 0; r < used; ++r) {
+        const LoadCommand& c = open_[r];
+        const ObjectId id = store.id_at(c.slot);
+        if (!id || id.generation != c.generation) {
+          rigid_.close_loads(0);
+          open_ = {};
+          const std::size_t fn = c.kind == Load::Torque ? 1 : c.kind == Load::ForceAtPoint ? 2 : 0;
+          return "'" + kRigidBody[fn].name + "' on the object in slot " + std::to_string(c.slot) +
+                 ", which was destroyed";
+        }
+      }
+    rigid_.close_loads(used);
+    open_ = {};
+    return "";
+  }
+  int record_kind(std::int32_t fn) const override {
+    switch (fn) {
+      case 0:
+        return int(Load::Force);
+      case 1:
+        return int(Load::Torque);
+      case 2:
+        return int(Load::ForceAtPoint);
+    }
+    return -1;
+  }
   void call(std::int32_t fn, ObjectId object, const double* a) override {
     const Vec3 v{a[0], a[1], a[2]};
     switch (fn) {
@@ -85,6 +138,7 @@ class RigidBodyTarget final : public NativeTarget {
 
  private:
   rigid::RigidBodyResolver& rigid_;
+  std::span<LoadCommand> open_;  // the room of the current call
 };
 
 }  // namespace

@@ -35,6 +35,23 @@ class NativeTarget {
   /// refused.
   virtual std::string perform(const double* b, std::size_t n, const PropertyStore& store,
                               bool alive_checked) = 0;
+  /// In-place queueing: room for `n` load records (abi::LoadRecord) in the
+  /// target's own queue, after those queued before the room was first opened;
+  /// asked again, more room with the records written so far kept (the
+  /// pointer may move). nullptr if the target takes no records in place.
+  virtual void* open_records(std::size_t n) { (void)n; return nullptr; }
+  /// Keeps the first `used` records of the open room and closes it. Unless
+  /// `ids_checked` (the prelude checked every id against the store as it is
+  /// now), each record's object is checked first; if one is gone, no record
+  /// is kept and what was refused is returned.
+  virtual std::string close_records(std::size_t used, const PropertyStore& store,
+                                    bool ids_checked) {
+    (void)used, (void)store, (void)ids_checked;
+    return "";
+  }
+  /// The record kind (abi::LoadRecord::kind) of interaction function `fn`
+  /// written in place, or -1 if it is queued as a command.
+  virtual int record_kind(std::int32_t fn) const { (void)fn; return -1; }
   /// Performs a bulk buffer of function `fn` (one argument): for each slot
   /// in `members` (live objects, from a column fetched in this call) whose
   /// `present` is 1, the call with the slot's `width` values. The values

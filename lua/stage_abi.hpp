@@ -55,7 +55,8 @@ struct Column {
 /// an interaction function, and lists handed out for the call.
 struct Call {
   double dt = 0, time = 0, step = 0;
-  /// Doubles used / available in buf. Doubles, not integers: the prelude
+  /// Doubles used / available in buf (records used / available in loads,
+  /// when the target takes them in place). Doubles, not integers: the prelude
   /// reads and writes them back in hot loops, and a uint32 field doing that
   /// makes LuaJIT's traces type-unstable (they never compile).
   double buf_len = 0, buf_cap = 0;
@@ -70,10 +71,26 @@ struct Call {
   std::uint32_t slots = 0;   ///< object slots in the world
   std::int32_t in_call = 0;  ///< 1 while the stage runs
   std::uint32_t epoch = 0;   ///< moves at every call: lists of an older call are refused
-  /// An interaction's per-slot flags, `slots` of them: 1 if the slot holds a
-  /// live object, else 0. Its functions check a slot against them as they
-  /// queue a command (kept between calls, rebuilt when objects come or go).
-  const std::uint8_t* alive = nullptr;
+  /// An interaction's per-slot ids, `slots` of them: the live object's
+  /// ObjectId packed as its generation << 32 | slot, or 0 for a free slot
+  /// (0 is never a live generation). Its functions check a slot against them
+  /// as they queue a command, and copy the id into a load record (kept
+  /// between calls, rebuilt when objects come or go).
+  const std::uint64_t* ids = nullptr;
+  /// An interaction on a target that takes records in place (the rigid
+  /// body): the target's own queue, room for buf_cap records of which buf_len
+  /// are written, while the call runs; else null (records go to buf).
+  void* loads = nullptr;
+};
+
+/// A load record of a target that takes them in place: the rigid body's
+/// queue entry (RigidBodyResolver::LoadCommand; native_bindings.cpp asserts
+/// the layout). `id` is the slot and generation, as Call::ids holds them.
+struct LoadRecord {
+  std::uint64_t id;
+  double vx, vy, vz;  ///< force or torque
+  double px, py, pz;  ///< the point of a force at a point
+  std::uint8_t kind;  ///< 0 force, 1 force at a point, 2 torque
 };
 
 /// A contact pair of the collisions derived set, copied for Lua.
@@ -106,15 +123,18 @@ struct Bulk {
 /// A mod's budget as its ticks see it (budget_ticks.hpp).
 struct Budget {
   /// Ticks left before the host checks the budgets (at most a quantum, a
-  /// few thousand: exact in a float). A float, neither an int nor a double:
-  /// the tick stores it in every loop iteration of a mod, and LuaJIT takes
-  /// a store as possibly changing any field of the same type. An integer
+  /// thousand). An int16, neither a float, an int32 nor a double: the tick
+  /// stores it in every loop iteration of a mod, and LuaJIT takes a store as
+  /// possibly changing any field of the same type (signed or not). An int32
   /// store would make it reload the uint32 counts and sizes of the columns
   /// the loop reads; a double store would make it reload the tick itself
-  /// after every double the loop stores (the command buffer), a chain
-  /// through memory in every iteration. No other float is stored in a
-  /// loop, so LuaJIT keeps the count in a register between iterations.
-  float ticks = 0;
+  /// after every double the loop stores (load records), a chain through
+  /// memory in every iteration. No other 16-bit integer is stored in a loop,
+  /// so LuaJIT keeps the count in a register, and it narrows the decrement
+  /// to integer arithmetic: a float (the previous type) cost a convert -
+  /// subtract - convert chain of ~13 cycles' latency per iteration.
+  std::int16_t ticks = 0;
+  std::int16_t unused = 0;
   std::int32_t stopped = 0;  ///< 1 once the mod is stopped: every tick fails
 };
 
@@ -142,7 +162,10 @@ struct Api {
 static_assert(sizeof(Vec3) == 24 && sizeof(Quat) == 32 && sizeof(ObjectId) == 8);
 static_assert(offsetof(Column, members) == 8 && offsetof(Column, n) == 40 && sizeof(Column) == 48);
 static_assert(offsetof(Call, buf_len) == 24 && offsetof(Call, buf) == 40 &&
-              offsetof(Call, in_call) == 80 && offsetof(Call, alive) == 88 && sizeof(Call) == 96);
+              offsetof(Call, in_call) == 80 && offsetof(Call, ids) == 88 &&
+              offsetof(Call, loads) == 96 && sizeof(Call) == 104);
+static_assert(offsetof(LoadRecord, vx) == 8 && offsetof(LoadRecord, px) == 32 &&
+              offsetof(LoadRecord, kind) == 56 && sizeof(LoadRecord) == 64);
 static_assert(offsetof(Bulk, n) == 16 && offsetof(Bulk, column) == 28 && sizeof(Bulk) == 32);
 static_assert(offsetof(Contact, speed) == 16 && offsetof(Contact, normal) == 48 &&
               sizeof(Contact) == 96);
@@ -166,8 +189,12 @@ typedef struct alloy_call {
   double* buf; const double* cmd; const void* contacts;
   uint32_t cmd_count, cmd_stride, contact_count, slots;
   int32_t in_call; uint32_t epoch;
-  const uint8_t* alive;
+  const uint64_t* ids;
+  void* loads;
 } alloy_call;
+typedef struct alloy_load {
+  uint64_t id; double vx, vy, vz, px, py, pz; uint8_t kind;
+} alloy_load;
 typedef struct alloy_contact {
   uint32_t a, b; int32_t points, began;
   double speed, depth, impulse, total_impulse;
@@ -177,7 +204,7 @@ typedef struct alloy_bulk {
   double* values; uint8_t* present;
   uint32_t n; int32_t width, fn, column;
 } alloy_bulk;
-typedef struct alloy_budget { float ticks; int32_t stopped; } alloy_budget;
+typedef struct alloy_budget { int16_t ticks, unused; int32_t stopped; } alloy_budget;
 typedef struct alloy_api {
   int32_t (*fetch)(void*, int32_t);
   int32_t (*set_scalar)(void*, int32_t, double, double);

@@ -19,8 +19,10 @@ local call_ptr = ffi.typeof("alloy_call*")
 local contact_ptr = ffi.typeof("const alloy_contact*")
 local cmd_ptr = ffi.typeof("const double*")
 local bulk_ptr = ffi.typeof("alloy_bulk*")
+local load_ptr = ffi.typeof("alloy_load*")
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
+local newproxy, getmetatable = newproxy, getmetatable
 local floor, sqrt, huge = math.floor, math.sqrt, math.huge
 local sort, concat = table.sort, table.concat
 local format = string.format
@@ -376,9 +378,17 @@ local function column_proxy(rec, k, c)
     end
     return methods[i]
   end
+  -- A proxy is a userdata, not a table: indexing a table with a number
+  -- makes the compiled loop test the key against the table's array part
+  -- first (a conversion, a compare and a spilled size per column read);
+  -- a userdata goes straight to __index. It also has no raw fields a mod
+  -- could set, and # gives the count (Lua 5.1 ignores __len on tables).
   local function proxy(mt)
     mt.__metatable = "column"
-    return setmetatable({}, mt)
+    local u = newproxy(true)
+    local m = getmetatable(u)
+    for key, v in next, mt do m[key] = v end
+    return u
   end
   local reader = proxy({
     __index = index,
@@ -447,10 +457,11 @@ local function command_queue(rec)
   end
   -- The function that queues interaction function `index`: it appends
   -- {index, slot, arguments...} to the buffer. The slot must hold a live
-  -- object (call.alive, the host's per-slot flags for this call), checked
+  -- object (call.ids, the host's per-slot ids for this call), checked
   -- here where the mod's line is known, so that the host performs the
   -- records without looking each object up again.
-  function q.target_function(index, fname, kinds)
+  function q.target_function(index, fname, kinds, record)
+    if record then return q.record_function(fname, kinds, record) end
     local n = #kinds
     if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
     local stride = 2
@@ -463,7 +474,7 @@ local function command_queue(rec)
       if not (i >= 0 and i < call.slots and i == floor(i)) then
         error(what .. ": no object in slot " .. tostring(i), 2)
       end
-      if call.alive[i] == 0 then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      if call.ids[i] == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
       local o = len
       if o + stride > cap then
         if api.grow(ptr) ~= 0 then fail(rec, 1) end
@@ -479,6 +490,96 @@ local function command_queue(rec)
       len = o
     end
   end
+  -- The same for a target that takes load records in place (the rigid
+  -- body, call.loads): each call writes one record of kind `record` into
+  -- the target's own queue, {id, value, point}, with the object's id
+  -- (slot and generation) copied from call.ids, so that the host keeps the
+  -- records as they are when the call returns. The room is zeroed by the
+  -- host: a force leaves point and kind as they are.
+  function q.record_function(fname, kinds, record)
+    local what = "'" .. fname .. "'"
+    local at = #kinds == 2
+    if not ((#kinds == 1 or at) and kinds[1] == "vec3" and (not at or kinds[2] == "vec3")) then
+      error("interaction function '" .. fname .. "' cannot be written in place")
+    end
+    return function(i, v, p)
+      if call.in_call == 0 then not_in_call(what) end
+      if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+      if not (i >= 0 and i < call.slots and i == floor(i)) then
+        error(what .. ": no object in slot " .. tostring(i), 2)
+      end
+      local id = call.ids[i]
+      if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      v = to_vec3(v, what)
+      local x, y, z = v.x, v.y, v.z
+      -- 0 if all three are finite, NaN otherwise: one test instead of three.
+      if not ((x - x) + (y - y) + (z - z) == 0) then
+        error(what .. ": arguments must be finite, got " .. tostring(v), 2)
+      end
+      local o = len
+      if o >= cap then
+        if api.grow(ptr) ~= 0 then fail(rec, 1) end
+        cap = call.buf_cap
+      end
+      local r = load_ptr(call.loads) + o
+      r.id, r.vx, r.vy, r.vz = id, x, y, z
+      if record ~= 0 then
+        r.kind = record
+        if at then
+          p = to_vec3(p, what)
+          local px, py, pz = p.x, p.y, p.z
+          if not ((px - px) + (py - py) + (pz - pz) == 0) then
+            error(what .. ": arguments must be finite, got " .. tostring(p), 2)
+          end
+          r.px, r.py, r.pz = px, py, pz
+        end
+      end
+      len = o + 1
+    end
+  end
+  -- A bulk buffer's writer and reader for a target taking records in
+  -- place: the first write to a member's slot appends a record of kind
+  -- `record` (its index kept in the buffer's values, one per slot), a later
+  -- write overwrites it, a read gives it back. `check` has refused slots
+  -- that are not members; the values are checked here.
+  function q.bulk_records(bk, record, what, check)
+    local function set(_, i, v)
+      check(i)
+      v = to_vec3(v, what)
+      local x, y, z = v.x, v.y, v.z
+      if not ((x - x) + (y - y) + (z - z) == 0) then
+        error(what .. ": values must be finite, got " .. tostring(v), 2)
+      end
+      local o
+      if bk.present[i] == 1 then
+        o = bk.values[i]
+      else
+        local id = call.ids[i]
+        if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+        o = len
+        if o >= cap then
+          if api.grow(ptr) ~= 0 then fail(rec, 1) end
+          cap = call.buf_cap
+        end
+        len = o + 1
+        local r = load_ptr(call.loads) + o
+        r.id = id
+        if record ~= 0 then r.kind = record end
+        bk.values[i] = o
+        bk.present[i] = 1
+      end
+      local r = load_ptr(call.loads) + o
+      r.vx, r.vy, r.vz = x, y, z
+    end
+    local function get(_, i)
+      check(i)
+      if bk.present[i] ~= 1 then return nil end
+      local r = load_ptr(call.loads) + bk.values[i]
+      local v = vec3_t(r.vx, r.vy, r.vz)
+      return v
+    end
+    return set, get
+  end
   return q
 end
 
@@ -488,7 +589,7 @@ end
 -- returns (one C++ loop, no command record per object). The same buffer comes
 -- back for the same column within a call; a buffer is only valid in its call.
 -- The proxies are made once per buffer index and column, not per call.
-local function bulk_function(rec, index, fname, kind, column_of)
+local function bulk_function(rec, index, fname, kind, column_of, record)
   local ptr, call = rec.ptr, rec.call
   local what = "'" .. fname .. "_each'"
   local proxies = {}  -- [buffer index][column] -> proxy
@@ -504,7 +605,9 @@ local function bulk_function(rec, index, fname, kind, column_of)
       end
     end
     local newindex, get
-    if kind == "vec3" then
+    if record then
+      newindex, get = rec.queue.bulk_records(bk, record, what, check)
+    elseif kind == "vec3" then
       newindex = function(_, i, v)
         check(i)
         v = to_vec3(v, what)
@@ -538,12 +641,13 @@ local function bulk_function(rec, index, fname, kind, column_of)
         return bk.values[i]
       end
     end
-    return setmetatable({}, {
-      __index = get,
-      __newindex = newindex,
-      __metatable = "bulk buffer",
-      __tostring = function() return "buffer of " .. what .. " over column '" .. cname .. "'" end,
-    })
+    local u = newproxy(true)  -- a userdata, as column proxies are (column_proxy)
+    local m = getmetatable(u)
+    m.__index = get
+    m.__newindex = newindex
+    m.__metatable = "bulk buffer"
+    m.__tostring = function() return "buffer of " .. what .. " over column '" .. cname .. "'" end
+    return u
   end
   return function(col)
     if call.in_call == 0 then not_in_call(what) end
@@ -728,12 +832,12 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
     local q = command_queue(rec)
     rec.queue = q
     for _, f in ipairs(decl.target.functions) do
-      t[f.name] = q.target_function(f.index, f.name, f.kinds)
+      t[f.name] = q.target_function(f.index, f.name, f.kinds, f.record)
     end
     for _, f in ipairs(decl.target.functions) do
       local kind = f.kinds[1]
       if #f.kinds == 1 and (kind == "vec3" or kind == "number") and t[f.name .. "_each"] == nil then
-        t[f.name .. "_each"] = bulk_function(rec, f.index, f.name, kind, column_of)
+        t[f.name .. "_each"] = bulk_function(rec, f.index, f.name, kind, column_of, f.record)
       end
     end
     w.target = frozen(t, "target '" .. decl.target.name .. "'")

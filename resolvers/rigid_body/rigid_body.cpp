@@ -664,6 +664,17 @@ void RigidBodyResolver::add_force(ObjectId part, Vec3 force, Vec3 point) {
 }
 void RigidBodyResolver::add_torque(ObjectId part, Vec3 torque) { queue(part, torque, {}, Load::Torque); }
 
+std::span<RigidBodyResolver::LoadCommand> RigidBodyResolver::open_loads(std::size_t n) {
+  if (open_ == ~std::size_t(0)) open_ = forces_.size();
+  forces_.resize(open_ + n);
+  return {forces_.data() + open_, n};
+}
+void RigidBodyResolver::close_loads(std::size_t used) {
+  if (open_ == ~std::size_t(0)) return;
+  forces_.resize(open_ + std::min(used, forces_.size() - open_));
+  open_ = ~std::size_t(0);
+}
+
 void RigidBodyResolver::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate,
                                  Vec3 torque_rate) {
   store_.check_alive(part);

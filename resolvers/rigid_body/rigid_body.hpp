@@ -160,6 +160,25 @@ class RigidBodyResolver final : public Resolver {
   /// Of several for one body, the largest is taken. Stale ids are ignored.
   void displace(ObjectId part, Vec3 displacement);
 
+  // --- in-place queueing, for bindings that write load records themselves ------
+  /// A queued load as the queue holds it (add_force, add_force at a point,
+  /// add_torque). The Lua stages' prelude writes these in place (its FFI
+  /// declaration mirrors this layout; lua/stage_abi.hpp asserts it).
+  enum class Load : std::uint8_t { Force, ForceAtPoint, Torque };
+  struct LoadCommand {
+    std::uint32_t slot;
+    std::uint32_t generation;  // 0: unchecked (slot fast path)
+    Vec3 value, point;
+    Load kind;
+  };
+  /// Room for `n` records after those queued when the room was first opened
+  /// (zeroed: Load::Force with no point), to be filled by the caller; asking
+  /// again for more keeps the records written so far, though the span moves.
+  /// The generation of each record must be its object's, as add_force(ObjectId)
+  /// would take it. close_loads(used) keeps the first `used` of them.
+  std::span<LoadCommand> open_loads(std::size_t n);
+  void close_loads(std::size_t used);
+
   // --- published state ------------------------------------------------------------
   /// Impulses of the last advance, one per contact pair it resolved, sorted by
   /// (a, b); empty when the advance computed none (impulses_computed()).
@@ -182,13 +201,6 @@ class RigidBodyResolver final : public Resolver {
   std::uint64_t rebuild_count() const { return rebuilds_; }
 
  private:
-  enum class Load : std::uint8_t { Force, ForceAtPoint, Torque };
-  struct LoadCommand {
-    std::uint32_t slot;
-    std::uint32_t generation;  // 0: unchecked (slot fast path)
-    Vec3 value, point;
-    Load kind;
-  };
   /// A load queued by add_load.
   struct RatedLoad {
     std::uint32_t slot, generation;
@@ -210,6 +222,7 @@ class RigidBodyResolver final : public Resolver {
   RigidBodyConfig config_;
   std::unique_ptr<Impl> impl_;
   std::vector<LoadCommand> forces_;
+  std::size_t open_ = ~std::size_t(0);  // open_loads: where the open room starts
   std::vector<RatedLoad> rated_loads_;
   std::vector<ContactCommand> contacts_;
   std::vector<ContactPoint> contact_points_;

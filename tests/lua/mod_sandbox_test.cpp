@@ -65,6 +65,8 @@ const Attempt kAttempts[] = {
      "belongs to the host"},
     {"column metatable", "getmetatable(w:read('mass')).__index = nil", Kind::StageDisabled,
      "index a string value"},
+    {"column rawset", "rawset(w:read('mass'), 0, 1)", Kind::StageDisabled,
+     "table expected, got userdata"},
     {"collectgarbage", "collectgarbage('stop')", Kind::StageDisabled, "global 'collectgarbage'"},
     {"newproxy", "newproxy(true)", Kind::StageDisabled, "global 'newproxy'"},
     {"reserved tick name", "local f, e = load('local __alloy_tick = 1') error(e, 0)",
