@@ -507,7 +507,7 @@ bool LuaStage::perform_commands() {
   if (call_->loads) {
     // The records are in the target's queue already: keep those written.
     call_->loads = nullptr;
-    records_room_ = std::max<std::size_t>(16, n);  // zeroed at each call: no more than needed
+    records_room_ = std::max<std::size_t>(16, n);  // the last call's need: room enough, no more
     if (std::string problem = native_target_->close_records(n, store, checked); !problem.empty())
       return error(problem), false;
     return true;

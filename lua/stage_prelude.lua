@@ -494,8 +494,9 @@ local function command_queue(rec)
   -- body, call.loads): each call writes one record of kind `record` into
   -- the target's own queue, {id, value, point}, with the object's id
   -- (slot and generation) copied from call.ids, so that the host keeps the
-  -- records as they are when the call returns. The room is zeroed by the
-  -- host: a force leaves point and kind as they are.
+  -- records as they are when the call returns. The room is not cleared by
+  -- the host (it reuses the queue's storage): every record gets its id,
+  -- value and kind here, and its point when the kind has one.
   function q.record_function(fname, kinds, record)
     local what = "'" .. fname .. "'"
     local at = #kinds == 2
@@ -522,9 +523,8 @@ local function command_queue(rec)
         cap = call.buf_cap
       end
       local r = load_ptr(call.loads) + o
-      r.id, r.vx, r.vy, r.vz = id, x, y, z
+      r.id, r.vx, r.vy, r.vz, r.kind = id, x, y, z, record
       if record ~= 0 then
-        r.kind = record
         if at then
           p = to_vec3(p, what)
           local px, py, pz = p.x, p.y, p.z
@@ -563,8 +563,7 @@ local function command_queue(rec)
         end
         len = o + 1
         local r = load_ptr(call.loads) + o
-        r.id = id
-        if record ~= 0 then r.kind = record end
+        r.id, r.kind = id, record
         bk.values[i] = o
         bk.present[i] = 1
       end

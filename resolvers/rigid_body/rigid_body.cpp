@@ -666,12 +666,13 @@ void RigidBodyResolver::add_torque(ObjectId part, Vec3 torque) { queue(part, tor
 
 std::span<RigidBodyResolver::LoadCommand> RigidBodyResolver::open_loads(std::size_t n) {
   if (open_ == ~std::size_t(0)) open_ = forces_.size();
-  forces_.resize(open_ + n);
-  return {forces_.data() + open_, n};
+  LoadCommand* room = forces_.room(open_, n);
+  forces_.set_size(open_ + n);
+  return {room, n};
 }
 void RigidBodyResolver::close_loads(std::size_t used) {
   if (open_ == ~std::size_t(0)) return;
-  forces_.resize(open_ + std::min(used, forces_.size() - open_));
+  forces_.set_size(open_ + std::min(used, forces_.size() - open_));
   open_ = ~std::size_t(0);
 }
 
