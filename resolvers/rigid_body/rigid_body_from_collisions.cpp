@@ -33,15 +33,8 @@ void RigidBodyFromCollisions::apply(const WorldView& world) {
   };
   // Parts that tunnelled go back to where they first touched (continuous detection).
   for (const Sweep& s : contacts_.sweeps()) target_.displace(s.part, s.displacement);
-  // Every touching pair, began and ongoing merged so that commands stay in (a, b) order.
-  const auto began = contacts_.began(), ongoing = contacts_.ongoing();
-  std::size_t i = 0, j = 0;
-  while (i < began.size() || j < ongoing.size()) {
-    if (j == ongoing.size() || (i < began.size() && pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b)))
-      queue(began[i++]);
-    else
-      queue(ongoing[j++]);
-  }
+  // Every touching pair, in (a, b) order.
+  for (const ContactPair& p : contacts_.touching()) queue(p);
 }
 
 }  // namespace alloy::rigid
