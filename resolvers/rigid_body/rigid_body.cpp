@@ -678,6 +678,16 @@ void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const 
   contacts_.push_back(c);
 }
 
+void RigidBodyResolver::add_contacts(std::span<const ContactCommand> pairs, std::span<const ContactPoint> points) {
+  const auto base = std::uint32_t(contact_points_.size());
+  contact_points_.insert(contact_points_.end(), points.begin(), points.end());
+  contacts_.reserve(contacts_.size() + pairs.size());
+  for (const ContactCommand& pair : pairs) {
+    contacts_.push_back(pair);
+    contacts_.back().first += base;
+  }
+}
+
 void RigidBodyResolver::displace(ObjectId part, Vec3 displacement) {
   displacements_.emplace_back(part, displacement);
 }
