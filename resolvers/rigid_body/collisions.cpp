@@ -237,7 +237,39 @@ struct CollisionSet::Impl {
   std::vector<bool> jointed;  // by slot
   std::vector<dContactGeom> buffer;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // sort keys of the step's pairs
+  std::vector<std::uint32_t> bucket;                          // per slot: counting sort by a
   std::vector<ContactPair> sorted;
+
+  /// Sorts the step's pairs by slot pair (the same order as by (a, b): live
+  /// objects have distinct slots), through 16-byte keys rather than by moving
+  /// the pairs. The keys are sorted by a with a counting sort over the slots,
+  /// then by b within each a by insertion (a part touches a few others): for
+  /// a pile this is a third of std::sort's work. Keys are unique (one pair per
+  /// two parts), so the order is the same as any sort's.
+  void sort_pairs(std::vector<ContactPair>& pairs) {
+    const std::size_t n = pairs.size(), slots = geoms.size();
+    order.resize(n);
+    if (n * 4 < slots) {  // few pairs among many slots: the buckets would cost more
+      for (std::uint32_t k = 0; k < n; ++k)
+        order[k] = {(std::uint64_t(pairs[k].a.index) << 32) | pairs[k].b.index, k};
+      std::sort(order.begin(), order.end());
+    } else {
+      bucket.assign(slots + 1, 0);
+      for (const ContactPair& p : pairs) ++bucket[p.a.index + 1];
+      for (std::size_t s = 1; s <= slots; ++s) bucket[s] += bucket[s - 1];
+      for (std::uint32_t k = 0; k < n; ++k)
+        order[bucket[pairs[k].a.index]++] = {(std::uint64_t(pairs[k].a.index) << 32) | pairs[k].b.index, k};
+      for (std::size_t i = 1; i < n; ++i) {  // runs of equal a: short
+        const auto key = order[i];
+        std::size_t j = i;
+        for (; j > 0 && key.first < order[j - 1].first; --j) order[j] = order[j - 1];
+        order[j] = key;
+      }
+    }
+    sorted.clear();
+    for (const auto& [key, k] : order) sorted.push_back(pairs[k]);
+    std::swap(pairs, sorted);
+  }
   bool geoms_dirty = true, joints_dirty = true;
 
   bool have_ids = false;
@@ -274,6 +306,20 @@ const ContactPair* CollisionSet::find(ObjectId a, ObjectId b) const {
   return it != current_.end() && it->a == a && it->b == b ? &*it : nullptr;
 }
 
+std::span<const ContactPair> CollisionSet::ongoing() const {
+  if (!ongoing_made_) {
+    // current_ without began_ (both sorted by pair, began_ a subsequence of it).
+    ongoing_.clear();
+    std::size_t b = 0;
+    for (const ContactPair& p : current_) {
+      if (b < began_.size() && began_[b].a == p.a && began_[b].b == p.b) ++b;
+      else ongoing_.push_back(p);
+    }
+    ongoing_made_ = true;
+  }
+  return ongoing_;
+}
+
 void CollisionSet::update(const WorldView& world) {
   ensure_ode();
   Impl& m = *impl_;
@@ -300,15 +346,7 @@ void CollisionSet::update(const WorldView& world) {
   m.points = &points_;
   dSpaceCollide(m.space, &m, &Impl::near_callback);
   sweep(world);
-  // Sorted by slot pair (the same order as by (a, b): live objects have
-  // distinct slots) through 16-byte keys, not by moving the pairs themselves.
-  m.order.clear();
-  for (std::uint32_t k = 0; k < current_.size(); ++k)
-    m.order.push_back({(std::uint64_t(current_[k].a.index) << 32) | current_[k].b.index, k});
-  std::sort(m.order.begin(), m.order.end());
-  m.sorted.clear();
-  for (const auto& [key, k] : m.order) m.sorted.push_back(current_[k]);
-  std::swap(current_, m.sorted);
+  m.sort_pairs(current_);
 
   // The rigid body's impulses are for the pairs it was given, i.e. those that
   // touched at the previous update: merge them in by pair. Empty when nobody
@@ -330,8 +368,10 @@ void CollisionSet::update(const WorldView& world) {
   };
   auto take_impulse = impulse_cursor();
 
-  // began / ongoing / ended by a merge of two sorted lists.
-  began_.clear(), ongoing_.clear(), ended_.clear();
+  // began / ongoing / ended by a merge of two sorted lists (ongoing pairs stay
+  // in current_ only: ongoing() picks them out when asked).
+  began_.clear(), ended_.clear();
+  ongoing_.clear(), ongoing_made_ = false;
   std::size_t i = 0, j = 0;
   while (i < current_.size() || j < previous_.size()) {
     const bool take_new = j == previous_.size() ||
@@ -343,7 +383,6 @@ void CollisionSet::update(const WorldView& world) {
       p.began_step = previous_[j].began_step;
       p.total_impulse = previous_[j++].total_impulse;
       take_impulse(p);
-      ongoing_.push_back(p);
     } else if (take_new) {
       ContactPair& p = current_[i++];
       p.began_step = step;

@@ -83,7 +83,9 @@ class CollisionSet final : public DerivedSet {
   void on_structure_changed(const WorldView& world) override;
 
   std::span<const ContactPair> began() const { return began_; }
-  std::span<const ContactPair> ongoing() const { return ongoing_; }
+  std::span<const ContactPair> ongoing() const;
+  /// began and ongoing together, sorted by (a, b): every pair that touches now.
+  std::span<const ContactPair> touching() const { return current_; }
   std::span<const ContactPair> ended() const { return ended_; }
   /// The contact points of began and ongoing pairs.
   std::span<const ContactPoint> points() const { return points_; }
@@ -112,8 +114,13 @@ class CollisionSet final : public DerivedSet {
   struct Impl;
   const RigidBodyResolver& rigid_;
   std::unique_ptr<Impl> impl_;
-  std::vector<ContactPair> began_, ongoing_, ended_;
+  std::vector<ContactPair> began_, ended_;
   std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; scratch for the merge
+  // ongoing() is made from current_ when first asked for after an update: the
+  // rigid body's feed reads touching(), and a pile's pairs are nearly all
+  // ongoing (1,000 boxes: about 1,000 pairs a step, 2 of them new).
+  mutable std::vector<ContactPair> ongoing_;
+  mutable bool ongoing_made_ = false;
   std::vector<ContactPoint> points_;
   std::vector<Sweep> sweeps_;
   std::uint64_t step_ = 0;

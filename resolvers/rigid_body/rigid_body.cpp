@@ -690,6 +690,16 @@ void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const 
   contacts_.push_back(c);
 }
 
+void RigidBodyResolver::add_contacts(std::span<const ContactCommand> pairs, std::span<const ContactPoint> points) {
+  const auto base = std::uint32_t(contact_points_.size());
+  contact_points_.insert(contact_points_.end(), points.begin(), points.end());
+  contacts_.reserve(contacts_.size() + pairs.size());
+  for (const ContactCommand& pair : pairs) {
+    contacts_.push_back(pair);
+    contacts_.back().first += base;
+  }
+}
+
 void RigidBodyResolver::displace(ObjectId part, Vec3 displacement) {
   displacements_.emplace_back(part, displacement);
 }
@@ -813,8 +823,21 @@ void RigidBodyResolver::wake_on_load_change() {
 
 void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback) {
   Impl& m = *impl_;
+  // What every point reads, loaded once: the ODE calls below are opaque to the
+  // compiler, which would otherwise reload each member after every call (a
+  // 1,000-box pile makes about 4,000 joints a step).
+  const dWorldID world = m.world;
+  const dJointGroupID group = m.contact_group;
+  const ContactPoint* const points = contact_points_.data();
+  const double* const depths = m.depth.data();
+  const double layer = config_.surface_layer, shallow = 0.5 * config_.surface_layer;
+  const bool auto_disable = config_.auto_disable;
+  dJointFeedback* const feedback_buffer = m.feedback.data();
+  const std::uint32_t commands = std::uint32_t(contacts_.size());
+  // Filled per pair and point; the fields never set stay zero (as a fresh dContact{}).
+  dContact contact{};
   std::uint32_t fb = 0;
-  for (std::uint32_t ci = 0; ci < contacts_.size(); ++ci) {
+  for (std::uint32_t ci = 0; ci < commands; ++ci) {
     const ContactCommand& c = contacts_[ci];
     const std::int32_t ba = m.body_of(c.a), bb = m.body_of(c.b);
     if (ba == bb) continue;  // one assembly, or two parts that are not bodies
@@ -825,25 +848,24 @@ void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback)
     // publishes no impulses, so the stages that read them (collisions, and
     // through it everything else) are skipped while it sleeps. A moving body
     // that touches a sleeper gets its joint, and ODE wakes the sleeper.
-    if (config_.auto_disable && m.sleeping_or_static(ba) && m.sleeping_or_static(bb)) continue;
+    if (auto_disable && m.sleeping_or_static(ba) && m.sleeping_or_static(bb)) continue;
     const bool swapped = ba < 0;
     dBodyID b1 = m.bodies[swapped ? bb : ba].id;
     dBodyID b2 = swapped ? nullptr : (bb >= 0 ? m.bodies[bb].id : nullptr);
-    dContact contact{};
     // Approx1: the friction bound is mu times the normal force (Coulomb), not a force.
-    contact.surface.mode = dContactApprox1;
+    int mode = dContactApprox1;
     contact.surface.mu = c.friction;
-    if (c.restitution > 0) {
-      contact.surface.mode |= dContactBounce;
-      contact.surface.bounce = c.restitution;
-      contact.surface.bounce_vel = c.bounce_velocity;
-    }
+    const bool may_bounce = c.restitution > 0;
+    if (may_bounce) mode |= dContactBounce;
+    contact.surface.bounce = may_bounce ? c.restitution : 0;
+    contact.surface.bounce_vel = may_bounce ? c.bounce_velocity : 0;
+    const double restitution = c.restitution, bounce_velocity = c.bounce_velocity;
     const double sign = swapped ? -1.0 : 1.0;  // the normal must push body 1 out
-    const int mode = contact.surface.mode;
     const std::uint32_t first_feedback = fb;
-    for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
-      const ContactPoint& p = contact_points_[k];
-      const double depth = m.depth[k];
+    const std::uint32_t end = c.first + c.count;
+    for (std::uint32_t k = c.first; k < end; ++k) {
+      const ContactPoint& p = points[k];
+      const double depth = depths[k];
       // A resting or sliding point that has drifted shallower than half the
       // surface layer may close to the full layer within this step (ODE's
       // normal surface motion: an allowance, never a pull). Without it the
@@ -853,22 +875,22 @@ void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback)
       // that are deep enough, are left exactly as ODE treats them.
       contact.surface.mode = mode;
       contact.surface.motionN = 0;
-      if (depth < 0.5 * config_.surface_layer) {
+      if (depth < shallow) {
         // The approach speed matters only to a point that may bounce.
-        if (c.restitution <= 0 || approach_speed(b1, b2, p.position, sign * p.normal) <= c.bounce_velocity) {
-          contact.surface.mode |= dContactMotionN;
-          contact.surface.motionN = -(config_.surface_layer - depth) / h;
+        if (restitution <= 0 || approach_speed(b1, b2, p.position, sign * p.normal) <= bounce_velocity) {
+          contact.surface.mode = mode | dContactMotionN;
+          contact.surface.motionN = -(layer - depth) / h;
         }
       }
       contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y, contact.geom.pos[2] = p.position.z;
       contact.geom.normal[0] = sign * p.normal.x, contact.geom.normal[1] = sign * p.normal.y,
       contact.geom.normal[2] = sign * p.normal.z;
       contact.geom.depth = depth;
-      dJointID j = dJointCreateContact(m.world, m.contact_group, &contact);
+      dJointID j = dJointCreateContact(world, group, &contact);
       dJointAttach(j, b1, b2);
       // The joint's force is reported only for readers of impulses; without
       // feedback ODE skips copying its Jacobian and computing J^T lambda.
-      if (feedback) dJointSetFeedback(j, &m.feedback[fb]);
+      if (feedback) dJointSetFeedback(j, &feedback_buffer[fb]);
       ++fb;
     }
     if (record) m.records.push_back({ci, first_feedback, fb - first_feedback, swapped});

@@ -19,29 +19,23 @@ void RigidBodyFromCollisions::apply(const WorldView& world) {
   }
   const auto friction = world.column<double>(friction_);
   const auto restitution = world.column<double>(restitution_);
-  const auto points = contacts_.points();
-  auto queue = [&](const ContactPair& p) {
-    ContactCommand c;
+  // Every touching pair, in (a, b) order, its points referred to by their
+  // place in the collision set's list (copied by the rigid body in one block).
+  commands_.clear();
+  for (const ContactPair& p : contacts_.touching()) {
+    ContactCommand& c = commands_.emplace_back();
     c.a = p.a, c.b = p.b;
+    c.first = p.first, c.count = p.count;
     c.friction = mix_friction(friction.value_or(p.a.index, kDefaultFriction),
                               friction.value_or(p.b.index, kDefaultFriction));
     c.restitution = std::clamp(mix_restitution(restitution.value_or(p.a.index, kDefaultRestitution),
                                                restitution.value_or(p.b.index, kDefaultRestitution)),
                                0.0, 1.0);
     c.bounce_velocity = bounce_velocity_;
-    target_.add_contact(c, points.subspan(p.first, p.count));
-  };
+  }
   // Parts that tunnelled go back to where they first touched (continuous detection).
   for (const Sweep& s : contacts_.sweeps()) target_.displace(s.part, s.displacement);
-  // Every touching pair, began and ongoing merged so that commands stay in (a, b) order.
-  const auto began = contacts_.began(), ongoing = contacts_.ongoing();
-  std::size_t i = 0, j = 0;
-  while (i < began.size() || j < ongoing.size()) {
-    if (j == ongoing.size() || (i < began.size() && pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b)))
-      queue(began[i++]);
-    else
-      queue(ongoing[j++]);
-  }
+  target_.add_contacts(commands_, contacts_.points());
 }
 
 }  // namespace alloy::rigid

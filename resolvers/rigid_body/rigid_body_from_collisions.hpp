@@ -33,6 +33,7 @@ class RigidBodyFromCollisions final : public Interaction {
   const CollisionSet& contacts_;
   double bounce_velocity_;
   PropertyId friction_ = kNoProperty, restitution_ = kNoProperty;
+  std::vector<ContactCommand> commands_;  // the step's, handed over at once
 };
 
 }  // namespace alloy::rigid

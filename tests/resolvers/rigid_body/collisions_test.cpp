@@ -88,6 +88,43 @@ TEST(Collisions, RestingContactStaysOngoing) {
     EXPECT_TRUE(rigid::pair_less(c.ongoing()[i - 1].a, c.ongoing()[i - 1].b, c.ongoing()[i].a, c.ongoing()[i].b));
 }
 
+// touching() is began and ongoing together, in (a, b) order: the rigid body's
+// feed reads it, and ongoing() is made from it when asked. Checked step by
+// step on a falling pile, where pairs begin and end in every step (and the
+// pairs are sorted by a counting sort over the slots).
+TEST(Collisions, TouchingIsBeganAndOngoingMergedInPairOrder) {
+  Sim s;
+  build_pile(*s, pile_layout(64));
+  std::size_t began_total = 0, ongoing_total = 0;
+  for (int i = 0; i < 240; ++i) {
+    s->step();
+    const CollisionSet& c = contacts_of(*s);
+    const auto touching = c.touching(), began = c.began(), ongoing = c.ongoing();
+    ASSERT_EQ(touching.size(), began.size() + ongoing.size()) << "step " << i;
+    std::size_t b = 0, o = 0;
+    for (std::size_t k = 0; k < touching.size(); ++k) {
+      const ContactPair& p = touching[k];
+      if (k > 0) ASSERT_TRUE(rigid::pair_less(touching[k - 1].a, touching[k - 1].b, p.a, p.b)) << "step " << i;
+      ASSERT_LT(p.a, p.b);
+      ASSERT_GT(p.count, 0u);
+      ASSERT_LE(p.first + p.count, c.points().size());
+      // Each pair is in exactly one of the two lists, at its place in order.
+      const bool in_began = b < began.size() && began[b].a == p.a && began[b].b == p.b;
+      const bool in_ongoing = o < ongoing.size() && ongoing[o].a == p.a && ongoing[o].b == p.b;
+      ASSERT_NE(in_began, in_ongoing) << "step " << i;
+      const ContactPair& q = in_began ? began[b++] : ongoing[o++];
+      EXPECT_EQ(q.first, p.first);
+      EXPECT_EQ(q.began_step, p.began_step);
+      EXPECT_EQ(in_began, p.began_step == c.step());
+      EXPECT_EQ(c.find(p.b, p.a), &p);
+    }
+    EXPECT_EQ(c.ongoing().data(), ongoing.data());  // made once per update
+    began_total += began.size(), ongoing_total += ongoing.size();
+  }
+  EXPECT_GT(began_total, 30u);  // 64 boxes landing: 64 when written
+  EXPECT_GT(ongoing_total, 1000u);
+}
+
 /// A ball dropped on a floor until the contact ends; records the
 /// contact_ended event and the set's state then. With `demand_at` >= 0, an
 /// impulse demand is taken after that many steps past the touch (0: before
