@@ -83,13 +83,7 @@ class Bulk : public ::testing::Test {
     return w;
   }
   /// Failures reported since the last call ("" if none).
-  std::string failures() {
-    std::string text;
-    for (const auto& r : runtime->poll())
-      if (r.kind == lua::ModReport::Kind::StageDisabled || r.kind == lua::ModReport::Kind::Stopped)
-        text += r.message + "\n";
-    return text;
-  }
+  std::string failures() { return stage_failures(*runtime); }
 
   PluginRegistry registry;
   TempMods mods;

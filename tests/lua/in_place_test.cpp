@@ -118,13 +118,7 @@ class InPlace : public ::testing::Test {
   }
   /// Runs both and expects the same poses, body by body.
   void same_as(const std::string& lua_stage, const std::string& cpp_stage);
-  std::string failures() {
-    std::string text;
-    for (const auto& r : runtime->poll())
-      if (r.kind == lua::ModReport::Kind::StageDisabled || r.kind == lua::ModReport::Kind::Stopped)
-        text += r.message + "\n";
-    return text;
-  }
+  std::string failures() { return stage_failures(*runtime); }
 
   PluginRegistry registry;
   TempMods mods;

@@ -81,6 +81,16 @@ inline const Event* find_event(const World& world, const std::string& type) {
   return nullptr;
 }
 
+/// The reports of stages disabled and mods stopped since the last poll, one
+/// a line ("" if none).
+inline std::string stage_failures(lua::ModRuntime& runtime) {
+  std::string text;
+  for (const auto& r : runtime.poll())
+    if (r.kind == lua::ModReport::Kind::StageDisabled || r.kind == lua::ModReport::Kind::Stopped)
+      text += r.message + "\n";
+  return text;
+}
+
 inline bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
