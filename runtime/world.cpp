@@ -19,6 +19,7 @@ struct World::Slot {
   Interaction* interaction = nullptr;
   std::vector<PropertyId> reads, writes;
   std::vector<Slot*> inputs;  // resolvers and derived sets whose output this stage reads
+  Slot* target = nullptr;     // an interaction's resolver (removed together with it)
   int every = 1;
   std::size_t registry_rank = 0;
   std::size_t timing = 0;  // index into profile_.stages
@@ -310,6 +311,14 @@ void World::step() {
 
 bool World::due(const Slot& s) const { return step_ % std::uint64_t(s.every) == 0; }
 
+bool World::feeds(const Slot& s, std::uint64_t advance_step) const {
+  // Commands queue up until their resolver advances: an interaction whose
+  // target runs every n-th step queues only for the advance that performs it,
+  // from the state just before it, or a load queued every step would act n
+  // times over (the motor's rotor ran twice as fast with the rigid body every 2).
+  return !s.target || advance_step % std::uint64_t(s.target->every) == 0;
+}
+
 void World::advance_phase() {
   for (Slot* s : resolvers_) {
     StageTiming& timing = profile_.stages[s->timing];
@@ -370,7 +379,7 @@ void World::derive_phase() {
 void World::interact_phase() {
   for (Slot* s : interactions_) {
     StageTiming& timing = profile_.stages[s->timing];
-    if (!due(*s)) {
+    if (!due(*s) || !feeds(*s, primed_ ? step_ + 1 : step_)) {
       ++timing.skipped;
       continue;
     }
@@ -460,7 +469,7 @@ void World::prime_new_stages() {
     ++s->output_version;
   }
   for (Slot* s : interactions_) {
-    if (s->primed) continue;
+    if (s->primed || !feeds(*s, step_)) continue;
     current_stage_ = &s->instance;
     s->interaction->apply(WorldView(*this, s->scope));
   }
@@ -595,6 +604,7 @@ void World::instantiate(const PluginDef& def, int area) {
   for (const auto* names : {&def.info.derived, &def.info.resolvers})
     for (const auto& n : *names)
       if (Slot* in = dependency(*slot, n)) slot->inputs.push_back(in);
+  if (!def.info.target.empty()) slot->target = dependency(*slot, def.info.target);
   slots_.push_back(std::move(slot));
   order_stages();
 }

@@ -275,6 +275,9 @@ class World {
   void instantiate(const PluginDef& def, int area);
   void order_stages();
   bool due(const Slot& s) const;
+  /// Whether interaction `s`'s commands would be performed by its target's
+  /// advance at `advance_step` (always, for a target that runs every step).
+  bool feeds(const Slot& s, std::uint64_t advance_step) const;
   bool inputs_changed(Slot& s) const;
 
 

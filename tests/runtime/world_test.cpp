@@ -213,6 +213,26 @@ TEST_F(WorldTest, EveryNRunsAStageEveryNthStepWithNTimesTheStep) {
   EXPECT_THROW(World(registry, WorldDef{.every = {{"oscillator", 0}}}), InputError);
 }
 
+TEST_F(WorldTest, AnInteractionQueuesOnlyForTheAdvanceOfATargetThatRunsEveryNthStep) {
+  // The kicker kicks every step; the oscillator advances every 3rd. Each
+  // advance must perform one kick per object, queued just before it, not the
+  // three queued since its last advance.
+  WorldDef def;
+  def.every["oscillator"] = 3;
+  World w(registry, def);
+  add_oscillator(w, "a", 1.0);
+  w.start();
+  dynamic_cast<Kicker&>(*w.stage("kicker")).threshold = 1e9;  // always kick
+  w.run(9);
+  auto& osc = dynamic_cast<Oscillator&>(*w.stage("oscillator"));
+  ASSERT_EQ(osc.dts.size(), 3u);
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> queued_performed;
+  for (const auto& p : osc.performed) queued_performed.push_back(p);
+  // Priming queues at step 0 for the advance of step 0 (threshold 0 then: no
+  // kick); afterwards the kicker runs at steps 2 and 5, for steps 3 and 6.
+  EXPECT_EQ(queued_performed, (std::vector<std::pair<std::uint64_t, std::uint64_t>>{{2, 3}, {5, 6}}));
+}
+
 TEST_F(WorldTest, AResolverCannotWriteAColumnItDidNotDeclare) {
   registry.add({.info = {.name = "rogue", .kind = StageKind::Resolver, .needs = {"x"}},
                 .create = [](PluginContext&) { return std::make_unique<Rogue>(); }});
