@@ -278,6 +278,7 @@ void World::start() {
 }
 
 void World::step() {
+  advanced_ = false;  // also after a step that threw
   if (!started_) start();
   const double t0 = now_seconds();
   apply_inputs();
@@ -286,6 +287,7 @@ void World::step() {
   if (crossed) rescope();
   const double t1 = now_seconds();
   advance_phase();
+  advanced_ = true;
   store_.refresh();
   // The advance moved bodies: put them in the areas of their new positions at
   // once, so that the derived sets, the interactions and the next advance see
@@ -298,6 +300,7 @@ void World::step() {
   const double t3 = now_seconds();
   interact_phase();
   const double t4 = now_seconds();
+  advanced_ = false;
   ++step_;
   publish_phase();
   const double t5 = now_seconds();
@@ -459,7 +462,14 @@ void World::sync_structure() {
 void World::prime_new_stages() {
   // A derived set or interaction created mid-run (a battery dropped into the
   // world) computes and queues from the present state now, so that its first
-  // commands act in this step's advance, as at start().
+  // commands act in this step's advance, as at start(). Created after this
+  // step's advance (a body crossed into an area during it), it is left to this
+  // step's derive and interact phases, which run it anyway: primed here too,
+  // its commands would be queued twice for the next advance.
+  if (advanced_) {
+    for (auto& s : slots_) s->primed = true;
+    return;
+  }
   for (Slot* s : derived_) {
     if (s->primed) continue;
     current_stage_ = &s->instance;

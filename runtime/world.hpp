@@ -299,6 +299,7 @@ class World {
   bool started_ = false;
   bool synced_ = false;
   bool primed_ = false;  // start() has primed the pipeline
+  bool advanced_ = false;  // within step(): this step's advance is done
   std::uint64_t seen_structure_ = 0;
   std::uint64_t seen_by_resolvers_ = 0;  // store_.resolver_membership_version() at the last sync
   std::vector<ObjectId> frozen_;  // by slot

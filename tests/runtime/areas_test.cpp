@@ -62,6 +62,29 @@ class Mover : public Resolver {
   }
 };
 
+/// Counts, per advance, the pokes queued on it since its last advance.
+class Counter : public Resolver {
+ public:
+  void build(ResolverAccess&) override {}
+  void advance(ResolverAccess&, double) override {
+    per_advance.push_back(pokes);
+    pokes = 0;
+  }
+  void poke() { ++pokes; }
+  int pokes = 0;
+  std::vector<int> per_advance;
+};
+
+/// Pokes its counter once a step.
+class Poker : public Interaction {
+ public:
+  explicit Poker(Counter& c) : counter_(c) {}
+  void apply(const WorldView&) override { counter_.poke(); }
+
+ private:
+  Counter& counter_;
+};
+
 PluginDef tagger(const std::string& name, double value) {
   return {.info = {.name = name, .kind = StageKind::Resolver, .reads = {"position"}, .writes = {"tag"},
                    .needs = {"position"}, .provides = "tag"},
@@ -176,6 +199,30 @@ TEST_F(AreasTest, ABodyMovedAcrossABorderIsHandedOverInTheStepItCrossed) {
   EXPECT_EQ(std::get<Vec3>(w.get(a, "position")).x, 0.125);
   EXPECT_EQ(w.area_of(a), "right");
   EXPECT_EQ(tag(w, a), 2);  // what the interactions of this step read
+}
+
+TEST_F(AreasTest, AnInteractionCreatedWhenABodyCrossesQueuesOncePerStep) {
+  // The counter and its poker exist in "right" only once a body is there. The
+  // body crosses during an advance: the new poker must queue once for the
+  // next advance, not once when it is created and again in the same step.
+  registry.add({.info = {.name = "mover", .kind = StageKind::Resolver, .writes = {"position"}, .needs = {"position"}},
+                .create = [](PluginContext&) { return std::make_unique<Mover>(); }});
+  registry.add({.info = {.name = "counter", .kind = StageKind::Resolver, .needs = {"position"}},
+                .create = [](PluginContext&) { return std::make_unique<Counter>(); }});
+  registry.add({.info = {.name = "poker", .kind = StageKind::Interaction, .needs = {"position"}, .target = "counter"},
+                .create = [](PluginContext& c) { return std::make_unique<Poker>(c.target<Counter>()); }});
+  WorldDef def;
+  def.dt = 0.25;
+  def.plugins = {"mover"};  // globally; the counter and poker only in "right"
+  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
+                              .plugins = {"counter", "poker"}});
+  World w(registry, def);
+  body(w, "a", -0.375);
+  w.run(6);  // crosses in the second step's advance
+  auto* counter = dynamic_cast<Counter*>(w.stage("counter@right"));
+  ASSERT_NE(counter, nullptr);
+  ASSERT_FALSE(counter->per_advance.empty());
+  for (int n : counter->per_advance) EXPECT_EQ(n, 1);
 }
 
 TEST_F(AreasTest, ScopedViewsListOnlyTheAreasObjects) {
