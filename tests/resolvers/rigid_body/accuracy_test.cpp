@@ -79,6 +79,37 @@ TEST(RigidBodyAccuracy, BounceHeightRatioIsRestitutionSquared) {
   }
 }
 
+TEST(RigidBodyAccuracy, DragLimitedSpeedIsExactAtAnyStep) {
+  // A ball falling with linear damping c settles at g / c. The step's kick and
+  // drift must agree on it: ODE's own damping (e^(-c h) after the drift) ran
+  // the position c h / 2 fast and reported the velocity c h / 2 slow.
+  const double c = 2;
+  for (double dt : {1.0 / 60, 1.0 / 240}) {
+    Sim s(WorldDef{.dt = dt});
+    const FreeFall ff = build_free_fall(*s, 1000);
+    s->set(ff.ball, "linear_damping", c);
+    s.run_for(10.0);  // 20 time constants
+    const double y0 = s.position(ff.ball).y;
+    s.run_for(1.0);
+    const double from_position = y0 - s.position(ff.ball).y;
+    const double reported = -s.velocity(ff.ball).y;
+    std::printf("terminal speed at dt 1/%.0f: from the position %.7f, reported %.7f, g / c %.7f\n",
+                1 / dt, from_position, reported, g / c);
+    EXPECT_NEAR(from_position, g / c, 1e-6 * g / c) << "dt " << dt;
+    EXPECT_NEAR(reported, g / c, 1e-6 * g / c) << "dt " << dt;
+  }
+  // Damping faster than the step (c h = 3): still falls, never reverses.
+  Sim s(WorldDef{.dt = 1.0 / 60});
+  const FreeFall ff = build_free_fall(*s, 1000);
+  s->set(ff.ball, "linear_damping", 180.0);
+  for (int i = 0; i < 120; ++i) {
+    s->step();
+    const double vy = s.velocity(ff.ball).y;
+    ASSERT_LT(vy, 0) << "step " << i;
+    ASSERT_GT(vy, -2 * g / 60) << "step " << i;  // about one step's fall
+  }
+}
+
 TEST(RigidBodyAccuracy, StackOfTenStandsForTenSeconds) {
   Sim s;
   const Stack st = build_stack(*s, 10, 0.2);
