@@ -3,7 +3,7 @@
 // (a contact that chatters shows as more contact_began than commutations)
 // and the per-stage times. The diagnosis of docs/performance.md "Multi-rate
 // coupling" is made of such runs; not a benchmark (make bench skips it).
-//   multirate_diag motor|doorbell N [elec=k] [rigid=k] [rates=1] [crates=1] [found=1] [every:stage=n] ...
+//   multirate_diag motor|doorbell N [elec=k] [rigid=k] [rates=1] [crates=1] [found=1] [solver=step|quick] [iter=k] [every:stage=n] ...
 // N: the window is 1/N s; every:stage=n runs that stage every n-th window,
 // e.g. every:magnetic_forces=32 at N = 7680 holds the magnetic loads for
 // 1/240 s while everything else runs at 1/7680 s.
@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
     else if (k == "rates") over.load_rates = v != 0;
     else if (k == "crates") over.current_rates = v != 0;
     else if (k == "found") over.substep_contacts = v ? "found" : "kept";
+    else if (k == "solver") over.solver = a.substr(eq + 1);
+    else if (k == "iter") over.iterations = v;
     else if (k.rfind("every:", 0) == 0) over.every[k.substr(6)] = v;
   }
   const Rates r = with(scene_rates(mod == "doorbell" ? mod : "motor"), over);

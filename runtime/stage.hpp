@@ -101,6 +101,13 @@ class DerivedSet : public Stage {
  public:
   /// Recomputes the derived data. Called only when an input changed.
   virtual void update(const WorldView& world) = 0;
+  /// True if only the stages that list it among their inputs read its data
+  /// and it publishes no event a step must not miss. It is then recomputed
+  /// only in the steps where one of those readers runs: read by an
+  /// interaction whose target runs every n-th step, once in n steps, from
+  /// the state just before that advance. A tool that reads it between steps
+  /// (the viewer) may see it as of the last step that did.
+  virtual bool on_demand() const { return false; }
 };
 
 class Interaction : public Stage {

@@ -361,10 +361,24 @@ bool World::inputs_changed(Slot& s) const {
   return changed;
 }
 
+bool World::wanted(const Slot& s) const {
+  if (!s.derived->on_demand()) return true;
+  const std::uint64_t next_advance = primed_ ? step_ + 1 : step_;
+  bool read = false;
+  for (const auto& r : slots_) {
+    if (std::find(r->inputs.begin(), r->inputs.end(), &s) == r->inputs.end()) continue;
+    read = true;
+    if (r->resolver) return true;
+    if (!due(*r)) continue;
+    if (r->interaction ? feeds(*r, next_advance) : wanted(*r)) return true;
+  }
+  return !read;  // no stage reads it: whatever does (a tool), every step
+}
+
 void World::derive_phase() {
   for (Slot* s : derived_) {
     StageTiming& timing = profile_.stages[s->timing];
-    if (!due(*s) || !inputs_changed(*s)) {
+    if (!due(*s) || !wanted(*s) || !inputs_changed(*s)) {
       ++timing.skipped;
       continue;
     }

@@ -278,6 +278,9 @@ class World {
   /// Whether interaction `s`'s commands would be performed by its target's
   /// advance at `advance_step` (always, for a target that runs every step).
   bool feeds(const Slot& s, std::uint64_t advance_step) const;
+  /// Whether derived set `s` is to be recomputed this step: always, unless it
+  /// is on demand (DerivedSet::on_demand) and none of its readers runs.
+  bool wanted(const Slot& s) const;
   bool inputs_changed(Slot& s) const;
 
 

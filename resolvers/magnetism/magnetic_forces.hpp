@@ -67,6 +67,9 @@ class MagneticForces : public DerivedSet {
       : softening_(softening), summation_(summation), rates_(rates) {}
 
   void update(const WorldView& world) override;
+  /// Its forces matter only to the stages that read them (the rigid body's
+  /// interaction): with the rigid body every n-th step, summed once in n.
+  bool on_demand() const override { return true; }
 
   /// Every magnetic part with a position, in slot order.
   std::span<const MagneticBody> bodies() const { return bodies_; }

@@ -62,8 +62,10 @@ class Energy : public DerivedSet {
     for (std::uint32_t s : x.members()) total += 0.5 * (x[s] * x[s] + v.value_or(s, 0) * v.value_or(s, 0));
     ++updates;
   }
+  bool on_demand() const override { return demand; }
   double total = 0;
   int updates = 0;
+  bool demand = false;
 };
 
 /// An interaction: kicks every oscillator whose energy derived set is below a threshold.
@@ -231,6 +233,34 @@ TEST_F(WorldTest, AnInteractionQueuesOnlyForTheAdvanceOfATargetThatRunsEveryNthS
   // Priming queues at step 0 for the advance of step 0 (threshold 0 then: no
   // kick); afterwards the kicker runs at steps 2 and 5, for steps 3 and 6.
   EXPECT_EQ(queued_performed, (std::vector<std::pair<std::uint64_t, std::uint64_t>>{{2, 3}, {5, 6}}));
+}
+
+TEST_F(WorldTest, AnOnDemandDerivedSetIsRecomputedOnlyWhenAReaderRuns) {
+  // The oscillator moves every step, so the energy's inputs always change;
+  // its one reader, the kicker, runs every 3rd step.
+  auto updates = [&](bool demand, std::vector<std::string> plugins) {
+    WorldDef def;
+    def.every["kicker"] = 3;
+    def.plugins = std::move(plugins);
+    World w(registry, def);
+    add_oscillator(w, "a", 1.0);
+    w.start();  // primes the energy: one update
+    auto& energy = dynamic_cast<Energy&>(*w.stage("energy"));
+    energy.demand = demand;
+    g_log.clear();
+    w.run(9);
+    // Each update the kicker reads is made in its own step, just before it.
+    for (std::size_t i = 0; i < g_log.size(); ++i) {
+      if (g_log[i] == "apply:kicker") {
+        EXPECT_EQ(g_log.at(i - 1), "update:energy");
+      }
+    }
+    return energy.updates;
+  };
+  EXPECT_EQ(updates(false, {}), 1 + 9);  // priming, then every step
+  EXPECT_EQ(updates(true, {}), 1 + 3);   // priming, then steps 0, 3, 6
+  // Read by no stage: a tool may read it, every step.
+  EXPECT_EQ(updates(true, {"oscillator", "energy"}), 1 + 9);
 }
 
 TEST_F(WorldTest, AResolverCannotWriteAColumnItDidNotDeclare) {
