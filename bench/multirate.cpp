@@ -4,9 +4,10 @@
 // Single-rate: every stage at the world's step, nothing substepped
 // (electricity substeps 1, rigid_body substeps 1, no `every`). Multi-rate:
 // the world's step is the coupling window (interactions exchange once a
-// window), the electricity takes backward-Euler substeps at its L/R need,
-// and, one at a time, magnetism runs every 2nd window or the rigid body takes
-// 2 or 4 ODE steps per window with the queued forces held. Error against a reference
+// window), and, one recipe at a time: the rigid body runs every 4th window
+// while the rest runs at the window; or the electricity takes backward-Euler
+// substeps at its L/R need, and magnetism runs every 2nd window or the rigid
+// body takes 2 or 4 ODE steps per window with the queued forces held. Error against a reference
 // run at a very small step; cost in CPU seconds per simulated second.
 //
 // Equal error: the single-rate runs' Pareto front (cost, error), interpolated
@@ -35,6 +36,9 @@ using namespace alloy::bench::coupled;
 struct Recipe {
   std::string name;
   Rates over;  ///< on top of the scene's rates, besides the window
+  /// Its windows (1/n s); empty: the sweep's. A recipe that runs a stage
+  /// every n-th window starts n times finer.
+  std::vector<int> windows = {};
 };
 
 /// Single-rate: everything at the window.
@@ -57,8 +61,19 @@ std::vector<Recipe> recipes(bool quick) {
   // present motion and the rigid body's substeps follow it (a first-order
   // hold); "contacts found": the rigid body finds the window's contact pairs'
   // points again before each substep.
-  if (quick) return {recipe("elec 4, rigid 2, load rates", 2, 1, true)};
-  return {recipe("elec 4", 1, 1),
+  // "rigid body every 4": the electricity, magnetism and the magnetic forces
+  // at the window, the rigid body (the cost) at a quarter of its rate. The
+  // commutation chain then lags by fine windows, the rotor's mechanics by a
+  // coarse step; the magnetic forces are summed only for the rigid body's
+  // advances (an on-demand derived set).
+  const Recipe rigid_every_4{"rigid body every 4",
+                             {.electricity_substeps = 1,
+                              .rigid_substeps = 1,
+                              .every = {{"magnetism", 1}, {"rigid_body", 4}}},
+                             quick ? std::vector<int>{960, 1920} : std::vector<int>{960, 1920, 3840, 7680}};
+  if (quick) return {recipe("elec 4, rigid 2, load rates", 2, 1, true), rigid_every_4};
+  return {rigid_every_4,
+          recipe("elec 4", 1, 1),
           recipe("elec 4, magnetism every 2", 1, 2),
           recipe("elec 4, rigid 2", 2, 1),
           recipe("elec 4, rigid 4", 4, 1),
@@ -101,16 +116,24 @@ int main(int argc, char** argv) {
       o.quick ? std::vector<int>{240, 960} : std::vector<int>{240, 480, 960, 1920};
   const int ref_n = o.quick ? 3840 : 30720;
   const int repeats = o.quick ? 1 : 2;
-  const std::vector<Recipe> multi = recipes(o.quick);
+  std::vector<Recipe> multi = recipes(o.quick);
+  std::vector<int> all_windows;  // the rows of the halving table
+  std::size_t multi_runs = 0;
+  for (Recipe& rc : multi) {
+    if (rc.windows.empty()) rc.windows = window_n;
+    multi_runs += rc.windows.size();
+    all_windows.insert(all_windows.end(), rc.windows.begin(), rc.windows.end());
+  }
+  std::sort(all_windows.begin(), all_windows.end());
+  all_windows.erase(std::unique(all_windows.begin(), all_windows.end()), all_windows.end());
   const std::vector<Scene> scenes = {doorbell_scene(), motor_scene()};
 
   Progress progress("multirate",
-                    scenes.size() * (1 + (single_n.size() + multi.size() * window_n.size()) *
-                                             std::size_t(repeats)),
+                    scenes.size() * (1 + (single_n.size() + multi_runs) * std::size_t(repeats)),
                     o.progress);
   Csv csv(o.file("multirate.csv"),
           {"scene", "configuration", "window", "electricity_substeps", "rigid_substeps",
-           "magnetism_every", "load_rates", "substep_contacts", "value", "relative_error", "cpu_per_simulated_s",
+           "magnetism_every", "rigid_every", "load_rates", "substep_contacts", "value", "relative_error", "cpu_per_simulated_s",
            "single_rate_cost_at_equal_error", "speedup", "status"});
   std::ostringstream md;
   md << "\nCommand: `build/bench/alloy_bench_multirate` (or `make bench`); raw data "
@@ -137,10 +160,13 @@ int main(int argc, char** argv) {
     };
     auto row = [&](const std::string& name, const Rates& r, const Measure& m, double err,
                    double equal_cost) {
-      const auto every = r.every.find("magnetism");
+      auto every = [&](const char* stage) {
+        const auto it = r.every.find(stage);
+        return Csv::cell(it == r.every.end() ? 1 : it->second);
+      };
       csv.row({scene.mod, name, Csv::cell(r.dt), Csv::cell(r.electricity_substeps),
-               Csv::cell(r.rigid_substeps),
-               Csv::cell(every == r.every.end() ? 1 : every->second), r.load_rates ? "yes" : "no",
+               Csv::cell(r.rigid_substeps), every("magnetism"), every("rigid_body"),
+               r.load_rates ? "yes" : "no",
                r.substep_contacts.empty() ? "kept" : r.substep_contacts, Csv::cell(m.value),
                Csv::cell(err), Csv::cell(m.cost()), Csv::cell(equal_cost),
                Csv::cell(equal_cost / m.cost()), m.ok() ? "ok" : "fails"});
@@ -173,7 +199,7 @@ int main(int argc, char** argv) {
       return h;
     }());
     std::vector<std::vector<std::string>> halving_rows;
-    for (int n : window_n) {
+    for (int n : all_windows) {
       std::vector<std::string> cells = {"1/" + std::to_string(n)};
       const auto s = std::find_if(single.begin(), single.end(),
                                   [&](const Point& p) { return std::abs(p.dt - 1.0 / n) < 1e-12; });
@@ -189,11 +215,12 @@ int main(int argc, char** argv) {
       Series series{rc.name, {}, {}, true, true};
       std::vector<Rates> rates;
       std::vector<Measure> measured;
-      for (std::size_t wi = 0; wi < window_n.size(); ++wi) {
-        rates.push_back(with(def, with(rc.over, {.dt = 1.0 / window_n[wi]})));
+      for (int n : rc.windows) {
+        rates.push_back(with(def, with(rc.over, {.dt = 1.0 / n})));
         measured.push_back(run(rates.back()));
       }
-      for (std::size_t wi = 0; wi < window_n.size(); ++wi) {
+      for (auto& cells : halving_rows) cells.push_back("-");
+      for (std::size_t wi = 0; wi < rc.windows.size(); ++wi) {
         const Rates& r = rates[wi];
         const Measure& m = measured[wi];
         const double err = relative_error(m, ref.value);
@@ -202,10 +229,11 @@ int main(int argc, char** argv) {
         // A point counts only where halving its window reduces its error: an
         // error that passes through zero between two windows (a lucky
         // crossing) is no accuracy a user can rely on.
-        const bool converging = wi + 1 < window_n.size() &&
+        const bool converging = wi + 1 < rc.windows.size() &&
                                 relative_error(measured[wi + 1], ref.value) < err;
         row(rc.name, r, m, err, equal);
-        halving_rows[wi].push_back(percent(err));
+        const auto at = std::find(all_windows.begin(), all_windows.end(), rc.windows[wi]);
+        halving_rows[std::size_t(at - all_windows.begin())].back() = percent(err);
         speed.row({rc.name, step_name(r.dt), percent(err), m.ok() ? fmt(m.cost(), 2) : "-",
                    std::isfinite(equal) ? fmt(equal, 2) : "-",
                    std::isfinite(up) ? fmt(up, 2) + "x" : "-", converging ? "yes" : "no"});
@@ -213,7 +241,8 @@ int main(int argc, char** argv) {
           best = up, best_what = rc.name + " at " + step_name(r.dt) + ", error " + percent(err);
         if (!m.ok()) continue;
         series.x.push_back(m.cost()), series.y.push_back(err);
-        if (rc.over.every.at("magnetism") == 1 && rc.over.rigid_substeps == 1 &&
+        if (rc.over.every.size() == 1 && rc.over.every.at("magnetism") == 1 &&
+            rc.over.rigid_substeps == 1 &&
             std::abs(r.dt - def.dt) < 1e-12 &&
             rc.over.electricity_substeps == def.electricity_substeps)
           plot.markers.push_back({m.cost(), err, "scene default (" + step_name(r.dt) + ")"});
