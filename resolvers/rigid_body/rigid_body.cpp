@@ -40,8 +40,8 @@ double approach_speed(dBodyID b1, dBodyID b2, Vec3 point, Vec3 normal) {
 /// position as in the velocity. ODE's own damping, e^(-c h) after the drift,
 /// runs such a speed c h / 2 fast (+1.2 % for the motor at 1/480 s). Where
 /// the damping's time constant is shorter than two steps, 1 - c h would
-/// overshoot towards 0 and below; a positive factor that falls on from the
-/// same value at c h = 1/2 keeps the body still at rest there.
+/// reach 0 and turn the velocity round; there the factor goes on from the
+/// same value at c h = 1/2 and falls towards 0 without crossing it.
 double damping_factor(double c, double h) {
   const double x = c * h;
   return x <= 0.5 ? 1 - x : 0.25 / x;
