@@ -9,7 +9,7 @@ world {
   settings = {
     ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
     -- ODE's exact solver: on this small mechanism (a rotor, a slider, one
-    -- contact) it gives QuickStep's speed to 0.01 % in two thirds of the
+    -- contact) it gives QuickStep's speed to 0.02 % in two thirds of the
     -- time (docs/performance.md, "Coupled scenes").
     rigid_body = { solver = "step" },
   },
