@@ -281,7 +281,8 @@ void LuaStage::push_settings(const StageDecl& decl) {
   lua_newtable(L);
   const int settings = lua_gettop(L);
   lua_rawgeti(L, LUA_REGISTRYINDEX, decl.def_ref);
-  lua_getfield(L, -1, "settings");
+  lua_pushliteral(L, "settings");
+  lua_rawget(L, -2);  // raw: outside a protected call, no code of the mod may run
   if (lua_istable(L, -1))
     for (lua_pushnil(L); lua_next(L, -2);) {
       lua_pushvalue(L, -2);
@@ -353,53 +354,18 @@ void LuaStage::rebind(const StageDecl& decl) {
 }
 
 bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char* phase, double dt) {
-  view_ = &view;
-  access_ = access;
-  if (access) writers_.assign(sources_.size(), AnyWriter{});
-  call_->dt = dt;
-  call_->time = view.time();
-  call_->step = double(view.step());
-  call_->slots = std::uint32_t(view.store().slot_count());
-  call_->in_call = 1;
-  ++call_->epoch;
-  if (kind_ == StageKind::Interaction) {
-    if (commands_.size() < kCommandBuffer) commands_.resize(kCommandBuffer);
-    refresh_ids(view.store());
-    call_->ids = ids_.data();
-    call_->buf = commands_.data();
-    call_->buf_len = 0;
-    call_->buf_cap = double(commands_.size());
-    if (in_place_) {
-      call_->loads = native_target_->open_records(records_room_);
-      call_->buf_cap = double(records_room_);
-    }
-  }
+  // Whatever way the call ends (returns, fails, or a C++ exception leaves
+  // it), everything lent to Lua for it is taken back (end_call).
+  struct Ending {
+    LuaStage& stage;
+    ~Ending() { stage.end_call(); }
+  };
   InputError failure("");
-  bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
-  // The commands are performed when the call succeeded, all of them; a
-  // failed call queues nothing.
-  if (ok && kind_ == StageKind::Interaction && !(perform_commands() && perform_bulk())) {
-    ok = false;
-    failure = InputError(ErrorLocation{where_.file, 0, ""}, last_error_);
+  bool ok = false;
+  {
+    Ending ending{*this};
+    ok = run_call(view, access, phase, dt, failure);
   }
-  for (int b = 0; b < bulk_used_; ++b) bulks_[b] = abi::Bulk{};
-  bulk_used_ = 0;
-  call_->buf = nullptr;
-  call_->buf_len = call_->buf_cap = 0;
-  if (call_->loads) {  // a failed call queues nothing
-    native_target_->close_records(0, view.store(), true);
-    call_->loads = nullptr;
-  }
-  call_->ids = nullptr;
-  for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
-  call_->in_call = 0;
-  call_->cmd = nullptr;
-  call_->cmd_count = 0;
-  call_->contacts = nullptr;
-  call_->contact_count = 0;
-  if (access) writers_.clear();
-  view_ = nullptr;
-  access_ = nullptr;
   if (ok) return true;
   // Published as events now; reported (and logged) by ModRuntime::poll.
   if (mod_->stopped()) {
@@ -414,6 +380,87 @@ bool LuaStage::invoke(const WorldView& view, ResolverAccess* access, const char*
             "' failed and is disabled until the mod is reloaded: " + failure.what();
   view.emit(Event{.type = "stage_disabled", .text = reason_});
   return false;
+}
+
+bool LuaStage::run_call(const WorldView& view, ResolverAccess* access, const char* phase, double dt,
+                        InputError& failure) {
+  view_ = &view;
+  contacts_made_ = 0;
+  access_ = access;
+  if (access) writers_.assign(sources_.size(), AnyWriter{});
+  call_->dt = dt;
+  call_->time = view.time();
+  call_->step = double(view.step());
+  call_->slots = std::uint32_t(view.store().slot_count());
+  if (kind_ == StageKind::Interaction) {
+    if (commands_.size() < kCommandBuffer) commands_.resize(kCommandBuffer);
+    refresh_ids(view.store());
+    call_->ids = ids_.data();
+    call_->buf = commands_.data();
+    call_->buf_len = 0;
+    call_->buf_cap = double(commands_.size());
+    if (in_place_) {
+      call_->loads = native_target_->open_records(records_room_);
+      call_->buf_cap = double(records_room_);
+    }
+  }
+  // On only now that everything it lends is in place.
+  call_->in_call = 1;
+  ++call_->epoch;
+  bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
+  // The commands are performed when the call succeeded, all of them; a
+  // failed call queues nothing.
+  if (ok && kind_ == StageKind::Interaction && !(perform_commands() && perform_bulk())) {
+    ok = false;
+    failure = InputError(ErrorLocation{where_.file, 0, ""}, last_error_);
+  }
+  return ok;
+}
+
+void LuaStage::end_call() noexcept {
+  // The call's lists and buffers are cleared in the blocks the prelude reads,
+  // so that every handle a mod kept (a column, a bulk buffer, an iterator, a
+  // lone function of w) refuses from now on, and the epoch moves, so that
+  // nothing of this call passes for the next one.
+  for (int b = 0; b < bulk_used_; ++b) bulks_[b] = abi::Bulk{};
+  bulk_used_ = 0;
+  call_->buf = nullptr;
+  call_->buf_len = call_->buf_cap = 0;
+  if (call_->loads) {  // a failed call queues nothing
+    try {
+      native_target_->close_records(0, view_->store(), true);
+    } catch (...) {  // closing keeps nothing: it cannot fail, but must not throw here
+    }
+    call_->loads = nullptr;
+  }
+  call_->ids = nullptr;
+  for (std::size_t k = 0; k < sources_.size(); ++k) infos_[k] = abi::Column{};
+  call_->in_call = 0;
+  ++call_->epoch;
+  call_->cmd = nullptr;
+  call_->cmd_count = 0;
+  call_->contacts = nullptr;
+  call_->contact_count = 0;
+  contacts_made_ = 0;
+  if (access_) writers_.clear();
+  view_ = nullptr;
+  access_ = nullptr;
+}
+
+std::int32_t LuaStage::refuse(const char* what, const char* prefix) noexcept {
+  try {
+    last_error_ = std::string(prefix) + (what ? what : "an unknown error in the host");
+  } catch (...) {
+    last_error_.clear();  // host_last_error says so
+  }
+  return 1;
+}
+
+LuaStage* LuaStage::stage_in_call(lua_State* L) {
+  LuaStage* st = stage_of(L);
+  // The prelude checks the call first; this guards the host's own pointers.
+  if (!st->view_) luaL_error(L, "stage '%s' is not in a call", st->instance_.c_str());
+  return st;
 }
 
 bool LuaStage::check_slot(double slot, std::uint32_t& out) {
@@ -587,7 +634,9 @@ std::int32_t LuaStage::api_fetch(void* p, std::int32_t column) noexcept {
     st->fetch(std::size_t(column));
     return 0;
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -627,7 +676,9 @@ std::int32_t LuaStage::api_set_scalar(void* p, std::int32_t k, double slot, doub
         return refuse("is not a number");
     }
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -651,7 +702,9 @@ std::int32_t LuaStage::api_set_vec3(void* p, std::int32_t k, double slot, double
     std::get<ColumnWriter<Vec3>>(st->writers_[std::size_t(k)]).set(s, Vec3{x, y, z});
     return 0;
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -672,7 +725,9 @@ std::int32_t LuaStage::api_set_quat(void* p, std::int32_t k, double slot, double
         .set(s, Quat{w / norm, x / norm, y / norm, z / norm});
     return 0;
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -695,8 +750,9 @@ std::int32_t LuaStage::api_has(void* p, std::int32_t k, double slot) noexcept {
     const abi::Column& info = st->infos_[k];
     return info.n > s && info.out_present && info.out_present[s] ? 1 : 0;
   } catch (const std::exception& e) {
-    st->error(e.what());
-    return -1;
+    return -st->refuse(e.what());
+  } catch (...) {
+    return -st->refuse(nullptr);
   }
 }
 
@@ -716,7 +772,9 @@ std::int32_t LuaStage::api_grow(void* p) noexcept {
     st->call_->buf_cap = double(st->commands_.size());
     return 0;
   } catch (const std::exception& e) {
-    return st->error(std::string("cannot queue more commands: ") + e.what());
+    return st->refuse(e.what(), "cannot queue more commands: ");
+  } catch (...) {
+    return st->refuse(nullptr, "cannot queue more commands: ");
   }
 }
 
@@ -726,7 +784,9 @@ std::int32_t LuaStage::api_commands(void* p, std::int32_t fn) noexcept {
     if (!st->access_) return st->error("commands are read in the resolver's advance");
     return st->commands(fn);
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -735,7 +795,17 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
   try {
     if (!st->view_ || !st->collisions_)
       return st->error("declare derived = { \"collisions\" } to read contacts");
-    st->contacts_.clear();
+    if (which < 0 || which >= kContactLists) return st->error("no such list of contacts");
+    // Each list is made once per call and then left alone: an iterator over
+    // one stays valid while the stage asks for another, or the same again.
+    std::vector<abi::Contact>& list = st->contacts_[which];
+    const std::uint32_t made = 1u << which;
+    if (st->contacts_made_ & made) {
+      st->call_->contacts = list.data();
+      st->call_->contact_count = std::uint32_t(list.size());
+      return 0;
+    }
+    list.clear();
     const rigid::CollisionSet& c = *st->collisions_;
     auto add = [&](std::span<const rigid::ContactPair> pairs, bool began) {
       for (const auto& pair : pairs) {
@@ -753,22 +823,24 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
           out.normal = pts[0].normal;
           out.point = pts[0].position;
         }
-        st->contacts_.push_back(out);
+        list.push_back(out);
       }
     };
     if (which == 0 || which == 3) add(c.began(), true);
     if (which == 1 || which == 3) add(c.ongoing(), false);
     if (which == 2) add(c.ended(), false);
     if (which == 3)  // touching: in (a, b) order, as the set keeps them
-      std::sort(st->contacts_.begin(), st->contacts_.end(),
-                [](const abi::Contact& x, const abi::Contact& y) {
-                  return x.a < y.a || (x.a == y.a && x.b < y.b);
-                });
-    st->call_->contacts = st->contacts_.data();
-    st->call_->contact_count = std::uint32_t(st->contacts_.size());
+      std::sort(list.begin(), list.end(), [](const abi::Contact& x, const abi::Contact& y) {
+        return x.a < y.a || (x.a == y.a && x.b < y.b);
+      });
+    st->contacts_made_ |= made;
+    st->call_->contacts = list.data();
+    st->call_->contact_count = std::uint32_t(list.size());
     return 0;
   } catch (const std::exception& e) {
-    return st->error(e.what());
+    return st->refuse(e.what());
+  } catch (...) {
+    return st->refuse(nullptr);
   }
 }
 
@@ -817,8 +889,9 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
     ++st->bulk_used_;
     return b;
   } catch (const std::exception& e) {
-    st->error(e.what());
-    return -1;
+    return -st->refuse(e.what());
+  } catch (...) {
+    return -st->refuse(nullptr);
   }
 }
 
@@ -826,12 +899,15 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
 
 int LuaStage::host_last_error(lua_State* L) {
   LuaStage* st = stage_of(L);
-  lua_pushlstring(L, st->last_error_.data(), st->last_error_.size());
+  if (st->last_error_.empty())  // refuse() could not copy the message (out of memory)
+    lua_pushliteral(L, "the host refused (no message: out of memory?)");
+  else
+    lua_pushlstring(L, st->last_error_.data(), st->last_error_.size());
   return 1;
 }
 
 int LuaStage::host_name(lua_State* L) {
-  LuaStage* st = stage_of(L);
+  LuaStage* st = stage_in_call(L);
   return catch_exceptions(L, [&] {
     std::uint32_t s;
     if (!st->check_slot(luaL_checknumber(L, 2), s)) throw InputError(st->last_error_);
@@ -842,15 +918,18 @@ int LuaStage::host_name(lua_State* L) {
 }
 
 int LuaStage::host_find(lua_State* L) {
-  LuaStage* st = stage_of(L);
-  const ObjectId id = st->view_->store().find(luaL_checkstring(L, 2));
-  if (!id) return 0;
-  lua_pushnumber(L, id.index);
-  return 1;
+  LuaStage* st = stage_in_call(L);
+  const char* name = luaL_checkstring(L, 2);  // converts a number; runs no metamethod
+  return catch_exceptions(L, [&] {
+    const ObjectId id = st->view_->store().find(name);
+    if (!id) return 0;
+    lua_pushnumber(L, id.index);
+    return 1;
+  });
 }
 
 int LuaStage::host_alive(lua_State* L) {
-  LuaStage* st = stage_of(L);
+  LuaStage* st = stage_in_call(L);
   const double slot = luaL_checknumber(L, 2);
   lua_pushboolean(L, slot >= 0 && slot < double(st->view_->store().slot_count()) &&
                          std::floor(slot) == slot &&
@@ -859,7 +938,7 @@ int LuaStage::host_alive(lua_State* L) {
 }
 
 int LuaStage::host_emit(lua_State* L) {
-  LuaStage* st = stage_of(L);
+  LuaStage* st = stage_in_call(L);
   return catch_exceptions(L, [&] {
     Event e;
     e.type = luaL_checkstring(L, 2);
@@ -893,7 +972,7 @@ int LuaStage::host_emit(lua_State* L) {
 }
 
 int LuaStage::host_slow_get(lua_State* L) {
-  LuaStage* st = stage_of(L);
+  LuaStage* st = stage_in_call(L);
   return catch_exceptions(L, [&] {
     const auto k = std::size_t(luaL_checkinteger(L, 2));
     std::uint32_t s;
@@ -920,18 +999,23 @@ int LuaStage::host_slow_get(lua_State* L) {
 }
 
 int LuaStage::host_slow_set(lua_State* L) {
-  LuaStage* st = stage_of(L);
+  LuaStage* st = stage_in_call(L);
+  // Every argument converted before any C++ object or reference is made (a
+  // Lua error here unwinds; none of these runs code of the mod).
+  const auto k = std::size_t(luaL_checkinteger(L, 2));
+  const double slot = luaL_checknumber(L, 3);
+  std::size_t n = 0;
+  const char* text = luaL_checklstring(L, 4, &n);
   return catch_exceptions(L, [&] {
-    const auto k = std::size_t(luaL_checkinteger(L, 2));
     std::uint32_t s;
     if (k >= st->sources_.size() || !st->access_ || !st->sources_[k].writable)
       throw InputError("not writable here");
-    if (!st->check_slot(luaL_checknumber(L, 3), s)) throw InputError(st->last_error_);
+    if (!st->check_slot(slot, s)) throw InputError(st->last_error_);
     if (st->sources_[k].kind != PropertyKind::String)
       throw InputError("writing '" + st->column_names_[k] +
                        "' from Lua is not supported (numbers, vectors, "
                        "rotations, booleans, enums and strings are)");
-    std::get<ColumnWriter<std::string>>(st->writers_[k]).set(s, luaL_checkstring(L, 4));
+    std::get<ColumnWriter<std::string>>(st->writers_[k]).set(s, std::string(text, n));
     return 0;
   });
 }

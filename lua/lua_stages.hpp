@@ -117,6 +117,19 @@ class LuaStage {
     last_error_ = std::move(message);
     return 1;
   }
+  /// What an FFI entry point returns when a C++ exception stopped it: the
+  /// message (prefix + what) as the last error, set without throwing (no
+  /// exception may leave a function LuaJIT's FFI called). Returns 1.
+  std::int32_t refuse(const char* what, const char* prefix = "") noexcept;
+  /// The stage of a host function's first argument, which must be in a call.
+  static LuaStage* stage_in_call(lua_State* L);
+  /// The body of invoke(): opens the call, runs the mod's function and
+  /// performs what it queued. Returns false with `failure` set if it failed.
+  bool run_call(const WorldView& view, ResolverAccess* access, const char* phase, double dt,
+                InputError& failure);
+  /// Takes back everything lent to Lua for the call, on every path out of
+  /// it (docs/architecture.md, "The Lua boundary").
+  void end_call() noexcept;
   /// Performs the commands an interaction appended during its call (on its
   /// target's interaction functions). Returns false with last_error_ set if
   /// one is refused (an object that died).
@@ -178,7 +191,12 @@ class LuaStage {
   const rigid::CollisionSet* collisions_ = nullptr;
   // Contacts reach Lua with their impulses, which a stage may read: declared.
   rigid::ImpulseDemand impulses_;
-  std::vector<abi::Contact> contacts_;
+  // The call's lists of contacts (began, ongoing, ended, touching), each made
+  // at most once per call (bit k of contacts_made_), so that a list stays
+  // where it is while the stage iterates over it and asks for another.
+  static constexpr int kContactLists = 4;
+  std::vector<abi::Contact> contacts_[kContactLists];
+  std::uint32_t contacts_made_ = 0;
 };
 
 class LuaResolver final : public Resolver, public LuaStage {

@@ -22,6 +22,7 @@ local bulk_ptr = ffi.typeof("alloy_bulk*")
 local load_ptr = ffi.typeof("alloy_load*")
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
+local rawget = rawget
 local newproxy, getmetatable = newproxy, getmetatable
 local floor, sqrt, huge = math.floor, math.sqrt, math.huge
 local sort, concat = table.sort, table.concat
@@ -49,13 +50,51 @@ local is_quat = function(v) return istype(quat_ct, v) end
 
 local function vec3(x, y, z) local r = vec3_t(x or 0, y or 0, z or 0) return r end
 
-local function to_vec3(v, what)
-  if is_vec3(v) then return v end
+-- The host's functions below follow one rule (docs/architecture.md, "The
+-- Lua boundary"): no code of the mod runs while they hold memory the host
+-- lent for a call. They turn every argument into plain numbers first, with
+-- no metamethod (which could yield, re-enter the host or fail), then check
+-- that the call they belong to is still on, and only then take a pointer
+-- into the host's buffers and write, with nothing in between.
+
+-- A vec3 argument as three plain numbers: a vec3 (x, y, z are struct
+-- fields: no code runs), or a table read raw, {x = , y = , z = } or
+-- {x, y, z} (z may be left out). A table's metatable is not consulted.
+-- Returns nil if v is none of these.
+local function xyz(v)
+  if is_vec3(v) then return v.x, v.y, v.z end
   if type(v) == "table" then
-    local x, y, z = v.x or v[1], v.y or v[2], v.z or v[3] or 0
-    if type(x) == "number" and type(y) == "number" and type(z) == "number" then local r = vec3_t(x, y, z) return r end
+    local x, y, z = rawget(v, "x"), rawget(v, "y"), rawget(v, "z")
+    if x == nil then x = rawget(v, 1) end
+    if y == nil then y = rawget(v, 2) end
+    if z == nil then
+      z = rawget(v, 3)
+      if z == nil then z = 0 end
+    end
+    if type(x) == "number" and type(y) == "number" and type(z) == "number" then return x, y, z end
   end
-  error((what or "value") .. " must be a vec3 (vec3(x, y, z) or {x, y, z}), got " .. type(v), 3)
+  return nil
+end
+
+-- Raises the error for a value that is not a vec3; `level` as the caller
+-- would give it to error().
+local function not_vec3(v, what, level)
+  local got = type(v)
+  if got == "table" then
+    got = getmetatable(v) ~= nil and "a table with a metatable (read raw: host functions run no metamethod)"
+      or "a table without three numbers"
+  end
+  error(what .. " must be a vec3 (vec3(x, y, z) or a table {x, y, z} of numbers), got " .. got, level + 1)
+end
+
+local function vtext(x, y, z) return format("{%g, %g, %g}", x, y, z) end
+
+-- A value of the mod's in a message, without running its code (tostring
+-- calls a table's __tostring).
+local function shown(v)
+  local t = type(v)
+  if t == "string" or t == "number" or t == "boolean" or t == "nil" then return tostring(v) end
+  return "a " .. t
 end
 
 local vec3_methods = {
@@ -225,16 +264,13 @@ M.string = {
 -- Stages. A stage record per C++ stage instance: its w (what the mod's
 -- functions get), the proxies of its columns, and its current definition.
 
-local function not_in_call(what)
-  error(what .. " can only be used while the stage that got it runs", 3)
+-- `level`: as the caller would give it to error() (2: the caller's caller).
+local function not_in_call(what, level)
+  error(what .. " can only be used while the stage that got it runs", (level or 2) + 1)
 end
 
 local function fail(rec, level)
   error(host.last_error(rec.handle), level + 1)
-end
-
-local function fail_index(rec, name, i)
-  error("column '" .. name .. "': no object in slot " .. tostring(i), 3)
 end
 
 local readers = {}  -- kind -> function(info, i) -> value
@@ -256,7 +292,7 @@ end
 
 -- The read-only proxy of column k; with `writable`, also its writer.
 local function column_proxy(rec, k, c)
-  local info, handle, ptr, name, kind = rec.infos + k, rec.handle, rec.ptr, c.name, c.kind
+  local info, handle, ptr, name, kind = rec.anchored(rec.infos + k), rec.handle, rec.ptr, c.name, c.kind
   local read = readers[kind]
   if kind == 5 then
     local names = c.values
@@ -308,20 +344,35 @@ local function column_proxy(rec, k, c)
     name = name,
   }
   local write
+  -- Each writer converts the value first, then checks the call and the
+  -- slot, then writes: nothing of the mod's runs after the check.
+  local what = "'" .. name .. "'"
+  local function slot_in_call(i)  -- for the writers of properties, whose slot C++ checks again
+    if info.n == 0 then not_in_call("column '" .. name .. "'", 3) end
+    if type(i) ~= "number" then error("column '" .. name .. "': no object in slot " .. shown(i), 3) end
+  end
   if c.output then
     -- A derived set's own output: written straight into the set's arrays.
+    local function output_slot(i)
+      if info.n == 0 then not_in_call("column '" .. name .. "'", 3) end
+      if not (type(i) == "number" and i >= 0 and i < info.n and i == floor(i)) then
+        error("column '" .. name .. "': no object in slot " .. shown(i), 4)
+      end
+    end
     if kind == 3 then
       write = function(_, i, v)
-        if not (i >= 0 and i < info.n) then fail_index(rec, name, i) end
-        v = to_vec3(v, "'" .. name .. "'")
-        check_finite(v.x, name) check_finite(v.y, name) check_finite(v.z, name)
-        info.out_vec3[i] = v
+        local x, y, z = xyz(v)
+        if x == nil then not_vec3(v, what, 2) end
+        check_finite(x, name) check_finite(y, name) check_finite(z, name)
+        output_slot(i)
+        local o = info.out_vec3 + i
+        o.x, o.y, o.z = x, y, z
         info.out_present[i] = 1
       end
     else
       write = function(_, i, v)
-        if not (i >= 0 and i < info.n) then fail_index(rec, name, i) end
         check_finite(v, name)
+        output_slot(i)
         info.out_num[i] = v
         info.out_present[i] = 1
       end
@@ -329,41 +380,43 @@ local function column_proxy(rec, k, c)
   elseif c.writable then
     if kind == 3 then
       write = function(_, i, v)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        v = to_vec3(v, "'" .. name .. "'")
-        if api.set_vec3(ptr, k, i, v.x, v.y, v.z) ~= 0 then fail(rec, 2) end
+        local x, y, z = xyz(v)
+        if x == nil then not_vec3(v, what, 2) end
+        slot_in_call(i)
+        if api.set_vec3(ptr, k, i, x, y, z) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 4 then
       write = function(_, i, q)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        if not is_quat(q) then error("'" .. name .. "' takes a quat", 2) end
-        if api.set_quat(ptr, k, i, q.w, q.x, q.y, q.z) ~= 0 then fail(rec, 2) end
+        if not is_quat(q) then error(what .. " takes a quat", 2) end
+        local qw, qx, qy, qz = q.w, q.x, q.y, q.z
+        slot_in_call(i)
+        if api.set_quat(ptr, k, i, qw, qx, qy, qz) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 2 then
       write = function(_, i, v)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        if type(v) ~= "boolean" then error("'" .. name .. "' takes true or false", 2) end
+        if type(v) ~= "boolean" then error(what .. " takes true or false", 2) end
+        slot_in_call(i)
         if api.set_scalar(ptr, k, i, v and 1 or 0) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 5 then
       local index = {}
       for j, n in ipairs(c.values) do index[n] = j - 1 end
       write = function(_, i, v)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        local e = index[v]
-        if e == nil then error("'" .. name .. "' has no value '" .. tostring(v) .. "'", 2) end
+        local e = type(v) == "string" and index[v] or nil
+        if e == nil then error(what .. " has no value '" .. shown(v) .. "'", 2) end
+        slot_in_call(i)
         if api.set_scalar(ptr, k, i, e) ~= 0 then fail(rec, 2) end
       end
     elseif kind == 0 or kind == 1 then
       write = function(_, i, v)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        if type(v) ~= "number" then error("'" .. name .. "' takes a number, got " .. type(v), 2) end
+        if type(v) ~= "number" then error(what .. " takes a number, got " .. type(v), 2) end
+        slot_in_call(i)
         if api.set_scalar(ptr, k, i, v) ~= 0 then fail(rec, 2) end
       end
     else
       write = function(_, i, v)
-        if info.n == 0 then not_in_call("column '" .. name .. "'") end
-        host.slow_set(handle, k, i, v)
+        slot_in_call(i)
+        host.slow_set(handle, k, i, v)  -- C: converts v to a string, runs no metamethod
       end
     end
   end
@@ -406,33 +459,34 @@ local function column_proxy(rec, k, c)
   return reader, writer
 end
 
--- Packs one argument of an interaction function into the command buffer b
--- at offset o, checked here where the mod's line is known (the slot's object
--- being alive is checked by C++ when the commands are performed).
+-- Converts one argument of an interaction function into plain numbers, in
+-- the table t from position j (returns the next position), checked here
+-- where the mod's line is known (the slot's object being alive is checked
+-- by C++ when the commands are performed). No code of the mod runs.
 local function finite(x) return x - x == 0 end  -- false for NaN and infinities
-local packers = {
-  number = function(b, o, v, what)
+local converters = {
+  number = function(t, j, v, what)
     if type(v) ~= "number" then error(what .. " takes a number, got " .. type(v), 3) end
     if not finite(v) then error(what .. ": arguments must be finite, got " .. tostring(v), 3) end
-    b[o] = v
-    return o + 1
+    t[j] = v
+    return j + 1
   end,
-  object = function(b, o, v, what)
+  object = function(t, j, v, what)
     if type(v) ~= "number" then error(what .. " takes an object (a slot number), got " .. type(v), 3) end
-    b[o] = v
-    return o + 1
+    t[j] = v
+    return j + 1
   end,
-  vec3 = function(b, o, v, what)
-    v = to_vec3(v, what)
-    local x, y, z = v.x, v.y, v.z
+  vec3 = function(t, j, v, what)
+    local x, y, z = xyz(v)
+    if x == nil then not_vec3(v, what, 3) end
     -- 0 if all three are finite, NaN otherwise: one test instead of three.
     if not ((x - x) + (y - y) + (z - z) == 0) then
-      error(what .. ": arguments must be finite, got " .. tostring(v), 3)
+      error(what .. ": arguments must be finite, got " .. vtext(x, y, z), 3)
     end
-    b[o], b[o + 1], b[o + 2] = x, y, z
-    return o + 3
+    t[j], t[j + 1], t[j + 2] = x, y, z
+    return j + 3
   end,
-  none = function(b, o) return o end,
+  none = function(t, j) return j end,
 }
 local width = { number = 1, object = 1, vec3 = 3 }
 
@@ -466,28 +520,35 @@ local function command_queue(rec)
     if n > 4 then error("interaction function '" .. fname .. "' takes more than 4 arguments") end
     local stride = 2
     for j = 1, n do stride = stride + width[kinds[j]] end
-    local p1, p2, p3, p4 = packers[kinds[1] or "none"], packers[kinds[2] or "none"], packers[kinds[3] or "none"], packers[kinds[4] or "none"]
+    local c1, c2, c3, c4 = converters[kinds[1] or "none"], converters[kinds[2] or "none"],
+                           converters[kinds[3] or "none"], converters[kinds[4] or "none"]
     local what = "'" .. fname .. "'"
+    local args = {}  -- the arguments as numbers, from their conversion to their copy
     return function(i, a1, a2, a3, a4)
-      if call.in_call == 0 then not_in_call(what) end
+      local epoch = call.epoch
+      -- 1. The arguments, as plain numbers.
       if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+      local m = c1(args, 1, a1, what)
+      m = c2(args, m, a2, what)
+      m = c3(args, m, a3, what)
+      m = c4(args, m, a4, what)
+      -- 2. The call this function was entered in is still on; the object lives.
+      if call.in_call == 0 or call.epoch ~= epoch then not_in_call(what) end
       if not (i >= 0 and i < call.slots and i == floor(i)) then
         error(what .. ": no object in slot " .. tostring(i), 2)
       end
       if call.ids[i] == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
+      -- 3. Only now the buffer: room, and the record, with nothing in between.
       local o = len
       if o + stride > cap then
-        if api.grow(ptr) ~= 0 then fail(rec, 1) end
+        if api.grow(ptr) ~= 0 then fail(rec, 2) end
         cap = call.buf_cap
       end
       local b = call.buf
       b[o] = index
       b[o + 1] = i
-      o = p1(b, o + 2, a1, what)
-      o = p2(b, o, a2, what)
-      o = p3(b, o, a3, what)
-      o = p4(b, o, a4, what)
-      len = o
+      for j = 1, m - 1 do b[o + 1 + j] = args[j] end
+      len = o + stride
     end
   end
   -- The same for a target that takes load records in place (the rigid
@@ -504,36 +565,39 @@ local function command_queue(rec)
       error("interaction function '" .. fname .. "' cannot be written in place")
     end
     return function(i, v, p)
-      if call.in_call == 0 then not_in_call(what) end
+      local epoch = call.epoch
+      -- 1. The arguments, as plain numbers.
       if type(i) ~= "number" then error(what .. " takes an object (a slot number) first, got " .. type(i), 2) end
+      local x, y, z = xyz(v)
+      if x == nil then not_vec3(v, what, 2) end
+      -- 0 if all three are finite, NaN otherwise: one test instead of three.
+      if not ((x - x) + (y - y) + (z - z) == 0) then
+        error(what .. ": arguments must be finite, got " .. vtext(x, y, z), 2)
+      end
+      local px, py, pz
+      if at then
+        px, py, pz = xyz(p)
+        if px == nil then not_vec3(p, what, 2) end
+        if not ((px - px) + (py - py) + (pz - pz) == 0) then
+          error(what .. ": arguments must be finite, got " .. vtext(px, py, pz), 2)
+        end
+      end
+      -- 2. The call this function was entered in is still on; the object lives.
+      if call.in_call == 0 or call.epoch ~= epoch then not_in_call(what) end
       if not (i >= 0 and i < call.slots and i == floor(i)) then
         error(what .. ": no object in slot " .. tostring(i), 2)
       end
       local id = call.ids[i]
       if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
-      v = to_vec3(v, what)
-      local x, y, z = v.x, v.y, v.z
-      -- 0 if all three are finite, NaN otherwise: one test instead of three.
-      if not ((x - x) + (y - y) + (z - z) == 0) then
-        error(what .. ": arguments must be finite, got " .. tostring(v), 2)
-      end
+      -- 3. Only now the queue: room, and the record, with nothing in between.
       local o = len
       if o >= cap then
-        if api.grow(ptr) ~= 0 then fail(rec, 1) end
+        if api.grow(ptr) ~= 0 then fail(rec, 2) end
         cap = call.buf_cap
       end
       local r = load_ptr(call.loads) + o
       r.id, r.vx, r.vy, r.vz, r.kind = id, x, y, z, record
-      if record ~= 0 then
-        if at then
-          p = to_vec3(p, what)
-          local px, py, pz = p.x, p.y, p.z
-          if not ((px - px) + (py - py) + (pz - pz) == 0) then
-            error(what .. ": arguments must be finite, got " .. tostring(p), 2)
-          end
-          r.px, r.py, r.pz = px, py, pz
-        end
-      end
+      if at then r.px, r.py, r.pz = px, py, pz end
       len = o + 1
     end
   end
@@ -544,12 +608,12 @@ local function command_queue(rec)
   -- that are not members; the values are checked here.
   function q.bulk_records(bk, record, what, check)
     local function set(_, i, v)
-      check(i)
-      v = to_vec3(v, what)
-      local x, y, z = v.x, v.y, v.z
+      local x, y, z = xyz(v)
+      if x == nil then not_vec3(v, what, 2) end
       if not ((x - x) + (y - y) + (z - z) == 0) then
-        error(what .. ": values must be finite, got " .. tostring(v), 2)
+        error(what .. ": values must be finite, got " .. vtext(x, y, z), 2)
       end
+      check(i)  -- after the conversion: the buffer is of a call that is on, i a member
       local o
       if bk.present[i] == 1 then
         o = bk.values[i]
@@ -558,7 +622,7 @@ local function command_queue(rec)
         if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
         o = len
         if o >= cap then
-          if api.grow(ptr) ~= 0 then fail(rec, 1) end
+          if api.grow(ptr) ~= 0 then fail(rec, 2) end
           cap = call.buf_cap
         end
         len = o + 1
@@ -593,7 +657,7 @@ local function bulk_function(rec, index, fname, kind, column_of, record)
   local what = "'" .. fname .. "_each'"
   local proxies = {}  -- [buffer index][column] -> proxy
   local function proxy(b, col, cname)
-    local bk = rec.bulks + b
+    local bk = rec.anchored(rec.bulks + b)
     local function check(i)
       if bk.n == 0 or bk.fn ~= index or bk.column ~= col then
         error(what .. ": a buffer can only be used in the call that got it", 3)
@@ -608,12 +672,12 @@ local function bulk_function(rec, index, fname, kind, column_of, record)
       newindex, get = rec.queue.bulk_records(bk, record, what, check)
     elseif kind == "vec3" then
       newindex = function(_, i, v)
-        check(i)
-        v = to_vec3(v, what)
-        local x, y, z = v.x, v.y, v.z
+        local x, y, z = xyz(v)
+        if x == nil then not_vec3(v, what, 2) end
         if not ((x - x) + (y - y) + (z - z) == 0) then
-          error(what .. ": values must be finite, got " .. tostring(v), 2)
+          error(what .. ": values must be finite, got " .. vtext(x, y, z), 2)
         end
+        check(i)
         local o = i * 3
         local vals = bk.values
         vals[o], vals[o + 1], vals[o + 2] = x, y, z
@@ -628,9 +692,9 @@ local function bulk_function(rec, index, fname, kind, column_of, record)
       end
     else
       newindex = function(_, i, v)
-        check(i)
         if type(v) ~= "number" then error(what .. " takes numbers, got " .. type(v), 2) end
         if not (v - v == 0) then error(what .. ": values must be finite, got " .. tostring(v), 2) end
+        check(i)
         bk.values[i] = v
         bk.present[i] = 1
       end
@@ -666,7 +730,7 @@ end
 -- Iterator over a resolver's queued commands of one function: slot, args...
 local function command_iterator(rec, fname, f)
   local call = rec.call
-  if call.in_call == 0 then not_in_call("w:commands") end
+  if call.in_call == 0 then not_in_call("w:commands", 3) end
   if api.commands(rec.ptr, f.index) ~= 0 then fail(rec, 2) end
   local recs, count, stride, epoch = call.cmd, call.cmd_count, call.cmd_stride, call.epoch
   local offsets, kinds, n = {}, f.kinds, #f.kinds
@@ -682,9 +746,9 @@ local function command_iterator(rec, fname, f)
   end
   local j = -1
   return function()
+    if call.in_call == 0 or call.epoch ~= epoch then error("commands can only be read in the call that got them", 2) end
     j = j + 1
     if j >= count then return nil end
-    if call.epoch ~= epoch then error("commands can only be read in the call that got them", 2) end
     local b = recs + j * stride
     if n == 0 then return b[0] end
     if n == 1 then return b[0], arg(b, 1) end
@@ -699,7 +763,7 @@ local contact_kinds = { began = 0, ongoing = 1, ended = 2, touching = 3 }
 local function frozen(t, what)
   return setmetatable({}, {
     __index = t,
-    __newindex = function(_, k) error(what .. " is read-only (cannot set '" .. tostring(k) .. "')", 2) end,
+    __newindex = function(_, k) error(what .. " is read-only (cannot set '" .. shown(k) .. "')", 2) end,
     __metatable = what,
     __len = function() return #t end,
   })
@@ -709,13 +773,21 @@ end
 -- functions (a resolver's own, for w:commands), target = { name, functions },
 -- contacts (bool), settings, area. state: the mod's state table.
 function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
+  -- The C++ side lends three blocks (userdata), writes into them during
+  -- calls and clears them when the stage goes. A pointer cdata does not keep
+  -- its userdata alive, and a mod may keep a lone function of its stage
+  -- (w.find, col.each) long after this record is gone: every pointer into
+  -- the blocks that a closure keeps carries a finalizer holding all three,
+  -- so that they live as long as any such pointer does.
+  local function hold() return infos_ud, call_ud, bulks_ud end
+  local function anchored(p) return ffi.gc(p, hold) end
   local rec = {
     handle = handle,  -- a lightuserdata, for the host's C functions
     ptr = ffi.cast("void*", handle),  -- the same as a cdata, for FFI calls (the JIT compiles only these)
-    infos = ffi.cast(column_ptr, infos_ud),
-    call = ffi.cast(call_ptr, call_ud),
-    bulks = ffi.cast(bulk_ptr, bulks_ud),
-    keep = { infos_ud, call_ud, bulks_ud },  -- the C++ side writes into these: keep them alive with the record
+    infos = anchored(ffi.cast(column_ptr, infos_ud)),
+    call = anchored(ffi.cast(call_ptr, call_ud)),
+    bulks = anchored(ffi.cast(bulk_ptr, bulks_ud)),
+    anchored = anchored,
     decl = decl,
     def = {},
   }
@@ -741,13 +813,13 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
   end
   local call, handle_, ptr = rec.call, handle, rec.ptr
   local function fetch(e)
-    if call.in_call == 0 then not_in_call("w") end
+    if call.in_call == 0 then not_in_call("w", 3) end
     if rec.infos[e.k].n == 0 then
       if api.fetch(ptr, e.k) ~= 0 then fail(rec, 3) end
     end
   end
   local function live(what)
-    if call.in_call == 0 then not_in_call(what) end
+    if call.in_call == 0 then not_in_call(what, 3) end
   end
   local sname = decl.name
   local w = {}
@@ -814,14 +886,17 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
       local list, count, epoch = ffi.cast(contact_ptr, call.contacts), call.contact_count, call.epoch
       local j = -1
       return function()
+        if call.in_call == 0 or call.epoch ~= epoch then error("contacts can only be read in the call that got them", 2) end
         j = j + 1
         if j >= count then return nil end
-        if call.epoch ~= epoch then error("contacts can only be read in the call that got them", 2) end
         local c = list[j]
-        return c.a, c.b, {
-          speed = c.speed, depth = c.depth, impulse = c.impulse, total_impulse = c.total_impulse,
-          points = c.points, began = c.began ~= 0,
-          normal = vec3_t(c.normal.x, c.normal.y, c.normal.z), point = vec3_t(c.point.x, c.point.y, c.point.z),
+        -- The numbers first, then the tables: the host's list is read through.
+        local a, b, speed, depth, impulse, total, points, began = c.a, c.b, c.speed, c.depth,
+          c.impulse, c.total_impulse, c.points, c.began ~= 0
+        local nx, ny, nz, px, py, pz = c.normal.x, c.normal.y, c.normal.z, c.point.x, c.point.y, c.point.z
+        return a, b, {
+          speed = speed, depth = depth, impulse = impulse, total_impulse = total, points = points,
+          began = began, normal = vec3_t(nx, ny, nz), point = vec3_t(px, py, pz),
         }
       end
     end
@@ -857,7 +932,7 @@ function M.set_state(rec, state) rec.w.state = state end
 
 -- One call of the stage's function `phase`, with the step's numbers.
 function M.run(rec, phase, dt, time, step)
-  local f = rec.def[phase]
+  local f = rawget(rec.def, phase)  -- raw: the mod's table may have a metatable
   if f == nil then return end
   local w = rec.w
   w.dt, w.time, w.step = dt, time, step
