@@ -272,6 +272,13 @@ mod.interaction { name = "evil.kicker", reads = { "probe" }, needs = { "probe" }
 mod.on("poke", function(e, state) if state.it then local i, v = state.it() end end) --@
 )LUA",
                "commands can only be read in the call that got them"});
+  c.push_back({"a contacts iterator kept and resumed in an event handler", R"LUA(
+mod.interaction { name = "rigid_body_from_probe", reads = { "probe" }, needs = { "probe" },
+  derived = { "collisions" }, target = "rigid_body",
+  apply = function(w) w.state.it = w:contacts("touching") w:emit("poke") end }
+mod.on("poke", function(e, state) local a, b = state.it() end) --@
+)LUA",
+               "contacts can only be read in the call that got them"});
   c.push_back({"w kept and used in an event handler", interaction(R"LUA(
     w.state.w = w
     w:emit("poke"))LUA") + R"LUA(
@@ -304,6 +311,11 @@ mod.on("poke", function(e, state) local v = state.w:find("victim") end) --@
     for i in s.each() do w.target.add_force(w:find("victim"), vec3(1e6, 0, 0)) end
     s.find(nil, "victim") --@)LUA",
                            "\"probe\", \"mass\"")});
+  c.push_back({"the host's error metatable changed for every later error", interaction(R"LUA(
+    local ok, err = pcall(function() w:emit("x", { a = 1e9 }) end)
+    assert(not ok and type(err) == "table", "the host raised an error table")
+    getmetatable(err).__tostring = function() return "hijacked" end --@)LUA"),
+               "attempt to index"});
   return c;
 }
 
