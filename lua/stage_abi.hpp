@@ -5,7 +5,10 @@
 // Only the prelude sees these. A mod gets Lua proxies built on them that
 // check every index and every value; it never holds a pointer. All pointers
 // here are valid during one call of one stage: C++ fills them when the stage
-// asks for a column (fetch) and clears them when the call returns.
+// asks for a column (fetch) and clears them when the call ends, whichever
+// way (LuaStage::end_call). The prelude converts a mod's arguments before it
+// checks that the call is on and takes a pointer, so that no code of the mod
+// runs while it holds one (docs/architecture.md, "The Lua boundary").
 #pragma once
 
 #include <cstddef>
@@ -70,7 +73,9 @@ struct Call {
   std::uint32_t contact_count = 0;
   std::uint32_t slots = 0;   ///< object slots in the world
   std::int32_t in_call = 0;  ///< 1 while the stage runs
-  std::uint32_t epoch = 0;   ///< moves at every call: lists of an older call are refused
+  /// Moves when a call starts and when it ends: a list, or a function
+  /// entered, in one call is refused in any other.
+  std::uint32_t epoch = 0;
   /// An interaction's per-slot ids, `slots` of them: the live object's
   /// ObjectId packed as its generation << 32 | slot, or 0 for a free slot
   /// (0 is never a live generation). Its functions check a slot against them
@@ -141,7 +146,8 @@ struct Budget {
 /// Entry points of the fast path, called by the prelude through the FFI.
 /// `stage` is the C++ stage (LuaStage*); `slot` a Lua number checked here.
 /// Each returns 0 on success, else the stage holds a message (last_error).
-/// None throws: they are called from inside the Lua VM.
+/// None throws (each ends in catch (...)), and none calls into Lua: they are
+/// called from inside the Lua VM, which an exception must not cross.
 struct Api {
   std::int32_t (*fetch)(void* stage, std::int32_t column) noexcept;
   std::int32_t (*set_scalar)(void* stage, std::int32_t column, double slot, double v) noexcept;
