@@ -394,7 +394,9 @@ TEST_P(HostileBoundary, IsContained) {
   EXPECT_EQ(at.x, 5.0);
   EXPECT_EQ(std::get<double>(world.get(victim, "sink")), 0.0);
   EXPECT_EQ(std::get<Vec3>(world.get(victim, "aim")), Vec3{});
-  if (h.ball_pushed) EXPECT_GT(std::get<Vec3>(world.get(ball, "velocity")).x, 0.01);
+  if (h.ball_pushed) {
+    EXPECT_GT(std::get<Vec3>(world.get(ball, "velocity")).x, 0.01);
+  }
   // The evil mod's failure, reported with the mod, the file and the line.
   ASSERT_FALSE(failures.empty()) << "nothing reported";
   for (const auto& r : failures) EXPECT_EQ(r.mod, "evil") << r.message;
