@@ -8,6 +8,11 @@
 // stays bounded: every case ends after a bounded number of steps (the
 // limits, not a clock, stop it).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 
 #include "tests/lua/mod_test_support.hpp"
 
@@ -186,6 +191,24 @@ mod.resolver { name = "parse.stage", writes = { "fields" }, needs = { "fields" }
   EXPECT_EQ(std::get<double>(world.get(o, "fields")), 2000.5);
 }
 
+// The host's own bindings read a mod's tables with lua_getfield, which runs
+// __index: recursion through them is bounded too.
+TEST(HostileCWork, RecursionThroughAHostBindingFailsTheLoadAtItsLine) {
+  PluginRegistry registry;
+  TempMods mods;
+  mods.mod("knot",
+           "local t\nt = setmetatable({}, { __index = function() mod.property(t) end })\n"
+           "mod.property(t)\n");
+  lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
+  try {
+    runtime.load("knot");
+    FAIL() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), kEitherStack)) << e.what();
+    EXPECT_TRUE(contains(e.what(), "knot/runtime.lua:")) << e.what();
+  }
+}
+
 // --- scene files and manifests: the same guards while a scene loads ----------------
 
 struct SceneAttempt {
@@ -254,6 +277,31 @@ TEST(HostileScene, TheTimeLimitStopsWhatTheInstructionCountWouldLetRun) {
     EXPECT_EQ(e.where().line, 2) << e.what();
   }
 }
+
+#ifdef ALLOY_BINARY
+// The built CLI: a hostile scene makes `alloy check` and `alloy run` exit
+// with an error at its line, not hang or die of a signal.
+TEST(HostileScene, AlloyCheckAndRunExitWithTheLine) {
+  TempMods dir;
+  dir.write("bomb.lua", "world { dt = 1/100 }\nlocal i = string.rep('a', 3000):find('a-a-a-b')\n");
+  dir.write("recurse.lua",
+            "world { dt = 1/100 }\nlocal function f() return (string.gsub('a', 'a', f)) end f()\n");
+  for (const char* scene : {"bomb.lua", "recurse.lua"}) {
+    for (const char* command : {"check", "run"}) {
+      const std::string out = (dir / "out.txt").string();
+      const std::string line = std::string(ALLOY_BINARY) + " " + command + " " +
+                               (dir / scene).string() + " > " + out + " 2>&1";
+      const int status = std::system(line.c_str());
+      ASSERT_TRUE(WIFEXITED(status)) << line << ": killed by a signal";
+      EXPECT_NE(WEXITSTATUS(status), 0) << line;
+      std::ifstream in(out);
+      std::stringstream text;
+      text << in.rdbuf();
+      EXPECT_TRUE(contains(text.str(), std::string(scene) + ":2")) << line << "\n" << text.str();
+    }
+  }
+}
+#endif
 
 struct ManifestAttempt {
   const char* name;
