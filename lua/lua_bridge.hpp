@@ -19,6 +19,7 @@
 #include <string>
 #include <utility>
 
+#include "lua/c_stack.hpp"
 #include "runtime/error.hpp"
 
 namespace alloy::lua {
@@ -38,6 +39,10 @@ void push_error_table(lua_State* L, const ErrorLocation& where, const std::strin
 /// Lua error raised after the catch block.
 template <class Body>
 int catch_exceptions(lua_State* L, Body&& body) {
+  // A binding may read the script's tables (and so run its metamethods,
+  // which may call the binding again): every binding is behind the C stack
+  // guard.
+  check_c_stack(L);
   ErrorLocation where;
   std::string message;
   bool failed = false;

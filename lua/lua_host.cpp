@@ -1,5 +1,6 @@
 #include "lua/lua_host.hpp"
 
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <lua.hpp>
@@ -7,6 +8,7 @@
 #include <stdexcept>
 
 #include "lua/budget_ticks.hpp"
+#include "lua/c_stack.hpp"
 #include "lua/sandbox.hpp"
 
 namespace alloy::lua {
@@ -18,6 +20,9 @@ namespace {
 // keeps the promise "never abort": LuaJIT on x64 unwinds C++ frames.
 constexpr const char* kHostKey = "alloy.host";
 constexpr int kCountStep = 10000;  // instructions between two budget checks
+// Steps of C work collected before they are passed on: the budgets are
+// checked at most once per quantum (a few microseconds of matching).
+constexpr std::uint64_t kWorkQuantum = 4096;
 
 int on_panic(lua_State* L) {
   const char* s = lua_tostring(L, -1);
@@ -53,13 +58,27 @@ std::optional<LocatedMessage> split_location(std::string_view message) {
 LuaHost::LuaHost(HostOptions options)
     : budget_(std::make_unique<MemoryBudget>(options.memory_limit)),
       memory_limit_(options.memory_limit),
-      instruction_limit_(options.instruction_limit) {
+      instruction_limit_(options.instruction_limit),
+      seconds_limit_(options.seconds_limit) {
   // The limit applies to scripts, not to setting the state up.
   budget_->set_limit(0);
   L_ = lua_newstate(&MemoryBudget::allocate, budget_.get());
   if (!L_) throw std::runtime_error("LuaJIT could not create a state with the alloy allocator");
   lua_atpanic(L_, on_panic);
-  prepare_state(L_);
+  patterns_.steps_per_call = options.pattern_steps;
+  patterns_.owner = this;
+  patterns_.charge = [](void* host, lua_State* L, std::uint64_t steps) {
+    static_cast<LuaHost*>(host)->charge_work(L, steps);
+  };
+  patterns_.refuse = [](void* owner, lua_State* L, const std::string& why) {
+    auto* host = static_cast<LuaHost*>(owner);
+    if (host->account_.refuse) host->account_.refuse(L, why);
+    // No account: an error at the caller's line. The steps are charged, so
+    // a script that catches it and tries again runs out of its budget.
+    host->charge_work(L, host->patterns_.steps_per_call);
+    luaL_error(L, "%s", why.c_str());
+  };
+  prepare_state(L_, &patterns_);
   lua_pushlightuserdata(L_, this);
   lua_setfield(L_, LUA_REGISTRYINDEX, kHostKey);
   // The message handler of call(), made once rather than on every call
@@ -174,14 +193,44 @@ void LuaHost::on_count(lua_State* L, lua_Debug*) {
   lua_pop(L, 1);
   if (!host) return;
   host->instructions_ += kCountStep;
+  if (host->instructions_ > host->instruction_limit_) host->fail_too_long(L);
+  host->check_deadline(L);
+}
+
+void LuaHost::fail_too_long(lua_State* L) {
   // Once over, check at every instruction and fail every time, so that a
   // script that catches the error with pcall and loops on is stopped at its
   // first instruction outside the pcall.
-  if (host->instructions_ > host->instruction_limit_) {
-    lua_sethook(L, &LuaHost::on_count, LUA_MASKCOUNT, 1);
-    luaL_error(L, "the script ran too long (more than %d million Lua instructions)",
-               int(host->instruction_limit_ / 1000000));
+  instructions_ = instruction_limit_ + 1;
+  lua_sethook(L, &LuaHost::on_count, LUA_MASKCOUNT, 1);
+  if (seconds_limit_ > 0 && std::chrono::steady_clock::now() > deadline_)
+    luaL_error(L, "the script ran too long (more than %g s)", seconds_limit_);
+  luaL_error(L,
+             "the script ran too long (more than %d million Lua instructions, pattern matching "
+             "included)",
+             int(instruction_limit_ / 1000000));
+  std::abort();  // luaL_error does not return
+}
+
+void LuaHost::check_deadline(lua_State* L) {
+  if (seconds_limit_ > 0 && depth_ > 0 && std::chrono::steady_clock::now() > deadline_)
+    fail_too_long(L);
+}
+
+void LuaHost::charge_work(lua_State* L, std::uint64_t steps) {
+  work_pending_ += steps;
+  if (work_pending_ < kWorkQuantum) return;
+  const std::uint64_t n = work_pending_;
+  work_pending_ = 0;
+  if (account_.charge) {
+    account_.charge(L, n);
+    return;
   }
+  if (instruction_limit_ > 0 && depth_ > 0) {
+    instructions_ += n;
+    if (instructions_ > instruction_limit_) fail_too_long(L);
+  }
+  check_deadline(L);
 }
 
 int LuaHost::on_error(lua_State* L) {
@@ -287,7 +336,14 @@ void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
     instructions_ = 0;
     lua_sethook(L, &LuaHost::on_count, LUA_MASKCOUNT, kCountStep);
   }
+  if (depth_ == 0) {
+    work_pending_ = 0;
+    deadline_ = std::chrono::steady_clock::now() +
+                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                    std::chrono::duration<double>(seconds_limit_));
+  }
   const std::size_t refusals = budget_->refusals();
+  const CStackEntry entry;  // the C stack guard measures from here
   ++depth_;
   const int rc = lua_pcall(L, nargs, nresults, func);
   --depth_;

@@ -8,9 +8,11 @@
 // never see it.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -18,6 +20,7 @@
 #include <string>
 #include <string_view>
 
+#include "lua/lua_patterns.hpp"
 #include "lua/memory_budget.hpp"
 #include "runtime/error.hpp"
 
@@ -34,6 +37,26 @@ struct HostOptions {
   /// for loading scenes (run once); a per-step budget for Lua stages will
   /// need another mechanism.
   std::uint64_t instruction_limit = 0;
+  /// Wall-clock seconds one outermost call() may take; 0 = no limit. Checked
+  /// with the instruction budget (so only with instruction_limit > 0) and
+  /// whenever C work is charged.
+  double seconds_limit = 0;
+  /// Steps one call of a pattern function may take (lua_patterns.hpp). About
+  /// 0.1 s of matching: enough for ordinary patterns over megabytes of text,
+  /// far less than a backtracking bomb takes.
+  std::uint64_t pattern_steps = 10'000'000;
+};
+
+/// Who pays for the C work a script makes the host do (pattern matching):
+/// a mod's runtime charges it to the mod's tick budget and stops the mod
+/// when it is spent. Without an account the host charges it as instructions
+/// against HostOptions::instruction_limit and seconds_limit.
+struct WorkAccount {
+  /// Pays for `steps` of C work; may raise a Lua error (the budget is spent).
+  std::function<void(lua_State* L, std::uint64_t steps)> charge;
+  /// Raises the error for one call over its allowance (`why` says which);
+  /// must not return.
+  std::function<void(lua_State* L, const std::string& why)> refuse;
 };
 
 class LuaHost {
@@ -64,6 +87,14 @@ class LuaHost {
   /// stop a runaway loop that the JIT compiled. The JIT stays on.
   void use_budget_ticks(int index);
   bool budget_ticks() const { return ticks_ref_ != -2; }
+
+  /// Makes `account` pay for the C work of scripts from now on.
+  void set_work_account(WorkAccount account) { account_ = std::move(account); }
+  /// Charges `steps` of C work done for the running script: collected, and
+  /// passed on (to the account, or to the instruction and time budgets) once
+  /// they make a quantum, so that a small call costs only an addition. May
+  /// raise a Lua error.
+  void charge_work(lua_State* L, std::uint64_t steps);
 
   /// The host that owns `L` (any thread of it), or nullptr.
   static LuaHost* from(lua_State* L);
@@ -100,6 +131,8 @@ class LuaHost {
   };
   static int on_error(lua_State* L);                  // the message handler of call()
   static void on_count(lua_State* L, lua_Debug* ar);  // the instruction budget
+  [[noreturn]] void fail_too_long(lua_State* L);  // raises, and fails at every instruction after
+  void check_deadline(lua_State* L);
   void describe_failure(lua_State* L);
   /// The known file whose (possibly truncated) chunk id is `src`.
   std::optional<std::string> file_for_chunk_id(std::string_view src) const;
@@ -108,6 +141,11 @@ class LuaHost {
   std::size_t memory_limit_ = 0;
   std::uint64_t instruction_limit_ = 0;
   std::uint64_t instructions_ = 0;  // run by the outermost call(), in steps of kCountStep
+  double seconds_limit_ = 0;
+  std::chrono::steady_clock::time_point deadline_;
+  PatternBudget patterns_;  // the pattern functions of this state point here
+  WorkAccount account_;
+  std::uint64_t work_pending_ = 0;  // C work charged but not yet passed on
   int depth_ = 0;                   // nested call()s (a manifest read while a scene runs)
   lua_State* L_ = nullptr;
   int handler_ref_ = -2;  // registry ref of the error handler (on_error), made once

@@ -38,6 +38,9 @@ std::vector<std::string> module_segments(const std::string& name) {
   }
 }
 
+constexpr HostOptions kManifestLimits{/*memory*/ 4u << 20, /*instructions*/ 10'000'000,
+                                      /*seconds*/ 2, /*pattern steps*/ 1'000'000};
+
 std::string folder_name(const fs::path& folder) {
   fs::path p = folder.lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
@@ -52,7 +55,11 @@ std::string display_path(const fs::path& p) {
   return s.empty() ? "." : s;
 }
 
-Manifest read_manifest(LuaHost& host, const fs::path& folder) {
+Manifest read_manifest(LuaHost&, const fs::path& folder) {
+  // A manifest is data: it runs in a small host of its own, whatever host
+  // asked for it, with tight limits (a loop, a string bomb or a pattern bomb
+  // in mod.lua must not hang `alloy run` or a mod runtime).
+  LuaHost host(kManifestLimits);
   lua_State* L = host.state();
   const fs::path file = folder / "mod.lua";
   Manifest m;

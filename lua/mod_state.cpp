@@ -20,6 +20,10 @@ namespace {
 
 constexpr std::int32_t kQuantum = 1000;  // ticks between two checks of the budgets
 static_assert(kQuantum <= INT16_MAX);  // abi::Budget::ticks
+// Steps of pattern matching (lua_patterns.hpp) that cost one tick. A step
+// takes 5-10 ns, about what the tick budget allows a tick (20 million ticks
+// and 0.25 s per step).
+constexpr std::uint64_t kPatternStepsPerTick = 1;
 
 std::string millions(std::uint64_t n) {
   if (n % 1000000 == 0) return std::to_string(n / 1000000) + " million";
@@ -372,6 +376,16 @@ void ModState::make_state() {
   host_ = std::make_unique<LuaHost>(HostOptions{budget_.memory_bytes, 0});
   lua_State* L = host_->state();
   StackGuard guard(L);
+  // Pattern matching is paid in ticks (lua_patterns.hpp), and one call over
+  // its allowance stops the mod as a runaway loop does.
+  host_->set_work_account(
+      WorkAccount{[this](lua_State* L, std::uint64_t steps) {
+                    step_ticks_ += steps / kPatternStepsPerTick;
+                    lua_pushlightuserdata(L, this);
+                    lua_pushcclosure(L, &ModState::over_budget, 1);
+                    lua_call(L, 0, 0);
+                  },
+                  [this](lua_State* L, const std::string& why) { stop(L, why); }});
 
   abi_budget_ = new (lua_newuserdata(L, sizeof(abi::Budget))) abi::Budget{};
   lua_pushvalue(L, -1);

@@ -4,8 +4,10 @@
 #include <lua.hpp>
 #include <string>
 
+#include "lua/c_stack.hpp"
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_host.hpp"
+#include "lua/lua_patterns.hpp"
 
 namespace alloy::lua {
 
@@ -85,6 +87,32 @@ int safe_rawset(lua_State* L) {
   return 1;
 }
 
+// A library function that can call back into Lua, behind the C stack guard.
+// Upvalue 1: the original function, called with all arguments and results.
+int guarded_call(lua_State* L) {
+  check_c_stack(L);
+  lua_pushvalue(L, lua_upvalueindex(1));
+  lua_insert(L, 1);
+  lua_call(L, lua_gettop(L) - 1, LUA_MULTRET);
+  return lua_gettop(L);
+}
+
+// coroutine.wrap, whose result resumes the coroutine when called: guarded too.
+int guarded_wrap(lua_State* L) {
+  lua_pushvalue(L, lua_upvalueindex(1));
+  lua_insert(L, 1);
+  lua_call(L, lua_gettop(L) - 1, 1);
+  lua_pushcclosure(L, guarded_call, 1);
+  return 1;
+}
+
+/// Replaces table[name] (the table at `t`) by `wrapper` over the original.
+void guard(lua_State* L, int t, const char* name, lua_CFunction wrapper = guarded_call) {
+  lua_getfield(L, t, name);
+  lua_pushcclosure(L, wrapper, 1);
+  lua_setfield(L, t, name);
+}
+
 int refuse_write(lua_State* L) {
   const char* key = lua_tostring(L, 2);
   return luaL_error(L, "this table is read-only (cannot set '%s')", key ? key : "?");
@@ -92,7 +120,7 @@ int refuse_write(lua_State* L) {
 
 }  // namespace
 
-void prepare_state(lua_State* L) {
+void prepare_state(lua_State* L, PatternBudget* patterns) {
   open(L, luaopen_base, "");
   open(L, luaopen_string, LUA_STRLIBNAME);
   open(L, luaopen_table, LUA_TABLIBNAME);
@@ -105,6 +133,24 @@ void prepare_state(lua_State* L) {
   lua_getglobal(L, "string");
   lua_pushnil(L);
   lua_setfield(L, -2, "dump");
+  // Patterns whose work is bounded and charged; format (%s calls __tostring)
+  // behind the C stack guard.
+  install_bounded_patterns(L, -1, patterns);
+  guard(L, lua_gettop(L), "format");
+  lua_pop(L, 1);
+  // The other C functions that call back into Lua: comparators, __tostring,
+  // coroutines (each with a Lua stack of its own, so that only the C stack
+  // bounds their nesting). pcall, xpcall and metamethods called by the VM
+  // keep no C frame in LuaJIT.
+  lua_pushvalue(L, LUA_GLOBALSINDEX);
+  guard(L, lua_gettop(L), "tostring");
+  lua_pop(L, 1);
+  lua_getglobal(L, "table");
+  guard(L, lua_gettop(L), "sort");
+  lua_pop(L, 1);
+  lua_getglobal(L, "coroutine");
+  guard(L, lua_gettop(L), "resume");
+  guard(L, lua_gettop(L), "wrap", guarded_wrap);
   lua_pop(L, 1);
 
   // getmetatable("") would reach that real table; __metatable hides it.

@@ -14,14 +14,26 @@
 //
 // Library tables are copied per environment, so a mod that changes
 // `string.format` changes it for itself only.
+//
+// Work a script makes C do is bounded too: string.find, match, gmatch and gsub
+// (also as methods of strings) are the host's own matcher, which counts its
+// steps against the state's budget (lua_patterns.hpp); the C functions that
+// call back into Lua (gsub, table.sort, tostring, string.format,
+// coroutine.resume and wrap) check the depth of the C stack first
+// (c_stack.hpp), so that recursion through them ends in a Lua error, not in
+// a crash.
 #pragma once
 
 struct lua_State;
 
 namespace alloy::lua {
 
+struct PatternBudget;
+
 /// Opens the safe libraries in a fresh state. Call once, before any script.
-void prepare_state(lua_State* L);
+/// `patterns` limits and charges the pattern functions (it must outlive the
+/// state; null: default limits, nothing charged).
+void prepare_state(lua_State* L, PatternBudget* patterns = nullptr);
 
 /// Pushes a new sandbox environment table (without the host API: the scene
 /// bindings and the mod loader add theirs).

@@ -98,7 +98,10 @@ std::vector<fs::path> search_path(const LoadOptions& options, const SceneSource&
 }
 
 RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool allow_library_mod) {
-  LuaHost host(HostOptions{options.memory_limit, options.instruction_limit});
+  // A scene is untrusted code too: instructions (pattern matching included),
+  // memory, wall-clock time and the C stack are all bounded (lua_host.hpp).
+  LuaHost host(HostOptions{options.memory_limit, options.instruction_limit, options.seconds_limit,
+                           options.pattern_steps});
   RecordedScene out;
   out.source = resolve(host, path, allow_library_mod);
   const SceneSource& src = out.source;

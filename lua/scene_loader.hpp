@@ -36,6 +36,10 @@ struct LoadOptions {
   /// Lua instructions the scene (with the mods it requires) may run while
   /// loading; 0 = no limit. Stops an endless loop in a scene.
   std::uint64_t instruction_limit = 2'000'000'000;
+  /// Wall-clock seconds the scene's Lua may run while loading; 0 = no limit.
+  double seconds_limit = 20;
+  /// Steps one pattern call of the scene may take (lua_patterns.hpp).
+  std::uint64_t pattern_steps = 10'000'000;
   /// Budgets of each mod with a runtime file the scene uses (its stages run
   /// in the world; mod_runtime.hpp).
   ModBudget mod_budget;

@@ -228,37 +228,10 @@ end
 function M.randomseed(s) seed(s) end
 
 ---------------------------------------------------------------------------
--- String patterns. Matching runs in C, where no tick reaches, and a pattern
--- with several repetitions can backtrack for an exponential time ("a*a*a*b"
--- on a long run of a's). A mod's find, match, gmatch and gsub refuse the
--- pattern when the length of the subject to the power of its repetitions
--- passes 1e9: patterns with one repetition are never refused, a few on short
--- strings (names, keys) are fine.
-
-local s_find, s_match, s_gmatch, s_gsub = string.find, string.match, string.gmatch, string.gsub
-local function check_pattern(fname, s, p, plain)
-  if plain or type(p) ~= "string" then return end
-  local n, i, len = 0, 1, #p
-  while i <= len do
-    local c = p:byte(i)
-    if c == 37 then
-      i = i + 2  -- %x: an escape or a class
-    else
-      if c == 42 or c == 43 or c == 45 or c == 63 then n = n + 1 end  -- * + - ?
-      i = i + 1
-    end
-  end
-  if n > 1 and type(s) == "string" and #s > 1 and n * math.log(#s) > 20.7 then  -- #s ^ n > 1e9
-    error(fname .. ": a pattern with " .. n .. " repetitions on a string of " .. #s ..
-          " bytes could take exponential time; mods may not run it", 3)
-  end
-end
-M.string = {
-  find = function(s, p, init, plain) check_pattern("string.find", s, p, plain) return s_find(s, p, init, plain) end,
-  match = function(s, p, init) check_pattern("string.match", s, p) return s_match(s, p, init) end,
-  gmatch = function(s, p) check_pattern("string.gmatch", s, p) return s_gmatch(s, p) end,
-  gsub = function(s, p, r, n) check_pattern("string.gsub", s, p) return s_gsub(s, p, r, n) end,
-}
+-- String patterns: the state's find, match, gmatch and gsub are the host's
+-- bounded matcher already (lua/lua_patterns.hpp), which counts its steps
+-- against the mod's ticks; nothing to add here.
+M.string = {}
 
 ---------------------------------------------------------------------------
 -- Stages. A stage record per C++ stage instance: its w (what the mod's

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstring>
 #include <lua.hpp>
 #include <stdexcept>
 #include <string>
@@ -11,6 +13,7 @@
 #include "lua/alloy_api.hpp"
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_host.hpp"
+#include "lua/lua_patterns.hpp"
 
 namespace alloy::lua {
 namespace {
@@ -222,6 +225,187 @@ TEST(SandboxMemory, TheBudgetStopsAGreedyScriptAndTheHostGoesOn) {
   host.call(0, 1);
   EXPECT_EQ(lua_tointeger(L, -1), 2);
   lua_pop(L, 1);
+}
+
+// --- the bounded pattern functions (lua_patterns.hpp) ----------------------------
+
+// The differential test: LuaJIT's string.find, match, gmatch and gsub and the
+// bounded ones side by side on the same calls, which must give the same
+// results and the same errors. The calls are generated from a fixed seed
+// (patterns built from items, quantifiers, captures, anchors, %b, %f and
+// back-references, some malformed; short subjects over an alphabet that
+// makes them match), plus hand-picked corner cases.
+const char* kDifferential = R"LUA(
+local bounded = ...
+local seed = 12345
+local function rnd(n) seed = (seed * 1103515245 + 12345) % 2147483648 return math.floor(seed / 65536) % n + 1 end
+local function pick(t) return t[rnd(#t)] end
+
+local atoms = { "a", "b", "c", "x", ".", "%a", "%d", "%s", "%w", "%x", "%p", "%l", "%u", "%c",
+  "%z", "%g", "%A", "%S", "%D", "%W", "[abc]", "[^ab]", "[a-c]", "[%d_]", "[]a]", "[^%s]", "[a-]",
+  "%%", "%.", "%(", "$", "^", " ", "1" }
+local quants = { "", "", "", "*", "+", "-", "?" }
+local function item()
+  local r = rnd(20)
+  if r == 1 then return "%b()" elseif r == 2 then return "%bab" elseif r == 3 then return "%f[%w]"
+  elseif r == 4 then return "%f[%W]" elseif r == 5 then return "()" end
+  return pick(atoms) .. pick(quants)
+end
+local malformed = { "[a", "%", "(", ")", "%b", "%ba", "%f", "%fa", "%1", "(a)%2", "((a)", "a)",
+  "[%", "%0", "(()" }
+local function pattern()
+  if rnd(25) == 1 then return pick(malformed) end
+  local parts, open = {}, 0
+  if rnd(5) == 1 then parts[#parts + 1] = "^" end
+  for _ = 1, rnd(5) do
+    local r = rnd(8)
+    if r == 1 and open < 3 then parts[#parts + 1] = "(" open = open + 1
+    elseif r == 2 and open > 0 then parts[#parts + 1] = ")" open = open - 1
+    elseif r == 3 and #parts > 0 and parts[1] ~= "^" and rnd(3) == 1 then parts[#parts + 1] = "%1"
+    else parts[#parts + 1] = item() end
+  end
+  for _ = 1, open do parts[#parts + 1] = ")" end
+  if rnd(6) == 1 then parts[#parts + 1] = "$" end
+  return table.concat(parts)
+end
+local letters = { "a", "a", "b", "b", "c", "1", "2", " ", "_", "(", ")", "x", ".", "%", "A", "\0", "\n" }
+local function subject()
+  local t = {}
+  for _ = 1, rnd(13) - 1 do t[#t + 1] = pick(letters) end
+  return table.concat(t)
+end
+
+local function show(...)
+  local t = { tostring(select("#", ...)) }
+  for i = 1, select("#", ...) do
+    local v = select(i, ...)
+    t[#t + 1] = type(v) .. ":" .. tostring(v)
+  end
+  return table.concat(t, "|")
+end
+local function collect(gmatch, s, p)
+  local ok, it = pcall(gmatch, s, p)
+  if not ok then return show(false, it) end
+  local out = {}
+  for _ = 1, 50 do
+    local r = { pcall(it) }
+    out[#out + 1] = show(unpack(r))
+    if not r[1] or r[2] == nil then break end
+  end
+  return table.concat(out, " ; ")
+end
+
+local calls, failures = 0, {}
+local function same(what, a, b)
+  calls = calls + 1
+  if a ~= b and #failures < 10 then failures[#failures + 1] = what .. "\n  luajit:  " .. a .. "\n  bounded: " .. b end
+end
+local function fmt(s) return string.format("%q", s) end
+local inits = { false, false, 1, 2, -1, -3, 0, 5, 20, -20 }
+local repls = { "<%0>", "%1-%1", "%%", "x", "%2", "[%0%1]", "", 7, "a%" }
+local tables = { a = "A", b = false, ["1"] = 9, ["("] = "P" }
+local function fn(c, d) if c == "b" then return nil end return "{" .. tostring(c) .. tostring(d) .. "}" end
+
+local function compare(s, p)
+  local init = pick(inits) or nil
+  local plain = rnd(6) == 1 or nil
+  same("find(" .. fmt(s) .. ", " .. fmt(p) .. ", " .. tostring(init) .. ", " .. tostring(plain) .. ")",
+       show(pcall(string.find, s, p, init, plain)), show(pcall(bounded.find, s, p, init, plain)))
+  same("match(" .. fmt(s) .. ", " .. fmt(p) .. ", " .. tostring(init) .. ")",
+       show(pcall(string.match, s, p, init)), show(pcall(bounded.match, s, p, init)))
+  same("gmatch(" .. fmt(s) .. ", " .. fmt(p) .. ")", collect(string.gmatch, s, p), collect(bounded.gmatch, s, p))
+  local r = rnd(3)
+  local repl = r == 1 and pick(repls) or r == 2 and tables or fn
+  local n = ({ nil, nil, 0, 1, 2 })[rnd(5)]
+  same("gsub(" .. fmt(s) .. ", " .. fmt(p) .. ", " .. tostring(repl) .. ", " .. tostring(n) .. ")",
+       show(pcall(string.gsub, s, p, repl, n)), show(pcall(bounded.gsub, s, p, repl, n)))
+end
+
+local fixed = {
+  { "hello world", "o w" }, { "hello", "l+" }, { "key = value", "(%w+)%s*=%s*(%w+)" },
+  { "f(a(b)c)d", "%b()" }, { "THE (quick) fox", "%f[%a]%a+" }, { "abcabc", "(abc)%1" },
+  { "  trim  ", "^%s*(.-)%s*$" }, { "a.b.c", "%." }, { "a.b.c", "." }, { "", "" }, { "abc", "" },
+  { "abc", "()" }, { "abc", "()b()" }, { "x=1, y=2", "(%w+)=(%w+)" }, { "aaa", "a-" },
+  { "aaa", "^a-$" }, { "[x]", "[]]" }, { "a-b", "[a-]" }, { "a\0b", "%z" }, { "a\0b", "[%z]" },
+  { "$5", "$5" }, { "5$", "5$" }, { "a^b", "a^b" }, { "THE END", "%u+" }, { "\t\n x", "%s+" },
+  { "0x1F", "%x+" }, { "a,b;c", "%p" }, { "ab", "(a)(b)" }, { "ab", "((a)(b))" },
+  { "abab", "(ab)*" }, { "aXb", "%f[%u]" }, { "hello", "(l)(l)" }, { "abc", "[^%a]" },
+  { "abc", "a(" }, { "abc", "a)" }, { "abc", "[a" }, { "abc", "%" }, { "abc", "%g+" },
+}
+for _, c in ipairs(fixed) do compare(c[1], c[2]) end
+for _ = 1, 700 do compare(subject(), pattern()) end
+return calls, table.concat(failures, "\n")
+)LUA";
+
+TEST(BoundedPatterns, AgreeWithLuaJITsOwnOnGeneratedPatterns) {
+  lua_State* L = luaL_newstate();
+  luaL_openlibs(L);
+  ASSERT_EQ(luaL_loadbuffer(L, kDifferential, std::strlen(kDifferential), "=differential"), 0)
+      << lua_tostring(L, -1);
+  lua_newtable(L);
+  install_bounded_patterns(L, -1, nullptr);
+  ASSERT_EQ(lua_pcall(L, 1, 2, 0), 0) << lua_tostring(L, -1);
+  const int calls = int(lua_tointeger(L, -2));
+  const std::string failures = lua_tostring(L, -1);
+  lua_close(L);
+  EXPECT_EQ(calls, 4 * (700 + 38));
+  EXPECT_EQ(failures, "");
+}
+
+// The cost of the bounded matcher against LuaJIT's on ordinary patterns, run
+// by hand (it measures time, so it is not part of the suite):
+//   build/tests/lua/lua_tests --gtest_also_run_disabled_tests \
+//     --gtest_filter='BoundedPatterns.DISABLED_CostAgainstLuaJIT'
+const char* kBenchmark = R"LUA(
+local bounded, clock = ...
+local text = ("The quick brown fox jumps over the lazy dog; key_%d = value %d, 12.5%%\n"):rep(20)
+local cases = {
+  { "find plain", "find", { "hello world, hello moon", "moon" } },
+  { "find class", "find", { "hello world 42", "%d+" } },
+  { "match pair", "match", { "key = value", "(%w+)%s*=%s*(%w+)" } },
+  { "match trim", "match", { "   some text here   ", "^%s*(.-)%s*$" } },
+  { "match number", "match", { "version 12.34 build", "(%d+)%.(%d+)" } },
+  { "match date", "match", { "on 2026-11-25 at noon", "(%d+)-(%d+)-(%d+)" } },
+  { "gsub spaces", "gsub", { text, "%s+", " " } },
+  { "gsub function", "gsub", { text, "%a+", function(w) return nil end } },
+  { "gsub table", "gsub", { text, "%%(%a)", { d = "1" } } },
+  { "gmatch words", "gmatch", { text, "%a+" } },
+}
+local function run(lib, c, n)
+  local f, a = lib[c[2]], c[3]
+  if c[2] == "gmatch" then
+    for _ = 1, n do for w in f(a[1], a[2]) do end end
+  else
+    for _ = 1, n do f(a[1], a[2], a[3]) end
+  end
+end
+local out = {}
+local total_j, total_b = 0, 0
+for _, c in ipairs(cases) do
+  local n = (c[2] == "gsub" or c[2] == "gmatch") and 2000 or 200000
+  run(string, c, n / 10) run(bounded, c, n / 10)  -- warm up
+  local t = clock() run(string, c, n) local tj = clock() - t
+  t = clock() run(bounded, c, n) local tb = clock() - t
+  total_j, total_b = total_j + tj, total_b + tb
+  out[#out + 1] = (string.format("%-16s luajit %7.1f ns/call  bounded %7.1f ns/call  ratio %.2f", c[1], tj / n * 1e9, tb / n * 1e9, tb / tj))
+end
+out[#out + 1] = (string.format("%-16s ratio %.2f", "all", total_b / total_j))
+return table.concat(out, "\n")
+)LUA";
+
+TEST(BoundedPatterns, DISABLED_CostAgainstLuaJIT) {
+  lua_State* L = luaL_newstate();
+  luaL_openlibs(L);
+  ASSERT_EQ(luaL_loadbuffer(L, kBenchmark, std::strlen(kBenchmark), "=benchmark"), 0)
+      << lua_tostring(L, -1);
+  lua_newtable(L);
+  install_bounded_patterns(L, -1, nullptr);
+  lua_getglobal(L, "os");
+  lua_getfield(L, -1, "clock");
+  lua_remove(L, -2);
+  ASSERT_EQ(lua_pcall(L, 2, 1, 0), 0) << lua_tostring(L, -1);
+  std::printf("%s\n", lua_tostring(L, -1));
+  lua_close(L);
 }
 
 TEST(SplitLocation, FindsTheChunkAndLine) {
