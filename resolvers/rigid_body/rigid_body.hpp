@@ -289,6 +289,9 @@ class RigidBodyResolver final : public Resolver {
   };
   LoadQueue forces_;
   SourceMarks load_sources_, rated_sources_;  // of forces_ and rated_loads_
+  /// Per body, the stage whose load did the most to it in this window (into
+  /// the marks' names; null: none), for check_motion's message.
+  std::vector<const std::string*> strongest_source_;
   std::size_t open_ = ~std::size_t(0);  // open_loads: where the open room starts
   std::vector<RatedLoad> rated_loads_;
   std::vector<ContactCommand> contacts_;

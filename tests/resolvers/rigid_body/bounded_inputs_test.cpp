@@ -203,13 +203,14 @@ TEST(BoundedInputs, ALoadWithinTheBoundIsPerformed) {
 TEST(BoundedInputs, ASteadyLoadThatRunsAwayIsStoppedAtTheSpeedLimit) {
   // Each step's push is within bounds (2.5e4 m/s a step), but it never stops:
   // after four steps the ball passes the speed limit, and the check after
-  // ODE's step refuses it before its pose reaches a property.
+  // ODE's step refuses it before its pose reaches a property, naming the
+  // stage that pushed it.
   Bench b;
   *b.act = [&](RigidBodyResolver& r, const WorldView&) {
     r.add_force(b.victim, Vec3{0, 0, 2.4e7});
   };
   b.w().run(30);
-  ASSERT_NO_FATAL_FAILURE(b.expect_refused("rigid_body", "velocity of {0,"));
+  ASSERT_NO_FATAL_FAILURE(b.expect_refused("pusher", "pushed it until the rigid body's step gave it a velocity of {0,"));
   EXPECT_NE(b.refused[0].text.find("beyond the limit of +-100000 m/s"), std::string::npos)
       << b.refused[0].text;
   b.expect_witness_fell();
