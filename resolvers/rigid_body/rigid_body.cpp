@@ -1318,8 +1318,9 @@ void RigidBodyResolver::screen_loads(ResolverAccess& access, double dt) {
     // A stage is named as the body's pusher if its load alone changes the
     // speed by 1 % of the limit in a step (1 km/s): gravity's 0.04 m/s is not.
     if (!(worst[b] < 0.01))
-      strongest_source_[b] = culprit[b] < forces_.size() ? &load_sources_.name_of(culprit[b])
-                                                         : &rated_sources_.name_of(culprit[b] - forces_.size());
+      strongest_source_[b] = culprit[b] < forces_.size()
+                                 ? &load_sources_.name_of(culprit[b])
+                                 : &rated_sources_.name_of(culprit[b] - forces_.size());
     if (dv[b] <= limits::speed && dw[b] <= limits::angular_speed) continue;
     const std::size_t i = culprit[b];
     std::string what;

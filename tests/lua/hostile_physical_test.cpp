@@ -53,14 +53,17 @@ struct Case {
 
 const Case kCases[] = {
     {"huge finite force", "t.add_force(ball, vec3(1e12, 0, 0))",
-     "frozen: ball: evil.push queued add_force {1e+12, 0, 0} N on it: its loads would change its speed by "
+     "frozen: ball: evil.push queued add_force {1e+12, 0, 0} N on it: its loads would change its "
+     "speed by "
      "1.04167e+09 m/s (the limit is 100000 m/s)"},
     {"torque of 1e308", "t.add_torque(ball, vec3(0, 0, 1e308))",
-     "evil.push queued add_torque {0, 0, 1e+308} N m on it: its loads would change its angular speed"},
+     "evil.push queued add_torque {0, 0, 1e+308} N m on it: its loads would change its angular "
+     "speed"},
     {"force at a far point", "t.add_force_at(ball, vec3(0, 1, 0), vec3(1e300, 0, 0))",
      "evil.push queued add_force_at {0, 1, 0} N at {1e+300, 0, 0} m"},
     {"huge force at a far point (overflows the torque)",
-     "t.add_force_at(ball, vec3(1e300, 0, 0), vec3(0, 1e300, 0))", "evil.push queued add_force_at {1e+300, 0, 0} N"},
+     "t.add_force_at(ball, vec3(1e300, 0, 0), vec3(0, 1e300, 0))",
+     "evil.push queued add_force_at {1e+300, 0, 0} N"},
     {"many loads within the bound", "for i = 1, 1000 do t.add_force(ball, vec3(1e6, 0, 0)) end",
      "its speed by 1.04167e+06 m/s"},
     {"alternating +-huge forces that cancel",
@@ -78,9 +81,11 @@ const Case kCases[] = {
      "evil.push queued add_torque {0, 0, 1e+200} N m"},
     {"a push within the bound every step (a runaway)", "t.add_force(ball, vec3(0, 0, 2.4e7))",
      "evil.push pushed it until the rigid body's step gave it a velocity of {0,"},
-    {"a twist within the bound every step (a runaway spin)", "t.add_torque(ball, vec3(0, 0, 1.9e5))",
+    {"a twist within the bound every step (a runaway spin)",
+     "t.add_torque(ball, vec3(0, 0, 1.9e5))",
      "evil.push pushed it until the rigid body's step gave it an angular velocity of"},
-    {"denormal force and point", "t.add_force_at(ball, vec3(4.9e-324, 0, 0), vec3(1e-310, -1e-310, 0))", nullptr},
+    {"denormal force and point",
+     "t.add_force_at(ball, vec3(4.9e-324, 0, 0), vec3(1e-310, -1e-310, 0))", nullptr},
     {"denormal torque", "t.add_torque(ball, vec3(0, 0, -4.9e-324))", nullptr},
     {"a force that overflows in the mod", "t.add_force(ball, vec3(1e308, 0, 0) * 10)", nullptr,
      "'add_force': arguments must be finite, got"},
@@ -92,7 +97,8 @@ class HostilePhysical : public ::testing::TestWithParam<Case> {};
 /// of semi-implicit Euler.
 void expect_fell_freely(const World& world, ObjectId witness) {
   const double t = world.time(), dt = world.dt(), g = 9.81;
-  EXPECT_NEAR(std::get<Vec3>(world.get(witness, "position")).y, 10 - g * t * t / 2 - g * dt * t / 2, 1e-9);
+  EXPECT_NEAR(std::get<Vec3>(world.get(witness, "position")).y, 10 - g * t * t / 2 - g * dt * t / 2,
+              1e-9);
   EXPECT_FALSE(world.frozen(witness));
 }
 
@@ -168,7 +174,8 @@ INSTANTIATE_TEST_SUITE_P(Cases, HostilePhysical, ::testing::ValuesIn(kCases),
 
 const char* kSceneHead =
     "world { seconds = 1 }\n"
-    "object { name = \"witness\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 5, 10 } }\n";
+    "object { name = \"witness\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 5, 10 } "
+    "}\n";
 
 /// A scene loaded from a temporary folder, with the registry its world uses.
 struct Scene {
@@ -197,17 +204,24 @@ struct SceneCase {
 
 const SceneCase kSceneCases[] = {
     {"velocity of 1e300",
-     "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 0, 10 }, velocity = { 1e300, 0 } }",
+     "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 0, 10 }, "
+     "velocity = { 1e300, 0 } }",
      "'velocity' must lie between -100000 and 100000 in every direction, got {1e+300, 0, 0}"},
-    {"position of 1e300", "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 1e300, 10 } }",
+    {"position of 1e300",
+     "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 1e300, 10 "
+     "} }",
      "'position' must lie between -1e+06 and 1e+06 in every direction, got {1e+300, 10, 0}"},
     {"angular velocity of 1e300",
      "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 0, 10 }, "
      "angular_velocity = { 0, 0, -1e300 } }",
      "'angular_velocity' must lie between"},
-    {"mass of 1e300", "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 1e300, position = { 0, 10 } }",
+    {"mass of 1e300",
+     "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 1e300, position = { 0, 10 "
+     "} }",
      "'mass' must be greater than 0 and at most 1e+12, got 1e+300"},
-    {"radius of 1e300", "object { name = \"ball\", shape = \"sphere\", radius = 1e300, mass = 4, position = { 0, 10 } }",
+    {"radius of 1e300",
+     "object { name = \"ball\", shape = \"sphere\", radius = 1e300, mass = 4, position = { 0, 10 } "
+     "}",
      "'radius' must be greater than 0 and at most 1e+06, got 1e+300"},
     {"timeline velocity of 1e300",
      "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 0, 10 } } "
@@ -246,29 +260,35 @@ void expect_left_out(const std::string& line, const std::string& message) {
   world.run(30);
   ASSERT_EQ(frozen.size(), 1u);
   EXPECT_EQ(world.describe(frozen[0].a), "ball");
-  EXPECT_TRUE(contains(frozen_message(world, frozen[0]), message)) << frozen_message(world, frozen[0]);
+  EXPECT_TRUE(contains(frozen_message(world, frozen[0]), message))
+      << frozen_message(world, frozen[0]);
   expect_fell_freely(world, world.find("witness"));
 }
 
 TEST(HostileSceneParts, ATinyMassIsLeftOutOfTheRigidBody) {
-  expect_left_out("object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 1e-300, position = { 0, 10 } }",
-                  "frozen: ball: rigid_body has a mass of 1e-300 kg, outside the 1e-09 .. 1e+12 kg");
+  expect_left_out(
+      "object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 1e-300, position = { 0, "
+      "10 } }",
+      "frozen: ball: rigid_body has a mass of 1e-300 kg, outside the 1e-09 .. 1e+12 kg");
 }
 
 TEST(HostileSceneParts, APartTooThinForItsInertiaIsLeftOut) {
   expect_left_out(
-      "object { name = \"ball\", shape = \"box\", size = { 1e-200, 1e-200, 1e-200 }, mass = 1, position = { 0, 10 } }",
+      "object { name = \"ball\", shape = \"box\", size = { 1e-200, 1e-200, 1e-200 }, mass = 1, "
+      "position = { 0, 10 } }",
       "smallest moment of inertia of 0 kg m^2");
 }
 
 TEST(HostileSceneParts, AHingeWithAHugeAxisWorks) {
   // {0, 0, 1e300}: its squared length overflows; it is scaled before it is normalised.
   Scene scene;
-  ASSERT_EQ(scene.load(
-                       "object { name = \"arm\", shape = \"box\", size = { 0.5, 0.1, 0.1 }, mass = 1, position = { 0, 10 } } "
-                       "object { name = \"pivot\", joint = \"hinge\", body_a = \"arm\", anchor = { -0.25, 10 }, "
-                       "axis = { 0, 0, 1e300 } }"),
-            "");
+  ASSERT_EQ(
+      scene.load(
+          "object { name = \"arm\", shape = \"box\", size = { 0.5, 0.1, 0.1 }, mass = 1, position "
+          "= { 0, 10 } } "
+          "object { name = \"pivot\", joint = \"hinge\", body_a = \"arm\", anchor = { -0.25, 10 }, "
+          "axis = { 0, 0, 1e300 } }"),
+      "");
   World& world = scene.world();
   world.run(30);
   EXPECT_NEAR(std::get<Vec3>(world.get(world.find("pivot"), "axis")).z, 1.0, 1e-9);
@@ -279,7 +299,8 @@ TEST(HostileSceneParts, AHingeWithAHugeAxisWorks) {
 TEST(HostileSceneParts, EditsBetweenStepsAreCheckedAsTheSceneIs) {
   // The viewer and tools edit through World::set, between steps.
   Scene scene;
-  ASSERT_EQ(scene.load("object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, position = { 0, 10 } }"),
+  ASSERT_EQ(scene.load("object { name = \"ball\", shape = \"sphere\", radius = 0.1, mass = 4, "
+                       "position = { 0, 10 } }"),
             "");
   World& world = scene.world();
   world.run(5);
@@ -289,7 +310,8 @@ TEST(HostileSceneParts, EditsBetweenStepsAreCheckedAsTheSceneIs) {
       world.set(ball, p, Vec3{0, 1e300, 0});
       ADD_FAILURE() << p << " accepted";
     } catch (const InputError& e) {
-      EXPECT_TRUE(contains(e.what(), "object 'ball': '" + std::string(p) + "' must lie between")) << e.what();
+      EXPECT_TRUE(contains(e.what(), "object 'ball': '" + std::string(p) + "' must lie between"))
+          << e.what();
     }
   }
   EXPECT_THROW(world.set(ball, "orientation", Quat{0, 0, 0, 0}), InputError);

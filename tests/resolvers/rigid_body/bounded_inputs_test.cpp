@@ -210,7 +210,8 @@ TEST(BoundedInputs, ASteadyLoadThatRunsAwayIsStoppedAtTheSpeedLimit) {
     r.add_force(b.victim, Vec3{0, 0, 2.4e7});
   };
   b.w().run(30);
-  ASSERT_NO_FATAL_FAILURE(b.expect_refused("pusher", "pushed it until the rigid body's step gave it a velocity of {0,"));
+  ASSERT_NO_FATAL_FAILURE(b.expect_refused(
+      "pusher", "pushed it until the rigid body's step gave it a velocity of {0,"));
   EXPECT_NE(b.refused[0].text.find("beyond the limit of +-100000 m/s"), std::string::npos)
       << b.refused[0].text;
   b.expect_witness_fell();
