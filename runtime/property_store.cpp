@@ -57,21 +57,30 @@ void check_bounds(const PropertyDef& def, const PropertyValue& value, const Erro
     if (def.min && (def.min_exclusive ? !(x > *def.min) : !(x >= *def.min))) return false;
     return !(def.max && x > *def.max);
   };
-  auto bounds = [&] {
-    if (def.min && def.max) return "must lie between " + num(*def.min) + " and " + num(*def.max);
-    if (def.min && *def.min == 0) return std::string(def.min_exclusive ? "must be greater than 0" : "must not be negative");
-    if (def.min) return (def.min_exclusive ? "must be greater than " : "must be at least ") + num(*def.min);
+  // The message names the bound that was crossed: "greater than 0" for a
+  // negative mass, though mass also has an upper bound far away.
+  auto bounds = [&](bool below) {
+    if (def.min && def.max && (!below || *def.min != 0) && !def.min_exclusive)
+      return "must lie between " + num(*def.min) + " and " + num(*def.max);
+    if (below && *def.min == 0)
+      return std::string(def.min_exclusive ? "must be greater than 0" : "must not be negative");
+    if (below)
+      return (def.min_exclusive ? "must be greater than " : "must be at least ") + num(*def.min);
+    if (def.min)
+      return (def.min_exclusive ? "must be greater than " : "must be at least ") + num(*def.min) +
+             " and at most " + num(*def.max);
     return "must be at most " + num(*def.max);
   };
+  auto below = [&](double x) { return def.min && !(def.max && x > *def.max); };
   if (def.min || def.max) {
     double x = 0;
     if (const double* d = std::get_if<double>(&value)) x = *d;
     else if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) x = double(*i);
     if (const Vec3* p = std::get_if<Vec3>(&value)) {
-      if (!in_bounds(p->x) || !in_bounds(p->y) || !in_bounds(p->z))
-        fail(bounds() + " in every direction, got " + text(value));
+      for (double c : {p->x, p->y, p->z})
+        if (!in_bounds(c)) fail(bounds(below(c)) + " in every direction, got " + text(value));
     } else if ((std::holds_alternative<double>(value) || std::holds_alternative<std::int64_t>(value)) && !in_bounds(x)) {
-      fail(bounds() + ", got " + num(x));
+      fail(bounds(below(x)) + ", got " + num(x));
     }
   }
   if (def.nonzero) {

@@ -56,12 +56,8 @@ void non_finite_write(ResolverAccess* access, std::uint32_t slot, PropertyId pro
   if (!access)
     throw AccessError("a column writer with no resolver behind it wrote a non-finite value");
   World& w = access->mutable_world_;
-  const ObjectId id = w.store_.id_at(slot);
-  if (id.is_null() || w.frozen(id)) return;  // refused; one event per freeze
-  w.frozen_.insert(std::upper_bound(w.frozen_.begin(), w.frozen_.end(), id,
-                                    [](ObjectId a, ObjectId b) { return a.index < b.index; }),
-                   id);
-  w.frozen_changed_ = true;
+  const ObjectId id = w.freeze_slot(slot);
+  if (id.is_null()) return;  // refused; one event per freeze
   static constexpr const char* kVec[] = {"x", "y", "z"};
   static constexpr const char* kQuat[] = {"w", "x", "y", "z"};
   Event e{.type = "non_finite",
@@ -83,7 +79,30 @@ void out_of_scope_write(ResolverAccess* access, std::uint32_t slot) {
 
 }  // namespace detail
 
+ObjectId World::freeze_slot(std::uint32_t slot) {
+  const ObjectId id = store_.id_at(slot);
+  if (id.is_null() || frozen(id)) return {};
+  frozen_.insert(std::upper_bound(frozen_.begin(), frozen_.end(), id,
+                                  [](ObjectId a, ObjectId b) { return a.index < b.index; }),
+                 id);
+  frozen_changed_ = true;
+  return id;
+}
+
+void ResolverAccess::refuse(std::uint32_t slot, const std::string& source, std::string text,
+                            std::vector<std::pair<std::string, double>> values) {
+  const ObjectId id = mutable_world_.freeze_slot(slot);
+  if (id.is_null()) return;
+  mutable_world_.pending_.push_back(Event{.type = "out_of_bounds",
+                                          .source = source.empty() ? stage_ : source,
+                                          .a = id,
+                                          .values = std::move(values),
+                                          .text = std::move(text)});
+}
+
 std::string frozen_message(const World& world, const Event& e) {
+  if (e.type == "out_of_bounds")
+    return "frozen: " + world.describe(e.a) + ": " + e.source + " " + e.text;
   std::string value;
   char buf[32];
   for (const auto& [k, v] : e.values) {

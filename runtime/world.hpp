@@ -102,6 +102,14 @@ class ResolverAccess : public WorldView {
   template <class T> ColumnWriter<T> writer(std::string_view name) {
     return writer<T>(property(name));
   }
+  /// Refuses a value that is finite but would break the resolver (a load that
+  /// would fling a body past its speed limit, a pose beyond the world's
+  /// extent) and freezes the object in `slot`, as a non-finite write does
+  /// (World::frozen). Publishes an "out_of_bounds" event: source: `source`
+  /// (the stage that gave the value; empty: this resolver), a: the object,
+  /// text: what was refused and why, values: its numbers. Once per freeze.
+  void refuse(std::uint32_t slot, const std::string& source, std::string text,
+              std::vector<std::pair<std::string, double>> values = {});
 
  private:
   friend void detail::non_finite_write(ResolverAccess*, std::uint32_t, PropertyId, const double*,
@@ -185,6 +193,10 @@ class World {
   /// An edit: the object rejoins every stage that wants it at the next step
   /// (fix its properties first, or it may be frozen again).
   void unfreeze(ObjectId id);
+  /// The stage running now (an interaction queueing a command, a resolver
+  /// advancing), or null between phases. A resolver reads it when a command is
+  /// queued, to name the stage that gave a value it refuses later.
+  const std::string* running_stage() const { return current_stage_; }
 
   // --- areas and swaps ---------------------------------------------------------
   /// The area an object is in, or "" (none). Updated after each advance (where
@@ -225,6 +237,9 @@ class World {
                                        int);
   friend void detail::out_of_scope_write(ResolverAccess*, std::uint32_t);
   friend class PluginContext;
+  /// Adds the object in `slot` to frozen_; its id, or null if it is dead or
+  /// frozen already (one event per freeze).
+  ObjectId freeze_slot(std::uint32_t slot);
   struct Slot;
 
   struct ScheduledInput {
@@ -316,7 +331,8 @@ class World {
 };
 
 /// The narrated line of a "non_finite" event: "frozen: ball: rigid_body wrote
-/// position = {nan, 0.5, 1}".
+/// position = {nan, 0.5, 1}", or of an "out_of_bounds" event: "frozen: ball:
+/// pusher queued add_force = {1e+12, 0, 0} N, ...".
 std::string frozen_message(const World& world, const Event& e);
 
 // ---------------------------------------------------------------------------

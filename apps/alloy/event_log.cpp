@@ -43,7 +43,8 @@ void EventLog::close() {
 
 void Narrator::narrate(const World& world, const Event& e) {
   ++counts_[e.type];
-  if (e.type == "non_finite") {  // rare and serious: always told, on its own line
+  if (e.type == "non_finite" ||
+      e.type == "out_of_bounds") {  // rare and serious: told on its own line
     flush();
     char head[64];
     std::snprintf(head, sizeof head, "step %6llu  t=%7.3f s  ", (unsigned long long)e.step, e.time);

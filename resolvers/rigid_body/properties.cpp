@@ -24,23 +24,48 @@ PropertyDef vec3(const char* name, const char* unit, const char* doc) {
 PropertyDef boolean(const char* name, const char* doc) {
   return {.name = name, .kind = PropertyKind::Bool, .doc = doc};
 }
+// Physical bounds (limits::): every component in [-bound, bound], or at most `bound`.
+PropertyDef within(PropertyDef def, double bound) {
+  def.min = -bound, def.max = bound;
+  return def;
+}
+PropertyDef at_most(PropertyDef def, double bound) {
+  def.max = bound;
+  return def;
+}
 }  // namespace
 
 std::vector<PropertyDef> body_properties() {
   return {
-      vec3("position", "m", "position of the part's centre of mass, world frame"),
-      {.name = "orientation", .kind = PropertyKind::Quat, .doc = "rotation from the part's frame to the world frame",
+      within(vec3("position", "m", "position of the part's centre of mass, world frame"),
+             limits::extent),
+      {.name = "orientation",
+       .kind = PropertyKind::Quat,
+       .doc = "rotation from the part's frame to the world frame",
        .nonzero = true},
-      vec3("velocity", "m/s", "linear velocity of the part's centre of mass"),
-      vec3("angular_velocity", "rad/s", "angular velocity, world frame"),
-      positive("mass", "kg", "mass (must be > 0); written from density * volume when density is given"),
+      within(vec3("velocity", "m/s", "linear velocity of the part's centre of mass"),
+             limits::speed),
+      within(vec3("angular_velocity", "rad/s", "angular velocity, world frame"),
+             limits::angular_speed),
+      at_most(positive("mass", "kg",
+                       "mass (must be > 0); written from density * volume when density is given"),
+              limits::max_mass),
       positive("density", "kg/m^3", "density; when given, mass = density * volume of the shape"),
-      {.name = "shape", .kind = PropertyKind::Enum, .doc = "collision and inertia shape",
+      {.name = "shape",
+       .kind = PropertyKind::Enum,
+       .doc = "collision and inertia shape",
        .enum_values = {"box", "sphere", "capsule"}},
-      {.name = "size", .kind = PropertyKind::Vec3, .unit = "m", .doc = "box: full extents along the part's x, y, z",
-       .min = 0.0, .min_exclusive = true},
-      positive("radius", "m", "sphere and capsule radius"),
-      non_negative("length", "m", "capsule: length of the cylinder part, along the part's x axis"),
+      {.name = "size",
+       .kind = PropertyKind::Vec3,
+       .unit = "m",
+       .doc = "box: full extents along the part's x, y, z",
+       .min = 0.0,
+       .min_exclusive = true,
+       .max = limits::max_dimension},
+      at_most(positive("radius", "m", "sphere and capsule radius"), limits::max_dimension),
+      at_most(non_negative("length", "m",
+                           "capsule: length of the cylinder part, along the part's x axis"),
+              limits::max_dimension),
       boolean("static", "immovable geometry with no body (floor, walls)"),
       boolean("pinned", "fixed to the play area; keeps its mass and can be unpinned"),
       boolean("planar", "held to the z = 0 plane, rotating about z only (the 2D kit)"),
@@ -51,16 +76,25 @@ std::vector<PropertyDef> body_properties() {
 
 std::vector<PropertyDef> joint_properties() {
   return {
-      {.name = "joint", .kind = PropertyKind::Enum, .doc = "this object is a joint of this type",
+      {.name = "joint",
+       .kind = PropertyKind::Enum,
+       .doc = "this object is a joint of this type",
        .enum_values = {"hinge", "fixed"}},
       {.name = "body_a", .kind = PropertyKind::Ref, .doc = "first joined part"},
-      {.name = "body_b", .kind = PropertyKind::Ref, .doc = "second joined part; absent or null: the play area"},
-      vec3("anchor", "m", "hinge pivot, world frame (kept current by the rigid body resolver)"),
-      {.name = "axis", .kind = PropertyKind::Vec3, .doc = "hinge axis, world frame (default {0,0,1}; kept current by the resolver)",
+      {.name = "body_b",
+       .kind = PropertyKind::Ref,
+       .doc = "second joined part; absent or null: the play area"},
+      within(
+          vec3("anchor", "m", "hinge pivot, world frame (kept current by the rigid body resolver)"),
+          limits::extent),
+      {.name = "axis",
+       .kind = PropertyKind::Vec3,
+       .doc = "hinge axis, world frame (default {0,0,1}; kept current by the resolver)",
        .nonzero = true},
       non_negative("joint_friction", "N*m", "hinge: resisting torque of the pivot"),
       number("limit_low", "rad", "hinge: lowest angle of body_a relative to body_b about the axis"),
-      number("limit_high", "rad", "hinge: highest angle of body_a relative to body_b about the axis"),
+      number("limit_high", "rad",
+             "hinge: highest angle of body_a relative to body_b about the axis"),
   };
 }
 

@@ -14,6 +14,36 @@ enum class Shape : std::int32_t { Box = 0, Sphere = 1, Capsule = 2 };
 /// Values of the `joint` enum, in registry order.
 enum class JointType : std::int32_t { Hinge = 0, Fixed = 1 };
 
+/// What a rigid body may be, in SI units. Inside these bounds ODE's arithmetic
+/// (bounding boxes, the normalisation of rotations, the solver's rows) stays
+/// finite and keeps the precision that contacts need. An edit beyond them
+/// (a scene, the viewer, the timeline, a Lua resolver's write) is refused by
+/// the property registry; a load, a mass or a motion that would take a body
+/// beyond them is refused by the rigid body, which freezes the body (an
+/// "out_of_bounds" event naming the stage that gave the value).
+namespace limits {
+/// Every coordinate of a body's centre (and of a hinge's pivot), m. At 1e6 m
+/// a double resolves 1.2e-10 m, six orders below the contact surface layer
+/// (1e-4 m), and squared distances (1e12 m^2) are far from overflowing.
+inline constexpr double extent = 1e6;
+/// Every component of a velocity, m/s: 100 km/s, nine times the Earth's
+/// escape velocity and twenty times the speed of sound in steel. At the
+/// default step a body moves at most 420 m a step.
+inline constexpr double speed = 1e5;
+/// Every component of an angular velocity, rad/s (a million rpm): a rim
+/// 1 m out at the speed limit.
+inline constexpr double angular_speed = 1e5;
+/// A moving body's mass, kg: a microgram to a billion tonnes. A lighter body
+/// (1e-300 kg) makes inverse masses and inertias that overflow the solver.
+inline constexpr double min_mass = 1e-9, max_mass = 1e12;
+/// A moving body's smallest principal moment of inertia, kg m^2 (a microgram
+/// sphere of radius 0.1 mm has 4e-18): below it the inertia is not positive
+/// definite in floating point (ODE asserts) or its inverse overflows.
+inline constexpr double min_inertia = 1e-24;
+/// A part's dimensions (size, radius, length), m: within the extent.
+inline constexpr double max_dimension = extent;
+}  // namespace limits
+
 /// Body properties: pose, velocity, mass and shape (see the doc line of each).
 std::vector<PropertyDef> body_properties();
 /// Joint objects: joint, body_a, body_b, anchor, axis, joint_friction, limits.

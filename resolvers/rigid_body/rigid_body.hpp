@@ -140,6 +140,7 @@ class RigidBodyResolver final : public Resolver {
   /// Fast path for loops over a column's members (no liveness check: the slot
   /// comes from a live member list in the same phase).
   void add_force(std::uint32_t slot, Vec3 force) {
+    load_sources_.note(forces_.size(), world_.running_stage());
     forces_.push_back({slot, store_.id_at(slot).generation, force, {}, Load::Force});
   }
   /// Torque, N*m, world frame.
@@ -204,6 +205,9 @@ class RigidBodyResolver final : public Resolver {
   std::size_t awake_count() const;
   /// Full rebuilds so far (build() and rebuilds after a defining edit).
   std::uint64_t rebuild_count() const { return rebuilds_; }
+  /// Errors raised inside ODE so far (OdeError), each reported as an
+  /// "engine_error" event; the world was rebuilt from properties after each.
+  std::uint64_t engine_error_count() const { return engine_errors_; }
 
  private:
   /// A load queued by add_load.
@@ -214,6 +218,36 @@ class RigidBodyResolver final : public Resolver {
   struct Impl;
 
   void queue(ObjectId part, Vec3 value, Vec3 point, Load kind);
+  /// advance() without its guard: OdeError escapes it.
+  void step_world(ResolverAccess& access, double dt);
+  // Bounds (limits:: in properties.hpp): the section "bounds" of rigid_body.cpp.
+  void screen_loads(ResolverAccess& access, double dt);
+  void check_motion(ResolverAccess& access);
+  void refuse_body(ResolverAccess& access, std::uint32_t body, const std::string& source,
+                   const std::string& text, std::vector<std::pair<std::string, double>> values);
+  void engine_failed(ResolverAccess& access, const std::string& what);
+
+  /// Which stage queued which loads: marks where the stage running at queue
+  /// time (World::running_stage) changed, so that a refused load names the
+  /// stage (and through it the mod) that gave it. One pointer compare a load.
+  class SourceMarks {
+   public:
+    void note(std::size_t at, const std::string* stage) {
+      if (marks_.empty() || marks_.back().stage != stage) mark(at, stage);
+    }
+    /// The name of the stage that queued load `i`, or "" (outside any stage).
+    const std::string& name_of(std::size_t i) const;
+    void clear() { marks_.clear(); }
+
+   private:
+    struct Mark {
+      std::size_t from;
+      const std::string* stage;  // compared, never read: names_ keeps the name
+      std::string name;
+    };
+    void mark(std::size_t at, const std::string* stage);
+    std::vector<Mark> marks_;
+  };
   // The parts of advance().
   void apply_loads();
   void apply_rated_loads(double tau);
@@ -223,6 +257,7 @@ class RigidBodyResolver final : public Resolver {
   void carry_depths(double h);
   void find_substep_contacts(ResolverAccess& access);
 
+  const World& world_;
   const PropertyStore& store_;
   RigidBodyConfig config_;
   std::unique_ptr<Impl> impl_;
@@ -253,6 +288,10 @@ class RigidBodyResolver final : public Resolver {
     std::size_t n_ = 0;
   };
   LoadQueue forces_;
+  SourceMarks load_sources_, rated_sources_;  // of forces_ and rated_loads_
+  /// Per body, the stage whose load did the most to it in this window (into
+  /// the marks' names; null: none), for check_motion's message.
+  std::vector<const std::string*> strongest_source_;
   std::size_t open_ = ~std::size_t(0);  // open_loads: where the open room starts
   std::vector<RatedLoad> rated_loads_;
   std::vector<ContactCommand> contacts_;
@@ -271,6 +310,7 @@ class RigidBodyResolver final : public Resolver {
   bool impulses_computed_ = false;
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
+  std::uint64_t engine_errors_ = 0;
 };
 
 }  // namespace alloy::rigid

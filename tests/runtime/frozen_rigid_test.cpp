@@ -1,9 +1,12 @@
-// Frozen objects on the real rigid body (resolvers/rigid_body): a box given a
-// huge velocity makes ODE produce non-finite numbers; the rigid body's write
-// of them goes through ColumnWriter::set, so the world refuses it, names the
-// rigid body, the box and the property, and freezes the box; the rigid body
-// rebuilds without it, so its NaN cannot reach the other bodies, which keep
-// falling and landing with finite values.
+// Frozen objects on the real rigid body (resolvers/rigid_body): a box flung
+// out of the world. A finite velocity of 1.7e308 m/s used to overflow its
+// position to infinity, and the rigid body's write of it was refused by
+// ColumnWriter::set (non_finite). Such an edit is now refused by the property
+// registry (limits:: in resolvers/rigid_body/properties.hpp), and a box that
+// leaves the world's extent at the speed limit is refused by the rigid body
+// before any number overflows: it names the rigid body, the box and where it
+// went, and freezes the box; the rigid body rebuilds without it, and the
+// other bodies keep falling and landing with finite values.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,10 +20,6 @@ namespace alloy {
 namespace {
 
 TEST(FrozenRigidBody, AnOverflowingBodyIsFrozenAndTheOthersGoOn) {
-  // No collisions stage: ODE's collision space asserts (and aborts) on a box
-  // beyond 2^53 m, and a huge angular velocity makes it abort when it
-  // normalises a NaN quaternion. Both happen inside ODE, before any write; the
-  // overflow of a position is what reaches the harness.
   scenes::Sim sim(
       WorldDef{.plugins = {"rigid_body", "gravity.uniform", "rigid_body_from_gravity"}});
   World& w = *sim;
@@ -30,19 +29,24 @@ TEST(FrozenRigidBody, AnOverflowingBodyIsFrozenAndTheOthersGoOn) {
     calm.push_back(
         scenes::add_box(w, {1.0 + i, 0.5, 0}, {0.2, 0.2, 0.2}, 1, {}, "calm" + std::to_string(i)));
   w.run(10);
-  // Finite, but position += velocity * dt overflows to infinity after about 240 steps.
-  w.set(wild, "velocity", Vec3{1.7e308, 0, 0});
+  // Finite, but position += velocity * dt would overflow after about 240 steps.
+  EXPECT_THROW(w.set(wild, "velocity", Vec3{1.7e308, 0, 0}), InputError);
+  // At the speed limit, 1 km from the world's edge: out in three steps.
+  w.set(wild, "position", Vec3{999e3, 1, 0});
+  w.set(wild, "velocity", Vec3{1e5, 0, 0});
 
   std::vector<Event> bad;
   w.add_observer([&](const Event& e) {
-    if (e.type == "non_finite") bad.push_back(e);
+    ASSERT_NE(e.type, "non_finite") << frozen_message(w, e);  // nothing overflowed
+    if (e.type == "out_of_bounds") bad.push_back(e);
   });
   for (int i = 0; i < 480; ++i) w.step();
 
   ASSERT_FALSE(bad.empty());
   EXPECT_EQ(bad.front().source, "rigid_body");
   EXPECT_EQ(bad.front().a, wild);
-  EXPECT_FALSE(bad.front().text.empty());
+  EXPECT_NE(bad.front().text.find("beyond the world's extent"), std::string::npos)
+      << bad.front().text;
   for (const Event& e : bad) EXPECT_EQ(e.a, wild) << frozen_message(w, e);  // nobody else caught it
   EXPECT_TRUE(w.frozen(wild));
   EXPECT_EQ(w.frozen_objects(), (std::vector<ObjectId>{wild}));
