@@ -408,6 +408,7 @@ bool LuaStage::run_call(const WorldView& view, ResolverAccess* access, const cha
   call_->in_call = 1;
   ++call_->epoch;
   bool ok = mod_->run_stage(record_ref_, phase, dt, view.time(), view.step(), where_, &failure);
+  if (ok && kind_ == StageKind::Interaction) ok = count_commands(failure);
   // The commands are performed when the call succeeded, all of them; a
   // failed call queues nothing.
   if (ok && kind_ == StageKind::Interaction && !(perform_commands() && perform_bulk())) {
@@ -756,13 +757,38 @@ std::int32_t LuaStage::api_has(void* p, std::int32_t k, double slot) noexcept {
   }
 }
 
+bool LuaStage::count_commands(InputError& failure) {
+  // The mod's budget of queued commands (mod_state.hpp), counted before they
+  // are performed: over it, the call's commands are refused.
+  const auto len = std::size_t(call_->buf_len);
+  std::uint64_t n = len;
+  std::size_t bytes = len * sizeof(abi::LoadRecord);
+  if (!call_->loads) {
+    n = 0;
+    bytes = len * sizeof(double);
+    for (std::size_t o = 0; o < len && std::size_t(commands_[o]) < target_functions_.size(); ++n)
+      o += 2 + std::size_t(widths(target_functions_[std::size_t(commands_[o])].args));
+  }
+  std::string why = mod_->count_commands(n, bytes);
+  if (why.empty()) return true;
+  mod_->place_stop(where_);
+  failure = InputError(why);
+  return false;
+}
+
 std::int32_t LuaStage::api_grow(void* p) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
     if (!st->view_ || st->kind_ != StageKind::Interaction)
       return st->error("only an interaction may queue commands, while it runs");
+    // The host memory the queue would take counts against the mod's budget.
+    const std::size_t room = std::size_t(st->call_->buf_cap) * 2;
+    const bool records = st->call_->loads != nullptr;  // one command each; else 2 to 14 doubles
+    const std::size_t unit = records ? sizeof(abi::LoadRecord) : sizeof(double);
+    if (std::string why = st->mod_->may_queue(room * unit, records ? room / 2 : room / 28);
+        !why.empty())
+      return st->error(why);
     if (st->call_->loads) {
-      const auto room = std::size_t(st->call_->buf_cap) * 2;
       st->call_->loads = st->native_target_->open_records(room);
       st->call_->buf_cap = double(room);
       return 0;
@@ -966,6 +992,10 @@ int LuaStage::host_emit(lua_State* L) {
       std::sort(values.begin(), values.end());  // a fixed order, whatever the table's
       e.values = std::move(values);
     }
+    // The mod's budget of events (mod_state.hpp): over it, the event is refused.
+    std::size_t bytes = e.type.size() + e.text.size();
+    for (const auto& [k, v] : e.values) bytes += k.size() + sizeof v;
+    if (std::string why = st->mod_->count_event(bytes); !why.empty()) throw InputError(why);
     st->view_->emit(std::move(e));
     return 0;
   });

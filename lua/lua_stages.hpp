@@ -134,6 +134,8 @@ class LuaStage {
   /// target's interaction functions). Returns false with last_error_ set if
   /// one is refused (an object that died).
   bool perform_commands();
+  // Counts the commands of the call against the mod's budget; false (and why) if over.
+  bool count_commands(InputError& failure);
   /// Performs the call's bulk buffers (add_force_each and the like), after
   /// its single commands. Returns false with last_error_ set if one is refused.
   bool perform_bulk();

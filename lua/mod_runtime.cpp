@@ -468,22 +468,45 @@ void ModRuntime::dispatch(const Event& e) {
       lua_setfield(L, -2, "values");
       mod.push_state();
       mod.begin_call(e.step);
+      const ErrorLocation file{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""};
       try {
-        mod.host().call(
-            2, 0, ErrorLocation{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""});
+        mod.host().call(2, 0, file);
         mod.end_call();
       } catch (const InputError& err) {
         mod.end_call();
-        if (mod.stopped()) break;
-        l.handler_ok[h] = false;
-        const std::string text =
-            "event handler for '" + handlers[h].first + "' of mod '" + mod.name() +
-            "' failed and is disabled until the mod is reloaded: " + err.what();
-        options_.log(mod.name(), text);
-        report({ModReport::Kind::StageDisabled, mod.name(), text, err.where()});
+        if (!handler_failed(l, h, err)) break;
+        continue;
+      }
+      if (mod.stopped()) {  // stopped, and a pcall in the handler swallowed the error
+        handler_failed(l, h, InputError(file, ""));
+        break;
       }
     }
   }
+}
+
+bool ModRuntime::handler_failed(Loaded& l, std::size_t h, const InputError& raised) {
+  ModState& mod = *l.state;
+  mod.place_stop(raised.where());
+  if (mod.stopped()) {
+    // No stage publishes a stop in a handler (LuaStage::invoke does for its
+    // own): say it now, and publish it with the next step's events.
+    if (!mod.stop_event_sent) {
+      mod.stop_event_sent = true;
+      options_.log(mod.name(), mod.stop_reason());
+      world_->view().emit(
+          Event{.type = "mod_stopped", .source = "mods", .text = mod.stop_reason()});
+    }
+    return false;
+  }
+  const InputError err = mod.bounded(raised);
+  l.handler_ok[h] = false;
+  const std::string text = "event handler for '" + mod.program()->handlers[h].first + "' of mod '" +
+                           mod.name() +
+                           "' failed and is disabled until the mod is reloaded: " + err.what();
+  options_.log(mod.name(), text);
+  report({ModReport::Kind::StageDisabled, mod.name(), text, err.where()});
+  return true;
 }
 
 std::vector<std::string> ModRuntime::plugins_of(const std::string& name) const {
@@ -514,6 +537,11 @@ std::string ModRuntime::stop_reason(const std::string& name) const {
 std::size_t ModRuntime::memory_of(const std::string& name) const {
   const Loaded* l = find(name);
   return l ? l->state->memory_used() : 0;
+}
+
+ModState::Output ModRuntime::output_of(const std::string& name) const {
+  const Loaded* l = find(name);
+  return l ? l->state->output_this_run() : ModState::Output{};
 }
 
 }  // namespace alloy::lua

@@ -120,6 +120,9 @@ class ModRuntime {
   std::string stop_reason(const std::string& name) const;
   /// Bytes a mod's Lua state holds.
   std::size_t memory_of(const std::string& name) const;
+  /// What a mod made the host do since it was last loaded: bytes printed,
+  /// events emitted, commands queued (ModBudget bounds them).
+  ModState::Output output_of(const std::string& name) const;
   PluginRegistry& registry() { return registry_; }
 
  private:
@@ -132,6 +135,10 @@ class ModRuntime {
   /// world which plugins changed.
   void commit(Loaded& l, std::unique_ptr<Program> p, bool first);
   void dispatch(const Event& e);
+  /// Handler `h` of `l` raised `raised`, or its mod was stopped in it: the
+  /// handler is disabled, or the stop told. Whether the mod's other handlers
+  /// may still run.
+  bool handler_failed(Loaded& l, std::size_t h, const InputError& raised);
   /// Holds a demand for contact impulses on the world's collisions set while a
   /// loaded mod handles contact_ended (or every event), whose impulse value
   /// exists only if someone asks (resolvers/rigid_body/collisions.hpp).

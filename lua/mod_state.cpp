@@ -41,6 +41,61 @@ ErrorLocation mod_location(lua_State* L) {
   return {};
 }
 
+/// "64 KiB", "16 MiB", "100 bytes": a budget as its author wrote it.
+std::string bytes_text(std::uint64_t n) {
+  if (n >= (1u << 20) && n % (1u << 20) == 0) return std::to_string(n >> 20) + " MiB";
+  if (n >= (1u << 10) && n % (1u << 10) == 0) return std::to_string(n >> 10) + " KiB";
+  return std::to_string(n) + " bytes";
+}
+
+/// `s` cut to `limit` bytes, with a note of how much was cut.
+std::string cut(const std::string& s, std::size_t limit) {
+  if (s.size() <= limit) return s;
+  return s.substr(0, limit) + "... (" + std::to_string(s.size() - limit) + " more bytes dropped)";
+}
+
+/// The line print(...) writes: its arguments through tostring, tab-separated.
+/// Only the first `room` bytes are copied into `line`; returns the length of
+/// the whole line with its newline.
+std::uint64_t print_line(lua_State* L, std::uint64_t room, std::string& line) {
+  std::uint64_t total = 1;  // the newline
+  const int n = lua_gettop(L);
+  for (int i = 1; i <= n; ++i) {
+    lua_getglobal(L, "tostring");
+    lua_pushvalue(L, i);
+    lua_call(L, 1, 1);
+    std::size_t len = 0;
+    const char* s = lua_tolstring(L, -1, &len);
+    if (!s) s = "?", len = 1;
+    if (i > 1) {
+      ++total;
+      if (line.size() < room) line += '\t';
+    }
+    total += len;
+    if (line.size() < room) line.append(s, std::min<std::size_t>(len, room - line.size()));
+    lua_pop(L, 1);
+  }
+  return total;
+}
+
+int sink_print(lua_State* L) {
+  auto* sink = static_cast<PrintSink*>(lua_touserdata(L, lua_upvalueindex(1)));
+  const std::uint64_t room = sink->used >= sink->limit ? 0 : sink->limit - sink->used;
+  std::string line;
+  const std::uint64_t total = print_line(L, room, line);
+  if (total <= room) {
+    sink->used += total;
+    sink->write(line);
+    return 0;
+  }
+  sink->used = sink->limit;
+  if (!line.empty()) sink->write(line);
+  sink->write("... (" + std::to_string(total - line.size()) + " more bytes dropped)");
+  std::string().swap(line);
+  return luaL_error(L, "%s printed more than %s (a print in a loop?)", sink->who.c_str(),
+                    bytes_text(sink->limit).c_str());
+}
+
 bool valid_name(const std::string& s, bool dots) {
   if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
   return std::all_of(s.begin(), s.end(), [&](char c) {
@@ -49,6 +104,13 @@ bool valid_name(const std::string& s, bool dots) {
 }
 
 }  // namespace
+
+void install_print(lua_State* L, int env, PrintSink* sink) {
+  env = abs_index(L, env);
+  lua_pushlightuserdata(L, sink);
+  lua_pushcclosure(L, sink_print, 1);
+  lua_setfield(L, env, "print");
+}
 
 std::string_view to_string(ArgKind kind) {
   switch (kind) {
@@ -530,25 +592,132 @@ void ModState::install_environment(lua_State* L, int env, const std::string& mod
 
 int ModState::print_fn(lua_State* L) {
   auto* self = static_cast<ModState*>(lua_touserdata(L, lua_upvalueindex(1)));
+  if (self->stopped_) self->stop(L, "");  // a stopped mod prints nothing, even inside a pcall
+  // Room left in the step's and the run's budgets. The line is built only up
+  // to it: a print of a huge string (or of thousands of arguments) copies no
+  // more than that into the host; the rest is only measured.
+  const ModBudget& b = self->budget_;
+  const auto left = [](std::uint64_t limit, std::uint64_t used) {
+    return used >= limit ? std::uint64_t(0) : limit - used;
+  };
+  const std::uint64_t step_left = left(b.print_bytes_per_step, self->step_out_.print_bytes);
+  const std::uint64_t run_left = left(b.print_bytes_per_run, self->run_out_.print_bytes);
+  const std::uint64_t room = std::min(step_left, run_left);
   std::string line;
-  const int n = lua_gettop(L);
-  for (int i = 1; i <= n; ++i) {
-    lua_getglobal(L, "tostring");
-    lua_pushvalue(L, i);
-    lua_call(L, 1, 1);
-    const char* s = lua_tostring(L, -1);
-    if (i > 1) line += "\t";
-    line += s ? s : "?";
-    lua_pop(L, 1);
+  const std::uint64_t total = print_line(L, room, line);
+  if (total <= room) {
+    self->step_out_.print_bytes += total;
+    self->run_out_.print_bytes += total;
+    self->log(line);
+    return 0;
   }
-  self->log(line);
-  return 0;
+  // Over: what fits is printed, then one line says how much was dropped.
+  const std::uint64_t kept = line.size();
+  self->step_out_.print_bytes += kept;
+  self->run_out_.print_bytes += kept;
+  self->step_out_.print_dropped += total - kept;
+  self->run_out_.print_dropped += total - kept;
+  if (!line.empty()) self->log(line);
+  self->log("... (" + std::to_string(total - kept) + " more bytes dropped)");
+  std::string().swap(line);  // stop() unwinds past this frame
+  const bool per_run = run_left < step_left;
+  self->stop(L, per_run
+                    ? self->over("printed", b.print_bytes_per_run, "print_bytes_per_run", true)
+                    : self->over("printed", b.print_bytes_per_step, "print_bytes_per_step", false));
+}
+
+std::string ModState::over(const char* what, std::uint64_t limit, const char* name, bool per_run,
+                           const char* unit) const {
+  return std::string("it ") + what + " more than " +
+         (*unit ? std::to_string(limit) + unit : bytes_text(limit)) +
+         (per_run    ? " since it was loaded"
+          : loading_ ? " while loading"
+                     : " in one step") +
+         " (its budget " + name + ")";
+}
+
+void ModState::mark_stopped(const std::string& why) {
+  if (!stopped_) {
+    stopped_ = true;
+    stop_message_ = "mod '" + manifest_.name + "' stopped: " + why;
+    stop_reason_ = stop_message_;
+    stop_unplaced_ = true;
+  }
+  // The next tick of the mod's code fails again (over_budget): a pcall
+  // around the refused call cannot keep the mod going.
+  abi_budget_->stopped = 1;
+  abi_budget_->ticks = 0;
+  granted_ = 0;
+}
+
+void ModState::place_stop(const ErrorLocation& where) {
+  if (!stopped_ || !stop_unplaced_ || where.file.empty()) return;
+  stop_unplaced_ = false;
+  stop_reason_ = InputError::format(ErrorLocation{where.file, where.line, ""}, stop_message_);
+}
+
+std::string ModState::count_event(std::size_t bytes) {
+  if (stopped_) return stop_message_;
+  const ModBudget& b = budget_;
+  std::string why;
+  if (step_out_.events + 1 > b.events_per_step)
+    why = over("emitted", b.events_per_step, "events_per_step", false, " events");
+  else if (run_out_.events + 1 > b.events_per_run)
+    why = over("emitted", b.events_per_run, "events_per_run", true, " events");
+  else if (step_out_.event_bytes + bytes > b.event_bytes_per_step)
+    why = over("emitted events of", b.event_bytes_per_step, "event_bytes_per_step", false);
+  else if (run_out_.event_bytes + bytes > b.event_bytes_per_run)
+    why = over("emitted events of", b.event_bytes_per_run, "event_bytes_per_run", true);
+  if (!why.empty()) {
+    mark_stopped(why + "; an event of " + std::to_string(bytes) + " bytes was refused");
+    return stop_message_;
+  }
+  ++step_out_.events;
+  ++run_out_.events;
+  step_out_.event_bytes += bytes;
+  run_out_.event_bytes += bytes;
+  return "";
+}
+
+std::string ModState::may_queue(std::size_t bytes_in_call, std::uint64_t commands_in_call) {
+  if (stopped_) return stop_message_;
+  if (step_out_.commands + commands_in_call > budget_.commands_per_step) {
+    mark_stopped(
+        over("queued", budget_.commands_per_step, "commands_per_step", false, " commands") +
+        "; the commands of this call were refused");
+    return stop_message_;
+  }
+  if (step_out_.command_bytes + bytes_in_call > budget_.command_bytes_per_step) {
+    mark_stopped(over("queued commands taking", budget_.command_bytes_per_step,
+                      "command_bytes_per_step", false) +
+                 "; the commands of this call were refused");
+    return stop_message_;
+  }
+  return "";
+}
+
+std::string ModState::count_commands(std::uint64_t n, std::size_t bytes) {
+  if (std::string why = may_queue(bytes, n); !why.empty()) return why;
+  step_out_.commands += n;
+  run_out_.commands += n;
+  step_out_.command_bytes += bytes;
+  run_out_.command_bytes += bytes;
+  return "";
+}
+
+InputError ModState::bounded(const InputError& e) const {
+  const std::size_t limit = std::max<std::size_t>(budget_.error_bytes, 64);
+  const ErrorLocation& w = e.where();
+  if (e.bare().size() <= limit && w.file.size() <= 256 && w.object.size() <= 256) return e;
+  return InputError(ErrorLocation{cut(w.file, 256), w.line, cut(w.object, 256)},
+                    cut(e.bare(), limit));
 }
 
 std::unique_ptr<Program> ModState::load_program() {
   auto prog = std::make_unique<Program>();
   const std::string runtime = runtime_file();
   if (runtime.empty()) return prog;
+  run_out_ = Output{};  // a load or reload starts a new run of the output budgets
   lua_State* L = host_->state();
   StackGuard guard(L);
 
@@ -582,6 +751,10 @@ std::unique_ptr<Program> ModState::load_program() {
     begin_loading();
     try {
       host_->call(0, 0, ErrorLocation{display, 0, ""});
+    } catch (const InputError& e) {
+      end_call();
+      place_stop(e.where());
+      throw bounded(e);
     } catch (...) {
       end_call();
       throw;
@@ -658,7 +831,9 @@ void ModState::call_hook(int ref, const char* what) {
     host_->call(1, 0, ErrorLocation{display_path(manifest_.folder / runtime_file()), 0, ""});
   } catch (const InputError& e) {
     end_call();
-    throw InputError(e.where(), std::string(what) + ": " + e.bare());
+    place_stop(e.where());
+    const InputError b = bounded(e);
+    throw InputError(b.where(), std::string(what) + ": " + b.bare());
   }
   end_call();
   if (stopped_) throw InputError(stop_reason_);
@@ -675,6 +850,7 @@ void ModState::begin_call(std::uint64_t step) {
     step_ = step;
     step_ticks_ = 0;
     step_seconds_ = 0;
+    step_out_ = Output{};
   }
   tick_limit_ = budget_.ticks_per_step;
   call_start_ = std::chrono::steady_clock::now();
@@ -691,6 +867,7 @@ void ModState::begin_loading() {
   step_ = ~0ull - 1;  // a call outside the steps: its own account
   step_ticks_ = 0;
   step_seconds_ = 0;
+  step_out_ = Output{};
   tick_limit_ = budget_.ticks_to_load;
   call_start_ = std::chrono::steady_clock::now();
   deadline_ = call_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -718,6 +895,7 @@ void ModState::end_call() {
 
 void ModState::stop(lua_State* L, const std::string& why) {
   const ErrorLocation where = mod_location(L);
+  place_stop(where);
   if (!stopped_) {
     stopped_ = true;
     stop_message_ = "mod '" + manifest_.name + "' stopped: " + why;
@@ -783,8 +961,10 @@ bool ModState::run_stage(int record_ref, const char* phase, double dt, double ti
   begin_call(step);
   try {
     host_->call(5, 0, fallback);
-  } catch (const InputError& e) {
+  } catch (const InputError& raised) {
     end_call();
+    place_stop(raised.where());
+    const InputError e = bounded(raised);
     if (host_->memory().refusals() != refusals && !stopped_) {
       // The allocator refused: the mod is out of memory, not just wrong.
       stopped_ = true;
@@ -798,6 +978,7 @@ bool ModState::run_stage(int record_ref, const char* phase, double dt, double ti
   }
   end_call();
   if (stopped_) {
+    place_stop(fallback);  // stopped where no line was known, and a pcall swallowed the error
     *error = InputError(stop_reason_);
     return false;
   }

@@ -41,6 +41,33 @@ struct ModBudget {
   double seconds_per_step = 0.25;             ///< same, wall clock
   std::uint64_t ticks_to_load = 200'000'000;  ///< running its files and on_load / on_reload
   double seconds_to_load = 5;
+
+  // What the mod makes the host do besides running its code. Each printed
+  // byte, emitted event and queued command costs host memory outside the
+  // mod's Lua state, and printed text and events end in a terminal or a file:
+  // none of it is seen by the memory budget above, so each has its own.
+  // Loading (its files, on_load, on_reload) is counted as one step of its
+  // own; a run lasts from a load or reload to the next. The defaults are far
+  // above what the bundled mods do (a few lines and events per run, tens of
+  // commands per step) and far below what fills a disk or the host's memory.
+  // Past any of them the excess is dropped and the mod is stopped, as for
+  // ticks and memory.
+  std::size_t print_bytes_per_step = 64u
+                                     << 10;  ///< text print() writes, tabs and newlines included
+  std::size_t print_bytes_per_run = 4u << 20;
+  std::uint64_t events_per_step = 1000;  ///< events w:emit publishes
+  std::uint64_t events_per_run = 100'000;
+  std::size_t event_bytes_per_step = 256u << 10;  ///< their type, text and value names
+  std::size_t event_bytes_per_run = 16u << 20;
+  /// Interaction-function calls queued (records written in place, or calls
+  /// queued for the target), over all of the mod's interactions in one step.
+  /// Commands are performed and freed at the target's next advance, so
+  /// nothing accumulates over a run: the budget is per step only.
+  std::uint64_t commands_per_step = 250'000;
+  std::size_t command_bytes_per_step = 16u << 20;  ///< host memory those commands take
+  /// Bytes of one error message (text, object, file) the host keeps and
+  /// passes on; the rest is cut with a note of how much.
+  std::size_t error_bytes = 4096;
   /// Instrument the mod's code with budget ticks. Without them nothing stops
   /// a runaway loop: only for trusted code, and to measure what they cost
   /// (bench/lua_stage.cpp).
@@ -169,6 +196,38 @@ class ModState : public std::enable_shared_from_this<ModState> {
     if (log_) log_(manifest_.name, line);
   }
 
+  // --- what the mod makes the host do (ModBudget: print, events, commands) ----------
+  /// What the mod made the host do in one step or one run.
+  struct Output {
+    std::uint64_t print_bytes = 0;    ///< printed text kept (newlines included)
+    std::uint64_t print_dropped = 0;  ///< printed text dropped for a budget
+    std::uint64_t events = 0;         ///< events accepted
+    std::uint64_t event_bytes = 0;
+    std::uint64_t commands = 0;  ///< interaction-function calls queued
+    std::uint64_t command_bytes = 0;
+  };
+  /// Counts one event of `bytes` (type, text, value names) the mod's code
+  /// asks to emit in the current call. Returns "" if it fits; else the event
+  /// is refused, the mod is stopped, and the reason is returned.
+  std::string count_event(std::size_t bytes);
+  /// Asked before one of the mod's command queues grows to hold
+  /// `bytes_in_call` bytes (`commands_in_call` commands, or as many as are
+  /// known) in the current call: "" if the step's commands stay within the
+  /// budget; else the mod is stopped and the reason returned. Never touches
+  /// the Lua state (called through the FFI).
+  std::string may_queue(std::size_t bytes_in_call, std::uint64_t commands_in_call);
+  /// Counts the `n` commands of `bytes` that a call queued, before they are
+  /// performed; "" if they fit, else (stopped) why.
+  std::string count_commands(std::uint64_t n, std::size_t bytes);
+  /// An error the mod raised, with its text, object and file cut to the
+  /// budget's error_bytes (a mod can raise a string as large as its memory).
+  InputError bounded(const InputError& e) const;
+  /// Gives a stop decided where no Lua frame was known (an FFI call) the
+  /// location of the error that unwound the mod's code.
+  void place_stop(const ErrorLocation& where);
+  const Output& output_this_run() const { return run_out_; }
+  const Output& output_this_step() const { return step_out_; }
+
   /// Bytes the mod's Lua state holds.
   std::size_t memory_used() const { return host_->memory().used(); }
   /// Ticks the mod ran in its last step with a call (for tests and profiles).
@@ -181,6 +240,12 @@ class ModState : public std::enable_shared_from_this<ModState> {
   static int over_budget(lua_State* L);
   static int print_fn(lua_State* L);
   [[noreturn]] void stop(lua_State* L, const std::string& why);
+  // Stops the mod without raising (the caller refuses what it was asked and
+  // the error unwinds the mod's code); place_stop adds the location later.
+  void mark_stopped(const std::string& why);
+  // A budget of ModBudget over: "its print ... (print_bytes_per_step)".
+  std::string over(const char* what, std::uint64_t limit, const char* name, bool per_run,
+                   const char* unit = "") const;  // unit "": bytes
   void charge();  // moves spent ticks from the counter to the step's total
 
   Manifest manifest_;
@@ -212,7 +277,22 @@ class ModState : public std::enable_shared_from_this<ModState> {
   std::int32_t granted_ = 0;
   std::uint64_t tick_limit_ = 0;
   std::chrono::steady_clock::time_point call_start_, deadline_;
+  Output step_out_, run_out_;   // step_out_ belongs to step_
+  bool stop_unplaced_ = false;  // stop_reason_ still lacks the mod's line
 };
+
+/// Where the print() of a script that is not a mod's runtime (a scene) goes,
+/// and how much it may write.
+struct PrintSink {
+  std::function<void(const std::string& line)> write;
+  std::uint64_t limit = 4u << 20;  ///< bytes, newlines included
+  std::uint64_t used = 0;
+  std::string who = "the scene";  ///< for the error: "the scene printed more than ..."
+};
+/// Sets print in the environment at `env` to one that writes to `sink`
+/// (which must outlive the state). Past the limit, what fits is written, then
+/// "... (N more bytes dropped)", and the script fails with an error.
+void install_print(lua_State* L, int env, PrintSink* sink);
 
 /// The stage definitions of `ModState::load_program` are parsed here; the
 /// error names the line of the definition.

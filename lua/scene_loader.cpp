@@ -1,6 +1,7 @@
 #include "lua/scene_loader.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <lua.hpp>
 #include <optional>
 
@@ -107,10 +108,21 @@ RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool a
   const SceneSource& src = out.source;
 
   SceneRecorder recorder(host);
+  // The scene's print() is bounded like a mod's (mod_state.hpp): its lines go
+  // to the mods' log, at most the mods' print budget of a run.
+  PrintSink print{[&](const std::string& line) {
+                    if (options.mod_log)
+                      options.mod_log(src.mod ? src.mod->name : "scene", line);
+                    else
+                      std::fprintf(stderr, "[%s] %s\n", src.mod ? src.mod->name.c_str() : "scene",
+                                   line.c_str());
+                  },
+                  options.mod_budget.print_bytes_per_run};
   ModLoader mods(host, search_path(options, src), [&](lua_State* L, int env, const std::string&) {
     recorder.install(L, env);
     push_alloy_api(L);
     lua_setfield(L, env, "alloy");
+    install_print(L, env, &print);
   });
   mods.set_scene_mod(src.mod);
   mods.add_scene_file(src.display);

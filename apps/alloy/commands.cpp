@@ -6,8 +6,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -15,6 +17,8 @@
 #include "apps/alloy/profile_report.hpp"
 #include "apps/alloy/trace_writer.hpp"
 #include "apps/viewer/view_command.hpp"
+#include "lua/lua_host.hpp"
+#include "lua/mod_loader.hpp"
 #include "lua/scene_loader.hpp"
 #include "lua/watch_loop.hpp"
 #include "resolvers/plugins.hpp"
@@ -63,6 +67,80 @@ lua::LoadOptions load_options() {
   }
   o.mod_paths.emplace_back(std::string(ALLOY_SOURCE_DIR) + "/mods");
   return o;
+}
+
+/// Where the mods' print() and reports go during `alloy run`: on standard
+/// output in their place among the narration (a line printed in step N comes
+/// after the narration of step N-1 and before that of step N's events), or
+/// on standard error with --quiet. What one mod writes in a run is bounded
+/// here too, whatever its budget (lua/mod_state.hpp) allows.
+class ModLog {
+ public:
+  static constexpr std::uint64_t kBytesPerMod = 8u << 20;
+  ModLog(Narrator* narrator, std::ostream& err) : narrator_(narrator), err_(err) {}
+  void write(const std::string& mod, const std::string& line) {
+    std::uint64_t& used = used_[mod];
+    std::string text = "[" + mod + "] " + line;
+    const std::uint64_t room = used < kBytesPerMod ? kBytesPerMod - used : 0;
+    if (text.size() + 1 > room) {
+      dropped_[mod] += text.size() + 1 - std::min<std::uint64_t>(room, text.size() + 1);
+      if (room == 0) return;
+      text.resize(room - 1);
+    }
+    used += text.size() + 1;
+    if (narrator_)
+      narrator_->line(text);
+    else
+      err_ << text << '\n';
+  }
+  void summary() {
+    for (const auto& [mod, bytes] : dropped_) {
+      const std::string text = "[" + mod + "] ... (" + std::to_string(bytes) +
+                               " more bytes dropped: a mod's output is cut at " +
+                               std::to_string(kBytesPerMod >> 20) + " MiB a run)";
+      if (narrator_)
+        narrator_->line(text);
+      else
+        err_ << text << '\n';
+    }
+  }
+
+ private:
+  Narrator* narrator_;
+  std::ostream& err_;
+  std::map<std::string, std::uint64_t> used_, dropped_;
+};
+
+/// The mod whose stage emitted `e` ("" for the engine's own stages), to
+/// bound what each mod gets written. Sources are stage instances
+/// ("plugin" or "plugin@area"); a mod's plugins are asked of the runtime.
+class EventOwners {
+ public:
+  explicit EventOwners(const lua::ModRuntime* mods) : mods_(mods) {}
+  const std::string& of(const Event& e) {
+    auto it = cache_.find(e.source);
+    if (it != cache_.end()) return it->second;
+    std::string owner;
+    if (mods_) {
+      const std::string plugin = e.source.substr(0, e.source.find('@'));
+      for (const auto& m : mods_->loaded())
+        for (const auto& p : mods_->plugins_of(m))
+          if (p == plugin) owner = m;
+      if (e.source == "mods" && !e.text.empty()) owner = "mods";  // a mod stopped in a handler
+    }
+    return cache_.emplace(e.source, owner).first->second;
+  }
+
+ private:
+  const lua::ModRuntime* mods_;
+  std::map<std::string, std::string> cache_;
+};
+
+/// A scene with no object simulates nothing: said, not refused (an empty
+/// scene is a valid start), as a compiler warns of an empty file.
+void warn_if_empty(const World& world, const std::string& path, std::ostream& err) {
+  if (world.store().object_count() == 0)
+    err << "warning: " << path << ": the scene holds no objects: there is nothing to simulate\n";
 }
 
 /// Refuses an --audio path whose folder does not exist before the run, not after it.
@@ -197,11 +275,16 @@ void schedule_swap(World& world, const std::string& spec) {
   world.schedule_swap(time, area, rest.substr(0, eq), rest.substr(eq + 1));
 }
 
-int run(const RunOptions& opt, std::ostream& out) {
+int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   PluginRegistry registry;
   register_native_plugins(registry);
-  lua::LoadedScene scene = lua::load_scene(opt.scene, registry, load_options());
+  Narrator narrator(out);
+  ModLog mod_log(opt.quiet ? nullptr : &narrator, err);
+  lua::LoadOptions load = load_options();
+  load.mod_log = [&](const std::string& mod, const std::string& line) { mod_log.write(mod, line); };
+  lua::LoadedScene scene = lua::load_scene(opt.scene, registry, load);
   World& world = *scene.world;
+  warn_if_empty(world, opt.scene, err);
   if (opt.dt) world.set_dt(*opt.dt);
 
   std::uint64_t steps;
@@ -229,10 +312,11 @@ int run(const RunOptions& opt, std::ostream& out) {
   if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
   std::unique_ptr<EventLog> events;
   if (!opt.events.empty()) events = std::make_unique<EventLog>(opt.events);
-  Narrator narrator(out);
+  EventOwners owners(scene.mods.get());
   world.add_observer([&](const Event& e) {
-    if (events) events->write(world, e);
-    if (!opt.quiet) narrator.narrate(world, e);
+    const std::string& mod = owners.of(e);
+    if (events) events->write(world, e, mod);
+    if (!opt.quiet) narrator.narrate(world, e, mod);
   });
 
   if (!opt.quiet) {
@@ -243,6 +327,7 @@ int run(const RunOptions& opt, std::ostream& out) {
   const double wall0 = now_seconds();
   try {
     world.start();
+    narrator.end_step();
     if (!opt.quiet) {
       out << "stages:";
       for (const auto& s : world.active_stages()) out << " " << s;
@@ -251,6 +336,7 @@ int run(const RunOptions& opt, std::ostream& out) {
     if (trace) trace->sample(world);
     for (std::uint64_t i = 0; i < steps; ++i) {
       world.step();
+      narrator.end_step();
       if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
       for (Report& r : reports)
         if (world.time() + 0.5 * world.dt() >= r.next) {
@@ -266,17 +352,106 @@ int run(const RunOptions& opt, std::ostream& out) {
   }
   const double wall = now_seconds() - wall0;
   if (trace) trace->close();
-  if (events) events->close();
+  if (events) events->close(world);
+  mod_log.summary();
   if (!opt.quiet) narrator.summary(world, wall);
   if (!opt.audio.empty()) write_audio(world, opt.audio, out, opt.quiet);
   if (opt.profile) print_profile(out, world.profile());
   return kExitOk;
 }
 
-int check(const std::string& path, std::ostream& out) {
+/// What the mods print and report while checking: written to standard error
+/// when the check ends (whichever way), without the failures the error
+/// itself repeats.
+class CheckLog {
+ public:
+  explicit CheckLog(std::ostream& err) : err_(err) {}
+  ~CheckLog() {
+    for (const auto& [mod, line] : lines_)
+      if (!said_.contains(line)) err_ << "[" << mod << "] " << line << "\n";
+  }
+  void write(const std::string& mod, const std::string& line) {
+    if (bytes_ > (8u << 20)) return;  // a mod's print budget bounds this long before
+    bytes_ += line.size();
+    lines_.emplace_back(mod, line);
+  }
+  /// The stages disabled and mods stopped while checking, one a line ("" if none).
+  std::string failures(lua::ModRuntime* mods) {
+    std::string text;
+    if (mods)
+      for (const auto& r : mods->poll())
+        if (r.kind == lua::ModReport::Kind::StageDisabled ||
+            r.kind == lua::ModReport::Kind::Stopped) {
+          text += (text.empty() ? "" : "\n") + r.message;
+          said_.insert(r.message);
+        }
+    return text;
+  }
+
+ private:
+  std::ostream& err_;
+  std::vector<std::pair<std::string, std::string>> lines_;
+  std::set<std::string> said_;
+  std::uint64_t bytes_ = 0;
+};
+
+/// `alloy check MOD` of a mod that has only a runtime (no scene, no main
+/// file): its runtime loads (on_load included) and its declarations are
+/// checked against the native plugins, as a scene using it would load it.
+int check_runtime(const std::filesystem::path& folder, const lua::LoadOptions& options,
+                  CheckLog& log, std::ostream& out) {
   PluginRegistry registry;
   register_native_plugins(registry);
-  lua::check(path, registry, load_options());
+  lua::ModRuntime mods(registry, {options.mod_paths, options.mod_budget, options.mod_log});
+  mods.load_folder(folder);
+  {
+    World world(registry);
+    mods.attach(world);
+    world.start();
+    if (std::string f = log.failures(&mods); !f.empty()) throw InputError(f);
+  }
+  const std::string name =
+      mods.loaded().empty() ? folder.filename().string() : mods.loaded().back();
+  const auto count = [](std::size_t n, const char* what) {
+    return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+  };
+  out << folder.string() << ": ok (mod '" << name
+      << "' has a runtime and no scene: " << count(mods.plugins_of(name).size(), "stage") << ", "
+      << count(mods.handlers_of(name), "event handler") << ")\n";
+  return kExitOk;
+}
+
+int check(const std::string& path, std::ostream& out, std::ostream& err) {
+  lua::LoadOptions options = load_options();
+  CheckLog log(err);
+  options.mod_log = [&](const std::string& mod, const std::string& line) { log.write(mod, line); };
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    lua::LuaHost reader;
+    const lua::Manifest m = lua::read_manifest(reader, path);
+    if (m.scene.empty()) {
+      if (!m.runtime.empty() && !std::filesystem::exists(m.folder / m.main, ec))
+        return check_runtime(path, options, log, out);
+      // A library mod (the kit): its main file runs as a scene would use it.
+      PluginRegistry registry;
+      register_native_plugins(registry);
+      lua::check(path, registry, options);
+      out << path << ": ok\n";
+      return kExitOk;
+    }
+  }
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadedScene scene = lua::load_scene(path, registry, options);
+  try {
+    scene.world->start();  // the plugins the scene needs are created and check their settings
+  } catch (const InputError& e) {
+    throw lua::locate(scene, e);
+  }
+  // A Lua stage that fails while the world starts (building, priming) is
+  // disabled and the world would go on; a check says so and fails.
+  if (std::string f = log.failures(scene.mods.get()); !f.empty()) throw InputError(f);
+  warn_if_empty(*scene.world, path, err);
   out << path << ": ok\n";
   return kExitOk;
 }
@@ -343,8 +518,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   }
 
   try {
-    if (run_cmd->parsed()) return run(ro, out);
-    if (check_cmd->parsed()) return check(check_path, out);
+    if (run_cmd->parsed()) return run(ro, out, err);
+    if (check_cmd->parsed()) return check(check_path, out, err);
     if (plugins_cmd->parsed()) return list_plugins(out);
     if (view_cmd->parsed()) return viewer::run_view(vo, out, err);
   } catch (const InputError& e) {

@@ -203,5 +203,161 @@ TEST(AlloyCli, ReportPrintsAValueAsTheRunGoes) {
   EXPECT_NE(r.out.find("report: axle angular_velocity.z = "), std::string::npos) << r.out;
 }
 
+// --- checks that say what they mean; floods bounded (issue 18) -------------------
+
+/// A mod folder in a fresh temp folder: manifest fields, and files by name.
+fs::path write_mod(const std::string& name, const std::string& manifest,
+                   const std::vector<std::pair<std::string, std::string>>& files) {
+  const fs::path dir = temp_dir() / "mods" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "mod.lua") << "return { name = \"" << name << "\", version = \"1.0\", "
+                                 << manifest << " }\n";
+  for (const auto& [file, text] : files) std::ofstream(dir / file) << text;
+  return dir;
+}
+
+int exit_code(const std::string& command) {
+  const int rc = std::system(command.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(AlloyCli, CheckFailsWhenAStageFailsWhileChecking) {
+  const fs::path dir = write_mod(
+      "buildfail", "runtime = \"runtime.lua\", scene = \"scene.lua\"",
+      {{"runtime.lua",
+        "mod.property { name = \"bf_level\" }\n"
+        "mod.resolver { name = \"bf.up\", writes = { \"bf_level\" }, needs = { \"bf_level\" },\n"
+        "  build = function(w) error(\"cannot build this\") end,\n"
+        "  advance = function(w) end }\n"},
+       {"scene.lua", "object { name = \"thing\", bf_level = 1 }\n"}});
+  Result r = cli({"check", dir.string()});
+  EXPECT_EQ(r.code, kExitBadInput) << r.out << r.err;
+  EXPECT_EQ(r.out.find(": ok"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("error: stage 'bf.up' of mod 'buildfail' failed"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("buildfail/runtime.lua:3: cannot build this"), std::string::npos) << r.err;
+  EXPECT_EQ(exit_code(std::string(ALLOY_BINARY) + " check " + dir.string() + " > /dev/null 2>&1"),
+            kExitBadInput);
+}
+
+TEST(AlloyCli, CheckPassesAModThatOnlyHasARuntime) {
+  const std::string runtime =
+      "mod.property { name = \"rt_level\" }\n"
+      "mod.resolver { name = \"rt.up\", writes = { \"rt_level\" }, needs = { \"rt_level\" },\n"
+      "  advance = function(w) end }\n"
+      "mod.on(\"contact_began\", function(e) end)\n";
+  fs::path dir = write_mod("rtonly", "runtime = \"runtime.lua\"", {{"runtime.lua", runtime}});
+  Result r = cli({"check", dir.string()});
+  EXPECT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("ok (mod 'rtonly' has a runtime and no scene: 1 stage, 1 event handler)"),
+            std::string::npos)
+      << r.out;
+  // Its declarations are checked as a scene would load them.
+  dir = write_mod("rtbad", "runtime = \"runtime.lua\"",
+                  {{"runtime.lua",
+                    "mod.resolver { name = \"rt.bad\", writes = { \"masss\" },\n"
+                    "  advance = function(w) end }\n"}});
+  r = cli({"check", dir.string()});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("rtbad/runtime.lua:1: resolver 'rt.bad': unknown property 'masss' (did you "
+                       "mean 'mass'?)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST(AlloyCli, AnEmptySceneWarnsThatItHoldsNothing) {
+  const fs::path scene = temp_dir() / "empty_scene.lua";
+  std::ofstream(scene) << "-- a scene that forgot its objects\nworld { seconds = 0.1 }\n";
+  for (const char* cmd : {"check", "run"}) {
+    Result r = cli({cmd, scene.string()});
+    EXPECT_EQ(r.code, kExitOk) << cmd << ": " << r.err;
+    EXPECT_NE(r.err.find("warning: " + scene.string() + ": the scene holds no objects"),
+              std::string::npos)
+        << cmd << ": " << r.err;
+  }
+  Result r = cli({"check", kDemo});
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+}
+
+TEST(AlloyCli, NarrationIsInStepOrder) {
+  // Contacts (narrated), reports every few steps, and a mod that prints from
+  // its stage every 10th step: all in the order of their steps.
+  const fs::path dir = write_mod(
+      "chatty", "runtime = \"runtime.lua\", scene = \"scene.lua\", depends = { \"kit\" }",
+      {{"runtime.lua",
+        "mod.property { name = \"chat\" }\n"
+        "mod.resolver { name = \"chatty.talk\", writes = { \"chat\" }, needs = { \"chat\" },\n"
+        "  advance = function(w) if w.step % 10 == 0 then print('said at step ' .. w.step) end end "
+        "}\n"},
+       {"scene.lua",
+        slurp("mods/rigid_demo/scene.lua") + "\nobject { name = \"talker\", chat = 0 }\n"}});
+  Result r = cli({"run", dir.string(), "--seconds", "2", "--report", "ball.position.y@0.0125"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  std::istringstream in(r.out);
+  std::uint64_t last = 0;
+  int said = 0, narrated = 0;
+  const std::regex step_line("^step +([0-9]+) "), said_line("^\\[chatty\\] said at step ([0-9]+)$");
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    std::uint64_t step;
+    if (std::regex_search(line, m, step_line)) {
+      step = std::stoull(m[1]);
+      narrated += line.find("report:") == std::string::npos;
+    } else if (std::regex_match(line, m, said_line)) {
+      step = std::stoull(m[1]);
+      ++said;
+    } else {
+      continue;
+    }
+    EXPECT_GE(step, last) << line << "\n" << r.out;
+    last = step;
+  }
+  EXPECT_EQ(said, 48);
+  EXPECT_GT(narrated, 0) << r.out;
+}
+
+TEST(AlloyCli, AFloodingModIsStoppedAndWhatTheRunWritesIsBounded) {
+  const fs::path dir = write_mod(
+      "flood", "runtime = \"runtime.lua\", scene = \"scene.lua\"",
+      {{"runtime.lua",
+        "mod.property { name = \"wet\" }\n"
+        "mod.resolver { name = \"flood.spam\", writes = { \"wet\" }, needs = { \"wet\" },\n"
+        "  advance = function(w)\n"
+        "    for k = 1, 1e7 do pcall(w.emit, w, 'spam', { text = ('x'):rep(200) }) "
+        "print(('y'):rep(100)) end\n"
+        "  end }\n"},
+       {"scene.lua", "world { seconds = 2 }\nobject { name = \"puddle\", wet = 1 }\n"}});
+  const fs::path events = temp_dir() / "flood_events.jsonl";
+  Result r = cli({"run", dir.string(), "--events", events.string()});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("ran 480 steps"), std::string::npos);
+  EXPECT_NE(r.out.find("mod 'flood' stopped: it printed more than 64 KiB in one step (its budget "
+                       "print_bytes_per_step)"),
+            std::string::npos)
+      << r.out.substr(0, 2000);
+  EXPECT_NE(r.out.find("flood/runtime.lua:4"), std::string::npos);
+  EXPECT_NE(r.out.find("[flood] ... ("), std::string::npos);
+  // At most a step's prints (64 KiB) and a step's events (256 KiB) narrated.
+  EXPECT_LT(r.out.size(), 400u << 10);
+  EXPECT_LT(fs::file_size(events), 1u << 20);
+}
+
+TEST(AlloyCli, ASceneThatPrintsInALoopFailsWithBoundedOutput) {
+  const fs::path scene = temp_dir() / "printing_scene.lua";
+  std::ofstream(scene) << "object { name = \"a\", position = {0, 1, 0} }\n"
+                          "for i = 1, 1e8 do print(('p'):rep(1000)) end\n";
+  const std::string bin = ALLOY_BINARY;
+  const fs::path out = temp_dir() / "printing_scene.out";
+  EXPECT_EQ(exit_code(bin + " check " + scene.string() + " > " + out.string() + " 2>&1"),
+            kExitBadInput);
+  const std::string text = slurp(out);
+  EXPECT_LT(text.size(), (4u << 20) + (64u << 10));
+  EXPECT_NE(
+      text.find("printing_scene.lua:2: the scene printed more than 4 MiB (a print in a loop?)"),
+      std::string::npos)
+      << text.substr(text.size() > 2000 ? text.size() - 2000 : 0);
+}
+
 }  // namespace
 }  // namespace alloy::app
