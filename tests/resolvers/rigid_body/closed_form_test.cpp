@@ -105,6 +105,52 @@ TEST(ClosedForm, BounceReboundsToRestitutionSquared) {
   }
 }
 
+// Joints at the default step: these converge (orders 2 and more) but do
+// not yet meet the bounds at 1/240 s with QuickStep at 40 iterations.
+// Measured at 1/240 s: the lever at 90 degrees runs 2.0 % short with its
+// hinge stretched 4.9 % (dWorldStep: 1.7e-4 and 0.084 %); at 170 degrees
+// 47 % (dWorldStep 4.5 %); the bar at 170 degrees 5.8 % short with either
+// solver (the velocity-level hinge loses 0.6 % of the swing's energy per
+// period); the 1000:1 chain comes apart (stretch 24 with either solver,
+// 1.8e-4 with dWorldStep at 1/960 s). So these hold convergence only, and
+// the bound is the measured figure's regression guard, not the goal.
+void expect_converges_only(const char* name, const std::function<double(double)>& what,
+                           double guard) {
+  expect_converges(name, kSteps, what, guard, 1e-7);
+}
+
+TEST(ClosedForm, SmallBallOnALongLeverConverges) {
+  for (double deg : {90.0, 170.0}) {
+    const double th = deg * kPi / 180;
+    const std::string name = "lever " + std::to_string(int(deg)) + " deg";
+    expect_converges_only((name + ", period error").c_str(),
+                          [th](double dt) { return run_swing(dt, Method{}, true, th).error; },
+                          deg < 100 ? 0.025 : 0.5);
+    expect_converges_only((name + ", stretch").c_str(),
+                          [th](double dt) { return run_swing(dt, Method{}, true, th).stretch; },
+                          deg < 100 ? 0.06 : 0.1);
+    expect_converges_only(
+        (name + ", energy drift per period").c_str(),
+        [th](double dt) { return run_swing(dt, Method{}, true, th).energy_drift; },
+        deg < 100 ? 0.15 : 0.25);
+  }
+}
+
+TEST(ClosedForm, BarPendulumAt170DegreesConverges) {
+  const double th = 170 * kPi / 180;
+  expect_converges_only(
+      "bar 170 deg, period error",
+      [th](double dt) { return run_swing(dt, Method{}, false, th).error; }, 0.065);
+  expect_converges_only(
+      "bar 170 deg, energy drift per period",
+      [th](double dt) { return run_swing(dt, Method{}, false, th).energy_drift; }, 0.007);
+}
+
+TEST(ClosedForm, ChainAtAThousandToOneConverges) {
+  expect_converges_only(
+      "chain 1000:1, stretch", [](double dt) { return run_heavy_chain(dt, Method{}).stretch; }, 30);
+}
+
 TEST(ClosedForm, TumblingBoxKeepsEnergyAndAngularMomentum) {
   expect_converges(
       "tumbling box 10 s, energy drift", kSteps,
