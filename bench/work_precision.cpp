@@ -9,6 +9,9 @@
 //   two-body orbit     Kepler's circular orbit under gravity.nbody
 //   RL circuit         I(t) = E/R (1 - e^(-t/tau))
 //   magnets            fine RK4 of the pole model's force law
+//   elastic pairs, Newton's cradle, bounce, lever and bar pendulums at large
+//   swings, a 1000:1 chain, the tumbling box over 10 s: the closed-form
+//   cases of issue 12 (energy drift in the table where the scene measures it)
 //
 // Methods: the rigid body's solver (dWorldStep; dWorldQuickStep at 10, 20,
 // 40, 80 iterations; only where there are constraints to solve, else step
@@ -39,6 +42,7 @@ using alloy::scenes::analytic::Result;
 namespace an = alloy::scenes::analytic;
 
 constexpr int kDefaultRate = 240;
+constexpr double kPi = 3.14159265358979323846;
 
 struct NamedMethod {
   std::string name;
@@ -93,6 +97,44 @@ std::vector<Scene> scenes() {
   s.push_back({"orbit", "Two-body circular orbit, gravity.nbody (2 orbits)",
                "separation error after 2 orbits (relative)",
                [](double dt, const Method& m) { return an::run_orbit(dt, m); },
+               rigid_methods(false)});
+  // The closed-form cases of issue 12 (tests/resolvers/rigid_body/closed_form_test.cpp).
+  s.push_back({"elastic_pair", "Head-on elastic pair, 1:1 (closed form v' = (0, 1))",
+               "largest velocity error (m/s)",
+               [](double dt, const Method& m) { return an::run_elastic_pair(dt, m, 1.0); },
+               rigid_methods(false)});
+  s.push_back({"elastic_pair_3to1", "Head-on elastic pair, 3:1 (closed form v' = (0.5, 1.5))",
+               "largest velocity error (m/s)",
+               [](double dt, const Method& m) { return an::run_elastic_pair(dt, m, 3.0); },
+               rigid_methods(false)});
+  s.push_back({"cradle", "Newton's cradle, 5 touching steel balls (closed form (0, 0, 0, 0, 1))",
+               "largest velocity error (m/s)",
+               [](double dt, const Method& m) { return an::run_cradle(dt, m); },
+               rigid_methods(false)});
+  s.push_back({"bounce", "Ball dropped 1 m, restitution 0.5 (rebound e^2 of the drop)",
+               "relative error of the rebound height",
+               [](double dt, const Method& m) { return an::run_bounce(dt, m, 0.5); },
+               rigid_methods(false)});
+  s.push_back({"lever_90", "2 cm ball hinged 1 m from its anchor, 90 degrees (2 periods)",
+               "relative period error",
+               [](double dt, const Method& m) { return an::run_swing(dt, m, true, kPi / 2); },
+               rigid_methods(true)});
+  s.push_back(
+      {"lever_170", "2 cm ball hinged 1 m from its anchor, 170 degrees (2 periods)",
+       "relative period error",
+       [](double dt, const Method& m) { return an::run_swing(dt, m, true, 170 * kPi / 180); },
+       rigid_methods(true)});
+  s.push_back(
+      {"bar_170", "Bar pendulum, 170 degrees (2 periods)", "relative period error",
+       [](double dt, const Method& m) { return an::run_swing(dt, m, false, 170 * kPi / 180); },
+       rigid_methods(true)});
+  s.push_back({"heavy_chain", "Chain of 5 light links holding a ball 1000 times heavier (3 s)",
+               "largest relative stretch",
+               [](double dt, const Method& m) { return an::run_heavy_chain(dt, m); },
+               rigid_methods(true)});
+  s.push_back({"tumbling_box_10s", "Torque-free box near its intermediate axis (10 s)",
+               "largest orientation error (rad)",
+               [](double dt, const Method& m) { return an::run_tumbling_box(dt, m, 10.0); },
                rigid_methods(false)});
   std::vector<NamedMethod> elec;
   for (int sub : {1, 2, 4, 8})

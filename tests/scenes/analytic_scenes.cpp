@@ -371,4 +371,212 @@ Result run_magnets(double dt, const Method& m, double seconds) {
   return r;
 }
 
+// --- closed-form cases (issue 12) -------------------------------------------------------
+
+namespace {
+
+constexpr double kSteel = 7850;  // kg/m^3
+
+double sphere_mass(double r, double density = kSteel) {
+  return density * 4.0 / 3.0 * kPi * r * r * r;
+}
+
+/// A frictionless ball with the given restitution.
+ObjectId add_ball(World& w, Vec3 at, double r, double mass, double restitution,
+                  const std::string& name) {
+  const ObjectId b = add_sphere(w, at, r, mass, name);
+  w.set(b, "restitution", restitution);
+  w.set(b, "friction", 0.0);
+  return b;
+}
+
+}  // namespace
+
+double elliptic_k(double k) {
+  double a = 1, b = std::sqrt(1 - k * k);
+  for (int i = 0; i < 40 && std::abs(a - b) > 1e-16 * a; ++i) {
+    const double an = (a + b) / 2;
+    b = std::sqrt(a * b), a = an;
+  }
+  return kPi / (2 * a);
+}
+
+Result run_elastic_pair(double dt, const Method& m, double ratio) {
+  Sim s(world_def(dt, m, /*gravity=*/false));
+  const double r = 0.05;
+  const ObjectId a = add_ball(*s, {-0.2, 0, 0}, r, ratio, 1.0, "a");
+  const ObjectId b = add_ball(*s, {0, 0, 0}, r, 1.0, 1.0, "b");
+  s->set(a, "velocity", Vec3{1, 0, 0});
+  const double va = (ratio - 1) / (ratio + 1), vb = 2 * ratio / (ratio + 1);
+  Result r_;
+  const std::uint64_t n = steps_for(0.3, dt);
+  run_timed(*s, n, r_, [&](std::uint64_t i) {
+    if (i != n) return;
+    const Vec3 ua = read<Vec3>(*s, a, "velocity"), ub = read<Vec3>(*s, b, "velocity");
+    r_.error = std::max(length(ua - Vec3{va, 0, 0}), length(ub - Vec3{vb, 0, 0}));
+    r_.measured = ub.x, r_.exact = vb;
+    const double p0 = ratio, e0 = 0.5 * ratio;
+    const double e1 = 0.5 * ratio * dot(ua, ua) + 0.5 * dot(ub, ub);
+    r_.energy_drift = std::abs(e1 - e0) / e0;
+    r_.momentum_drift = std::abs(ratio * ua.x + ub.x - p0) / p0;
+  });
+  return r_;
+}
+
+Result run_cradle(double dt, const Method& m) {
+  Sim s(world_def(dt, m, /*gravity=*/false));
+  const double r = 0.025, mass = sphere_mass(r);
+  std::vector<ObjectId> balls;
+  for (int i = 0; i < 5; ++i) {
+    // The first 1 cm from the second; the others touching.
+    const double x = i == 0 ? -(2 * r + 0.01) : 2 * r * (i - 1);
+    balls.push_back(add_ball(*s, {x, 0, 0}, r, mass, 1.0, "ball" + std::to_string(i)));
+  }
+  s->set(balls[0], "velocity", Vec3{1, 0, 0});
+  Result res;
+  const std::uint64_t n = steps_for(0.2, dt);
+  run_timed(*s, n, res, [&](std::uint64_t i) {
+    if (i != n) return;
+    double e = 0;
+    for (std::size_t k = 0; k < balls.size(); ++k) {
+      const Vec3 v = read<Vec3>(*s, balls[k], "velocity");
+      const Vec3 exact{k + 1 == balls.size() ? 1.0 : 0.0, 0, 0};
+      res.error = std::max(res.error, length(v - exact));
+      e += 0.5 * mass * dot(v, v);
+    }
+    res.measured = read<Vec3>(*s, balls.back(), "velocity").x, res.exact = 1;
+    res.energy_drift = std::abs(e / (0.5 * mass) - 1);
+  });
+  return res;
+}
+
+Result run_bounce(double dt, const Method& m, double e) {
+  Sim s(world_def(dt, m));
+  const Bounce b = build_bounce(*s, 1.0, e);
+  bool rebounded = false, done = false;
+  double top = -1;
+  Result res;
+  run_timed(*s, steps_for(2.5, dt), res, [&](std::uint64_t) {
+    if (done) return;
+    const double vy = read<Vec3>(*s, b.ball, "velocity").y;
+    const double y = read<Vec3>(*s, b.ball, "position").y - b.radius;
+    if (!rebounded && vy > 0) rebounded = true;
+    if (!rebounded) return;
+    if (vy < 0) done = true;
+    top = std::max(top, y);
+  });
+  res.measured = top / b.drop, res.exact = e * e;
+  res.error = std::abs(res.measured / res.exact - 1);
+  return res;
+}
+
+namespace {
+
+struct SwingBody {
+  double mass, d, inertia;  // kg; pivot to centre, m; about the pivot, kg m^2
+};
+
+SwingBody swing_body(bool lever) {
+  if (lever) {
+    const double r = 0.02, mass = sphere_mass(r), d = 1.0;
+    return {mass, d, mass * (d * d + 0.4 * r * r)};
+  }
+  BarPendulum p;
+  const double d = p.length / 2;
+  return {p.mass, d, p.mass * (p.length * p.length + p.width * p.width) / 12 + p.mass * d * d};
+}
+
+}  // namespace
+
+double swing_period(bool lever, double theta0) {
+  const SwingBody sb = swing_body(lever);
+  return 4 * std::sqrt(sb.inertia / (sb.mass * kG * sb.d)) * elliptic_k(std::sin(theta0 / 2));
+}
+
+Result run_swing(double dt, const Method& m, bool lever, double theta0, int periods) {
+  Sim s(world_def(dt, m));
+  const SwingBody sb = swing_body(lever);
+  ObjectId body;
+  if (lever) {
+    const double angle = -kPi / 2 + theta0;
+    body =
+        add_sphere(*s, {sb.d * std::cos(angle), sb.d * std::sin(angle), 0}, 0.02, sb.mass, "ball");
+    s->set(body, "planar", true);
+    add_hinge(*s, body, {}, {0, 0, 0}, {0, 0, 1}, "pivot");
+  } else {
+    body = build_bar_pendulum(*s, 1.0, theta0).bar;
+  }
+  const double exact = swing_period(lever, theta0);
+  const double e_swing = sb.mass * kG * sb.d * (1 - std::cos(theta0));
+  auto energy = [&] {
+    const Vec3 x = read<Vec3>(*s, body, "position"), v = read<Vec3>(*s, body, "velocity");
+    const Vec3 w = read<Vec3>(*s, body, "angular_velocity");
+    const double i_centre = sb.inertia - sb.mass * sb.d * sb.d;
+    return 0.5 * sb.mass * dot(v, v) + 0.5 * i_centre * dot(w, w) + sb.mass * kG * x.y;
+  };
+  const double e0 = -sb.mass * kG * sb.d * std::cos(theta0);
+  std::vector<double> crossings;
+  double prev = theta0;
+  Result r;
+  r.stretch = 0;
+  double drift = 0;
+  run_timed(*s, steps_for((periods + 0.3) * exact, dt), r, [&](std::uint64_t i) {
+    const Vec3 c = read<Vec3>(*s, body, "position");
+    const double a = std::atan2(c.x, -c.y);  // from hanging straight down
+    // Upward (increasing) zero crossings, interpolated within the step.
+    if (prev < 0 && a >= 0) crossings.push_back((double(i) - 1 + prev / (prev - a)) * dt);
+    prev = a;
+    r.stretch = std::max(r.stretch, std::abs(length(c) / sb.d - 1));
+    drift = std::max(drift, std::abs(energy() - e0) / e_swing);
+  });
+  if (crossings.size() >= 2) {
+    r.measured = (crossings.back() - crossings.front()) / double(crossings.size() - 1);
+    r.error = std::abs(r.measured / exact - 1);
+  } else {
+    r.error = 1;  // never swung through: as wrong as it gets
+  }
+  r.exact = exact;
+  // Per period, over the periods the run covers.
+  r.energy_drift = drift / std::max(1.0, double(r.steps) * dt / exact);
+  return r;
+}
+
+Result run_heavy_chain(double dt, const Method& m) {
+  Sim s(world_def(dt, m));
+  constexpr int kLinks = 5;
+  const double link = 0.1, theta0 = kPi / 3;
+  const Vec3 dir{std::sin(theta0), -std::cos(theta0), 0};  // down the chain
+  const double angle = std::atan2(dir.y, dir.x);
+  std::vector<ObjectId> links;
+  ObjectId prev;
+  for (int i = 0; i < kLinks; ++i) {
+    const ObjectId l = add_box(*s, (i + 0.5) * link * dir, {link, 0.01, 0.01}, 0.01,
+                               Quat::from_angle_z(angle), "link" + std::to_string(i));
+    s->set(l, "planar", true);
+    add_hinge(*s, l, prev, i * link * dir, {0, 0, 1});
+    links.push_back(prev = l);
+  }
+  const double total = kLinks * link;
+  const ObjectId ball = add_sphere(*s, total * dir, 0.05, 10.0, "ball");
+  s->set(ball, "planar", true);
+  add_hinge(*s, ball, prev, total * dir, {0, 0, 1});
+  Result r;
+  r.stretch = 0;
+  run_timed(*s, steps_for(3.0, dt), r, [&](std::uint64_t) {
+    // Each joint's gap: where one link's end is against where the next begins.
+    double gaps = 0;
+    Vec3 end{0, 0, 0};
+    for (const ObjectId l : links) {
+      const Vec3 c = read<Vec3>(*s, l, "position");
+      const Vec3 half = rotate(read<Quat>(*s, l, "orientation"), Vec3{link / 2, 0, 0});
+      gaps += length(c - half - end);
+      end = c + half;
+    }
+    gaps += length(read<Vec3>(*s, ball, "position") - end);
+    r.stretch = std::max(r.stretch, gaps / total);
+  });
+  r.error = r.stretch;
+  return r;
+}
+
 }  // namespace alloy::scenes::analytic

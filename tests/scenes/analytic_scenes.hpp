@@ -39,6 +39,10 @@ struct Result {
   double energy_drift = -1;    ///< largest |E - E0| / |E0| over the run; < 0: not measured
   double momentum_drift = -1;  ///< largest |L - L0| / |L0| (angular momentum); < 0: not measured
   bool finite = true;          ///< no non-finite value was written (nor is the error one)
+  double stretch =
+      -1;  ///< largest relative change of a joint's length over the run; < 0: not measured
+  double measured = 0;  ///< the scene's measured quantity (a period, s; a ratio), for reports
+  double exact = 0;     ///< its closed-form value
   double cost() const { return sim_seconds > 0 ? cpu_seconds / sim_seconds : 0; }
 };
 
@@ -82,6 +86,44 @@ Result run_rl(double dt, const Method& m, double seconds = 0.5);
 /// model's softened force law written out here.
 Result run_magnets(double dt, const Method& m, double seconds = 1.0);
 
+// --- closed-form cases (issue 12) ------------------------------------------------------
+// Each returns the error against a closed form; the tests in
+// tests/resolvers/rigid_body/closed_form_test.cpp hold them at 1/240 s and
+// check that they converge.
+
+/// Two 10 cm steel-like balls (restitution 1, no gravity, no friction) meet
+/// head on at 1 m/s: `ratio` kg moving onto 1 kg at rest. Error: the largest
+/// |v' - v'_exact| of the two, m/s, 0.3 s after the start (the impact is at
+/// 0.1 s). Closed form v1' = (r - 1) / (r + 1), v2' = 2 r / (r + 1).
+Result run_elastic_pair(double dt, const Method& m, double ratio);
+
+/// Newton's cradle without strings: 5 touching steel balls (r = 2.5 cm,
+/// restitution 1) in a row, no gravity, the first 1 cm away moving at 1 m/s.
+/// Error: the largest |v_i - v_exact_i| after 0.2 s, m/s, where the exact
+/// answer is (0, 0, 0, 0, 1); energy drift of the kinetic energy.
+Result run_cradle(double dt, const Method& m);
+
+/// A 0.1 m ball dropped 1 m onto a static floor with restitution e. Error:
+/// |h1 / h0 - e^2| / e^2 of the first rebound's height h1 (measured = h1 / h0).
+Result run_bounce(double dt, const Method& m, double e);
+
+/// A pendulum released from rest at theta0 rad: `lever` true, a 2 cm steel
+/// ball (2 cm radius) hinged 1 m from its centre (a small body on a long lever); false, the
+/// 1 m bar of rigid_scenes. Planar, as the kit's parts. Error: the relative
+/// period error |T - T_exact| / T_exact, T from the upward zero crossings
+/// over `periods` periods and T_exact = 4 sqrt(I / (m g d)) K(sin(theta0 / 2));
+/// stretch: the largest |pivot-to-centre distance - d| / d; energy_drift: the
+/// largest |E - E0| / E_swing per period (E_swing = m g d (1 - cos theta0)).
+Result run_swing(double dt, const Method& m, bool lever, double theta0, int periods = 2);
+/// The exact period of run_swing's pendulum, s.
+double swing_period(bool lever, double theta0);
+
+/// A chain of 5 light links (10 g, 10 cm, hinged end to end) holding a 10 kg
+/// ball (1000:1), hanging from the play area and released 60 degrees from
+/// the vertical. Error (and stretch): the largest relative change of the
+/// pivot-to-ball distance over 3 s.
+Result run_heavy_chain(double dt, const Method& m);
+
 // --- references (exposed for tests) -----------------------------------------------------
 
 /// theta at times 0, dt, ..., n dt of theta'' = -k sin theta, theta(0) = theta0,
@@ -92,5 +134,9 @@ std::vector<double> pendulum_reference(double k, double theta0, double dt, std::
 /// The axial force on the free magnet at centre x from the fixed one at the
 /// origin (like poles facing), N: the pole model's four pole pairs.
 double magnet_force(double x);
+
+/// The complete elliptic integral of the first kind K(k), by the
+/// arithmetic-geometric mean.
+double elliptic_k(double k);
 
 }  // namespace alloy::scenes::analytic

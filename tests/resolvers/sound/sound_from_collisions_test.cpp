@@ -144,8 +144,12 @@ TEST_F(SoundFromCollisionsTest, ABouncingBallRingsAtEveryBounceSofterEachTime) {
   run(w, 1.5);
   // Each bounce leaves at e times the speed it came in with: the next blow
   // is e times as strong, and comes e times as soon.
+  // The blow is the collision's impulse m (1 + e) u at the speed u the ball
+  // touched with. From the fifth blow on (0.26 m/s) one step's gravity kick
+  // (g dt = 0.04 m/s) is 16 % of that speed, and where in the step the touch
+  // falls moves the ratio by as much: the first four are held to e.
   ASSERT_GE(sounds.size(), 4u);
-  for (std::size_t i = 1; i < sounds.size(); ++i)
+  for (std::size_t i = 1; i < 4; ++i)
     EXPECT_NEAR(sounds[i].value("amplitude") / sounds[i - 1].value("amplitude"), e, 0.08) << i;
   for (std::size_t i = 2; i < 4; ++i) {
     const double ratio = double(sound_steps[i] - sound_steps[i - 1]) /
