@@ -68,6 +68,7 @@ class LuaHost {
 
   lua_State* state() const { return L_; }
   const MemoryBudget& memory() const { return *budget_; }
+  MemoryBudget& memory() { return *budget_; }
 
   /// Reads a Lua source file and pushes it as a function (text only: a
   /// precompiled chunk is refused). `display` is the name used in messages.

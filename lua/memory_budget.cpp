@@ -17,6 +17,8 @@ void* MemoryBudget::allocate(void* ud, void* ptr, std::size_t old_size,
   if (self->limit_ != 0 && new_size > old_bytes &&
       self->used_ - old_bytes + new_size > self->limit_) {
     ++self->refusals_;
+    // The error Lua raises can be caught; the tick that follows cannot.
+    if (self->zero_on_refusal_) *self->zero_on_refusal_ = 0;
     return nullptr;  // Lua raises LUA_ERRMEM; a shrink is never refused (Lua requires it)
   }
   void* block = std::realloc(ptr, new_size);

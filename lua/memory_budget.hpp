@@ -1,10 +1,15 @@
 // The allocator of a Lua state: counts what the state holds and refuses to go
 // past a limit, so that a mod from a player cannot take the machine's memory.
 // Lua turns a refused allocation into a catchable "not enough memory" error;
-// nothing crashes and the host stays usable.
+// nothing crashes and the host stays usable. Catchable is not enough for a
+// mod: a pcall would swallow the error and the mod would go on at the edge of
+// its budget. So a refusal also zeroes the mod's budget tick counter
+// (zero_on_refusal): the mod's next tick calls the host, which sees the
+// refusal and stops the mod; once stopped every tick fails again.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace alloy::lua {
 
@@ -19,6 +24,10 @@ class MemoryBudget {
   void set_limit(std::size_t limit_bytes) { limit_ = limit_bytes; }
   /// Allocations refused because of the limit.
   std::size_t refusals() const { return refusals_; }
+  /// A counter set to 0 at every refusal (a mod's budget ticks, stage_abi.hpp),
+  /// so that the mod's next tick reaches the host; nullptr: none. The counter
+  /// must outlive the allocator's use of it.
+  void zero_on_refusal(std::int16_t* counter) { zero_on_refusal_ = counter; }
 
   /// A lua_Alloc: `ud` is the MemoryBudget. noexcept: it is called from inside
   /// the Lua VM, which must never see a C++ exception.
@@ -29,6 +38,7 @@ class MemoryBudget {
   std::size_t used_ = 0;
   std::size_t peak_ = 0;
   std::size_t refusals_ = 0;
+  std::int16_t* zero_on_refusal_ = nullptr;
 };
 
 }  // namespace alloy::lua

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 
+#include "lua/alloy_api.hpp"
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_host.hpp"
 #include "lua/lua_values.hpp"
@@ -55,6 +56,26 @@ std::string display_path(const fs::path& p) {
   return s.empty() ? "." : s;
 }
 
+fs::path contained_file(const std::string& mod, const fs::path& folder, const fs::path& file,
+                        const ErrorLocation& where) {
+  std::error_code ec;
+  const fs::path root = fs::canonical(folder, ec);
+  if (ec) return file;
+  if (!fs::exists(fs::symlink_status(file, ec))) return file;
+  // canonical follows every link (a dangling one fails, and is refused too:
+  // it may point outside and be created later).
+  const fs::path real = fs::canonical(file, ec);
+  const fs::path rel = ec ? fs::path("..") : real.lexically_relative(root);
+  if (rel.empty() || *rel.begin() == "..")
+    throw InputError(where,
+                     "mod '" + mod + "': " + display_path(file) +
+                         (ec ? std::string(" is a link to nowhere")
+                             : " leads outside the mod's folder (to " + real.string() + ")") +
+                         "; a mod's files must be inside its folder (no symlink or '..' "
+                         "out of it)");
+  return real;
+}
+
 Manifest read_manifest(LuaHost&, const fs::path& folder) {
   // A manifest is data: it runs in a small host of its own, whatever host
   // asked for it, with tight limits (a loop, a string bomb or a pattern bomb
@@ -70,7 +91,7 @@ Manifest read_manifest(LuaHost&, const fs::path& folder) {
     throw InputError(where, "no mod.lua here: a mod folder needs a manifest");
 
   StackGuard guard(L);
-  host.load_file(file, m.file);
+  host.load_file(contained_file(folder_name(folder), folder, file, where), m.file);
   lua_newtable(L);  // a manifest is data: it gets no functions at all
   lua_setfenv(L, -2);
   host.call(0, 1, where);
@@ -135,6 +156,8 @@ Manifest read_manifest(LuaHost&, const fs::path& folder) {
                                   "' must name a file inside the mod's folder, not '" + *value +
                                   "'");
   }
+  for (const std::string* value : {&m.main, &m.scene, &m.runtime})
+    if (!value->empty()) contained_file(folder_name(folder), folder, folder / *value, where);
   if (m.name.empty()) throw InputError(where, "mod.lua must give the mod's name");
   if (!is_identifier(m.name))
     throw InputError(where, "mod name '" + m.name + "' must be letters, digits and _ only");
@@ -156,6 +179,8 @@ ModLoader::ModLoader(LuaHost& host, std::vector<fs::path> search_path, Decorate 
   envs_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
   lua_newtable(L);
   loaded_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
+  lua_newtable(L);
+  views_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
 }
 
 ModLoader::~ModLoader() {
@@ -164,6 +189,7 @@ ModLoader::~ModLoader() {
   luaL_unref(L, LUA_REGISTRYINDEX, box_ref_);
   luaL_unref(L, LUA_REGISTRYINDEX, envs_ref_);
   luaL_unref(L, LUA_REGISTRYINDEX, loaded_ref_);
+  luaL_unref(L, LUA_REGISTRYINDEX, views_ref_);
 }
 
 void ModLoader::set_scene_mod(std::optional<Manifest> manifest) {
@@ -188,7 +214,8 @@ void ModLoader::push_environment(const std::string& mod) {
   const int env = lua_gettop(L);
   decorate_(L, env, key);
   lua_rawgeti(L, LUA_REGISTRYINDEX, box_ref_);
-  lua_pushcclosure(L, &ModLoader::require_fn, 1);
+  lua_pushstring(L, key.c_str());  // who requires: this environment's mod ("" = the scene's)
+  lua_pushcclosure(L, &ModLoader::require_fn, 2);
   lua_setfield(L, env, "require");
   lua_pushvalue(L, env);
   lua_setfield(L, -3, key.c_str());
@@ -223,15 +250,6 @@ std::vector<std::string> ModLoader::available() const {
   return out;
 }
 
-std::optional<std::string> ModLoader::caller_mod(lua_State* L) const {
-  lua_Debug ar;
-  if (!lua_getstack(L, 1, &ar) || !lua_getinfo(L, "S", &ar) || !ar.source || ar.source[0] != '@')
-    return std::nullopt;
-  auto it = file_mod_.find(ar.source + 1);
-  if (it == file_mod_.end()) return std::nullopt;
-  return it->second.empty() ? scene_mod_name() : it->second;
-}
-
 void ModLoader::check_depends(const Manifest& m) {
   if (std::find(checked_.begin(), checked_.end(), m.name) != checked_.end()) return;
   for (const auto& dep : m.depends)
@@ -250,11 +268,9 @@ int ModLoader::require_fn(lua_State* L) {
 
 int ModLoader::require(lua_State* L) {
   const std::string name = luaL_checkstring(L, 1);
+  const char* env_mod = lua_tostring(L, lua_upvalueindex(2));
+  const std::string requirer = env_mod && *env_mod ? env_mod : scene_mod_name();
   lua_settop(L, 1);
-  lua_rawgeti(L, LUA_REGISTRYINDEX, loaded_ref_);  // 2
-  lua_getfield(L, 2, name.c_str());
-  if (!lua_isnil(L, -1)) return 1;
-  lua_pop(L, 1);
 
   const std::vector<std::string> segments = module_segments(name);
   if (segments.empty())
@@ -264,13 +280,17 @@ int ModLoader::require(lua_State* L) {
         "dot-separated file names (\"kit\", \"kit.materials\"); paths are not allowed");
   const std::string& mod = segments[0];
 
-  const std::optional<std::string> caller = caller_mod(L);
-  if (caller && !caller->empty() && *caller != mod) {
-    const Manifest* cm = find(*caller);
+  if (!requirer.empty() && requirer != mod) {
+    const Manifest* cm = find(requirer);
     if (cm && std::find(cm->depends.begin(), cm->depends.end(), mod) == cm->depends.end())
-      throw InputError("mod '" + *caller + "' requires '" + mod +
+      throw InputError("mod '" + requirer + "' requires '" + mod +
                        "' but its mod.lua does not list it in depends");
   }
+
+  lua_rawgeti(L, LUA_REGISTRYINDEX, loaded_ref_);  // 2
+  lua_getfield(L, 2, name.c_str());
+  if (!lua_isnil(L, -1)) return deliver(L, name, mod, requirer);
+  lua_pop(L, 1);
 
   const Manifest* m = find(mod);
   if (!m) {
@@ -292,7 +312,13 @@ int ModLoader::require(lua_State* L) {
     file += ".lua";
   }
   const std::string display = display_path(file);
-  if (!fs::is_regular_file(file))
+  fs::path real;
+  try {
+    real = contained_file(mod, m->folder, file);
+  } catch (const InputError& e) {
+    throw InputError(library_caller(L) + e.bare());
+  }
+  if (!fs::is_regular_file(real))
     throw InputError("require \"" + name + "\": mod '" + mod + "' has no file " + display);
 
   if (std::find(loading_.begin(), loading_.end(), name) != loading_.end()) {
@@ -311,7 +337,7 @@ int ModLoader::require(lua_State* L) {
   if (!user_code && std::find(required_.begin(), required_.end(), m->name) == required_.end())
     required_.push_back(m->name);
   if (!user_code) host_.mark_library(display);
-  host_.load_file(file, display);  // 3: the chunk
+  host_.load_file(real, display);  // 3: the chunk
   push_environment(m->name);
   lua_setfenv(L, 3);
   lua_pushvalue(L, 1);
@@ -322,6 +348,48 @@ int ModLoader::require(lua_State* L) {
   }
   lua_pushvalue(L, -1);
   lua_setfield(L, 2, name.c_str());
+  return deliver(L, name, m->name, requirer);
+}
+
+std::string ModLoader::library_caller(lua_State* L) const {
+  lua_Debug ar;
+  if (lua_getstack(L, 1, &ar) && lua_getinfo(L, "Sl", &ar) && ar.source && ar.source[0] == '@' &&
+      ar.currentline > 0 && host_.is_library(ar.source + 1))
+    return std::string(ar.source + 1) + ":" + std::to_string(ar.currentline) + ": ";
+  return "";
+}
+
+int ModLoader::deliver(lua_State* L, const std::string& name, const std::string& mod,
+                       const std::string& requirer) {
+  const int value = lua_gettop(L);
+  const bool per_mod = push_per_mod_function(L, value);  // pushes f
+  const bool foreign = requirer != mod;
+  if (!per_mod && !(foreign && lua_istable(L, value) && !is_frozen(L, value))) return 1;
+  const std::string key = name + "|" + requirer;
+  lua_rawgeti(L, LUA_REGISTRYINDEX, views_ref_);
+  const int views = lua_gettop(L);
+  lua_getfield(L, views, key.c_str());
+  if (!lua_isnil(L, -1)) return 1;
+  lua_pop(L, 1);
+  if (per_mod) {
+    lua_pushvalue(L, value + 1);
+    lua_pushstring(L, requirer.c_str());
+    lua_call(L, 1, 1);  // unprotected, as the module's own chunk
+    if (lua_isnil(L, -1))
+      throw InputError(library_caller(L) + "require \"" + name + "\": mod '" + mod +
+                       "' keeps this module to itself; " +
+                       (requirer.empty() ? std::string("the scene") : "mod '" + requirer + "'") +
+                       " cannot use it (require \"" + mod + "\")");
+  } else {
+    lua_pushvalue(L, value);
+  }
+  // Another mod's table is theirs: read it, call it, never change it.
+  if (foreign && lua_istable(L, -1) && !is_frozen(L, -1)) {
+    push_frozen(L, -1);
+    lua_remove(L, -2);
+  }
+  lua_pushvalue(L, -1);
+  lua_setfield(L, views, key.c_str());
   return 1;
 }
 

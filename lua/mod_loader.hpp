@@ -8,10 +8,20 @@
 //
 // Only Lua source files inside a mod folder can be required: names are
 // dot-separated identifiers, so no path can leave the folder, and there is no
-// native-code loader. Each mod runs in its own sandbox environment (its files
-// share it); the scene's own mod shares the scene's. A module runs once per
-// load; later requires get its cached value. A mod that requires another must
-// list it in `depends`. Cycles are reported with the chain.
+// native-code loader, and no file outside the mod's folder (a symlink or `..`
+// out of it is refused: contained_file). Each mod runs in its own sandbox
+// environment (its files share it); the scene's own mod shares the scene's. A
+// module runs once per load; later requires get its cached value. A mod that
+// requires another must list it in `depends`. Cycles are reported with the
+// chain.
+//
+// Who requires is known for certain: each environment's `require` carries the
+// name of its mod (a script cannot pose as another mod by where it calls
+// from). Another mod's module is handed over read-only (alloy.freeze, shallow),
+// and a module may return alloy.per_mod(f) to give each requiring mod its own
+// value f(name) ("" for a loose scene), made once: the kit gives each mod a
+// kit whose definitions are owned by that mod, and keeps its inner modules to
+// itself (f returns nil: "keeps this module to itself").
 #pragma once
 
 #include <filesystem>
@@ -51,6 +61,17 @@ Manifest read_manifest(LuaHost& host, const std::filesystem::path& folder);
 
 /// Lexically normal display form of a path ("mods/kit/init.lua").
 std::string display_path(const std::filesystem::path& p);
+
+/// The file `file` of mod `mod` (whose folder is `folder`) as it really is on
+/// disk: every symlink and `..` resolved. A mod's files stay inside its
+/// folder: if `file` resolves to a place outside it (a symlink to /etc/passwd
+/// or into another mod, a `..`), throws InputError at `where` naming the mod
+/// and the file. A file that does not exist is returned as it is (the caller
+/// reports it missing). Used for mod.lua, every file a manifest names, and
+/// every file `require` runs.
+std::filesystem::path contained_file(const std::string& mod, const std::filesystem::path& folder,
+                                     const std::filesystem::path& file,
+                                     const ErrorLocation& where = {});
 
 class ModLoader {
  public:
@@ -93,9 +114,16 @@ class ModLoader {
  private:
   static int require_fn(lua_State* L);
   int require(lua_State* L);
+  /// Replaces the module value on the stack top by what `requirer` gets of
+  /// module `name` of mod `mod`: a per_mod view, or a read-only view for
+  /// another mod (cached per requirer).
+  int deliver(lua_State* L, const std::string& name, const std::string& mod,
+              const std::string& requirer);
   std::string scene_mod_name() const { return scene_mod_ ? scene_mod_->name : ""; }
-  /// The mod whose file called the running C function ("" = the scene or unknown).
-  std::optional<std::string> caller_mod(lua_State* L) const;
+  /// "file:line: " of the library mod's file that called require (a refusal
+  /// names it: the host would put the error on the scene line that required
+  /// the library), or "" for the scene's own code.
+  std::string library_caller(lua_State* L) const;
   void check_depends(const Manifest& m);
 
   LuaHost& host_;
@@ -112,6 +140,7 @@ class ModLoader {
   int box_ref_ = -2;
   int envs_ref_ = -2;    // registry ref: mod name -> environment (this loader's own)
   int loaded_ref_ = -2;  // registry ref: module name -> value (this loader's own)
+  int views_ref_ = -2;   // registry ref: "module|requirer" -> the value that mod gets
 };
 
 }  // namespace alloy::lua

@@ -209,6 +209,64 @@ void ModRuntime::validate(const ModState& mod, const Program& p) const {
       }
     }
   }
+  check_ownership(mod, p);
+}
+
+void ModRuntime::check_ownership(const ModState& mod, const Program& p) const {
+  const PropertyRegistry& props = registry_.properties();
+  const std::string& me = mod.name();
+  const std::string file = display_path(mod.manifest().folder / mod.runtime_file());
+  auto defines = [&](const std::string& name) {
+    return std::any_of(p.properties.begin(), p.properties.end(),
+                       [&](const PropertyDef& d) { return d.name == name; });
+  };
+  std::vector<std::string> granted;
+  for (const WriteGrant& g : options_.grants) {
+    if (g.mod != me) continue;
+    for (const auto& name : g.properties) {
+      if (!props.find(name) && !defines(name)) {
+        std::string msg = "world: grants: mod '" + me + "' is granted property '" + name +
+                          "', which does not exist";
+        if (auto near = closest_name(name, props.names()); !near.empty())
+          msg += " (did you mean '" + near + "'?)";
+        throw InputError(g.where, msg);
+      }
+      granted.push_back(name);
+    }
+  }
+  auto is_granted = [&](const std::string& name) {
+    return std::find(granted.begin(), granted.end(), name) != granted.end();
+  };
+  // A property type belongs to whoever registered it first; a mod may not
+  // define (and so come to think it may write) one of another's, unless the
+  // scene granted it (two implementations of the same physics, swapped: each
+  // defines the property it works on, the same way).
+  for (std::size_t i = 0; i < p.properties.size(); ++i) {
+    const auto id = props.find(p.properties[i].name);
+    if (!id || owned_by_mod(props.def(*id), me) || is_granted(p.properties[i].name)) continue;
+    const ErrorLocation where =
+        i < p.property_where.size() ? p.property_where[i] : ErrorLocation{file, 0, ""};
+    throw InputError(where, "mod.property '" + p.properties[i].name +
+                                "': the property belongs to " + owner_text(props.def(*id)) +
+                                "; mod '" + me +
+                                "' cannot define it (read it as it is, define one of its own "
+                                "under another name, or have the scene grant it)");
+  }
+  for (const auto& s : p.stages) {
+    if (s.info.kind != StageKind::Resolver) continue;
+    for (const auto& name : s.info.writes) {
+      if (is_granted(name)) continue;
+      if (const auto id = props.find(name)) {
+        if (owned_by_mod(props.def(*id), me)) continue;
+        throw InputError(s.where, "resolver '" + s.info.name + "' of mod '" + me + "' writes '" +
+                                      name + "', which belongs to " + owner_text(props.def(*id)) +
+                                      ": a mod's resolvers write only its own properties, "
+                                      "unless the scene grants more (world { grants = { " +
+                                      me + " = { \"" + name + "\" } } })");
+      }
+      // Not registered yet: one of this program's own (validate checked it exists).
+    }
+  }
 }
 
 void ModRuntime::commit(Loaded& l, std::unique_ptr<Program> p, bool first) {

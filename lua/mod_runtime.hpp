@@ -46,6 +46,16 @@ namespace alloy::lua {
 
 class FileWatcher;
 
+/// A scene's grant to a mod (world { grants = { wind = { "velocity" } } }):
+/// the mod's resolvers may also write these properties, which belong to
+/// others. Without one a Lua resolver writes only the properties its own mod
+/// defines.
+struct WriteGrant {
+  std::string mod;                      ///< the mod granted
+  std::vector<std::string> properties;  ///< what its resolvers may write besides its own
+  ErrorLocation where;                  ///< the scene line that granted it
+};
+
 struct ModRuntimeOptions {
   /// Folders searched for mods by name.
   std::vector<std::filesystem::path> mod_paths;
@@ -55,6 +65,9 @@ struct ModRuntimeOptions {
   std::function<void(const std::string& mod, const std::string& line)> log;
   /// watch() scans modification times instead of using inotify.
   bool poll_files = false;
+  /// The scene's grants of others' properties to mods (none: each mod writes
+  /// only its own).
+  std::vector<WriteGrant> grants;
 };
 
 /// What happened to a mod: for the CLI, the viewer and tests.
@@ -131,6 +144,10 @@ class ModRuntime {
   void load_manifest(const Manifest& manifest, std::vector<std::string>& chain);
   /// Checks `p` against the registry as `mod` would register it.
   void validate(const ModState& mod, const Program& p) const;
+  /// The ownership rules of `validate`: a mod defines no property that is
+  /// another's, and its resolvers write only its own properties and those the
+  /// scene grants it. The refusal names both owners and the line.
+  void check_ownership(const ModState& mod, const Program& p) const;
   /// Registers `p` for `mod`, replacing its current program, and tells the
   /// world which plugins changed.
   void commit(Loaded& l, std::unique_ptr<Program> p, bool first);

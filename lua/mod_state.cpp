@@ -273,10 +273,12 @@ struct Collector {
       throw InputError(here(L), what + " '" + def.name +
                                     "': an enum needs its values, e.g. values = {\"a\", \"b\"}");
     def.owner = mod.name();
+    def.owner_is_mod = true;
     for (const auto& p : program.properties)
       if (p.name == def.name)
         throw InputError(here(L), what + " '" + def.name + "' is defined twice");
     program.properties.push_back(std::move(def));
+    program.property_where.push_back(here(L));
   }
 
   void stage(lua_State* L, StageKind kind) {
@@ -450,6 +452,7 @@ void ModState::make_state() {
                   [this](lua_State* L, const std::string& why) { stop(L, why); }});
 
   abi_budget_ = new (lua_newuserdata(L, sizeof(abi::Budget))) abi::Budget{};
+  host_->memory().zero_on_refusal(&abi_budget_->ticks);  // the userdata lives as long as L
   lua_pushvalue(L, -1);
   budget_ud_ref_ = luaL_ref(L, LUA_REGISTRYINDEX);
   const int budget_ud = lua_gettop(L);
@@ -744,7 +747,9 @@ std::unique_ptr<Program> ModState::load_program() {
     if (c.mod_ref != -2) luaL_unref(L, LUA_REGISTRYINDEX, c.mod_ref);
   };
   try {
-    host_->load_file(file, display);
+    host_->load_file(contained_file(manifest_.name, manifest_.folder, file,
+                                    ErrorLocation{manifest_.file, 0, ""}),
+                     display);
     loader->add_scene_file(display);
     loader->push_environment(manifest_.name);
     lua_setfenv(L, -2);
@@ -861,6 +866,7 @@ void ModState::begin_call(std::uint64_t step) {
   granted_ = stopped_ ? 0 : kQuantum;
   abi_budget_->ticks = std::int16_t(granted_);
   abi_budget_->stopped = stopped_ ? 1 : 0;
+  refusals_seen_ = host_->memory().refusals();
 }
 
 void ModState::begin_loading() {
@@ -874,6 +880,7 @@ void ModState::begin_loading() {
                                 std::chrono::duration<double>(budget_.seconds_to_load));
   granted_ = stopped_ ? 0 : kQuantum;
   abi_budget_->ticks = std::int16_t(granted_);
+  refusals_seen_ = host_->memory().refusals();
   loading_ = true;
 }
 
@@ -885,6 +892,7 @@ void ModState::charge() {
 
 void ModState::end_call() {
   charge();
+  stop_if_refused(nullptr);  // a refusal caught by the call's last pcall
   step_seconds_ +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - call_start_).count();
   if (loading_) {
@@ -908,12 +916,29 @@ void ModState::stop(lua_State* L, const std::string& why) {
   raise_error_table(L);
 }
 
+void ModState::stop_if_refused(lua_State* L) {
+  if (stopped_ || host_->memory().refusals() == refusals_seen_) return;
+  const std::string why = "it ran out of its memory budget of " +
+                          std::to_string(budget_.memory_bytes >> 20) +
+                          " MiB (an allocation was refused; a pcall does not undo that)";
+  if (L) stop(L, why);  // raises
+  stopped_ = true;
+  stop_message_ = "mod '" + manifest_.name + "' stopped: " + why;
+  stop_reason_ = InputError::format(
+      ErrorLocation{display_path(manifest_.folder / runtime_file()), 0, ""}, stop_message_);
+  abi_budget_->stopped = 1;
+  abi_budget_->ticks = 0;
+}
+
 int ModState::over_budget(lua_State* L) {
   auto* self = static_cast<ModState*>(lua_touserdata(L, lua_upvalueindex(1)));
   self->charge();
   // Already stopped: fail again, so that a pcall around a loop cannot
   // swallow the stop and loop on.
   if (self->stopped_) self->stop(L, "");
+  // The allocator refused (and zeroed the ticks to get here): the mod stops
+  // even if a pcall caught the "not enough memory" error.
+  self->stop_if_refused(L);
   if (self->step_ticks_ > self->tick_limit_)
     self->stop(L, "it ran more than " + millions(self->tick_limit_) +
                       " ticks (loop iterations and calls) " +
@@ -957,22 +982,15 @@ bool ModState::run_stage(int record_ref, const char* phase, double dt, double ti
   lua_pushnumber(L, dt);
   lua_pushnumber(L, time);
   lua_pushnumber(L, double(step));
-  const std::size_t refusals = host_->memory().refusals();
   begin_call(step);
   try {
     host_->call(5, 0, fallback);
   } catch (const InputError& raised) {
-    end_call();
+    const bool was_stopped = stopped_;
+    end_call();  // stops the mod if the allocator refused: out of memory, not just wrong
     place_stop(raised.where());
     const InputError e = bounded(raised);
-    if (host_->memory().refusals() != refusals && !stopped_) {
-      // The allocator refused: the mod is out of memory, not just wrong.
-      stopped_ = true;
-      stop_message_ = "mod '" + manifest_.name + "' stopped: it ran out of its memory budget of " +
-                      std::to_string(budget_.memory_bytes >> 20) + " MiB";
-      stop_reason_ = InputError::format(e.where(), stop_message_);
-      abi_budget_->stopped = 1;
-    }
+    if (stopped_ && !was_stopped) stop_reason_ = InputError::format(e.where(), stop_message_);
     *error = e;
     return false;
   }

@@ -111,6 +111,7 @@ struct StageDecl {
 /// Everything one run of a mod's runtime file defined.
 struct Program {
   std::vector<PropertyDef> properties;
+  std::vector<ErrorLocation> property_where;  ///< the line that defined each of `properties`
   std::vector<StageDecl> stages;
   std::vector<std::pair<std::string, int>> handlers;  ///< event type ("*": all), function ref
   int on_load = -2, on_reload = -2, on_unload = -2;   ///< function refs, or -2
@@ -247,6 +248,9 @@ class ModState : public std::enable_shared_from_this<ModState> {
   std::string over(const char* what, std::uint64_t limit, const char* name, bool per_run,
                    const char* unit = "") const;  // unit "": bytes
   void charge();  // moves spent ticks from the counter to the step's total
+  /// Stops the mod if its allocator refused since the call began, even when
+  /// a pcall caught the error; raises only if `L` is given (from a tick).
+  void stop_if_refused(lua_State* L);
 
   Manifest manifest_;
   std::vector<std::filesystem::path> search_path_;
@@ -275,6 +279,7 @@ class ModState : public std::enable_shared_from_this<ModState> {
   std::uint64_t step_ticks_ = 0;
   double step_seconds_ = 0;
   std::int32_t granted_ = 0;
+  std::size_t refusals_seen_ = 0;  // allocator refusals when the call began
   std::uint64_t tick_limit_ = 0;
   std::chrono::steady_clock::time_point call_start_, deadline_;
   Output step_out_, run_out_;   // step_out_ belongs to step_

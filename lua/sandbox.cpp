@@ -79,7 +79,18 @@ int safe_rawset(lua_State* L) {
   luaL_checktype(L, 1, LUA_TTABLE);
   luaL_checkany(L, 2);
   luaL_checkany(L, 3);
-  if (is_frozen(L, 1))
+  // A locked metatable (a __metatable field) is what setmetatable refuses, and
+  // rawset refuses the same tables: the frozen proxies, and the tables the
+  // host's Lua code made with a locked metatable (vec3, quat, a stage's view,
+  // its target and settings), which the frozen set does not hold.
+  bool locked = false;
+  if (lua_getmetatable(L, 1)) {
+    lua_pushliteral(L, "__metatable");
+    lua_rawget(L, -2);
+    locked = !lua_isnil(L, -1);
+    lua_pop(L, 2);
+  }
+  if (locked || is_frozen(L, 1))
     return luaL_error(L, "rawset: this table belongs to the host and is read-only");
   lua_settop(L, 3);
   lua_rawset(L, 1);

@@ -10,7 +10,8 @@
 //   no io, os, debug, ffi, jit, package; no dofile, loadfile, loadstring,
 //   getfenv, setfenv, collectgarbage, newproxy, module, gcinfo, string.dump;
 //   load compiles text only (mode "t") into the caller's environment;
-//   rawset refuses frozen (host) tables; require is the mod loader's.
+//   rawset refuses host tables (frozen ones, and any table whose metatable is
+//   locked with __metatable, as setmetatable does); require is the mod loader's.
 //
 // Library tables are copied per environment, so a mod that changes
 // `string.format` changes it for itself only.

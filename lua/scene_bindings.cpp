@@ -12,8 +12,9 @@ namespace alloy::lua {
 
 namespace {
 
-const std::vector<std::string> kWorldFields = {"name",  "description", "dt",  "seconds", "plugins",
-                                               "settings", "every",     "use", "areas", "report"};
+const std::vector<std::string> kWorldFields = {"name",    "description", "dt",    "seconds",
+                                               "plugins", "settings",    "every", "use",
+                                               "areas",   "report",      "grants"};
 const std::vector<std::string> kAreaFields = {"name", "center", "half_extents", "radius", "plugins",
                                               "settings"};
 
@@ -276,6 +277,36 @@ int SceneRecorder::record_world(lua_State* L) {
         if (area.name.empty()) throw InputError(where, what + " needs a name");
         w.areas.push_back(std::move(area));
         lua_pop(L, 1);
+      }
+      lua_pop(L, 1);
+    } else if (key == "grants") {
+      raw_field(L, 1, key);
+      const int t = lua_gettop(L);
+      const char* example = "world: 'grants' must be a table such as { magic = { \"velocity\" } }";
+      if (lua_type(L, t) != LUA_TTABLE) throw InputError(where, example);
+      std::vector<std::string> mods;
+      try {
+        mods = sorted_keys(L, t, "world: 'grants'");
+      } catch (const InputError& e) {
+        throw InputError(where, e.bare());
+      }
+      for (const auto& mod : mods) {
+        raw_field(L, t, mod);
+        SceneValue v;
+        try {
+          v = to_scene_value(L, -1);
+        } catch (const InputError& e) {
+          throw InputError(where, "world: 'grants' of '" + mod + "' " + e.bare());
+        }
+        lua_pop(L, 1);
+        if (auto* names = std::get_if<std::vector<std::string>>(&v))
+          w.grants.emplace_back(mod, *names);
+        else if (auto* one = std::get_if<std::string>(&v))
+          w.grants.emplace_back(mod, std::vector<std::string>{*one});
+        else
+          throw InputError(where,
+                           "world: 'grants' of '" + mod +
+                               "' must be a list of property names, such as { \"velocity\" }");
       }
       lua_pop(L, 1);
     } else if (key == "settings" || key == "every") {

@@ -146,9 +146,17 @@ RecordedScene run_scene(const fs::path& path, const LoadOptions& options, bool a
 /// of them has one.
 std::shared_ptr<ModRuntime> start_mods(const RecordedScene& rec, PluginRegistry& registry,
                                        const LoadOptions& options) {
-  auto runtime = std::make_shared<ModRuntime>(
-      registry, ModRuntimeOptions{rec.search, options.mod_budget, options.mod_log});
+  ModRuntimeOptions o{rec.search, options.mod_budget, options.mod_log};
+  for (const auto& [mod, properties] : rec.record.world.grants)
+    o.grants.push_back({mod, properties, rec.record.world.where});
+  auto runtime = std::make_shared<ModRuntime>(registry, std::move(o));
   for (const Manifest& m : rec.mods) runtime->load(m);
+  for (const auto& [mod, properties] : rec.record.world.grants)
+    if (!runtime->has(mod))
+      throw InputError(rec.record.world.where,
+                       "world: 'grants' names mod '" + mod +
+                           "', which this scene does not run (a mod with a runtime file that "
+                           "the scene requires, or whose scene it is)");
   if (runtime->loaded().empty()) return nullptr;
   return runtime;
 }

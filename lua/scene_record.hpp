@@ -60,6 +60,9 @@ struct RecordedWorld {
   std::vector<std::pair<std::string, std::string>> use;  ///< thing -> plugin
   std::vector<std::string> report;  ///< "object.property[.component][@seconds]" for the CLI
   std::vector<RecordedArea> areas;
+  /// grants = { mod = { "property", ... } }: properties of others a mod's
+  /// resolvers may write (mod_runtime.hpp, WriteGrant), sorted by mod.
+  std::vector<std::pair<std::string, std::vector<std::string>>> grants;
 };
 
 /// `swap(time, "area" or "", "from", "to")`: a resolver swap on the timeline.

@@ -82,6 +82,12 @@ std::optional<EnumValue> PropertyRegistry::enum_value(PropertyId id, std::string
   return EnumValue{std::int32_t(it - values.begin())};
 }
 
+std::string owner_text(const PropertyDef& def) {
+  if (def.owner_is_mod) return "mod '" + def.owner + "'";
+  if (def.owner == "runtime" || def.owner.empty()) return "the runtime";
+  return "the native plugin '" + def.owner + "'";
+}
+
 std::vector<std::string> PropertyRegistry::names() const {
   std::vector<std::string> out;
   out.reserve(by_name_.size());

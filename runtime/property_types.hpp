@@ -79,6 +79,10 @@ struct PropertyDef {
   std::string doc;                       ///< one line: what the value means
   std::vector<std::string> enum_values;  ///< the names of an Enum's values, in order
   std::string owner;                     ///< who registered it (plugin or mod), for unloading
+  /// `owner` names a Lua mod (else a native plugin, or "runtime"). A mod may
+  /// be called like a native plugin: the flag, not the name, tells them apart.
+  /// Only a property's owner may write it from Lua without a scene's grant.
+  bool owner_is_mod = false;
   /// Bounds, checked on every edit (scene, player, timeline): numbers and
   /// integers, and each component of a vec3 (a box's size).
   std::optional<double> min;
@@ -129,6 +133,14 @@ inline std::optional<PropertyId> PropertyRegistry::find(std::string_view name) c
     if (id == kNoProperty) return std::nullopt;
     if (defs_[id].name == name) return id;
   }
+}
+
+/// Who a property belongs to, for messages: "mod 'magic'", "the native
+/// plugin 'rigid_body'", "the runtime".
+std::string owner_text(const PropertyDef& def);
+/// Whether `def` belongs to the Lua mod called `mod`.
+inline bool owned_by_mod(const PropertyDef& def, std::string_view mod) {
+  return def.owner_is_mod && def.owner == mod;
 }
 
 /// Closest registered name to `name` by edit distance (for "did you mean"), or "".

@@ -60,7 +60,8 @@
 --   Structure-Borne Sound (3rd ed.), table of loss factors; Fletcher &
 --   Rossing, The Physics of Musical Instruments, ch. 21 (bells).
 
-return {
+-- The kit's own: other mods read materials through kit.material(name).
+local materials = {
   steel  = { density = 7850, friction = 0.5,  restitution = 0.6,
              conductive = true, resistivity = 1.5e-7,
              susceptibility = 300, saturation_magnetization = 1.6e6,
@@ -84,3 +85,7 @@ return {
              youngs_modulus = 5e7, loss_factor = 0.1 },
   felt   = { density = 300,  friction = 0.6,  restitution = 0.05 },
 }
+
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return materials end
+end)

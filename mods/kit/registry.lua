@@ -13,13 +13,33 @@
 -- calls `build`, applies the caller's raw `props` overrides and records the
 -- object with the host's object{}. The host attributes the object, and any
 -- error raised here, to the scene line that called the component.
+--
+-- Every component and material belongs to the mod that defined it (its
+-- owner: "kit" for the kit's own, "" for a loose scene). A mod may add new
+-- ones and replace its own, never another's: kit.define and kit.add_material
+-- reach here through the kit each mod gets (init.lua), which passes the
+-- requiring mod's name as the host gave it. This module is the kit's alone
+-- (alloy.per_mod at the end), and what it hands out is read-only.
 local geometry = require "kit.geometry"
 
 local registry = {}
 
-local components = {}  -- name -> spec
-local materials = {}   -- name -> { density, friction, restitution, ... }
+local components = {}  -- name -> { owner, doc, args, build, make } (frozen)
+local materials = {}   -- name -> { name, owner, density, friction, restitution, ... } (frozen)
 local placed = {}      -- object name -> position {x, y, z}, for parts made here
+
+local function who(owner)
+  return owner == "" and "the scene" or ("mod '" .. owner .. "'")
+end
+
+-- Refuses to let `owner` replace what another owns; the message names both.
+local function check_owner(what, name, old, owner)
+  if old and old.owner ~= owner then
+    error(what .. " '" .. name .. "' belongs to " .. who(old.owner) .. "; " .. who(owner) ..
+          " cannot redefine it (give yours another name, such as '" ..
+          (owner == "" and "my" or owner) .. "_" .. name .. "')", 3)
+  end
+end
 
 -- Errors are tables so that the host can name the object separately.
 local function fail(object, message)
@@ -106,13 +126,16 @@ types.material = function(v)
   return nil, "one of the kit's materials", "unknown material '" .. v .. "'" .. hint(v, sorted_keys(materials))
 end
 
---- Adds or replaces a material.
-function registry.add_material(name, m)
+--- Adds a material for `owner`, or replaces one of its own.
+function registry.add_material(owner, name, m)
+  if type(name) ~= "string" or name == "" then error("a material needs a name", 3) end
   local checked, expected = types.material(m)
-  if not checked then error("material '" .. tostring(name) .. "' must be " .. expected, 2) end
-  local copy = { name = name }
+  if not checked then error("material '" .. tostring(name) .. "' must be " .. expected, 3) end
+  check_owner("material", name, materials[name], owner)
+  local copy = {}
   for k, v in pairs(m) do copy[k] = v end
-  materials[name] = copy
+  copy.name, copy.owner = name, owner
+  materials[name] = alloy.freeze(copy)
 end
 
 function registry.material(name)
@@ -123,10 +146,15 @@ function registry.material_names()
   return sorted_keys(materials)
 end
 
---- Where a part made by the kit was placed (nil for other objects).
+--- Where a part made by the kit was placed (nil for other objects): a copy.
 function registry.placed(name)
-  return placed[name]
+  local p = placed[name]
+  return p and { p[1], p[2], p[3] }
 end
+
+-- What a component's build gets as its second argument: the parts of the
+-- registry a build needs, read-only.
+local context = alloy.freeze({ placed = registry.placed, fail = fail, material = registry.material })
 
 local function check_args(part, spec, args)
   local by_name = {}
@@ -170,7 +198,7 @@ local function make(part, spec)
     local a = check_args(part, spec, args)
     -- A failure inside build (a bug in a component, or one of its own checks)
     -- is reported for this object.
-    local ok, props = pcall(spec.build, a, registry)
+    local ok, props = pcall(spec.build, a, context)
     if not ok then
       if type(props) == "table" then
         props.object = props.object or a.name
@@ -178,39 +206,64 @@ local function make(part, spec)
       end
       fail(a.name, tostring(props))
     end
+    if type(props) ~= "table" then fail(a.name, "kit." .. part .. ": its build must return a table of properties") end
     props.name = a.name
     for k, v in pairs(a.props or {}) do props[k] = v end
-    if a.name and props.position then placed[a.name] = props.position end
+    local at = props.position
+    if a.name and type(at) == "table" then placed[a.name] = { at[1], at[2], at[3] } end
     object(props)
     return a.name
   end
 end
 
---- Registers a component; returns the function that makes one.
-function registry.define(part, spec)
+--- Registers a component for `owner` (or replaces one of its own); returns
+--- the function that makes one.
+function registry.define(owner, part, spec)
   if type(part) ~= "string" or not part:match("^[%a_][%w_]*$") then
-    error("a component needs a name made of letters, digits and _", 2)
+    error("a component needs a name made of letters, digits and _", 3)
   end
   if type(spec) ~= "table" or type(spec.build) ~= "function" or type(spec.args) ~= "table" then
-    error("component '" .. part .. "' needs args (a list) and build (a function)", 2)
+    error("component '" .. part .. "' needs args (a list) and build (a function)", 3)
   end
-  for _, a in ipairs(spec.args) do
-    if type(a[1]) ~= "string" or not types[a[2]] then
-      error("component '" .. part .. "': argument " .. tostring(a[1]) .. " has unknown type " .. tostring(a[2]), 2)
-    end
-  end
+  check_owner("part", "kit." .. part, components[part], owner)
   -- Every part may be named, and may override any raw property with props = {...}.
+  -- The arguments are copied: the caller keeps no hold on the registered part.
   local args = { { "name", "string" } }
-  for _, a in ipairs(spec.args) do args[#args + 1] = a end
+  for _, a in ipairs(spec.args) do
+    if type(a) ~= "table" or type(a[1]) ~= "string" or not types[a[2]] then
+      error("component '" .. part .. "': argument " .. tostring(type(a) == "table" and a[1] or a) ..
+            " has unknown type " .. tostring(type(a) == "table" and a[2] or nil), 3)
+    end
+    local copy = {}
+    for k, v in pairs(a) do copy[k] = v end
+    args[#args + 1] = copy
+  end
   args[#args + 1] = { "props", "props", doc = "raw property overrides" }
-  local entry = { doc = spec.doc or "", args = args, build = spec.build }
+  local entry = { owner = owner, doc = spec.doc or "", args = args, build = spec.build }
   entry.make = make(part, entry)
-  components[part] = entry
+  components[part] = alloy.freeze(entry)
   return entry.make
 end
 
+local function copy_deep(v)
+  if type(v) ~= "table" then return v end
+  local out = {}
+  for k, x in pairs(v) do out[k] = copy_deep(x) end
+  return out
+end
+
+--- A component's description (owner, doc, args, make), for docs and tools:
+--- a copy, so that nobody changes the registered part through it.
 function registry.component(part)
-  return components[part]
+  local c = components[part]
+  if not c then return nil end
+  return { owner = c.owner, doc = c.doc, args = copy_deep(c.args), make = c.make }
+end
+
+--- The function that makes a component, or nil.
+function registry.maker(part)
+  local c = components[part]
+  return c and c.make
 end
 
 function registry.names()
@@ -226,4 +279,7 @@ function registry.unknown(part)
   end
 end
 
-return registry
+-- The kit's own: other mods use it through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return registry end
+end)

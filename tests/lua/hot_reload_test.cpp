@@ -336,7 +336,9 @@ TEST_F(HotReload, ChangedSettingDefaultsReachTheLiveStagesButTheScenesValuesWin)
   // A scene that sets the rate itself keeps it across reloads.
   TempMods other;
   other.mod("fill2", mod("1").replace(mod("1").find("fill.r"), 6, "fill.q"));
-  lua::ModRuntime rt3(registry, runtime_options(other, &log));
+  lua::ModRuntimeOptions o3 = runtime_options(other, &log);
+  o3.grants = {{"fill2", {"level"}, {}}};  // fill's property, shared by the scene's grant
+  lua::ModRuntime rt3(registry, o3);
   rt3.load("fill2");
   def.plugins = {"fill.q"};
   def.settings["fill.q"] = given;

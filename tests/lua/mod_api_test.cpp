@@ -497,7 +497,9 @@ mod.resolver { name = "fill.fast", writes = { "level" }, needs = { "level" },
   advance = function(w) local l = w:write("level") for i in l:each() do l[i] = l[i] + 10 end end }
 )LUA");
   PluginRegistry registry;
-  lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
+  lua::ModRuntimeOptions o = runtime_options(mods, nullptr);
+  o.grants = {{"fast", {"level"}, {}}};  // slow's property: the scene lets fast write it too
+  lua::ModRuntime runtime(registry, o);
   runtime.load("slow");
   runtime.load("fast");
   World world(registry, WorldDef{.plugins = {"fill.slow"}});

@@ -42,4 +42,7 @@ acoustic.bell = {
   end,
 }
 
-return acoustic
+-- The kit's own: other mods use these parts through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return acoustic end
+end)

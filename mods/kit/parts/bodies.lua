@@ -137,4 +137,7 @@ bodies.wall = {
   build = static_body,
 }
 
-return bodies
+-- The kit's own: other mods use these parts through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return bodies end
+end)

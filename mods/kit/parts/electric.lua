@@ -99,4 +99,7 @@ electric.wire = {
   end,
 }
 
-return electric
+-- The kit's own: other mods use these parts through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return electric end
+end)

@@ -60,4 +60,7 @@ joints.glue = {
   end,
 }
 
-return joints
+-- The kit's own: other mods use these parts through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return joints end
+end)

@@ -126,4 +126,7 @@ magnetic.magnet = {
   end,
 }
 
-return magnetic
+-- The kit's own: other mods use these parts through `require "kit"`.
+return alloy.per_mod(function(mod)
+  if mod == "kit" then return magnetic end
+end)
