@@ -308,6 +308,7 @@ struct Collector {
       throw InputError(d.where, what + " needs a name made of letters, digits, _ and . (name = \"" +
                                     mod.name() + ".thing\")");
     what += " '" + d.info.name + "'";
+    d.info.owner = mod.name();
     d.info.doc = string_field(L, 1, "doc", what).value_or("");
     d.info.reads = list_field(L, 1, "reads", what);
     d.info.needs = list_field(L, 1, "needs", what);
@@ -458,13 +459,18 @@ void ModState::make_state() {
   const int budget_ud = lua_gettop(L);
 
   // The prelude is host code: no ticks, the state's own globals, and the FFI.
+  // The FFI is opened before the prelude is parsed: its 0ULL literals make
+  // LuaJIT's lexer open it on demand otherwise, and a second luaopen_ffi
+  // would replace that first type state and leak it (found by the fuzzers).
+  lua_pushcfunction(L, luaopen_ffi);
+  lua_call(L, 0, 1);
+  const int ffi = lua_gettop(L);
   const std::string_view src = kStagePreludeSource;
   if (luaL_loadbufferx(L, src.data(), src.size(), "=alloy.prelude", "t") != 0)
     throw std::runtime_error(std::string("the stage prelude does not compile: ") +
                              lua_tostring(L, -1));
   const int chunk = lua_gettop(L);
-  lua_pushcfunction(L, luaopen_ffi);
-  lua_call(L, 0, 1);
+  lua_pushvalue(L, ffi);
   lua_pushlightuserdata(L, const_cast<abi::Api*>(&stage_api()));
   lua_pushvalue(L, budget_ud);
   lua_pushlightuserdata(L, this);

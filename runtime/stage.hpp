@@ -51,6 +51,10 @@ struct StageInfo {
   /// provider of a thing is active: the scene's choice, else the first registered.
   std::string provides;
   std::string doc;                     ///< one line for `alloy plugins` and docs
+  /// Who defined the stage: the mod's name for a Lua stage, "" for a native
+  /// plugin. Messages that blame a stage name its mod too (a mod chooses its
+  /// stages' names, so the name alone does not say whose they are).
+  std::string owner;
 };
 
 /// Settings given to a plugin by a scene (e.g. `gravity.uniform { g = {0,-9.81,0} }`).

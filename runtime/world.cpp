@@ -101,8 +101,14 @@ void ResolverAccess::refuse(std::uint32_t slot, const std::string& source, std::
 }
 
 std::string frozen_message(const World& world, const Event& e) {
-  if (e.type == "out_of_bounds")
-    return "frozen: " + world.describe(e.a) + ": " + e.source + " " + e.text;
+  if (e.type == "out_of_bounds") {
+    // The source is the stage that gave the value; a mod's stage is named
+    // with its mod, which chose the stage's name.
+    std::string source = e.source;
+    if (const PluginDef* d = world.plugin_def(e.source); d && !d->info.owner.empty())
+      source = "mod '" + d->info.owner + "' (stage '" + e.source + "')";
+    return "frozen: " + world.describe(e.a) + ": " + source + " " + e.text;
+  }
   std::string value;
   char buf[32];
   for (const auto& [k, v] : e.values) {
@@ -845,8 +851,10 @@ std::vector<std::string> World::plugin_changed(std::string_view plugin) {
   }
   std::vector<std::string> after = active_stages();
   std::erase_if(before, [&](const std::string& n) { return listed(after, n); });
+  // A slot whose plugin already left the registry (a mod unloading several
+  // plugins, told one at a time) keeps its scope: its own call removes it.
   for (auto& s : slots_)
-    if (s->area < 0) s->scope = global_scope(*plugins_.find(s->info.name));
+    if (const PluginDef* d = plugins_.find(s->info.name); d && s->area < 0) s->scope = global_scope(*d);
   if (started_) {
     synced_ = false;
     sync_structure();

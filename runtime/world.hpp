@@ -226,6 +226,11 @@ class World {
   std::vector<std::string> active_stages() const;
 
   PluginRegistry& plugins() { return plugins_; }
+  /// The definition a stage instance ("name", or "name@area") was made
+  /// from, or nullptr if no plugin of that name is registered now.
+  const PluginDef* plugin_def(std::string_view stage) const {
+    return plugins_.find(stage.substr(0, stage.find('@')));
+  }
   PropertyStore& store() { return store_; }
   const PropertyStore& store() const { return store_; }
   const PropertyRegistry& properties() const { return plugins_.properties(); }

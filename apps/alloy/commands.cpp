@@ -443,6 +443,16 @@ int check(const std::string& path, std::ostream& out, std::ostream& err) {
   PluginRegistry registry;
   register_native_plugins(registry);
   lua::LoadedScene scene = lua::load_scene(path, registry, options);
+  // A part that the world refuses while it starts (a value out of the
+  // engine's bounds, a non-finite one, an engine error) is frozen and the
+  // world would go on without it; a check says so and fails.
+  std::string refused;
+  scene.world->add_observer([&](const Event& e) {
+    if (e.type == "non_finite" || e.type == "out_of_bounds")
+      refused += (refused.empty() ? "" : "\n") + frozen_message(*scene.world, e);
+    else if (e.type == "engine_error")
+      refused += (refused.empty() ? "" : "\n") + e.source + ": " + e.text;
+  });
   try {
     scene.world->start();  // the plugins the scene needs are created and check their settings
   } catch (const InputError& e) {
@@ -451,6 +461,7 @@ int check(const std::string& path, std::ostream& out, std::ostream& err) {
   // A Lua stage that fails while the world starts (building, priming) is
   // disabled and the world would go on; a check says so and fails.
   if (std::string f = log.failures(scene.mods.get()); !f.empty()) throw InputError(f);
+  if (!refused.empty()) throw InputError(path + ": " + refused);
   warn_if_empty(*scene.world, path, err);
   out << path << ": ok\n";
   return kExitOk;

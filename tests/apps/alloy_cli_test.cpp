@@ -280,6 +280,21 @@ TEST(AlloyCli, AnEmptySceneWarnsThatItHoldsNothing) {
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 }
 
+TEST(AlloyCli, CheckFailsWhenThePhysicsRefusesAPartAtTheStart) {
+  // A mass the property allows (positive) but the rigid body cannot take: the
+  // part is frozen when the world starts, and a check must not say "ok".
+  const fs::path scene = temp_dir() / "speck_scene.lua";
+  std::ofstream(scene) << "world { seconds = 0.1 }\n"
+                          "object { name = \"speck\", shape = \"sphere\", radius = 0.1, "
+                          "mass = 1e-300, position = {0, 1, 0} }\n"
+                          "object { name = \"ball\", shape = \"sphere\", radius = 0.1, "
+                          "mass = 1, position = {1, 1, 0} }\n";
+  Result r = cli({"check", scene.string()});
+  EXPECT_EQ(r.code, kExitBadInput) << r.out << r.err;
+  EXPECT_NE(r.err.find("frozen: speck"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find(": ok"), std::string::npos) << r.out;
+}
+
 TEST(AlloyCli, NarrationIsInStepOrder) {
   // Contacts (narrated), reports every few steps, and a mod that prints from
   // its stage every 10th step: all in the order of their steps.

@@ -53,37 +53,37 @@ struct Case {
 
 const Case kCases[] = {
     {"huge finite force", "t.add_force(ball, vec3(1e12, 0, 0))",
-     "frozen: ball: evil.push queued add_force {1e+12, 0, 0} N on it: its loads would change its "
+     "frozen: ball: mod 'evil' (stage 'evil.push') queued add_force {1e+12, 0, 0} N on it: its loads would change its "
      "speed by "
      "1.04167e+09 m/s (the limit is 100000 m/s)"},
     {"torque of 1e308", "t.add_torque(ball, vec3(0, 0, 1e308))",
-     "evil.push queued add_torque {0, 0, 1e+308} N m on it: its loads would change its angular "
+     "mod 'evil' (stage 'evil.push') queued add_torque {0, 0, 1e+308} N m on it: its loads would change its angular "
      "speed"},
     {"force at a far point", "t.add_force_at(ball, vec3(0, 1, 0), vec3(1e300, 0, 0))",
-     "evil.push queued add_force_at {0, 1, 0} N at {1e+300, 0, 0} m"},
+     "mod 'evil' (stage 'evil.push') queued add_force_at {0, 1, 0} N at {1e+300, 0, 0} m"},
     {"huge force at a far point (overflows the torque)",
      "t.add_force_at(ball, vec3(1e300, 0, 0), vec3(0, 1e300, 0))",
-     "evil.push queued add_force_at {1e+300, 0, 0} N"},
+     "mod 'evil' (stage 'evil.push') queued add_force_at {1e+300, 0, 0} N"},
     {"many loads within the bound", "for i = 1, 1000 do t.add_force(ball, vec3(1e6, 0, 0)) end",
      "its speed by 1.04167e+06 m/s"},
     {"alternating +-huge forces that cancel",
      "for i = 1, 10 do t.add_force(ball, vec3(i % 2 == 0 and 1e300 or -1e300, 0, 0)) end",
-     "evil.push queued add_force"},
+     "mod 'evil' (stage 'evil.push') queued add_force"},
     // A frozen object leaves the mass column's members (every stage's scope):
     // the loop stops writing to it.
     {"huge impulse through a bulk write",
      "local m = w:read('mass') local f = t.add_force_each(m) "
      "for i in m:each() do if i == ball then f[i] = vec3(0, 1e15, 0) end end",
-     "evil.push queued add_force {0, 1e+15, 0} N"},
+     "mod 'evil' (stage 'evil.push') queued add_force {0, 1e+15, 0} N"},
     {"huge torque through a bulk write",
      "local m = w:read('mass') local q = t.add_torque_each(m) "
      "for i in m:each() do if i == ball then q[i] = vec3(0, 0, 1e200) end end",
-     "evil.push queued add_torque {0, 0, 1e+200} N m"},
+     "mod 'evil' (stage 'evil.push') queued add_torque {0, 0, 1e+200} N m"},
     {"a push within the bound every step (a runaway)", "t.add_force(ball, vec3(0, 0, 2.4e7))",
-     "evil.push pushed it until the rigid body's step gave it a velocity of {0,"},
+     "mod 'evil' (stage 'evil.push') pushed it until the rigid body's step gave it a velocity of {0,"},
     {"a twist within the bound every step (a runaway spin)",
      "t.add_torque(ball, vec3(0, 0, 1.9e5))",
-     "evil.push pushed it until the rigid body's step gave it an angular velocity of"},
+     "mod 'evil' (stage 'evil.push') pushed it until the rigid body's step gave it an angular velocity of"},
     {"denormal force and point",
      "t.add_force_at(ball, vec3(4.9e-324, 0, 0), vec3(1e-310, -1e-310, 0))", nullptr},
     {"denormal torque", "t.add_torque(ball, vec3(0, 0, -4.9e-324))", nullptr},
