@@ -193,6 +193,10 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
 
   lua_State* L = mod_->state();
   StackGuard guard(L);
+  // The stage's blocks and declarations are built outside a protected call
+  // (and the prelude runs no code of the mod): from the host's reserve, so
+  // that a mod at the edge of its memory cannot make a new stage fail.
+  MemoryBudget::HostScope building(mod_->host().memory());
   lua_rawgeti(L, LUA_REGISTRYINDEX, mod_->prelude_ref("new_stage"));
   const int fn = lua_gettop(L);
   lua_pushlightuserdata(L, this);

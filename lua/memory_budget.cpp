@@ -15,7 +15,7 @@ void* MemoryBudget::allocate(void* ud, void* ptr, std::size_t old_size,
     return nullptr;
   }
   if (self->limit_ != 0 && new_size > old_bytes &&
-      self->used_ - old_bytes + new_size > self->limit_) {
+      self->used_ - old_bytes + new_size > self->limit_ + self->slack_) {
     ++self->refusals_;
     // The error Lua raises can be caught; the tick that follows cannot.
     if (self->zero_on_refusal_) *self->zero_on_refusal_ = 0;

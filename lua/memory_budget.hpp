@@ -29,6 +29,27 @@ class MemoryBudget {
   /// must outlive the allocator's use of it.
   void zero_on_refusal(std::int16_t* counter) { zero_on_refusal_ = counter; }
 
+  /// While one lives, the host is building values in the state for the mod
+  /// (an event table before a handler runs, a stage's blocks before its first
+  /// call): these run outside any protected call, where a refused allocation
+  /// would be an unprotected error, so they may go past the limit by up to
+  /// kHostReserve. The mod pays it back: its own next allocation past the
+  /// limit is refused and stops it as usual.
+  class HostScope {
+   public:
+    explicit HostScope(MemoryBudget& budget) : budget_(budget), saved_(budget.slack_) {
+      budget_.slack_ = kHostReserve;
+    }
+    ~HostScope() { budget_.slack_ = saved_; }
+    HostScope(const HostScope&) = delete;
+    HostScope& operator=(const HostScope&) = delete;
+
+   private:
+    MemoryBudget& budget_;
+    std::size_t saved_;
+  };
+  static constexpr std::size_t kHostReserve = 1u << 20;
+
   /// A lua_Alloc: `ud` is the MemoryBudget. noexcept: it is called from inside
   /// the Lua VM, which must never see a C++ exception.
   static void* allocate(void* ud, void* ptr, std::size_t old_size, std::size_t new_size) noexcept;
@@ -39,6 +60,7 @@ class MemoryBudget {
   std::size_t peak_ = 0;
   std::size_t refusals_ = 0;
   std::int16_t* zero_on_refusal_ = nullptr;
+  std::size_t slack_ = 0;  ///< kHostReserve while a HostScope lives, else 0
 };
 
 }  // namespace alloy::lua

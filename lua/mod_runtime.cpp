@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <lua.hpp>
 
 #include "lua/file_watcher.hpp"
@@ -497,6 +498,9 @@ void ModRuntime::dispatch(const Event& e) {
       if (!l.handler_ok[h] || (handlers[h].first != "*" && handlers[h].first != e.type)) continue;
       lua_State* L = mod.state();
       StackGuard guard(L);
+      // The event table is built outside a protected call: from the host's
+      // reserve, so that a mod at the edge of its memory cannot make it fail.
+      std::optional<MemoryBudget::HostScope> building(mod.host().memory());
       lua_rawgeti(L, LUA_REGISTRYINDEX, handlers[h].second);
       lua_createtable(L, 0, 10);
       lua_pushstring(L, e.type.c_str());
@@ -525,6 +529,7 @@ void ModRuntime::dispatch(const Event& e) {
       }
       lua_setfield(L, -2, "values");
       mod.push_state();
+      building.reset();  // the handler's own allocations count as usual
       mod.begin_call(e.step);
       const ErrorLocation file{display_path(mod.manifest().folder / mod.runtime_file()), 0, ""};
       try {

@@ -212,6 +212,52 @@ function mod.on_load(state) state.calls = 0 end
   EXPECT_EQ(std::get<double>(world.get(x, "n")), 2.0);
 }
 
+// The host builds values in a mod's state outside any protected call (the
+// event table a handler gets). A mod creeping up to its memory limit must be
+// stopped at one of its own allocations, never make one of the host's fail:
+// that would be an unprotected Lua error, thrown through the world. The limit
+// is swept over a range of offsets so that the edge falls, run after run, on
+// every allocation of a step, the host's included.
+TEST(ModSandbox, AModAtTheEdgeOfItsMemoryCannotMakeTheHostFail) {
+  const char* kCreep = R"LUA(
+mod.property { name = "creep_mark" }
+mod.resolver { name = "creep.stage", writes = { "creep_mark" }, needs = { "creep_mark" },
+  advance = function(w)
+    w.state.keep = w.state.keep or {}
+    local k = w.state.keep
+    k[#k + 1] = string.rep("x", 150) .. #k
+    w:emit("creep_ping", { text = "a", n = #k })
+  end }
+mod.on("creep_ping", function(e, state) state.seen = (state.seen or 0) + 1 end)
+)LUA";
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  TempMods mods;
+  mods.mod("good", kGood);
+  mods.mod("creep", kCreep);
+  auto run = [&](std::size_t memory) {
+    lua::ModRuntimeOptions o = runtime_options(mods, nullptr);
+    o.budget.memory_bytes = memory;
+    lua::ModRuntime runtime(registry, o);
+    runtime.load("good");
+    runtime.load("creep");
+    const std::size_t loaded = runtime.memory_of("creep");
+    World world(registry);
+    runtime.attach(world);
+    const ObjectId thing = world.create("thing");
+    world.set(thing, "good_count", 0.0);
+    world.set(thing, "creep_mark", 0.0);
+    EXPECT_NO_THROW(world.run(60)) << "limit " << memory;
+    EXPECT_EQ(std::get<double>(world.get(thing, "good_count")), 60.0);
+    return std::pair{loaded, runtime.stopped("creep")};
+  };
+  const std::size_t loaded = run(64u << 20).first;
+  int stopped = 0;
+  for (std::size_t offset = 0; offset < 1024; offset += 16)
+    stopped += run(loaded + (4u << 10) + offset).second ? 1 : 0;
+  EXPECT_EQ(stopped, 64);  // every run reached the edge, and was stopped there
+}
+
 TEST(ModSandbox, ModsShareNothingButTheWorld) {
   PluginRegistry registry;
   TempMods mods;
