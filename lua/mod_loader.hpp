@@ -56,7 +56,9 @@ struct Manifest {
 };
 
 /// Reads and checks folder/mod.lua. The manifest is data: it runs in an empty
-/// environment. Throws InputError at the manifest.
+/// environment of a small host of its own (tight memory, instruction, time and
+/// pattern limits), not in `host`, which is kept for the callers' sake.
+/// Throws InputError at the manifest.
 Manifest read_manifest(LuaHost& host, const std::filesystem::path& folder);
 
 /// Lexically normal display form of a path ("mods/kit/init.lua").
