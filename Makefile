@@ -7,11 +7,19 @@
 #   make bench   build, then run every benchmark and regenerate the tables
 #                and plots of docs/performance.md (QUICK=1: a short smoke run
 #                that writes into the build directory only)
+#   make test-asan  the whole suite built with AddressSanitizer and
+#                UndefinedBehaviorSanitizer (build-asan/), any report fails
+#   make fuzz    build the libFuzzer targets with clang (build-fuzz/) and run
+#                each for FUZZ_SECONDS (default 60); fails on a crash, a
+#                sanitizer report, a leak or a timeout (tests/fuzz/README.md)
 
 BUILD      ?= build
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 MAIN_SCENE ?= mods/doorbell
 ALLOY      := $(BUILD)/apps/alloy
+ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
 
 # Debian packages the build needs (the dependencies named in DESIGN.md, plus
 # the well-kept libraries used for the command line and JSON, and the
@@ -21,9 +29,25 @@ PACKAGES := build-essential cmake pkg-config \
             libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
             libimgui-dev libpng-dev fonts-dejavu-core
 
+# What `make fuzz` needs besides: Debian's clang 16 (bookworm's default clang,
+# 14, cannot build alloy: it lacks C++20's parenthesized aggregate
+# initialization, which emplace_back relies on), libFuzzer and the sanitizers'
+# runtimes for it (libclang-rt-16-dev, only recommended by clang), and
+# llvm-symbolizer (llvm-16) for stacks with file and line.
+FUZZ_CLANG    := 16
+FUZZ_PACKAGES := clang-$(FUZZ_CLANG) libclang-rt-$(FUZZ_CLANG)-dev llvm-$(FUZZ_CLANG)
+
+# The sanitizer builds: optimised but with asserts and frame pointers; the
+# benchmarks are not built (they are not tests).
+SANITIZER_FLAGS := -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
+                   -DALLOY_BUILD_BENCH=OFF
+# A sanitizer's report fails the test that triggered it.
+SANITIZER_ENV := ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:check_initialization_order=1 \
+                 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: run test bench deps configure build clean
+.PHONY: run test bench deps deps-fuzz configure build test-asan fuzz clean
 
 run: build
 	$(ALLOY) run $(MAIN_SCENE)
@@ -34,10 +58,27 @@ test: build
 bench: build
 	bench/run_all.sh $(BUILD) $(if $(QUICK),--quick)
 
+test-asan: deps
+	cmake -S . -B $(ASAN_BUILD) $(SANITIZER_FLAGS) -DALLOY_SANITIZE=address,undefined
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
+
+fuzz: deps deps-fuzz
+	cmake -S . -B $(FUZZ_BUILD) $(SANITIZER_FLAGS) -DCMAKE_CXX_COMPILER=clang++-$(FUZZ_CLANG) -DALLOY_FUZZ=ON
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_all
+	ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-$(FUZZ_CLANG)/bin/llvm-symbolizer \
+	  tests/fuzz/run_fuzzers.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
 # Installs only what is missing, so a machine that has everything runs no apt.
 deps:
-	@missing=""; \
-	for p in $(PACKAGES); do \
+	@$(call install,$(PACKAGES))
+
+deps-fuzz:
+	@$(call install,$(FUZZ_PACKAGES))
+
+define install
+	missing=""; \
+	for p in $(1); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
@@ -45,6 +86,7 @@ deps:
 	  $(SUDO) apt-get update -qq && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
 	fi
+endef
 
 configure: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
@@ -53,4 +95,4 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 clean:
-	rm -rf $(BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

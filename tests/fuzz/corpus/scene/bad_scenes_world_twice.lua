@@ -1,0 +1,3 @@
+-- expect: line 3: world{} is given twice
+world { seconds = 1 }
+world { seconds = 2 }

@@ -1,0 +1,152 @@
+-- The electric motor of the paper (section 4.2, figure 4), built from kit
+-- parts only: a rotor of eight permanent-magnet spokes glued to an axle that
+-- is pinned to the play area, a brass sliding contact hinged to the left of
+-- the rotor that falls onto the spokes, two electromagnets to the right, a
+-- bias magnet below, a battery and wires. Nothing here knows what a motor
+-- is: each part is what it is made of, the wires say what is connected to
+-- what, and the physics does the rest (docs/motor.md).
+--
+--   require "motor.layout" (options)   builds it and returns the numbers
+--   used; any default below can be overridden by name (variants, tests).
+--
+-- How it turns. The spokes are neodymium bar magnets lying along their
+-- radius, north out and south out in turn; they are nickel-plated and so
+-- conduct. The slider rests on the spokes' outer ends; the spoke it touches
+-- closes a circuit: battery + -> slider -> spoke -> (its wire) -> a coil ->
+-- battery -. The four north spokes are wired to the upper coil, the four
+-- south spokes to the lower one. Both coils are wired so that the end facing
+-- the rotor is a north pole, and they stand 45 degrees apart (+-22.5 degrees
+-- about the horizontal): since the rotor's poles alternate every 45 degrees,
+-- a north pole at -22.5 degrees acts on the rotor exactly as a south pole at
+-- +22.5 degrees would, so the pair is the paper's "single electromagnet of
+-- changing polarity" at +22.5 degrees. While the slider touches a north
+-- spoke (from 112.5 to 157.5 degrees, upper left) the north spoke nearest
+-- the upper coil is just above it and is pushed on, and the south spoke just
+-- below it is pulled up (paper, figure 6); when the slider reaches the next
+-- spoke, a south one, the other coil takes over and the push goes on. The
+-- slider's contact line is tangent to the circle of the spokes' ends at 135
+-- degrees, so the hand-over comes exactly when the torque of the coil that
+-- is on would turn round.
+--
+-- Coordinates: metres, y up, z = 0 the play area; angles in degrees from +x,
+-- anticlockwise, about the axle.
+local kit = require "kit"
+
+local defaults = {
+  centre = { 0.24, 0.20 },  -- the axle
+  -- Supply: the kit's 6 V lantern battery (four alkaline cells, 0.5 ohm).
+  emf = 6, internal_resistance = 0.5,
+  -- The rotor: eight 50 x 10 x 10 mm sintered NdFeB bars (the kit's default
+  -- magnet, 37.5 g, q = 112 A m), inner ends 24 mm from the axle, on a wooden
+  -- hub (insulating: the spokes touch nothing but the slider).
+  spoke_length = 0.05, spoke_width = 0.01, spoke_inner = 0.024, hub_radius = 0.022,
+  -- The bearing: a 10 mm steel axle in a greased bronze bush. Dry friction
+  -- (N m) and the grease's viscous drag (N m s: Petroff's law, 2 pi eta r^3
+  -- l / c, is 9.0e-3 for grease of 10 Pa s, r = 5 mm, l = 23 mm, c = 20 um).
+  -- The drag is what sets the steady speed (docs/motor.md, "What sets the speed").
+  axle_friction = 0.002, bearing_drag = 9e-3,
+  -- The sliding contact: a brass rod 170 x 4 x 4 mm hinged 4 mm from its
+  -- left end. Its underside lies on the tangent to the circle of the spokes'
+  -- ends at contact_angle, the hinge hinge_distance down that line. It is
+  -- held raised by slider_lift (rad) until slider_release (s), then falls.
+  -- A sliding contact is made to slide and not to bounce: friction 0.15
+  -- (a silver-graphite face), restitution 0 on both sides of the pair (the
+  -- rigid body takes the larger of a pair's two values, so the spokes' ends
+  -- are dead too).
+  contact_angle = 135, hinge_distance = 0.13, slider_length = 0.17, slider_width = 0.004,
+  slider_lift = 0.4, slider_release = 0.1, slider_friction = 0.15, spoke_restitution = 0,
+  -- The electromagnets: the kit's coil (500 turns of 0.5 mm copper on a
+  -- 50 x 30 mm bobbin with an iron core: 3.2 ohm, 16 mH, q = 30 A m per
+  -- ampere), radial, their inner faces coil_gap outside the spokes' ends.
+  coil_angle = 22.5, coil_gap = 0.008, coil_length = 0.05, coil_diameter = 0.03, turns = 500,
+  -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
+  -- below the axle, north up; it pulls a south spoke to the bottom, which
+  -- puts a north spoke under the slider, where the torque is largest.
+  bias_distance = 0.12, bias_grade = "ferrite", bias_length = 0.03, bias_width = 0.01,
+  -- The rotor as it is put down, turned by this many degrees from where the
+  -- bias magnet holds it (tests: it settles back before the slider lands).
+  rotor_angle = 0,
+}
+
+return function(options)
+  local o = {}
+  for k, v in pairs(defaults) do o[k] = v end
+  for k, v in pairs(options or {}) do
+    if defaults[k] == nil then error("motor: no option '" .. tostring(k) .. "'", 2) end
+    o[k] = v
+  end
+  local C = o.centre
+  local rad = math.rad
+  local function at(r, degrees)
+    return { C[1] + r * math.cos(rad(degrees)), C[2] + r * math.sin(rad(degrees)) }
+  end
+  local tip = o.spoke_inner + o.spoke_length  -- radius of the spokes' outer ends
+
+  -- The rotor. Spoke i stands at -90 + 45 i degrees (the bottom first, going
+  -- anticlockwise), south out for even i: S1 N1 S2 N2 S3 N3 S4 N4.
+  local hub_mass = kit.material("wood").density * 4 / 3 * math.pi * o.hub_radius ^ 3
+  local inertia = 2 / 5 * hub_mass * o.hub_radius ^ 2
+  local spokes, counts = {}, { N = 0, S = 0 }
+  local magnet_density = 7500  -- sintered NdFeB (kit.magnet's "neodymium")
+  for i = 0, 7 do
+    local pole = i % 2 == 1 and "N" or "S"
+    counts[pole] = counts[pole] + 1
+    local name = "spoke_" .. pole .. counts[pole]
+    local r = o.spoke_inner + o.spoke_length / 2
+    local angle = -90 + 45 * i + o.rotor_angle
+    kit.magnet { name = name, at = at(r, angle), angle = rad(angle), length = o.spoke_length,
+                 width = o.spoke_width, north = pole == "N" and "+x" or "-x",
+                 props = { restitution = o.spoke_restitution } }
+    kit.glue { name = name .. "_glue", a = "axle", b = name }
+    spokes[#spokes + 1] = { name = name, north = pole == "N" }
+    local m = magnet_density * o.spoke_length * o.spoke_width * o.spoke_width
+    inertia = inertia + m * ((o.spoke_length ^ 2 + o.spoke_width ^ 2) / 12 + r * r)
+  end
+  -- The grease's drag on the rotor is b w; the rigid body's angular damping
+  -- is a rate (dw/dt = -c w), so c = b / I of the rotor as built here.
+  kit.disk { name = "axle", material = "wood", at = C, radius = o.hub_radius,
+             props = { angular_damping = o.bearing_drag / inertia } }
+  kit.pin { name = "bearing", part = "axle", friction = o.axle_friction }
+
+  -- The sliding contact, raised and held until it is let go.
+  local p = rad(o.contact_angle)
+  local along = { math.cos(p - math.pi / 2), math.sin(p - math.pi / 2) }  -- the tangent, rising to the right
+  local out = { math.cos(p), math.sin(p) }
+  local half = o.slider_width / 2
+  local hinge = { C[1] + tip * out[1] - o.hinge_distance * along[1] + half * out[1],
+                  C[2] + tip * out[2] - o.hinge_distance * along[2] + half * out[2] }
+  local lean = math.atan2(along[2], along[1]) + o.slider_lift
+  local inset = 0.004
+  local from_hinge = o.slider_length / 2 - inset
+  kit.bar { name = "slider", material = "brass", length = o.slider_length, width = o.slider_width,
+            at = { hinge[1] + from_hinge * math.cos(lean), hinge[2] + from_hinge * math.sin(lean) },
+            angle = lean, pinned = o.slider_release > 0,
+            props = { friction = o.slider_friction, restitution = 0 } }
+  kit.hinge { name = "slider_hinge", a = "slider", anchor = hinge }
+
+  -- The two electromagnets, radial, inner faces towards the rotor.
+  local r_coil = tip + o.coil_gap + o.coil_length / 2
+  for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
+    kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
+               diameter = o.coil_diameter, turns = o.turns }
+  end
+
+  -- The bias magnet, standing below the axle, north up.
+  kit.magnet { name = "bias", at = at(o.bias_distance, -90), angle = math.pi / 2, length = o.bias_length,
+               width = o.bias_width, grade = o.bias_grade, north = "+x", pinned = true }
+
+  -- The battery, below and to the left, and the wires. A coil's current
+  -- from its terminal 1 to 0 makes its -x end (the one facing the rotor) a
+  -- north pole.
+  kit.battery { name = "battery", at = { C[1] - 0.115, C[2] - 0.125 }, emf = o.emf,
+                internal_resistance = o.internal_resistance }
+  kit.wire { name = "lead", from = "battery", from_terminal = 1, to = "slider" }
+  for _, s in ipairs(spokes) do
+    kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and "upper_coil" or "lower_coil", to_terminal = 1 }
+  end
+  kit.wire { name = "upper_return", from = "upper_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
+  kit.wire { name = "lower_return", from = "lower_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
+
+  o.hinge, o.tip, o.inertia, o.coil_radius = hinge, tip, inertia, r_coil
+  return o
+end
