@@ -184,7 +184,7 @@ TEST(HostileOwnership, APropertyWithTheNameOfANativeOneIsRefused) {
   // The same definition as the rigid body's, so only ownership refuses it.
   Arena a(
       "mod.property { name = \"evil_mark\" }\n"
-      "mod.property { name = \"mass\", unit = \"kg\", min = 0, min_exclusive = true }\n"
+      "mod.property { name = \"mass\", unit = \"kg\", min = 0, min_exclusive = true, max = 1e12 }\n"
       "mod.resolver { name = \"evil.stage\", writes = { \"mass\" }, needs = { \"evil_mark\" },\n"
       "  advance = function(w) end }\n");
   a.check_refused({"evil/runtime.lua:2", "'mass'", "the native plugin 'rigid_body'",
