@@ -19,7 +19,9 @@ namespace {
 
 using Kind = lua::ModReport::Kind;
 
-const char* kGood = R"LUA(
+/// The good mod of the other hostile tests, with an event every step for the
+/// evil handlers to handle.
+const char* kGoodTicking = R"LUA(
 mod.property { name = "good_count" }
 mod.resolver {
   name = "good.counter", writes = { "good_count" }, needs = { "good_count" },
@@ -202,7 +204,7 @@ TEST_P(Floods, AreBoundedAndStopTheModNotTheWorld) {
   PluginRegistry registry;
   register_native_plugins(registry);
   TempMods mods;
-  mods.mod("good", kGood);
+  mods.mod("good", kGoodTicking);
   mods.mod("evil", f.runtime);
   Seen run;
   std::vector<std::string> reports;
@@ -304,7 +306,7 @@ struct Bystander {
   }
   Bystander() {
     register_native_plugins(registry);
-    mods.mod("good", kGood);
+    mods.mod("good", kGoodTicking);
   }
   /// Steps a world with the good mod's object; true if it counted every step.
   bool good_keeps_stepping(lua::ModRuntime& runtime) {

@@ -21,14 +21,6 @@ namespace {
 
 using Kind = lua::ModReport::Kind;
 
-const char* kGood = R"LUA(
-mod.property { name = "good_count" }
-mod.resolver {
-  name = "good.counter", writes = { "good_count" }, needs = { "good_count" },
-  advance = function(w) local c = w:write("good_count") for i in c:each() do c[i] = c[i] + 1 end end,
-}
-)LUA";
-
 /// The evil mod: `code` runs in its resolver's advance, at line 5.
 std::string evil(const std::string& code) {
   return "mod.property { name = \"evil_mark\" }\n"

@@ -21,14 +21,6 @@ namespace {
 
 using Kind = lua::ModReport::Kind;
 
-const char* kGood = R"LUA(
-mod.property { name = "good_count" }
-mod.resolver {
-  name = "good.counter", writes = { "good_count" }, needs = { "good_count" },
-  advance = function(w) local c = w:write("good_count") for i in c:each() do c[i] = c[i] + 1 end end,
-}
-)LUA";
-
 // The other mod: its counter is what a hostile resolver wants to overwrite.
 const char* kWitness = R"LUA(
 mod.property { name = "witness" }

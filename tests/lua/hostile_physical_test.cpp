@@ -20,14 +20,6 @@ namespace {
 
 using Kind = lua::ModReport::Kind;
 
-const char* kGood = R"LUA(
-mod.property { name = "good_count" }
-mod.resolver {
-  name = "good.counter", writes = { "good_count" }, needs = { "good_count" },
-  advance = function(w) local c = w:write("good_count") for i in c:each() do c[i] = c[i] + 1 end end,
-}
-)LUA";
-
 /// The hostile mod: `code` runs in its interaction on the rigid body, every
 /// step, with `ball` the victim's slot and `t` the rigid body's functions.
 std::string hostile(const std::string& code) {

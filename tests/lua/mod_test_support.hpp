@@ -65,6 +65,17 @@ class TempMods {
 };
 
 /// The options of a ModRuntime over `mods`, with the log kept for the test.
+/// The well-behaved mod of the sandbox and hostile tests: its resolver adds
+/// one to `good_count` every step, so a count equal to the steps run shows
+/// that the world, and this mod with it, went on whatever another mod did.
+inline constexpr const char* kGood = R"LUA(
+mod.property { name = "good_count" }
+mod.resolver {
+  name = "good.counter", writes = { "good_count" }, needs = { "good_count" },
+  advance = function(w) local c = w:write("good_count") for i in c:each() do c[i] = c[i] + 1 end end,
+}
+)LUA";
+
 inline lua::ModRuntimeOptions runtime_options(const TempMods& mods, std::vector<std::string>* log) {
   lua::ModRuntimeOptions o;
   o.mod_paths = {mods.path(), source_path("mods")};
