@@ -354,7 +354,7 @@ TEST(BoundedPatterns, AgreeWithLuaJITsOwnOnGeneratedPatterns) {
 
 // The cost of the bounded matcher against LuaJIT's on ordinary patterns, run
 // by hand (it measures time, so it is not part of the suite):
-//   build/tests/lua/lua_tests --gtest_also_run_disabled_tests \
+//   build/tests/lua/lua_tests --gtest_also_run_disabled_tests
 //     --gtest_filter='BoundedPatterns.DISABLED_CostAgainstLuaJIT'
 const char* kBenchmark = R"LUA(
 local bounded, clock = ...

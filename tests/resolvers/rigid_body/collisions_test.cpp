@@ -104,7 +104,9 @@ TEST(Collisions, TouchingIsBeganAndOngoingMergedInPairOrder) {
     std::size_t b = 0, o = 0;
     for (std::size_t k = 0; k < touching.size(); ++k) {
       const ContactPair& p = touching[k];
-      if (k > 0) ASSERT_TRUE(rigid::pair_less(touching[k - 1].a, touching[k - 1].b, p.a, p.b)) << "step " << i;
+      if (k > 0) {
+        ASSERT_TRUE(rigid::pair_less(touching[k - 1].a, touching[k - 1].b, p.a, p.b)) << "step " << i;
+      }
       ASSERT_LT(p.a, p.b);
       ASSERT_GT(p.count, 0u);
       ASSERT_LE(p.first + p.count, c.points().size());
