@@ -578,14 +578,21 @@ bool LuaStage::perform_commands() {
     if (o + stride > n) return error("a truncated command"), false;
     // The prelude checked kinds, ranges and finiteness where the mod's line
     // was known; what remains is whether the objects still exist.
-    const ObjectId id = store.id_at(std::uint32_t(b[o + 1]));
+    // A slot read from the buffer is converted only once it is known to be
+    // one: a double outside uint32's range is undefined behaviour to convert
+    // (UBSan, found by the fuzzers with an object argument of -1).
+    auto live = [&](double slot) {
+      return slot >= 0 && slot < double(store.slot_count()) ? store.id_at(std::uint32_t(slot))
+                                                             : ObjectId{};
+    };
+    const ObjectId id = live(b[o + 1]);
     if (!id)
       return error("'" + f.name + "' on the object in slot " + number_text(b[o + 1]) +
                    ", which was destroyed"),
              false;
     std::size_t a = o + 2;
     for (ArgKind k : f.args) {
-      if (k == ArgKind::Object && !store.id_at(std::uint32_t(b[a])))
+      if (k == ArgKind::Object && !live(b[a]))
         return error("'" + f.name + "' of " + store.describe(id) + ": no object in slot " +
                      number_text(b[a])),
                false;

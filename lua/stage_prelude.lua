@@ -446,6 +446,9 @@ local converters = {
   end,
   object = function(t, j, v, what)
     if type(v) ~= "number" then error(what .. " takes an object (a slot number), got " .. type(v), 3) end
+    if not (v >= 0 and v < 4294967296 and v == floor(v)) then
+      error(what .. ": no object in slot " .. tostring(v), 3)
+    end
     t[j] = v
     return j + 1
   end,

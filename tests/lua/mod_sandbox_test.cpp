@@ -250,6 +250,38 @@ mod.on("creep_ping", function(e, state) state.seen = (state.seen or 0) + 1 end)
   EXPECT_EQ(stopped, 64);  // every run reached the edge, and was stopped there
 }
 
+// An object argument that is no slot at all (negative, fractional, past any
+// uint32) is refused where the mod called, before it reaches the buffer: the
+// C++ side once converted -1 to an unsigned slot (UBSan, found by the mod API
+// fuzzer; tests/fuzz/regressions/mod_api/ubsan_negative_object_slot_*).
+TEST(ModSandbox, AnObjectArgumentThatIsNoSlotIsRefusedAtTheModsLine) {
+  for (const char* slot : {"-1", "0.5", "2^40"}) {
+    PluginRegistry registry;
+    register_native_plugins(registry);
+    TempMods mods;
+    mods.mod("good", kGood);
+    mods.mod("evil", std::string(R"LUA(mod.property { name = "evil_mark" }
+mod.resolver { name = "evil.sink", writes = { "evil_mark" }, needs = { "evil_mark" },
+  functions = { tag = { "object" } }, advance = function(w) end }
+mod.interaction { name = "evil.tagger", reads = { "evil_mark" }, target = "evil.sink",
+  apply = function(w) w.target.tag(w:find("thing"), )LUA") + slot + ") end }\n");
+    lua::ModRuntime runtime(registry, runtime_options(mods, nullptr));
+    runtime.load("good");
+    runtime.load("evil");
+    World world(registry);
+    runtime.attach(world);
+    const ObjectId thing = world.create("thing");
+    world.set(thing, "good_count", 0.0);
+    world.set(thing, "evil_mark", 0.0);
+    world.run(3);
+    EXPECT_EQ(std::get<double>(world.get(thing, "good_count")), 3.0);
+    std::string reports;
+    for (const auto& r : runtime.poll()) reports += r.message + "\n";
+    EXPECT_TRUE(contains(reports, "'tag': no object in slot")) << slot << ": " << reports;
+    EXPECT_TRUE(contains(reports, "evil/runtime.lua:5")) << slot << ": " << reports;
+  }
+}
+
 TEST(ModSandbox, ModsShareNothingButTheWorld) {
   PluginRegistry registry;
   TempMods mods;
