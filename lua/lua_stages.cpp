@@ -583,7 +583,7 @@ bool LuaStage::perform_commands() {
     // (UBSan, found by the fuzzers with an object argument of -1).
     auto live = [&](double slot) {
       return slot >= 0 && slot < double(store.slot_count()) ? store.id_at(std::uint32_t(slot))
-                                                             : ObjectId{};
+                                                            : ObjectId{};
     };
     const ObjectId id = live(b[o + 1]);
     if (!id)

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <optional>
 #include <lua.hpp>
+#include <optional>
 
 #include "lua/file_watcher.hpp"
 #include "lua/lua_bridge.hpp"
