@@ -348,7 +348,18 @@ void LuaHost::call(int nargs, int nresults, const ErrorLocation& fallback) {
   const int rc = lua_pcall(L, nargs, nresults, func);
   --depth_;
   lua_remove(L, func);
-  if (rc == 0) return;
+  if (rc == 0 && budget_->refusals() == refusals) return;
+  if (rc == 0) {
+    // The script ran out of memory and caught the error in its own pcall.
+    // A mod that does so is stopped (mod_runtime); a scene or a manifest is
+    // refused the same way, rather than going on at its limit until the
+    // instruction budget ends it.
+    lua_pop(L, nresults == LUA_MULTRET ? lua_gettop(L) - func + 1 : nresults);
+    lua_gc(L, LUA_GCCOLLECT, 0);
+    throw InputError(fallback, "out of memory: the script needs more than its budget of " +
+                                   std::to_string(memory_limit_ / 1024) +
+                                   " KiB (it caught the error in a pcall and went on)");
+  }
   // LuaJIT has no emergency collection: after a failure (above all an
   // out-of-memory one) free the failed script's garbage now, so that the
   // host can go on within its budget.

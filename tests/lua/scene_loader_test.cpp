@@ -92,6 +92,16 @@ TEST_F(SceneLoaderTest, AMemoryHungrySceneIsStopped) {
   EXPECT_NE(std::string(e.what()).find("out of memory"), std::string::npos) << e.what();
 }
 
+TEST_F(SceneLoaderTest, ASceneThatCatchesItsOwnOutOfMemoryIsStillStopped) {
+  LoadOptions options;
+  options.memory_limit = 4u << 20;
+  const InputError e = load_error("tests/lua/limits/memory_hog_pcall.lua", options);
+  EXPECT_NE(std::string(e.what()).find("out of memory"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("caught the error in a pcall"), std::string::npos)
+      << e.what();
+  EXPECT_NE(e.where().file.find("memory_hog_pcall.lua"), std::string::npos) << e.where().file;
+}
+
 TEST_F(SceneLoaderTest, AnEndlessSceneIsStopped) {
   LoadOptions options;
   options.instruction_limit = 20'000'000;
