@@ -61,7 +61,10 @@ TEST(Cylinder, MassAndInertiaFollowTheFormulas) {
     s->set(c, "angular_velocity", Vec3{w1, 0, w3});
     s->start();
     EXPECT_NEAR(std::get<double>(s->get(c, "mass")), 7800 * kPi * r * r * len, 1e-9);
-    const double omega = w3 * (i.z - i.x) / i.x, t = 1.0;
+    // The moments written out, not cylinder_inertia's: a wrong formula there
+    // must not move the reference with it.
+    const double i1 = (3 * r * r + len * len) / 12, i3 = r * r / 2;
+    const double omega = w3 * (i3 - i1) / i1, t = 1.0;
     double turned = 0, last = 0;
     for (std::uint64_t k = 0; k < std::uint64_t(std::llround(t / dt)); ++k) {
       s->step();
@@ -158,17 +161,20 @@ TEST(Cylinder, BouncesOnAFloorAsABallDoes) {
 }
 
 TEST(Cylinder, DisksOverlappingDeeperThanTheirThicknessArePushedApartInThePlane) {
-  // Two 2 cm thick disks dropped 4 cm into each other (an edit, a spawn):
-  // the way out is across their axes, not along them (libccd's answer, which
-  // planar disks cannot follow: they would stay inside each other).
-  Sim s(def_at(1.0 / 240, false));
-  const ObjectId a = add_cylinder(*s, {0, 0, 0}, 0.05, 0.02, "a");
-  const ObjectId b = add_cylinder(*s, {0.06, 0, 0}, 0.05, 0.02, "b");
-  s->start();
-  s.run_for(1.0);
-  const double gap = length(s.position(b) - s.position(a));
-  std::printf("centres 0.06 m apart pushed to %.5f m (touching: 0.1 m)\n", gap);
-  EXPECT_GT(gap, 0.0995);
+  // Two 2 cm thick disks of 5 cm put 4, 7 and 9 cm into each other (an edit,
+  // a spawn): the way out is across their axes, not along them (libccd's
+  // answer when the overlap is deeper than the thickness, which planar disks
+  // cannot follow: they would stay inside each other).
+  for (const double apart : {0.06, 0.03, 0.01}) {
+    Sim s(def_at(1.0 / 240, false));
+    const ObjectId a = add_cylinder(*s, {0, 0, 0}, 0.05, 0.02, "a");
+    const ObjectId b = add_cylinder(*s, {apart, 0.001, 0}, 0.05, 0.02, "b");
+    s->start();
+    s.run_for(1.0);
+    const double gap = length(s.position(b) - s.position(a));
+    std::printf("centres %.2f m apart pushed to %.5f m (touching: 0.1 m)\n", apart, gap);
+    EXPECT_GT(gap, 0.0995) << "put " << apart << " m apart";
+  }
 }
 
 // collide_parts finds a cylinder's contact with every shape, with the
