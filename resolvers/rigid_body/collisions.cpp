@@ -145,7 +145,7 @@ int collide_parts(dxGeom* g1, dxGeom* g2, int max, dContactGeom* out) {
   // other's (sphere on box: on the box). Resting contacts keep an overlap of
   // the surface layer, so a ball's point on the box is a layer nearer its
   // centre than its surface, and friction turns it about that shorter radius:
-  // it rolls faster than a ball of its radius (a 5 cm disk: 0.12 %). When one
+  // it rolls slower than a ball of its radius (5 cm: 0.12 %). When one
   // part is round (sphere, capsule, cylinder) and the other is not, the point
   // goes onto the round part's surface, along the normal: the normal force's
   // line is unchanged, and the rolling radius is the part's own.
