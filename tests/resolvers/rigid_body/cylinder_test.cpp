@@ -177,6 +177,30 @@ TEST(Cylinder, DisksOverlappingDeeperThanTheirThicknessArePushedApartInThePlane)
   }
 }
 
+// A cylinder without its length, or with a length of 0, is refused with a
+// message naming the object (not a zero-volume geom in ODE).
+TEST(Cylinder, ACylinderWithoutALengthIsRefused) {
+  for (const bool give_zero : {false, true}) {
+    Sim s(def_at(1.0 / 240));
+    std::string message = "accepted";
+    try {
+      const ObjectId c = s->create("coin");
+      s->set(c, "shape", std::string("cylinder"));
+      s->set(c, "radius", 0.05);
+      if (give_zero) s->set(c, "length", 0.0);
+      s->set(c, "mass", 1.0);
+      s->set(c, "position", Vec3{0, 1, 0});
+      s->start();
+      s->step();
+    } catch (const InputError& e) {
+      message = e.what();
+    }
+    std::printf("%s\n", message.c_str());
+    EXPECT_NE(message.find("coin"), std::string::npos) << message;
+    EXPECT_NE(message.find("a cylinder needs a"), std::string::npos) << message;
+  }
+}
+
 // collide_parts finds a cylinder's contact with every shape, with the
 // normal ODE's convention asks for (it pushes g1 out of g2).
 TEST(Cylinder, EveryShapePairTouches) {
