@@ -136,6 +136,10 @@ std::vector<Scene> scenes() {
                "largest orientation error (rad)",
                [](double dt, const Method& m) { return an::run_tumbling_box(dt, m, 10.0); },
                rigid_methods(false)});
+  s.push_back({"rolling_disk", "Disk rolling down 20 degrees (closed form a = 2/3 g sin theta)",
+               "relative error of the acceleration",
+               [](double dt, const Method& m) { return an::run_rolling(dt, m, true); },
+               rigid_methods(false)});
   std::vector<NamedMethod> elec;
   for (int sub : {1, 2, 4, 8})
     elec.push_back({std::to_string(sub) + " substep" + (sub > 1 ? "s" : ""),

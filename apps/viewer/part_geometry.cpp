@@ -49,7 +49,8 @@ std::optional<Part2D> read_part(const World& world, ObjectId id) {
     if (!size) return std::nullopt;
     p.shape = Shape2D::Box;
     p.half = {size->x / 2, size->y / 2};
-  } else if (*shape == "sphere") {
+  } else if (*shape == "sphere" || *shape == "cylinder") {
+    // A cylinder's axis is the part's z: seen along it, a disk.
     p.shape = Shape2D::Disk;
     p.radius = world.value<double>(id, "radius").value_or(0);
   } else if (*shape == "capsule") {

@@ -21,4 +21,9 @@ function geometry.sphere_volume(radius)
   return 4 / 3 * math.pi * radius ^ 3
 end
 
+--- Volume of a solid cylinder of `radius` and `length` along its axis.
+function geometry.cylinder_volume(radius, length)
+  return math.pi * radius ^ 2 * length
+end
+
 return geometry

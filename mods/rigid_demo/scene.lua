@@ -21,9 +21,10 @@ kit.floor { name = "ramp", at = { -1.5, 0.6 }, size = { 1.6, 0.05 }, angle = -0.
 kit.bar   { name = "pendulum", material = "steel", at = { 1.9, 1.8 }, length = 0.8, width = 0.04 }
 kit.hinge { name = "pivot", a = "pendulum", anchor = { 1.5, 1.8 } }
 
--- Two metal disks dropped onto the ramp: they land, roll down and off.
-kit.disk { name = "brass_disk", material = "brass", at = { -2.0, 1.3 }, radius = 0.06 }
-kit.disk { name = "copper_disk", material = "copper", at = { -1.7, 1.6 }, radius = 0.06 }
+-- Two metal disks (cylinders, coins seen face on) dropped onto the ramp:
+-- they land, roll down and off.
+kit.cylinder { name = "brass_disk", material = "brass", at = { -2.0, 1.3 }, radius = 0.06 }
+kit.cylinder { name = "copper_disk", material = "copper", at = { -1.7, 1.6 }, radius = 0.06 }
 
 -- A rubber ball dropped on the floor: it bounces, a little lower each time.
 kit.disk { name = "ball", material = "rubber", at = { 0.3, 1.5 }, radius = 0.08 }
@@ -32,5 +33,5 @@ kit.disk { name = "ball", material = "rubber", at = { 0.3, 1.5 }, radius = 0.08 
 kit.bar { name = "plank", material = "wood", at = { 0.9, 0.6 }, length = 0.6, width = 0.05, angle = 0.3 }
 
 -- A wooden wheel pinned through its centre, spun up: pin friction slows it.
-kit.disk { name = "wheel", material = "wood", at = { 2.4, 0.5 }, radius = 0.15, spin = 6 }
+kit.cylinder { name = "wheel", material = "wood", at = { 2.4, 0.5 }, radius = 0.15, depth = 0.04, spin = 6 }
 kit.pin  { name = "axle", part = "wheel", friction = 0.05 }

@@ -67,7 +67,7 @@ void ensure_geometry_properties(PropertyRegistry& registry) {
       {.name = prop::kShape,
        .kind = K::Enum,
        .doc = "collision shape",
-       .enum_values = {"box", "sphere", "capsule"}},
+       .enum_values = {"box", "sphere", "capsule", "cylinder"}},  // as the rigid body's
       {.name = prop::kSize,
        .kind = K::Vec3,
        .unit = "m",

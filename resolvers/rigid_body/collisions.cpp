@@ -1,6 +1,7 @@
 #include "resolvers/rigid_body/collisions.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <utility>
 
@@ -21,18 +22,172 @@ std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
 }
 
 bool by_pair(const ContactPair& x, const ContactPair& y) { return pair_less(x.a, x.b, y.a, y.b); }
+
+// --- narrow phase: cylinders and the contact point of round parts ---------------------
+
+constexpr int kCylinderPoints = 16;  // ODE's cylinder colliders write at most 8
+
+Vec3 geom_axis(dGeomID g) {  // the geom's local z in the world: a cylinder's or capsule's axis
+  const dReal* r = dGeomGetRotation(g);
+  return {r[2], r[6], r[10]};
+}
+
+/// How far the geom reaches from its centre along the unit direction d, m
+/// (its support function): where its surface is deepest in a part it touches
+/// along d. Negative for a shape that is not round (no reach is needed).
+double round_reach(dGeomID g, Vec3 d) {
+  switch (dGeomGetClass(g)) {
+    case dSphereClass:
+      return dGeomSphereGetRadius(g);
+    case dCapsuleClass: {
+      dReal r, len;
+      dGeomCapsuleGetParams(g, &r, &len);
+      return r + 0.5 * len * std::abs(dot(d, geom_axis(g)));
+    }
+    case dCylinderClass: {
+      dReal r, len;
+      dGeomCylinderGetParams(g, &r, &len);
+      const double along = dot(d, geom_axis(g));
+      return r * std::sqrt(std::max(0.0, 1 - along * along)) + 0.5 * len * std::abs(along);
+    }
+    default:
+      return -1;
+  }
+}
+
+/// Two cylinders with parallel axes, each centred within the other's slab
+/// (disks side by side in the play area): circle against circle, the normal
+/// across the axes. ODE's cylinder pair (libccd) takes the shallowest way out
+/// instead, which for two disks overlapping by more than their thickness is
+/// along the axis: planar disks would then pass through each other. Returns
+/// -1 when the pair is not side by side (ODE's collider decides then). One
+/// point, midway through the overlap and the axial span the two share: a
+/// line contact's middle, which pushes without turning either across its axis.
+int collide_side_by_side(dGeomID g1, dGeomID g2, int max, dContactGeom* out) {
+  const Vec3 a = geom_axis(g1);
+  if (std::abs(dot(a, geom_axis(g2))) < 1 - 1e-9) return -1;  // 0.003 degrees
+  dReal r1, h1, r2, h2;
+  dGeomCylinderGetParams(g1, &r1, &h1);
+  dGeomCylinderGetParams(g2, &r2, &h2);
+  const Vec3 c1 = to_vec3(dGeomGetPosition(g1)), c2 = to_vec3(dGeomGetPosition(g2));
+  const Vec3 d = c2 - c1;
+  const double axial = dot(d, a);
+  // The thinner one's mid-plane inside the thicker one's slab: side by side.
+  // (Stacked coins, one on the other's face, are ODE's case.)
+  if (std::abs(axial) > 0.5 * std::max(h1, h2)) return -1;
+  const Vec3 across = d - a * axial;
+  const double dist = length(across);
+  const double depth = r1 + r2 - dist;
+  if (!(depth > 0) || max < 1) return 0;
+  // From g1 to g2 across the axes (any direction across them when concentric).
+  const Vec3 u = dist > 1e-12 * (r1 + r2)
+                     ? across / dist
+                     : unit(cross(a, std::abs(a.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}));
+  // The points: on the line of centres, midway through the overlap, at both
+  // ends of the axial span the two share (a line contact; its two ends give
+  // no torque across the axis).
+  const double lo = std::max(-0.5 * h1, axial - 0.5 * h2),
+               hi = std::min(0.5 * h1, axial + 0.5 * h2);
+  const Vec3 p = c1 + u * (r1 - 0.5 * depth) + a * (0.5 * (lo + hi));
+  dContactGeom& c = out[0];
+  c = dContactGeom{};
+  c.pos[0] = p.x, c.pos[1] = p.y, c.pos[2] = p.z;
+  c.normal[0] = -u.x, c.normal[1] = -u.y, c.normal[2] = -u.z;  // ODE: pushes g1 out of g2
+  c.depth = depth;
+  c.g1 = g1, c.g2 = g2;
+  c.side1 = c.side2 = -1;
+  return 1;
+}
+
+/// Keeps `max` of the n points, spread out: the deepest, then each time the
+/// one farthest from those kept. ODE's cylinder colliders write their points
+/// in order round the rim and stop when the buffer is full: a coin lying
+/// flat, asked for 4 of its 8, gets 4 on one side and tips over.
+int spread_points(dContactGeom* points, int n, int max) {
+  if (n <= max) return n;
+  int deepest = 0;
+  for (int k = 1; k < n; ++k)
+    if (points[k].depth > points[deepest].depth) deepest = k;
+  std::swap(points[0], points[deepest]);
+  for (int kept = 1; kept < max; ++kept) {
+    int best = kept;
+    double best_d2 = -1;
+    for (int k = kept; k < n; ++k) {
+      double d2 = 1e300;
+      for (int j = 0; j < kept; ++j) {
+        const Vec3 d = to_vec3(points[k].pos) - to_vec3(points[j].pos);
+        d2 = std::min(d2, dot(d, d));
+      }
+      if (d2 > best_d2) best_d2 = d2, best = k;
+    }
+    std::swap(points[kept], points[best]);
+  }
+  return max;
+}
 }  // namespace
+
+int collide_parts(dxGeom* g1, dxGeom* g2, int max, dContactGeom* out) {
+  if (max < 1) return 0;
+  const bool cyl1 = dGeomGetClass(g1) == dCylinderClass, cyl2 = dGeomGetClass(g2) == dCylinderClass;
+  if (cyl1 && cyl2)
+    if (const int n = collide_side_by_side(g1, g2, max, out); n >= 0) return n;
+  int n;
+  if ((cyl1 || cyl2) && max < kCylinderPoints) {
+    // All of a cylinder's points (8 round a face at most), then a spread few.
+    thread_local std::array<dContactGeom, kCylinderPoints> all;
+    n = spread_points(all.data(),
+                      dCollide(g1, g2, kCylinderPoints, all.data(), sizeof(dContactGeom)), max);
+    std::copy_n(all.begin(), std::max(n, 0), out);
+  } else {
+    n = dCollide(g1, g2, max, out, sizeof(dContactGeom));
+  }
+  // ODE's colliders place a point either on one part's surface or on the
+  // other's (sphere on box: on the box). Resting contacts keep an overlap of
+  // the surface layer, so a ball's point on the box is a layer nearer its
+  // centre than its surface, and friction turns it about that shorter radius:
+  // it rolls slower than a ball of its radius (5 cm: 0.12 %). When one
+  // part is round (sphere, capsule, cylinder) and the other is not, the point
+  // goes onto the round part's surface, along the normal: the normal force's
+  // line is unchanged, and the rolling radius is the part's own.
+  for (int k = 0; k < n; ++k) {
+    dContactGeom& c = out[k];
+    const Vec3 normal = to_vec3(c.normal), p = to_vec3(c.pos);
+    const double reach1 = round_reach(g1, -normal), reach2 = round_reach(g2, normal);
+    if ((reach1 >= 0) == (reach2 >= 0)) continue;  // both round or neither
+    Vec3 q;
+    if (reach1 >= 0) {  // g1's surface deepest in g2 lies along -normal
+      const Vec3 c1 = to_vec3(dGeomGetPosition(g1));
+      q = p + normal * (-reach1 - dot(p - c1, normal));
+    } else {
+      const Vec3 c2 = to_vec3(dGeomGetPosition(g2));
+      q = p + normal * (reach2 - dot(p - c2, normal));
+    }
+    c.pos[0] = q.x, c.pos[1] = q.y, c.pos[2] = q.z;
+  }
+  return n;
+}
 
 struct CollisionSet::Impl {
   struct Geom {
     dGeomID geom = nullptr;
     ObjectId id;
     bool capsule = false;
+    bool cylinder = false;
     bool placed = false;
     bool movable = false;
     double inscribed = 0;  ///< radius of the largest sphere inside the shape, m
+    double radius = 0, half_length = 0;  ///< a cylinder's, m
     Vec3 pos;
     Quat q;
+    /// How far the part reaches from its centre along the unit direction n,
+    /// m, where a sweep stops it short of a surface: a cylinder's own reach
+    /// (a disk moving in the play area reaches its radius, not half its
+    /// thickness); for the other shapes their inscribed radius.
+    double reach(Vec3 n) const {
+      if (!cylinder) return inscribed;
+      const double along = dot(n, rotate(normalized(q), Vec3{0, 0, 1}));
+      return radius * std::sqrt(std::max(0.0, 1 - along * along)) + half_length * std::abs(along);
+    }
   };
 
   explicit Impl(int max_contacts) : buffer(std::size_t(max_contacts)) {
@@ -106,6 +261,15 @@ struct CollisionSet::Impl {
           g.capsule = true;
           g.inscribed = rad[s];
           break;
+        case Shape::Cylinder:
+          // Along the part's z, ODE's cylinder axis: no axis rotation needed.
+          if (!(rad.value_or(s, 0) > 0) || !(len.value_or(s, 0) > 0))
+            throw InputError(where, "a cylinder needs a radius > 0 and a length > 0");
+          g.geom = dCreateCylinder(space, rad[s], len[s]);
+          g.cylinder = true;
+          g.radius = rad[s], g.half_length = 0.5 * len[s];
+          g.inscribed = std::min(rad[s], 0.5 * len[s]);
+          break;
       }
       g.id = id;
       const bool is_static = stat.value_or(s, 0);
@@ -175,7 +339,7 @@ struct CollisionSet::Impl {
     // collide a before b: the points then do not depend on the space's order.
     if (s1 > s2) std::swap(s1, s2), std::swap(g1, g2);
     if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
-    const int n = dCollide(g1, g2, int(m.buffer.size()), m.buffer.data(), sizeof(dContactGeom));
+    const int n = collide_parts(g1, g2, int(m.buffer.size()), m.buffer.data());
     if (n <= 0) return;
     ContactPair& pair = m.pairs->emplace_back();
     pair.a = m.geoms[s1].id;
@@ -448,7 +612,8 @@ void CollisionSet::sweep(const WorldView& world) {
     Vec3 n = hit.normal;
     if (dot(n, dir) > 0) n = -n;  // out of the surface, towards where the part came from
     const double incidence = std::max(-dot(n, dir), 0.05);
-    const double along = std::max(0.0, hit.t - (g.inscribed - layer) / incidence);
+    const double reach = g.reach(n);
+    const double along = std::max(0.0, hit.t - (reach - layer) / incidence);
     const Vec3 centre = cand.from + dir * along;
     sweeps_.push_back({g.id, centre - g.pos});
 
@@ -458,8 +623,8 @@ void CollisionSet::sweep(const WorldView& world) {
     ContactPair pair;
     pair.a = m.geoms[self_first ? cand.slot : hit.slot].id;
     pair.b = m.geoms[self_first ? hit.slot : cand.slot].id;
-    const ContactPoint p{centre - n * g.inscribed, self_first ? n : -n,
-                         std::max(0.0, g.inscribed - dot(centre - hit.position, n))};
+    const ContactPoint p{centre - n * reach, self_first ? n : -n,
+                         std::max(0.0, reach - dot(centre - hit.position, n))};
     pair.first = std::uint32_t(points_.size());
     pair.count = 1;
     pair.depth = p.depth;

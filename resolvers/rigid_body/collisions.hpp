@@ -44,9 +44,22 @@
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
+struct dxGeom;
+struct dContactGeom;
+
 namespace alloy::rigid {
 
 class RigidBodyResolver;
+
+/// The narrow phase of two parts' ODE geoms (dCollide with our own rules; the
+/// rigid body's substeps use it too, so that both find the same points):
+/// two cylinders side by side (parallel axes, each centred within the
+/// other's thickness: disks in the play area) touch as two circles, across
+/// their axes; and a point between a round part (sphere, capsule, cylinder)
+/// and one that is not lies on the round part's surface, so that the surface
+/// layer's overlap does not shorten its rolling radius. Returns the number of
+/// points written to out[0, max).
+int collide_parts(dxGeom* g1, dxGeom* g2, int max, dContactGeom* out);
 
 /// A part moved back along its path to where it first touched a surface.
 struct Sweep {

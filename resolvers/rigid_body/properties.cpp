@@ -54,7 +54,7 @@ std::vector<PropertyDef> body_properties() {
       {.name = "shape",
        .kind = PropertyKind::Enum,
        .doc = "collision and inertia shape",
-       .enum_values = {"box", "sphere", "capsule"}},
+       .enum_values = {"box", "sphere", "capsule", "cylinder"}},
       {.name = "size",
        .kind = PropertyKind::Vec3,
        .unit = "m",
@@ -62,9 +62,11 @@ std::vector<PropertyDef> body_properties() {
        .min = 0.0,
        .min_exclusive = true,
        .max = limits::max_dimension},
-      at_most(positive("radius", "m", "sphere and capsule radius"), limits::max_dimension),
+      at_most(positive("radius", "m", "sphere, capsule and cylinder radius"),
+              limits::max_dimension),
       at_most(non_negative("length", "m",
-                           "capsule: length of the cylinder part, along the part's x axis"),
+                           "capsule: length of the cylinder part, along the part's x axis; "
+                           "cylinder: its length (a disk's thickness), along the part's z axis"),
               limits::max_dimension),
       boolean("static", "immovable geometry with no body (floor, walls)"),
       boolean("pinned", "fixed to the play area; keeps its mass and can be unpinned"),
@@ -150,6 +152,11 @@ void check_object(const World& w, ObjectId id) {
       if (!carries(w, id, "radius") || !carries(w, id, "length"))
         throw InputError("a capsule needs a 'radius' and a 'length'");
       break;
+    case Shape::Cylinder:
+      if (!carries(w, id, "radius") || !carries(w, id, "length"))
+        throw InputError(
+            "a cylinder needs a 'radius' and a 'length' (its thickness along the part's z)");
+      break;
   }
   if (!w.value<bool>(id, "static").value_or(false) && !carries(w, id, "mass") && !carries(w, id, "density"))
     throw InputError("a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
@@ -161,8 +168,15 @@ double shape_volume(Shape shape, Vec3 size, double radius, double length) {
     case Shape::Box: return size.x * size.y * size.z;
     case Shape::Sphere: return 4.0 / 3.0 * pi * radius * radius * radius;
     case Shape::Capsule: return pi * radius * radius * length + 4.0 / 3.0 * pi * radius * radius * radius;
+    case Shape::Cylinder:
+      return pi * radius * radius * length;
   }
   return 0;
+}
+
+Vec3 cylinder_inertia(double mass, double radius, double length) {
+  const double across = mass * (3 * radius * radius + length * length) / 12;
+  return {across, across, 0.5 * mass * radius * radius};
 }
 
 }  // namespace alloy::rigid

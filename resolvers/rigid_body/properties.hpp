@@ -9,8 +9,10 @@
 
 namespace alloy::rigid {
 
-/// Values of the `shape` enum, in registry order.
-enum class Shape : std::int32_t { Box = 0, Sphere = 1, Capsule = 2 };
+/// Values of the `shape` enum, in registry order. A cylinder's axis is the
+/// part's z axis: a planar cylinder is a disk in the play area (a wheel, a
+/// coin, a pulley), `length` its thickness out of the plane.
+enum class Shape : std::int32_t { Box = 0, Sphere = 1, Capsule = 2, Cylinder = 3 };
 /// Values of the `joint` enum, in registry order.
 enum class JointType : std::int32_t { Hinge = 0, Fixed = 1 };
 
@@ -58,5 +60,10 @@ void check_object(const World& world, ObjectId id);
 
 /// Volume of a part's shape, m^3 (for mass = density * volume).
 double shape_volume(Shape shape, Vec3 size, double radius, double length);
+
+/// Principal moments of inertia of a solid cylinder of mass m, radius r and
+/// length len along its axis (the part's z), about its centre of mass, kg m^2:
+/// {m (3 r^2 + len^2) / 12, the same, m r^2 / 2}.
+Vec3 cylinder_inertia(double mass, double radius, double length);
 
 }  // namespace alloy::rigid

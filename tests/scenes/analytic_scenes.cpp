@@ -580,3 +580,51 @@ Result run_heavy_chain(double dt, const Method& m) {
 }
 
 }  // namespace alloy::scenes::analytic
+
+// --- rolling (issue 12, the kit's cylinder) ----------------------------------------------
+
+namespace alloy::scenes::analytic {
+
+Result run_rolling(double dt, const Method& m, bool cylinder) {
+  Sim s(world_def(dt, m));
+  constexpr double r = 0.05, thickness = 0.02, seconds = 1.0;
+  const double theta = kRollSlope;
+  // Down the slope, and out of it (the slope's top face turned by -theta).
+  const Vec3 down{std::cos(theta), -std::sin(theta), 0}, out{std::sin(theta), std::cos(theta), 0};
+  const ObjectId slope = s->create("slope");
+  s->set(slope, "shape", std::string("box"));
+  s->set(slope, "size", Vec3{6, 0.2, 1});
+  s->set(slope, "position", Vec3{});
+  s->set(slope, "orientation", Quat::from_angle_z(-theta));
+  s->set(slope, "static", true);
+  // Touching the slope, 2 m up it.
+  const Vec3 start = out * (0.1 + r) - down * 2.0;
+  ObjectId part;
+  if (cylinder) {
+    part = s->create("disk");
+    s->set(part, "shape", std::string("cylinder"));
+    s->set(part, "radius", r);
+    s->set(part, "length", thickness);
+    s->set(part, "density", 7800.0);
+    s->set(part, "position", start);
+  } else {
+    part = add_sphere(*s, start, r, 7800.0 * 4.0 / 3.0 * kPi * r * r * r, "ball");
+  }
+  s->set(part, "planar", true);
+  const std::uint64_t n = steps_for(seconds, dt);
+  Result res;
+  res.stretch = 0;
+  run_timed(*s, n, res, [&](std::uint64_t i) {
+    if (2 * i < n) return;
+    const Vec3 v = read<Vec3>(*s, part, "velocity"), w = read<Vec3>(*s, part, "angular_velocity");
+    const Vec3 rim = v + cross(w, out * -r);  // the contact point's velocity
+    res.stretch = std::max(res.stretch, length(rim) / std::max(length(v), 1e-12));
+  });
+  const double speed = dot(read<Vec3>(*s, part, "velocity"), down);
+  res.measured = speed / (double(n) * dt) / (kG * std::sin(theta));
+  res.exact = cylinder ? 2.0 / 3.0 : 5.0 / 7.0;
+  res.error = std::abs(res.measured / res.exact - 1);
+  return res;
+}
+
+}  // namespace alloy::scenes::analytic

@@ -140,3 +140,22 @@ double magnet_force(double x);
 double elliptic_k(double k);
 
 }  // namespace alloy::scenes::analytic
+
+namespace alloy::scenes::analytic {
+
+// --- rolling (issue 12, the kit's cylinder) ----------------------------------------------
+
+/// The slope of run_rolling, rad (20 degrees).
+inline constexpr double kRollSlope = 0.3490658503988659;
+
+/// A planar part of radius 5 cm released from rest on a static 20 degree
+/// slope (friction 0.5, enough to roll without slipping), rolling for 1 s:
+/// `cylinder` true, a disk (shape cylinder, 2 cm thick, axis out of the play
+/// area), a = 2/3 g sin(theta); false, a ball (shape sphere), 5/7 g sin(theta).
+/// measured: the mean acceleration along the slope over the run (its speed
+/// down the slope at the end over the time) divided by g sin(theta); exact:
+/// 2/3 or 5/7; error: |measured / exact - 1|. stretch: the largest slip of
+/// the rim, |v + w x r| / |v| at the contact, over the last half of the run.
+Result run_rolling(double dt, const Method& m, bool cylinder);
+
+}  // namespace alloy::scenes::analytic

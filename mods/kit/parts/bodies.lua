@@ -88,8 +88,11 @@ bodies.armature = {
   end,
 }
 
+-- A ball: the sphere of the kit's first scenes, kept so that they (and their
+-- measured figures) stay as they were. It rolls at 5/7 g sin(theta) down a
+-- slope; a wheel or a coin, which rolls at 2/3, is kit.cylinder.
 bodies.disk = {
-  doc = "a round part rolling in the play area (a sphere, so it rolls and bounces alike in 3D)",
+  doc = "a ball rolling in the play area (a sphere; a wheel or a coin is kit.cylinder)",
   args = motion_args({
     { "material", "material", default = "steel" },
     { "at", "vec", required = true, doc = "centre {x, y}, m" },
@@ -98,6 +101,28 @@ bodies.disk = {
   build = function(a)
     local volume = geometry.sphere_volume(a.radius)
     return material_props(a, moving_body(a, { shape = "sphere", radius = a.radius }, volume), 2 * a.radius, volume)
+  end,
+}
+
+bodies.cylinder = {
+  doc = "a wheel, a coin, a pulley: a solid cylinder whose axis is out of the play area, so that it is a true disk in it",
+  args = motion_args({
+    { "material", "material", default = "steel" },
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "radius", "positive", required = true, doc = "m" },
+    { "depth", "positive", default = 0.02, doc = "thickness out of the plane (along the axis), m" },
+  }),
+  build = function(a)
+    -- The magnetism resolver's bulk model knows bars, spheres and capsules,
+    -- not cylinders: an iron cylinder is plain iron, and asking for a
+    -- magnetic one is refused rather than ignored.
+    if a.magnetic then
+      error("a cylinder cannot be magnetic (the magnetism resolver models bars, spheres and capsules): use kit.disk or kit.armature", 0)
+    end
+    a.magnetic = false
+    local volume = geometry.cylinder_volume(a.radius, a.depth)
+    return material_props(a, moving_body(a, { shape = "cylinder", radius = a.radius, length = a.depth }, volume),
+                          2 * a.radius, volume)
   end,
 }
 
