@@ -915,11 +915,17 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
     const int width = ::alloy::lua::width(f.args[0]);
     // 2 everywhere, then 0 on the members: a write is refused outside them.
     // Storage is kept between calls (no allocation once it has grown).
-    store.present.assign(info.n, 2);
-    // Locals: through the fields, each byte stored would reload them (it may alias).
-    std::uint8_t* present = store.present.data();
+    // Members are ascending and distinct: n of them ending at n-1 are every
+    // slot (the common case), 0 everywhere without walking the list.
     const std::uint32_t* members = info.members;
-    for (std::uint32_t j = 0, count = info.count; j < count; ++j) present[members[j]] = 0;
+    if (info.count == info.n && info.n > 0 && members[info.n - 1] == info.n - 1) {
+      store.present.assign(info.n, 0);
+    } else {
+      store.present.assign(info.n, 2);
+      // Locals: through the fields, each byte stored would reload them (it may alias).
+      std::uint8_t* present = store.present.data();
+      for (std::uint32_t j = 0, count = info.count; j < count; ++j) present[members[j]] = 0;
+    }
     if (store.values.size() < std::size_t(width) * info.n)
       store.values.resize(std::size_t(width) * info.n);
     st->bulks_[b] = abi::Bulk{store.values.data(), store.present.data(), info.n, width, fn, column};

@@ -20,6 +20,8 @@ local contact_ptr = ffi.typeof("const alloy_contact*")
 local cmd_ptr = ffi.typeof("const double*")
 local bulk_ptr = ffi.typeof("alloy_bulk*")
 local load_ptr = ffi.typeof("alloy_load*")
+local u32_ptr = ffi.typeof("uint32_t*")
+local cast = ffi.cast
 
 local error, type, tostring, select, setmetatable, pairs_raw, next = error, type, tostring, select, setmetatable, pairs, next
 local rawget = rawget
@@ -293,7 +295,21 @@ local function column_proxy(rec, k, c)
       free[nfree] = st
     end
   end
+  -- Most columns hold every object of the world, in a world whose slots
+  -- are dense: the members are then 0 .. count-1 (they are ascending and
+  -- distinct, so the last one is count-1 only if each is its own position).
+  -- Such a loop needs no state but the slot itself, the control value of
+  -- the for: no table to store the position into, no members to load.
+  -- The count is read at each step, as above, so that a loop kept past
+  -- its call ends there; a slot it gives is checked wherever it is used.
+  local function dense_step(_, i)
+    if type(i) ~= "number" then return nil end  -- a mod calling it by hand
+    local j = i + 1
+    if j < info.count then return j end
+  end
   local function each()
+    local count = info.count
+    if count == 0 or info.members[count - 1] == count - 1 then return dense_step, nil, -1 end
     local st
     if nfree > 0 then
       st = free[nfree]
@@ -579,20 +595,31 @@ local function command_queue(rec)
   end
   -- A bulk buffer's writer and reader for a target taking records in
   -- place: the first write to a member's slot appends a record of kind
-  -- `record` (its index kept in the buffer's values, one per slot), a later
-  -- write overwrites it, a read gives it back. `check` has refused slots
-  -- that are not members; the values are checked here.
-  function q.bulk_records(bk, record, what, check)
+  -- `record` (its index kept in the buffer's values, read as one uint32 per
+  -- slot: half the memory traffic of a double per slot), a later
+  -- write overwrites it, a read gives it back. `check` refuses slots that
+  -- are not members and buffers of a call that is over; the writer makes
+  -- the same checks itself (the hot path of the bulk form): with `check`,
+  -- a closure of its own, the compiled loop would read present[i] twice,
+  -- through two copies of the buffer's pointer (anchored pointers are not
+  -- folded into constants, so LuaJIT cannot tell the two are the same).
+  function q.bulk_records(bk, record, what, check, fn, col)
     local function set(_, i, v)
       local x, y, z = xyz(v)
       if x == nil then not_vec3(v, what, 2) end
       if not ((x - x) + (y - y) + (z - z) == 0) then
         error(what .. ": values must be finite, got " .. vtext(x, y, z), 2)
       end
-      check(i)  -- after the conversion: the buffer is of a call that is on, i a member
+      -- After the conversion: the buffer is of a call that is on, i a member
+      -- (check's tests, in the same order, with one read of present[i]).
+      if bk.n == 0 or bk.fn ~= fn or bk.column ~= col or type(i) ~= "number" then check(i) end
+      if not (i >= 0 and i < bk.n and i == floor(i)) then check(i) end
+      local state = bk.present[i]
       local o
-      if bk.present[i] == 1 then
-        o = bk.values[i]
+      if state == 1 then
+        o = cast(u32_ptr, bk.values)[i]
+      elseif state == 2 then
+        check(i)
       else
         local id = call.ids[i]
         if id == 0ULL then error(what .. ": the object in slot " .. tostring(i) .. " was destroyed", 2) end
@@ -604,7 +631,7 @@ local function command_queue(rec)
         len = o + 1
         local r = load_ptr(call.loads) + o
         r.id, r.kind = id, record
-        bk.values[i] = o
+        cast(u32_ptr, bk.values)[i] = o
         bk.present[i] = 1
       end
       local r = load_ptr(call.loads) + o
@@ -613,7 +640,7 @@ local function command_queue(rec)
     local function get(_, i)
       check(i)
       if bk.present[i] ~= 1 then return nil end
-      local r = load_ptr(call.loads) + bk.values[i]
+      local r = load_ptr(call.loads) + cast(u32_ptr, bk.values)[i]
       local v = vec3_t(r.vx, r.vy, r.vz)
       return v
     end
@@ -645,7 +672,7 @@ local function bulk_function(rec, index, fname, kind, column_of, record)
     end
     local newindex, get
     if record then
-      newindex, get = rec.queue.bulk_records(bk, record, what, check)
+      newindex, get = rec.queue.bulk_records(bk, record, what, check, index, col)
     elseif kind == "vec3" then
       newindex = function(_, i, v)
         local x, y, z = xyz(v)

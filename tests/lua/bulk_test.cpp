@@ -184,5 +184,73 @@ mod.property { name = "charge" }
   }
 }
 
+// col:each() has two forms (lua/stage_prelude.lua): members 0 .. count-1
+// (every slot a member, the common case) go without a position table; any
+// other list is walked through the members. Both must give exactly the
+// members, in order, and a loop kept past its call must end there.
+TEST(Each, GivesTheMembersInOrderWhetherTheSlotsAreDenseOrNot) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  TempMods mods;
+  mods.mod("lister", R"LUA(
+mod.property { name = "tag" }
+mod.interaction {
+  name = "lister", reads = { "tag" }, target = "rigid_body",
+  apply = function(w)
+    local kept = w.state.kept
+    if kept then  -- before this call reads the column again
+      local f, s, c = kept[1], kept[2], kept[3]
+      local a, b, d = f(s, c), f(s, "1"), f(s, {})
+      w:emit("lister.kept", { text = tostring(a) .. " " .. tostring(b) .. " " .. tostring(d) })
+    end
+    local t = w:read("tag")
+    local seen = {}
+    for i in t:each() do seen[#seen + 1] = tostring(i) end
+    w:emit("lister.members", { text = table.concat(seen, " ") })
+    w.state.kept = { t:each() }
+  end,
+}
+)LUA");
+  std::vector<std::string> log;
+  lua::ModRuntime runtime(registry, runtime_options(mods, &log));
+  runtime.load("lister");
+  // Objects 0..n-1; `tagged(i)` says which carry the tag; `gone` is destroyed.
+  auto members = [&](int n, bool (*tagged)(int), int gone) {
+    WorldDef def;
+    def.plugins = {"rigid_body", "lister"};
+    World w(registry, def);
+    for (int i = 0; i < n; ++i) {
+      const ObjectId o = w.create("o" + std::to_string(i));
+      w.set(o, "shape", std::string("sphere"));  // a body: the stage runs for the rigid body
+      w.set(o, "radius", 0.05);
+      w.set(o, "mass", 1.0);
+      w.set(o, "position", Vec3{double(i), 0, 0});
+      if (tagged(i)) w.set(o, "tag", 1.0);
+    }
+    if (gone >= 0) w.destroy(w.find("o" + std::to_string(gone)));  // after: no slot reused
+    w.run(2);
+    const Event* kept = find_event(w, "lister.kept");
+    EXPECT_NE(kept, nullptr);
+    if (kept) {
+      EXPECT_EQ(kept->text, "nil nil nil");
+    }
+    const Event* e = find_event(w, "lister.members");
+    return e ? e->text : std::string("(no event)");
+  };
+  auto all = [](int) { return true; };
+  EXPECT_EQ(members(5, all, -1), "0 1 2 3 4");  // dense
+  EXPECT_EQ(members(
+                6, [](int i) { return i % 2 == 1; }, -1),
+            "1 3 5");  // every other
+  EXPECT_EQ(members(
+                5, [](int i) { return i != 0; }, -1),
+            "1 2 3 4");                      // from 1
+  EXPECT_EQ(members(5, all, 2), "0 1 3 4");  // a hole
+  EXPECT_EQ(members(
+                5, [](int i) { return i < 3; }, -1),
+            "0 1 2");  // dense, then none
+  EXPECT_EQ(stage_failures(runtime), "");
+}
+
 }  // namespace
 }  // namespace alloy::test
