@@ -110,7 +110,7 @@ Result run_circuit(double dt, const Method& m, Circuit kind) {
   const double c = kind == Circuit::Rc ? 1e-3 : 0.02, q0 = kind == Circuit::Rc ? 0.0 : 0.12;
   const alloy::ObjectId cap = w.create("cap");
   w.set(cap, "capacitance", c);
-  w.set(cap, "charge", q0);
+  w.set(cap, "plate_charge", q0);
   double r_loop = 0, seconds = 0;
   if (kind == Circuit::Rc) {
     const alloy::ObjectId b = w.create("battery");
@@ -142,7 +142,7 @@ Result run_circuit(double dt, const Method& m, Circuit kind) {
   const double t0 = cpu_seconds();
   for (std::uint64_t i = 1; i <= steps; ++i) {
     w.step();
-    const double t = double(i) * dt, q = std::get<double>(w.get(cap, "charge"));
+    const double t = double(i) * dt, q = std::get<double>(w.get(cap, "plate_charge"));
     if (kind == Circuit::Rc) {
       r.error =
           std::max(r.error, std::abs(q - c * e * (1 - std::exp(-t / (r_loop * c)))) / (c * e));

@@ -293,7 +293,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         // A capacitor: two dark plates across its middle, the charged one
         // (terminal 0's plate positive: -x) tinted.
         const double hy = p.half.y, gap = hx * 0.08, t = hx * 0.06;
-        const double q = world.value<double>(id, "charge").value_or(0);
+        const double q = world.value<double>(id, "plate_charge").value_or(0);
         const ImU32 plate = scale_rgb(colour::kBattery, 1.2f);
         fill(dl, cam, local_quad(p, -gap - t, -gap, -hy * 0.8, hy * 0.8),
              q > 0 ? colour::kNorth : plate);

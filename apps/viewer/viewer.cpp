@@ -1092,7 +1092,7 @@ void Viewer::panel_inspector() {
   }
   if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);
-  if (const auto q = (*w).value<double>(id, "charge")) ImGui::Text("charge %.4g C", *q);
+  if (const auto q = (*w).value<double>(id, "plate_charge")) ImGui::Text("charge %.4g C", *q);
   if (const auto c = (*w).value<bool>(id, "switch_closed"))
     ImGui::Text("switch %s", *c ? "closed" : "open");
   if ((*w).value<bool>(id, "powered").value_or(false))

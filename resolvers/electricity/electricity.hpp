@@ -19,8 +19,8 @@
 // Reads   conductive, emf, internal_resistance, inductance, resistance,
 //         contact_resistance, wire_from, wire_to, wire_from_terminal,
 //         wire_to_terminal, capacitance, switch_closed, current (the coil's
-//         state), charge (the capacitor's state).
-// Writes  current, voltage, powered, on every part and wire; charge on
+//         state), plate_charge (the capacitor's state).
+// Writes  current, voltage, powered, on every part and wire; plate_charge on
 //         capacitors.
 // Time    coils and capacitors are integrated by the trapezoidal rule
 //         (second order), with the first substep after any discontinuity (a
@@ -39,9 +39,9 @@
 //         window late (docs/performance.md "Multi-rate coupling").
 //
 // State that matters lives in properties: a coil's current is its `current`,
-// a capacitor's charge its `charge`, so build() loses nothing. Contacts are not stored: they are
-// the touching pairs of the collisions set, and electricity_from_collisions re-sends every touching
-// pair when it starts, so a new resolver instance recovers them.
+// a capacitor's charge its `plate_charge`, so build() loses nothing. Contacts are not stored: they
+// are the touching pairs of the collisions set, and electricity_from_collisions re-sends every
+// touching pair when it starts, so a new resolver instance recovers them.
 #pragma once
 
 #include <array>
@@ -77,7 +77,7 @@ inline constexpr const char* kVoltage = "voltage";
 inline constexpr const char* kPowered = "powered";
 inline constexpr const char* kCurrentRate = "current_rate";
 inline constexpr const char* kCapacitance = "capacitance";
-inline constexpr const char* kCharge = "charge";
+inline constexpr const char* kCharge = "plate_charge";
 inline constexpr const char* kSwitchClosed = "switch_closed";
 }  // namespace prop
 

@@ -188,10 +188,10 @@ TEST(KitCircuitParts, ResistorCapacitorAndSwitchBecomeTheirProperties) {
   // Open: the capacitor keeps its charge; closed, it charges towards C E = 6 mC
   // through the resistor (RC = 0.1 s).
   world.run(24);
-  EXPECT_DOUBLE_EQ(get<double>(world, "capacitor", "charge"), 1e-3);
+  EXPECT_DOUBLE_EQ(get<double>(world, "capacitor", "plate_charge"), 1e-3);
   world.set(world.find("switch"), "switch_closed", true);
   world.run(24);  // 0.1 s
-  const double q = get<double>(world, "capacitor", "charge");
+  const double q = get<double>(world, "capacitor", "plate_charge");
   const double r = 100 + 0.5 + 0.03 + 0.001 + get<double>(world, "w1", "resistance") +
                    get<double>(world, "w2", "resistance") + get<double>(world, "w3", "resistance") +
                    get<double>(world, "w4", "resistance");

@@ -143,7 +143,7 @@ electric.capacitor = {
     { "mass", "positive", default = 0.06, doc = "kg (used when pinned)" },
   }),
   build = function(a)
-    return two_terminal(a, { capacitance = a.capacitance, charge = a.charge, resistance = a.resistance }, a.mass)
+    return two_terminal(a, { capacitance = a.capacitance, plate_charge = a.charge, resistance = a.resistance }, a.mass)
   end,
 }
 

@@ -518,7 +518,7 @@ TEST_F(ElectricityTest, SettingsAreValidated) {
 ObjectId make_capacitor(World& w, const std::string& name, double c, double q0) {
   const ObjectId id = w.create(name);
   w.set(id, "capacitance", c);
-  w.set(id, "charge", q0);
+  w.set(id, "plate_charge", q0);
   w.set(id, "conductive", true);
   return id;
 }
@@ -556,7 +556,7 @@ double rc_charge_error(PluginRegistry& registry, double dt) {
   double worst = 0;
   while (w.time() < 5 * r_total * c - 1e-9) {
     w.step();
-    const double q = std::get<double>(w.get(cap, "charge"));
+    const double q = std::get<double>(w.get(cap, "plate_charge"));
     worst = std::max(worst, std::abs(q - c * e * (1 - std::exp(-w.time() / (r_total * c)))));
   }
   return worst / (c * e);
@@ -585,7 +585,7 @@ LcRun lc_run(PluginRegistry& registry, double dt, double r, double t_end) {
   int crossings = 0;
   while (w.time() < t_end - 1e-9) {
     w.step();
-    const double q = std::get<double>(w.get(cap, "charge")), t = w.time();
+    const double q = std::get<double>(w.get(cap, "plate_charge")), t = w.time();
     const double exact = q0 * std::exp(-a * t) * (std::cos(om * t) + a / om * std::sin(om * t));
     out.worst = std::max(out.worst, std::abs(q - exact) / q0);
     if ((q_prev > 0) != (q > 0)) {
@@ -650,14 +650,14 @@ TEST_F(ElectricityTest, ACapacitorKeepsItsChargeWhenItsCircuitIsEdited) {
   const ObjectId lead = wire(w, "w2", r, 1, cap, 0, 0.0);
   wire(w, "w3", cap, 1, b, 0, 0.0);
   w.run(24);  // 0.1 s = 10 RC
-  const double q1 = num(w, cap, "charge");
+  const double q1 = num(w, cap, "plate_charge");
   EXPECT_NEAR(q1, 6e-3, 1e-6);
   EXPECT_NEAR(num(w, cap, "voltage"), 6.0, 1e-3);
   // Cut a wire while running: the capacitor is open, holds its charge exactly
   // and shows its voltage.
   w.destroy(lead);
   w.run(10);
-  EXPECT_EQ(num(w, cap, "charge"), q1);
+  EXPECT_EQ(num(w, cap, "plate_charge"), q1);
   EXPECT_EQ(num(w, cap, "current"), 0.0);
   EXPECT_NEAR(num(w, cap, "voltage"), q1 / 1e-3, 1e-12);
   // Rewire it across a 10 Ohm resistor alone: it discharges from that charge,
@@ -666,13 +666,13 @@ TEST_F(ElectricityTest, ACapacitorKeepsItsChargeWhenItsCircuitIsEdited) {
   wire(w, "l1", cap, 0, load, 0, 0.0);
   wire(w, "l2", load, 1, cap, 1, 0.0);
   w.run(2);
-  EXPECT_NEAR(num(w, cap, "charge"), q1 * std::exp(-2 * w.dt() / (10.0 * 1e-3)), 5e-3 * q1);
+  EXPECT_NEAR(num(w, cap, "plate_charge"), q1 * std::exp(-2 * w.dt() / (10.0 * 1e-3)), 5e-3 * q1);
   EXPECT_GT(num(w, load, "current"), 0.0);  // out of terminal 0, through the load
   // A charge set from outside is the state the resolver integrates from.
-  w.set(cap, "charge", -2e-3);
+  w.set(cap, "plate_charge", -2e-3);
   w.step();
-  EXPECT_LT(num(w, cap, "charge"), 0.0);
-  EXPECT_GT(num(w, cap, "charge"), -2e-3);
+  EXPECT_LT(num(w, cap, "plate_charge"), 0.0);
+  EXPECT_GT(num(w, cap, "plate_charge"), -2e-3);
 }
 
 TEST_F(ElectricityTest, ASwitchJoinsItsTerminalsOnlyWhileClosed) {
@@ -781,11 +781,11 @@ TEST_F(ElectricityTest, ACapacitorAcrossABatteryWithNoResistanceChargesAtOnce) {
   w.set(sw, "switch_closed", true);
   w.set(sw, "resistance", 0.0);
   w.step();
-  EXPECT_NEAR(num(w, cap, "charge"), 0.06, 1e-9);
+  EXPECT_NEAR(num(w, cap, "plate_charge"), 0.06, 1e-9);
   const double jump = 0.06 / (w.dt() / 8);
   for (int k = 0; k < 50; ++k) {
     w.step();
-    EXPECT_NEAR(num(w, cap, "charge"), 0.06, 1e-9) << k;
+    EXPECT_NEAR(num(w, cap, "plate_charge"), 0.06, 1e-9) << k;
     EXPECT_LT(std::abs(num(w, cap, "current")), 2e-4 * jump) << k;
     EXPECT_NEAR(num(w, cap, "voltage"), 6.0, 1e-6);
   }
@@ -800,7 +800,7 @@ TEST_F(ElectricityTest, AZeroCapacitanceIsAnOpenGap) {
   w.run(3);
   EXPECT_EQ(num(w, b, "current"), 0.0);
   EXPECT_EQ(num(w, cap, "current"), 0.0);
-  EXPECT_EQ(num(w, cap, "charge"), 0.0);
+  EXPECT_EQ(num(w, cap, "plate_charge"), 0.0);
   EXPECT_NEAR(num(w, cap, "voltage"), 6.0, 1e-9);
 }
 
