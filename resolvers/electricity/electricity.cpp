@@ -450,7 +450,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   if (dirty_ || h != h_ || inputs_changed(access)) build_network(access, h);
 
   // The state is in properties (written at the end of every advance, or
-  // edited from outside): a coil's `current`, a capacitor's `charge`.
+  // edited from outside): a coil's `current`, a capacitor's `plate_charge`.
   // Reading it here makes a rebuild, a swap or an edit lose nothing; a value
   // other than the one last written is an edit, a jump the guard step absorbs.
   const auto current = current_id_.column<double>(access);
