@@ -8,6 +8,8 @@
 //   tumbling box       fine RK4 of Euler's equations + quaternion (Dzhanibekov flip)
 //   two-body orbit     Kepler's circular orbit under gravity.nbody
 //   RL circuit         I(t) = E/R (1 - e^(-t/tau))
+//   RC, LC, RLC        issue 13: q(t) = C E (1 - e^(-t/RC)); the LC period
+//                      2 pi sqrt(LC); q(t) = q0 e^(-at)(cos wt + a/w sin wt)
 //   magnets            fine RK4 of the pole model's force law
 //   elastic pairs, Newton's cradle, bounce, lever and bar pendulums at large
 //   swings, a 1000:1 chain, the tumbling box over 10 s: the closed-form
@@ -33,6 +35,7 @@
 
 #include "bench/common/bench_common.hpp"
 #include "tests/scenes/analytic_scenes.hpp"
+#include "tests/scenes/rigid_scenes.hpp"
 
 namespace {
 
@@ -77,6 +80,103 @@ std::vector<NamedMethod> rigid_methods(bool constrained) {
     for (int sub : {2, 4})
       m.push_back({"quick 40, " + std::to_string(sub) + " substeps", {.rigid_substeps = sub}});
   return m;
+}
+
+// --- issue 13: circuits with capacitors against their closed forms -------------
+// Built here rather than in tests/scenes so that the numbers are the same as
+// tests/resolvers/electricity's (RcCharge..., LcPeriod..., RlcDecay...).
+
+enum class Circuit { Rc, Lc, Rlc };
+
+void join(alloy::World& w, const char* name, alloy::ObjectId from, int ft, alloy::ObjectId to,
+          int tt) {
+  const alloy::ObjectId id = w.create(name);
+  w.set(id, "wire_from", from);
+  w.set(id, "wire_from_terminal", std::int64_t(ft));
+  w.set(id, "wire_to", to);
+  w.set(id, "wire_to_terminal", std::int64_t(tt));
+  w.set(id, "resistance", 0.0);  // 1 micro-ohm, the floor
+}
+
+/// RC: battery 6 V, 0.5 Ohm + resistor 99.5 Ohm + 1 mF (RC = 0.1 s), 0.5 s;
+/// error: largest |q - q(t)| / C E. LC: 0.06 H, 20 mF charged to 0.12 C, six
+/// periods (1.31 s); error: relative period error from the zero crossings.
+/// RLC: the same with the coil's 1 Ohm, 0.45 s; error: largest |q - q(t)| / q0.
+Result run_circuit(double dt, const Method& m, Circuit kind) {
+  alloy::scenes::Sim sim(an::world_def(dt, m, /*gravity=*/false));
+  alloy::World& w = *sim;
+  Result r;
+  const double e = 6.0, l = 0.06;
+  const double c = kind == Circuit::Rc ? 1e-3 : 0.02, q0 = kind == Circuit::Rc ? 0.0 : 0.12;
+  const alloy::ObjectId cap = w.create("cap");
+  w.set(cap, "capacitance", c);
+  w.set(cap, "plate_charge", q0);
+  double r_loop = 0, seconds = 0;
+  if (kind == Circuit::Rc) {
+    const alloy::ObjectId b = w.create("battery");
+    w.set(b, "emf", e);
+    w.set(b, "internal_resistance", 0.5);
+    const alloy::ObjectId res = w.create("resistor");
+    w.set(res, "conductive", true);
+    w.set(res, "resistance", 99.5);
+    join(w, "w1", b, 1, res, 0);
+    join(w, "w2", res, 1, cap, 0);
+    join(w, "w3", cap, 1, b, 0);
+    r_loop = 100 + 3e-6, seconds = 0.5;
+  } else {
+    const double rc = kind == Circuit::Rlc ? 1.0 : 0.0;
+    const alloy::ObjectId coil = w.create("coil");
+    w.set(coil, "inductance", l);
+    w.set(coil, "resistance", rc);
+    join(w, "w1", cap, 0, coil, 0);
+    join(w, "w2", coil, 1, cap, 1);
+    r_loop = rc + 2e-6, seconds = kind == Circuit::Rlc ? 0.45 : 6 * 2 * kPi * std::sqrt(l * c);
+  }
+  const double a = r_loop / (2 * l), om = std::sqrt(1 / (l * c) - a * a);
+  const auto steps = std::uint64_t(std::llround(seconds / dt));
+  bool non_finite = false;
+  w.add_observer([&](const alloy::Event& ev) { non_finite |= ev.type == "non_finite"; });
+  w.start();
+  double q_prev = q0, first = -1, last = -1;
+  int crossings = 0;
+  const double t0 = cpu_seconds();
+  for (std::uint64_t i = 1; i <= steps; ++i) {
+    w.step();
+    const double t = double(i) * dt, q = std::get<double>(w.get(cap, "plate_charge"));
+    if (kind == Circuit::Rc) {
+      r.error =
+          std::max(r.error, std::abs(q - c * e * (1 - std::exp(-t / (r_loop * c)))) / (c * e));
+    } else if (kind == Circuit::Rlc) {
+      const double exact = q0 * std::exp(-a * t) * (std::cos(om * t) + a / om * std::sin(om * t));
+      r.error = std::max(r.error, std::abs(q - exact) / q0);
+    } else if ((q_prev > 0) != (q > 0)) {
+      const double tc = t - dt + dt * q_prev / (q_prev - q);
+      if (first < 0) first = tc;
+      last = tc, ++crossings;
+    }
+    q_prev = q;
+  }
+  r.cpu_seconds = cpu_seconds() - t0;
+  r.steps = steps;
+  r.sim_seconds = double(steps) * dt;
+  if (kind == Circuit::Lc) {
+    r.exact = 2 * kPi / om;
+    r.measured = crossings > 1 ? 2 * (last - first) / (crossings - 1) : 0;
+    r.error = std::abs(r.measured - r.exact) / r.exact;
+  }
+  r.finite = !non_finite && std::isfinite(r.error);
+  return r;
+}
+
+void add_circuit_scenes(std::vector<Scene>& s, const std::vector<NamedMethod>& elec) {
+  s.push_back({"rc_circuit", "RC charge, RC = 0.1 s (0.5 s)",
+               "largest charge error (relative to C E)",
+               [](double dt, const Method& m) { return run_circuit(dt, m, Circuit::Rc); }, elec});
+  s.push_back({"lc_circuit", "LC oscillation, period 0.218 s (6 periods)", "relative period error",
+               [](double dt, const Method& m) { return run_circuit(dt, m, Circuit::Lc); }, elec});
+  s.push_back({"rlc_circuit", "RLC decay, 1 Ohm, 0.06 H, 20 mF (0.45 s)",
+               "largest charge error (relative to q0)",
+               [](double dt, const Method& m) { return run_circuit(dt, m, Circuit::Rlc); }, elec});
 }
 
 std::vector<Scene> scenes() {
@@ -151,6 +251,7 @@ std::vector<Scene> scenes() {
   s.push_back({"magnets", "Two magnets, like poles facing (1 s)", "largest position error (m)",
                [](double dt, const Method& m) { return an::run_magnets(dt, m); },
                rigid_methods(false)});
+  add_circuit_scenes(s, elec);  // issue 13
   return s;
 }
 
@@ -176,10 +277,15 @@ std::string rate_label(int rate) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options opt = Options::parse(argc, argv, "alloy_bench_work_precision");
+  const Options opt = Options::parse(argc, argv, "alloy_bench_work_precision", {"--circuits"});
   const std::vector<int> rates =
       opt.quick ? std::vector<int>{120, 240} : std::vector<int>{60, 120, 240, 480, 960, 1920};
   std::vector<Scene> all = scenes();
+  // --circuits: the RL, RC, LC and RLC scenes alone (a few seconds), written
+  // to circuits.csv and the "circuits" section of docs/performance.md.
+  const bool circuits = opt.flag("--circuits");
+  if (circuits) std::erase_if(all, [](const Scene& s) { return !s.key.ends_with("_circuit"); });
+  const std::string stem = circuits ? "circuits" : "work_precision";
   if (opt.quick)  // one method per scene: the default
     for (Scene& s : all)
       std::erase_if(s.methods, [](const NamedMethod& m) { return !m.is_default; });
@@ -198,7 +304,7 @@ int main(int argc, char** argv) {
         }
   }
 
-  Csv csv(opt.file("work_precision.csv"),
+  Csv csv(opt.file(stem + ".csv"),
           {"scene", "method", "solver", "iterations", "rigid_substeps", "electricity_substeps",
            "dt", "steps", "sim_seconds", "cpu_seconds", "cpu_per_sim_second", "error",
            "energy_drift", "momentum_drift", "finite", "default"});
@@ -276,13 +382,14 @@ int main(int argc, char** argv) {
   if (!opt.docs.empty()) {
     std::string md = "Orders are least-squares slopes of log(error) against log(dt) over " +
                      std::string("dt = 1/60 ... 1/1920 s; cost is CPU time per simulated second ") +
-                     "(best of repeats). Generated by `alloy_bench_work_precision`; data in " +
-                     "[bench/work_precision.csv](bench/work_precision.csv).\n\n" + table.str() +
+                     "(best of repeats). Generated by `alloy_bench_work_precision" +
+                     (circuits ? " --circuits" : "") + "`; data in [bench/" + stem +
+                     ".csv](bench/" + stem + ".csv).\n\n" + table.str() +
                      "\nPareto fronts of (cost, error), cheapest first, as method @ dt (error, "
                      "CPU ms per simulated s):\n\n" +
                      fronts + "\n";
     for (const Scene& s : all) md += "![" + s.title + "](bench/wp_" + s.key + ".svg)\n";
-    splice(opt.docs, "work_precision", md);
+    splice(opt.docs, stem, md);
   }
   if (!all_finite) std::fprintf(stderr, "work-precision: a run froze an object (non-finite)\n");
   return all_finite ? 0 : 1;

@@ -253,12 +253,13 @@ EditResult Editor::toggle_pin(ObjectId part) {
 
 bool Editor::electrical(ObjectId id) const {
   if (has(id, "wire_from") || has(id, "wire_to")) return false;
-  return has(id, "emf") || has(id, "inductance") ||
-         world_->value<bool>(id, "conductive").value_or(false);
+  return has(id, "emf") || has(id, "inductance") || has(id, "capacitance") ||
+         has(id, "switch_closed") || world_->value<bool>(id, "conductive").value_or(false);
 }
 
 bool Editor::two_terminal(ObjectId id) const {
-  return has(id, "emf") || has(id, "inductance") ||
+  return has(id, "emf") || has(id, "inductance") || has(id, "capacitance") ||
+         has(id, "switch_closed") ||
          (world_->value<bool>(id, "conductive").value_or(false) && has(id, "resistance"));
 }
 

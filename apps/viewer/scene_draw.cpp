@@ -206,6 +206,7 @@ Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal) {
   if (!p) return xy(world.value<Vec3>(part, "position").value_or(Vec3{}));
   const bool two =
       has(world, part, "emf") || has(world, part, "inductance") ||
+      has(world, part, "capacitance") || has(world, part, "switch_closed") ||
       (world.value<bool>(part, "conductive").value_or(false) && has(world, part, "resistance"));
   if (!two) return p->centre;
   const double x = p->half_extent_x() * 0.8;
@@ -288,6 +289,28 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
           text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? -hx * 0.6 : hx * 0.6, 0}))),
                        IM_COL32_WHITE, "-", letter);
         }
+      } else if (has(world, id, "capacitance") && p.shape == Shape2D::Box) {
+        // A capacitor: two dark plates across its middle, the charged one
+        // (terminal 0's plate positive: -x) tinted.
+        const double hy = p.half.y, gap = hx * 0.08, t = hx * 0.06;
+        const double q = world.value<double>(id, "plate_charge").value_or(0);
+        const ImU32 plate = scale_rgb(colour::kBattery, 1.2f);
+        fill(dl, cam, local_quad(p, -gap - t, -gap, -hy * 0.8, hy * 0.8),
+             q > 0 ? colour::kNorth : plate);
+        fill(dl, cam, local_quad(p, gap, gap + t, -hy * 0.8, hy * 0.8),
+             q < 0 ? colour::kNorth : plate);
+      } else if (has(world, id, "switch_closed") && p.shape == Shape2D::Box) {
+        // A knife switch: jaws at both ends and a blade, lying in them while
+        // closed, raised 30 degrees from terminal 0's jaw while open.
+        const double hy = p.half.y;
+        const bool closed = world.value<bool>(id, "switch_closed").value_or(false);
+        fill(dl, cam, local_quad(p, -hx, -hx * 0.8, -hy, hy), colour::kBrass);
+        fill(dl, cam, local_quad(p, hx * 0.8, hx, -hy, hy), colour::kBrass);
+        const Vec2 hinge = p.to_world({-hx * 0.9, 0});
+        const double len = hx * 1.8, up = closed ? 0.0 : 0.52;
+        const Vec2 tip = p.to_world({-hx * 0.9 + len * std::cos(up), len * std::sin(up)});
+        dl->AddLine(iv(cam.to_screen(hinge)), iv(cam.to_screen(tip)), colour::kSteel,
+                    std::max(2.0f, float(hy * px * 0.5)));
       }
       if (p.is_static) draw_hatch(dl, cam, p, scale_rgb(base, 0.72f, 150));
 

@@ -1077,9 +1077,11 @@ void Viewer::panel_inspector() {
   ImGui::TextColored(ImVec4(0.43f, 0.16f, 0.63f, 1), "%s", w->describe(id).c_str());
   if (part) {
     ImGui::SameLine();
-    const char* what = (*w).value<double>(id, "emf")          ? "battery"
-                       : (*w).value<double>(id, "inductance") ? "coil"
-                                                           : material_name(material_of(*w, id));
+    const char* what = (*w).value<double>(id, "emf")           ? "battery"
+                       : (*w).value<double>(id, "inductance")  ? "coil"
+                       : (*w).value<double>(id, "capacitance") ? "capacitor"
+                       : (*w).value<bool>(id, "switch_closed") ? "switch"
+                                                               : material_name(material_of(*w, id));
     ImGui::TextDisabled("%s%s%s", what, part->is_static ? ", static" : "",
                         part->pinned ? ", pinned" : "");
     const double mass = (*w).value<double>(id, "mass").value_or(0);
@@ -1090,6 +1092,9 @@ void Viewer::panel_inspector() {
   }
   if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);
+  if (const auto q = (*w).value<double>(id, "plate_charge")) ImGui::Text("charge %.4g C", *q);
+  if (const auto c = (*w).value<bool>(id, "switch_closed"))
+    ImGui::Text("switch %s", *c ? "closed" : "open");
   if ((*w).value<bool>(id, "powered").value_or(false))
     ImGui::TextColored(ImVec4(0.8f, 0.55f, 0, 1), "powered");
   if (const auto q = (*w).value<double>(id, "pole_strength"); q && *q != 0)

@@ -19,7 +19,7 @@ constexpr const char* kNetworkInputs[] = {
     prop::kConductive, prop::kInternalResistance, prop::kInductance,
     prop::kResistance, prop::kContactResistance,  prop::kWireFrom,
     prop::kWireTo,     prop::kWireFromTerminal,   prop::kWireToTerminal,
-    prop::kEmf,
+    prop::kEmf,        prop::kCapacitance,        prop::kSwitchClosed,
 };
 
 double positive_resistance(double r) {
@@ -71,15 +71,26 @@ std::vector<PropertyDef> electricity_property_defs() {
        .doc = "written by electricity: |current| is above the powered threshold (1 mA)"},
       number(prop::kCurrentRate, "A/s",
              "written by electricity with rates = true: a coil's dI/dt at the end of the step"),
+      number(prop::kCapacitance, "F",
+             "capacitor: capacitance between terminals 0 and 1 (below 1 pF: an open gap)", 0.0),
+      number(prop::kCharge, "C",
+             "capacitor: charge on the plate at terminal 0 (its state; kept across edits)"),
+      {.name = prop::kSwitchClosed,
+       .kind = PropertyKind::Bool,
+       .doc = "switch: joins its terminals 0 and 1 through `resistance` (default: the contact "
+              "resistance setting) while true; an open gap while false"},
   };
 }
 
 // --- settings ------------------------------------------------------------------
 
 const std::vector<std::string>& ElectricityConfig::keys() {
-  static const std::vector<std::string> k = {"powered_threshold", "contact_resistance",
-                                             "wire_resistance",   "internal_resistance",
-                                             "substeps",          "dense_limit",
+  static const std::vector<std::string> k = {"powered_threshold",
+                                             "contact_resistance",
+                                             "wire_resistance",
+                                             "internal_resistance",
+                                             "substeps",
+                                             "dense_limit",
                                              "rates"};
   return k;
 }
@@ -160,6 +171,14 @@ void ElectricityResolver::build(ResolverAccess& access) {
     if (conductive[s]) give(s);
   for (std::uint32_t s : access.column<double>(prop::kEmf).members()) give(s);
   for (std::uint32_t s : access.column<double>(prop::kInductance).members()) give(s);
+  for (std::uint32_t s : access.column<std::uint8_t>(prop::kSwitchClosed).members()) give(s);
+  {
+    auto charge = access.writer<double>(prop::kCharge);
+    for (std::uint32_t s : access.column<double>(prop::kCapacitance).members()) {
+      give(s);
+      if (!charge.has(s)) charge.set(s, 0.0);  // a preset charge is the state: keep it
+    }
+  }
   for (std::uint32_t s : access.column<ObjectId>(prop::kWireFrom).members()) give(s);
   for (std::uint32_t s : access.column<ObjectId>(prop::kWireTo).members()) give(s);
   if (config_.rates) {
@@ -225,6 +244,8 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   const auto wire_to = view.column<ObjectId>(prop::kWireTo);
   const auto from_terminal = view.column<std::int64_t>(prop::kWireFromTerminal);
   const auto to_terminal = view.column<std::int64_t>(prop::kWireToTerminal);
+  const auto capacitance = view.column<double>(prop::kCapacitance);
+  const auto switch_closed = view.column<std::uint8_t>(prop::kSwitchClosed);
 
   // Which slots are wires, which are parts, and of what kind.
   const std::size_t slots = store.slot_count();
@@ -234,12 +255,15 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   for (std::uint32_t s : conductive.members()) is_part[s] |= conductive[s] != 0;
   for (std::uint32_t s : emf.members()) is_part[s] = 1;
   for (std::uint32_t s : inductance.members()) is_part[s] = 1;
+  for (std::uint32_t s : capacitance.members()) is_part[s] = 1;
+  for (std::uint32_t s : switch_closed.members()) is_part[s] = 1;
 
   Network net;
   parts_.clear();
   wires_.clear();
-  batteries_.clear();
+  std::vector<std::uint32_t> batteries;
   std::vector<Coil> coils;
+  std::vector<Capacitor> capacitors;
   std::vector<std::int32_t> part_of_slot(slots, -1);
   for (std::uint32_t s = 0; s < slots; ++s) {
     if (!is_part[s] || is_wire[s]) continue;
@@ -248,6 +272,10 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
       p.kind = PartKind::Battery;
     else if (inductance.has(s))
       p.kind = PartKind::Coil;
+    else if (capacitance.has(s))
+      p.kind = PartKind::Capacitor;
+    else if (switch_closed.has(s))
+      p.kind = PartKind::Switch;
     else if (resistance.has(s))
       p.kind = PartKind::Resistor;
     if (p.kind == PartKind::Node)
@@ -259,12 +287,14 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   }
 
   // Thevenin branches: batteries first, so that a component's ground is the
-  // negative terminal of its first battery; then coils (backward-Euler
-  // companion: z = R + L/h, source (L/h) I_n, see docs/electricity.md).
+  // negative terminal of its first battery; then coils and capacitors. Their
+  // companions (docs/electricity.md) have the same impedance for the
+  // trapezoidal rule over h and backward Euler over h/2: coil z = R + 2L/h,
+  // capacitor z = R + h/2C, so the guard step needs no factorisation of its own.
   for (Part& p : parts_)
     if (p.kind == PartKind::Battery) {
       p.element = std::int32_t(net.branches.size());
-      batteries_.push_back(p.slot);
+      batteries.push_back(p.slot);
       net.branches.push_back(
           {p.node[0], p.node[1],
            positive_resistance(internal_r.value_or(p.slot, config_.internal_resistance))});
@@ -274,15 +304,25 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
       const double l = inductance[p.slot];
       const double r = resistance.value_or(p.slot, 0.0);
       p.element = std::int32_t(net.branches.size());
-      coils.push_back({p.slot, l, r, 0.0});
-      net.branches.push_back({p.node[0], p.node[1], positive_resistance(r + l / h)});
+      coils.push_back({.slot = p.slot, .inductance = l, .resistance = r});
+      net.branches.push_back({p.node[0], p.node[1], positive_resistance(r + 2 * l / h)});
     }
-  coils_ = std::move(coils);
   for (Part& p : parts_)
-    if (p.kind == PartKind::Resistor) {
+    if (p.kind == PartKind::Capacitor && capacitance[p.slot] >= kMinCapacitance) {
+      const double c = capacitance[p.slot];
+      const double r = resistance.value_or(p.slot, 0.0);
+      p.element = std::int32_t(net.branches.size());
+      capacitors.push_back({.slot = p.slot, .capacitance = c, .resistance = r});
+      net.branches.push_back({p.node[0], p.node[1], positive_resistance(r + h / (2 * c))});
+    }
+  for (Part& p : parts_)
+    if (p.kind == PartKind::Resistor ||
+        (p.kind == PartKind::Switch && switch_closed[p.slot] != 0)) {
+      const double r = p.kind == PartKind::Resistor
+                           ? resistance[p.slot]
+                           : resistance.value_or(p.slot, config_.contact_resistance);
       p.element = std::int32_t(net.conductances.size());
-      net.conductances.push_back(
-          {p.node[0], p.node[1], 1.0 / positive_resistance(resistance[p.slot])});
+      net.conductances.push_back({p.node[0], p.node[1], 1.0 / positive_resistance(r)});
     }
 
   // Wires: an end on a destroyed object (or a null ref) is open; an end on a
@@ -355,9 +395,10 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   element_closed_.assign(parts_.size(), false);
   for (std::size_t i = 0; i < parts_.size(); ++i) {
     const Part& p = parts_[i];
-    if (p.kind == PartKind::Battery || p.kind == PartKind::Coil)
+    if (p.element < 0) continue;  // a node, an open switch, a vanishing capacitor
+    if (p.kind == PartKind::Battery || p.kind == PartKind::Coil || p.kind == PartKind::Capacitor)
       element_closed_[i] = on_cycle[std::size_t(p.element)];
-    else if (p.kind == PartKind::Resistor)
+    else
       element_closed_[i] = on_cycle[net.branches.size() + std::size_t(p.element)];
   }
 
@@ -368,6 +409,30 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
     if (part_of_slot[s] < 0 && !is_wire[s]) stale_outputs_.push_back(s);
   for (auto it = reported_closed_.begin(); it != reported_closed_.end();)
     it = store.alive(it->first) ? std::next(it) : reported_closed_.erase(it);
+
+  // The integrators' history survives a rebuild that changed nothing (a
+  // structural change elsewhere in the world): same matrix, same batteries,
+  // coils and capacitors in the same order. Anything else is a discontinuity
+  // and the next substep is a guard step, which needs the state alone.
+  auto same_slots = [](const auto& a, const auto& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                      [](const auto& x, const auto& y) { return x.slot == y.slot; });
+  };
+  const bool same = net == network_ && batteries == batteries_ && same_slots(coils, coils_) &&
+                    same_slots(capacitors, capacitors_);
+  if (same) {
+    for (std::size_t i = 0; i < coils.size(); ++i)
+      coils[i].current = coils_[i].current, coils[i].v_l = coils_[i].v_l,
+      coils[i].series_emf = coils_[i].series_emf;
+    for (std::size_t i = 0; i < capacitors.size(); ++i)
+      capacitors[i].charge = capacitors_[i].charge, capacitors[i].current = capacitors_[i].current;
+  } else {
+    guard_ = true;
+    battery_emf_.assign(batteries.size(), 0.0);
+  }
+  batteries_ = std::move(batteries);
+  coils_ = std::move(coils);
+  capacitors_ = std::move(capacitors);
 
   // The expensive part, only when the matrix changed.
   if (!(net == network_)) solver_.factor(net);
@@ -384,43 +449,94 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   const double h = dt / config_.substeps;
   if (dirty_ || h != h_ || inputs_changed(access)) build_network(access, h);
 
-  // The coil's state is its `current` property (written at the end of every
-  // advance, or edited from outside): reading it here makes a rebuild, a swap
-  // or an edit lose nothing.
+  // The state is in properties (written at the end of every advance, or
+  // edited from outside): a coil's `current`, a capacitor's `plate_charge`.
+  // Reading it here makes a rebuild, a swap or an edit lose nothing; a value
+  // other than the one last written is an edit, a jump the guard step absorbs.
   const auto current = current_id_.column<double>(access);
-  for (Coil& c : coils_) c.current = current.value_or(c.slot, 0.0);
-
+  for (Coil& c : coils_) {
+    const double i = current.value_or(c.slot, 0.0);
+    if (i != c.current) guard_ = true, c.current = i, c.v_l = 0;
+  }
+  const auto charge = charge_id_.column<double>(access);
+  for (Capacitor& c : capacitors_) {
+    const double q = charge.value_or(c.slot, 0.0);
+    if (q != c.charge) guard_ = true, c.charge = q, c.current = 0;
+  }
   const auto emf = emf_id_.column<double>(access);
-  const std::size_t nb = batteries_.size();
-  for (std::size_t k = 0; k < nb; ++k) e_[k] = emf[batteries_[k]];
-  for (int step = 0; step < config_.substeps; ++step) {
-    for (std::size_t i = 0; i < coils_.size(); ++i)
-      e_[nb + i] = coils_[i].inductance / h * coils_[i].current;
+  const std::size_t nb = batteries_.size(), nc = coils_.size();
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double e = emf[batteries_[k]];
+    if (e != battery_emf_[k]) guard_ = true;  // a source that steps is a discontinuity too
+    battery_emf_[k] = e_[k] = e;
+  }
+  // A coil that lost its last loop while carrying current: KCL stops it at
+  // the first substep; its field's energy goes into the gap (the spark of a
+  // real switch), which the model does not follow. It is reported.
+  for (std::size_t i = 0; i < nc; ++i) {
+    Coil& c = coils_[i];
+    c.released = branch_on_loop_[nb + i] ? 0.0 : 0.5 * c.inductance * c.current * c.current;
+  }
+
+  // Each substep is one trapezoidal step over h, or, as the guard after a
+  // discontinuity, two backward-Euler steps over h/2 (same impedances, so the
+  // same factorisation). With `trap` = 1 or 0:
+  //   coil       v_L' + trap v_L = (2L/h)(I' - I)           e = (2L/h) I + trap v_L + series_emf
+  //   capacitor  q' = q + (h/2)(I' + trap I)                 e = -(q/C + trap (h/2C) I)
+  // (branch law V(0) - V(1) = z I' - e; docs/electricity.md derives both).
+  auto substep = [&](double trap) {
+    for (std::size_t i = 0; i < nc; ++i) {
+      const Coil& c = coils_[i];
+      e_[nb + i] = 2 * c.inductance / h * c.current + trap * c.v_l + c.series_emf;
+    }
+    for (std::size_t j = 0; j < capacitors_.size(); ++j) {
+      const Capacitor& c = capacitors_[j];
+      e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
+    }
     solver_.solve(e_, potential_, branch_current_);
     for (std::size_t k = 0; k < branch_current_.size(); ++k)
       if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
-    if (config_.rates && step + 1 == config_.substeps) write_current_rates(access, h);
-    for (std::size_t i = 0; i < coils_.size(); ++i) coils_[i].current = branch_current_[nb + i];
+    for (std::size_t i = 0; i < nc; ++i) {
+      Coil& c = coils_[i];
+      const double next = branch_current_[nb + i];
+      // An opened coil carries no current and has no dI/dt: its history is 0
+      // (left to the formula, it would alternate in sign forever).
+      c.v_l =
+          branch_on_loop_[nb + i] ? 2 * c.inductance / h * (next - c.current) - trap * c.v_l : 0.0;
+      c.current = next;
+    }
+    for (std::size_t j = 0; j < capacitors_.size(); ++j) {
+      Capacitor& c = capacitors_[j];
+      const double next = branch_current_[nb + nc + j];
+      c.charge += h / 2 * (next + trap * c.current);
+      c.current = next;
+    }
+  };
+  for (int step = 0; step < config_.substeps; ++step) {
+    if (guard_) {
+      substep(0.0), substep(0.0);
+      guard_ = false;
+    } else {
+      substep(1.0);
+    }
   }
+  if (config_.rates) write_current_rates(access);
   write_outputs(access);
 }
 
-void ElectricityResolver::write_current_rates(ResolverAccess& access, double h) {
-  // Backward Euler's last substep: L (I - I_prev) / h = V - R I holds at the
-  // substep's end, so the difference quotient is the coil's dI/dt at the end
-  // of the advance (0 on an opened coil, whose current is exactly 0).
+void ElectricityResolver::write_current_rates(ResolverAccess& access) {
+  // The inductor's voltage over L is the integrator's own dI/dt at the end
+  // of the advance (for the trapezoidal rule and backward Euler alike; 0 on
+  // an opened coil, whose current is exactly 0, and on a coil without L).
   auto rate = current_rate_id_.writer<double>(access);
-  const std::size_t nb = batteries_.size();
-  for (std::size_t i = 0; i < coils_.size(); ++i) {
-    const double next = branch_current_[nb + i];
-    rate.set(coils_[i].slot, branch_on_loop_[nb + i] ? (next - coils_[i].current) / h : 0.0);
-  }
+  for (const Coil& c : coils_) rate.set(c.slot, c.inductance > 0 ? c.v_l / c.inductance : 0.0);
 }
 
 void ElectricityResolver::write_outputs(ResolverAccess& access) {
   auto current = current_id_.writer<double>(access);
   auto voltage = voltage_id_.writer<double>(access);
   auto powered = powered_id_.writer<std::uint8_t>(access);
+  auto charge = charge_id_.writer<double>(access);
   const double threshold = config_.powered_threshold;
   const auto& p = potential_;
 
@@ -458,11 +574,13 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
         publish(part.slot, i, v1 - v0);
         break;
       case PartKind::Coil:
-        i = branch_current_[std::size_t(part.element)];
+      case PartKind::Capacitor:
+        i = part.element < 0 ? 0.0 : branch_current_[std::size_t(part.element)];
         publish(part.slot, i, v0 - v1);
         break;
+      case PartKind::Switch:
       case PartKind::Resistor:
-        i = g_current[std::size_t(part.element)];
+        i = part.element < 0 ? 0.0 : g_current[std::size_t(part.element)];
         publish(part.slot, i, v0 - v1);
         break;
     }
@@ -471,11 +589,16 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     bool& reported = reported_closed_[id];
     if (reported != element_closed_[idx]) {
       reported = element_closed_[idx];
-      access.emit({.type = reported ? event::kCircuitClosed : event::kCircuitOpened,
-                   .a = id,
-                   .values = {{"current", i}}});
+      Event ev{.type = reported ? event::kCircuitClosed : event::kCircuitOpened,
+               .a = id,
+               .values = {{"current", i}}};
+      if (part.kind == PartKind::Coil && !reported)
+        ev.values.push_back(
+            {"energy", coils_[std::size_t(part.element) - batteries_.size()].released});
+      access.emit(std::move(ev));
     }
   }
+  for (const Capacitor& c : capacitors_) charge.set(c.slot, c.charge);
   for (const Wire& w : wires_) {
     if (w.conductance < 0) {
       publish(w.slot, 0.0, 0.0);
@@ -489,17 +612,22 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
 
 void register_electricity_resolver(PluginRegistry& registry) {
   registry.add({
-      .info =
-          {.name = kResolverName,
-           .kind = StageKind::Resolver,
-           .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance, prop::kInductance,
-                     prop::kResistance, prop::kContactResistance, prop::kWireFrom, prop::kWireTo,
-                     prop::kWireFromTerminal, prop::kWireToTerminal, prop::kCurrent},
-           .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered, prop::kCurrentRate},
-           // Without a battery or a coil (which may hold a current) no
-           // current can flow: bars that merely conduct need no solver.
-           .needs = {prop::kEmf, prop::kInductance},
-           .doc = "DC circuits with coils: modified nodal analysis over parts, wires and contacts"},
+      .info = {.name = kResolverName,
+               .kind = StageKind::Resolver,
+               .reads = {prop::kConductive, prop::kEmf, prop::kInternalResistance,
+                         prop::kInductance, prop::kResistance, prop::kContactResistance,
+                         prop::kWireFrom, prop::kWireTo, prop::kWireFromTerminal,
+                         prop::kWireToTerminal, prop::kCurrent, prop::kCapacitance, prop::kCharge,
+                         prop::kSwitchClosed},
+               .writes = {prop::kCurrent, prop::kVoltage, prop::kPowered, prop::kCurrentRate,
+                          prop::kCharge},
+               // Without a battery, a coil (which may hold a current) or a
+               // capacitor (a charge) no current can flow: bars that merely
+               // conduct need no solver.
+               .needs = {prop::kEmf, prop::kInductance, prop::kCapacitance},
+               .doc =
+                   "circuits with coils and capacitors: modified nodal analysis over parts, wires "
+                   "and contacts, trapezoidal in time"},
       .properties = electricity_property_defs(),
       .create =
           [](PluginContext& ctx) {

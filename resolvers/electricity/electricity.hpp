@@ -5,10 +5,12 @@
 // units and the limits.
 //
 // Parts   an object is an electrical part if it carries `emf` (battery),
-//         `inductance` (coil), or `conductive` = true (with `resistance`: a
-//         resistor; without: a single equipotential node such as a bar, a
-//         contact, the striker). Batteries, coils and resistors have two
-//         terminals, 0 and 1; a node part has one (terminal 1 means the same node).
+//         `inductance` (coil), `capacitance` (capacitor), `switch_closed`
+//         (switch), or `conductive` = true (with `resistance`: a resistor;
+//         without: a single equipotential node such as a bar, a contact, the
+//         striker). Batteries, coils, capacitors, switches and resistors have
+//         two terminals, 0 and 1; a node part has one (terminal 1 means the
+//         same node).
 // Wires   objects carrying `wire_from` / `wire_to` (refs to parts) join two
 //         terminals through `resistance`.
 // Contacts made and broken by touching arrive as connect / disconnect
@@ -16,11 +18,20 @@
 //         next advance.
 // Reads   conductive, emf, internal_resistance, inductance, resistance,
 //         contact_resistance, wire_from, wire_to, wire_from_terminal,
-//         wire_to_terminal, current (the coil's state).
-// Writes  current, voltage, powered, on every part and wire.
+//         wire_to_terminal, capacitance, switch_closed, current (the coil's
+//         state), plate_charge (the capacitor's state).
+// Writes  current, voltage, powered, on every part and wire; plate_charge on
+//         capacitors.
+// Time    coils and capacitors are integrated by the trapezoidal rule
+//         (second order), with the first substep after any discontinuity (a
+//         new network, an emf edit, an edited state) taken as two
+//         backward-Euler half-steps, which damp the trapezoidal rule's
+//         ringing (docs/electricity.md, "Coils and capacitors in time").
 // Events  connected / disconnected (a, b) when a contact is made / broken;
-//         circuit_closed / circuit_opened (a = battery, coil or resistor, value
-//         "current") when the element joins / leaves a closed loop.
+//         circuit_closed / circuit_opened (a = battery, coil, capacitor,
+//         switch or resistor, value "current"; a coil's circuit_opened also
+//         "energy", the J its collapsing field released into the gap) when the
+//         element joins / leaves a closed loop.
 // Rates   with the setting `rates = true`, a coil also publishes
 //         `current_rate`, dI/dt at the end of the advance (A/s), so that
 //         magnetism_from_electricity can pass the current on with its rate
@@ -28,8 +39,8 @@
 //         window late (docs/performance.md "Multi-rate coupling").
 //
 // State that matters lives in properties: a coil's current is its `current`,
-// so build() loses nothing. Contacts are not stored: they are the touching
-// pairs of the collisions set, and electricity_from_collisions re-sends every
+// a capacitor's charge its `plate_charge`, so build() loses nothing. Contacts are not stored: they
+// are the touching pairs of the collisions set, and electricity_from_collisions re-sends every
 // touching pair when it starts, so a new resolver instance recovers them.
 #pragma once
 
@@ -65,6 +76,9 @@ inline constexpr const char* kCurrent = "current";
 inline constexpr const char* kVoltage = "voltage";
 inline constexpr const char* kPowered = "powered";
 inline constexpr const char* kCurrentRate = "current_rate";
+inline constexpr const char* kCapacitance = "capacitance";
+inline constexpr const char* kCharge = "plate_charge";
+inline constexpr const char* kSwitchClosed = "switch_closed";
 }  // namespace prop
 
 /// Plugin names.
@@ -87,6 +101,11 @@ std::vector<PropertyDef> electricity_property_defs();
 /// and a short circuit a huge but finite current.
 inline constexpr double kMinResistance = 1e-6;
 
+/// A capacitor below this capacitance, F, is an open gap (no branch): its
+/// companion impedance h / 2C would exceed 1e8 Ohm at a 1 ms substep and cost
+/// the solve its digits next to micro-ohm wires.
+inline constexpr double kMinCapacitance = 1e-12;
+
 /// Settings of the `electricity` plugin.
 struct ElectricityConfig {
   /// A part or wire is `powered` when |current| exceeds this, A.
@@ -100,9 +119,9 @@ struct ElectricityConfig {
   /// Internal resistance of a battery that does not carry `internal_resistance`, Ohm
   /// (a fresh alkaline cell).
   double internal_resistance = 0.1;
-  /// Backward-Euler substeps per advance: the coil model's error is first
-  /// order in dt / substeps. 4 keeps a kit coil's rise (L/R ~ 10 ms, 2.4 steps
-  /// of 1/240 s) within 2 % of the analytic curve instead of 6 %; a substep
+  /// Trapezoidal substeps per advance: the coil and capacitor models' error
+  /// is second order in dt / substeps. 4 keeps a kit coil's rise (L/R ~ 10
+  /// ms, 2.4 steps of 1/240 s) within 0.1 % of the analytic curve; a substep
   /// costs one back-substitution per driven circuit (docs/electricity.md).
   int substeps = 4;
   /// Components with at most this many unknowns are solved with dense LU,
@@ -119,8 +138,9 @@ struct ElectricityConfig {
 };
 
 /// What an electrical part is, by the properties it carries (first match wins:
-/// a wire is never a part; then emf, inductance, resistance).
-enum class PartKind : std::uint8_t { Node, Battery, Coil, Resistor };
+/// a wire is never a part; then emf, inductance, capacitance, switch_closed,
+/// resistance).
+enum class PartKind : std::uint8_t { Node, Battery, Coil, Capacitor, Switch, Resistor };
 
 class ElectricityResolver final : public Resolver {
  public:
@@ -142,7 +162,7 @@ class ElectricityResolver final : public Resolver {
   /// Whether a and b touch electrically, as of the last advance.
   bool connected(ObjectId a, ObjectId b) const;
   std::size_t contact_count() const { return contacts_.size(); }
-  /// Whether a battery, coil or resistor lies on a closed loop, as of the last advance.
+  /// Whether a two-terminal part lies on a closed loop, as of the last advance.
   bool closed(ObjectId element) const;
   /// Component factorisations so far: moves only when the network's matrix changes.
   std::uint64_t factorizations() const { return solver_.factorizations(); }
@@ -165,25 +185,49 @@ class ElectricityResolver final : public Resolver {
     std::uint32_t slot;
     PartKind kind;
     std::uint32_t node[2];  // node of terminal 0 and 1 (equal for a node part)
-    std::int32_t element;   // branch (battery, coil) or conductance (resistor) index
+    // Branch (battery, coil, capacitor) or conductance (resistor, closed
+    // switch) index; -1 for a node, an open switch or a capacitor below
+    // kMinCapacitance.
+    std::int32_t element;
   };
   struct Wire {
     std::uint32_t slot;
     std::int32_t conductance;  // -1: an end is open
   };
+  // Branch k's source each substep is e_k = companion + series emf; the
+  // companion's history (v_l, previous current) is only valid while the
+  // network stays the same: after a discontinuity the guard step rebuilds it
+  // from the state alone.
   struct Coil {
     std::uint32_t slot;
     double inductance, resistance;
-    double current;  // the state: A, from terminal 0 to 1 through the coil
+    double current = 0;  // the state: A, from terminal 0 to 1 through the coil
+    /// Trapezoidal history: the inductor's own voltage L dI/dt at the last
+    /// substep, V (V(0) - V(1) less R I and less series_emf).
+    double v_l = 0;
+    /// An EMF in series with the coil, V, driving current from terminal 0 to
+    /// 1 (a source inside the branch): enters the branch's right-hand side in
+    /// one place, the substep loop of advance(). Zero here; a coupling that
+    /// induces an EMF sets it before the loop.
+    double series_emf = 0;
+    /// 1/2 L I^2 (J) released this advance because the coil lost its last
+    /// loop with current flowing (the spark at the opening contact).
+    double released = 0;
+  };
+  struct Capacitor {
+    std::uint32_t slot;
+    double capacitance, resistance;  // F (>= kMinCapacitance), series resistance Ohm
+    double charge = 0;   // the state: C on the plate at terminal 0; V(0) - V(1) = q / C + R I
+    double current = 0;  // trapezoidal history: A from terminal 0 to 1, last substep
   };
 
   void perform_commands(const WorldView& view);
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
-  void write_current_rates(ResolverAccess& access, double h);
+  void write_current_rates(ResolverAccess& access);
   /// Value and membership counters of the columns that define the network.
-  static constexpr std::size_t kNetworkInputCount = 10;
+  static constexpr std::size_t kNetworkInputCount = 12;
   using InputVersions = std::array<std::uint64_t, 2 * kNetworkInputCount>;
   InputVersions input_versions(const WorldView& view);
 
@@ -195,20 +239,27 @@ class ElectricityResolver final : public Resolver {
   bool dirty_ = true;
   bool reload_coil_state_ = true;
   double h_ = 0;  // the substep the coil companions were built for, s
+  /// The next substep is a guard step (two backward-Euler half-steps): set at
+  /// the first advance, when the network or its element lists change, when
+  /// an emf or a coil's current or a capacitor's charge was edited from
+  /// outside. The trapezoidal rule rings after such a jump; backward Euler
+  /// damps it and rebuilds the history from the state alone.
+  bool guard_ = true;
   InputVersions seen_versions_{};
   std::array<PropertyId, kNetworkInputCount> input_ids_{};  // resolved at the first use
   bool input_ids_resolved_ = false;
   // The columns of every advance, resolved at the first use.
   PropertyRef current_id_{prop::kCurrent}, voltage_id_{prop::kVoltage}, powered_id_{prop::kPowered},
-      emf_id_{prop::kEmf}, current_rate_id_{prop::kCurrentRate};
-  std::uint64_t seen_current_version_ = 0;
+      emf_id_{prop::kEmf}, current_rate_id_{prop::kCurrentRate}, charge_id_{prop::kCharge};
   std::uint64_t network_builds_ = 0;
   Network network_;
   MnaSolver solver_;
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index
+  std::vector<Capacitor> capacitors_;     // branch index = after the coils
   std::vector<std::uint32_t> batteries_;  // slots; branch index = position
+  std::vector<double> battery_emf_;       // the emfs of the last advance, V
   std::vector<bool> element_closed_;      // per part: on a closed loop (two-terminal parts)
   std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
   std::map<ObjectId, bool> reported_closed_;  // what the last events said, per element

@@ -38,14 +38,17 @@ TEST(WorkPrecision, FreeFallConvergesAtFirstOrder) {
   EXPECT_NEAR(e[0], 9.81 * 1.0 * kSteps[0] / 2, 0.1 * e[0]);
 }
 
-TEST(WorkPrecision, RlCircuitConvergesAtFirstOrderWithAnySubsteps) {
+TEST(WorkPrecision, RlCircuitConvergesAtSecondOrderWithAnySubsteps) {
+  // Trapezoidal coils with a backward-Euler guard substep at the closing
+  // (issue 13): measured 1.7 over 1/240 ... 1/960 s (the guard's error is
+  // not yet asymptotic at 1/240 s with one substep); 1.0 with backward Euler.
   for (int substeps : {1, 4}) {
     Method m;
     m.electricity_substeps = substeps;
     const std::vector<double> e = errors([&](double dt) { return run_rl(dt, m); });
     const double order = bench::loglog_slope(kSteps, e);
-    EXPECT_GE(order, 0.8) << substeps << " substeps";
-    EXPECT_LE(order, 1.2) << substeps << " substeps";
+    EXPECT_GE(order, 1.5) << substeps << " substeps";
+    EXPECT_LE(order, 2.3) << substeps << " substeps";
     EXPECT_LT(e.back(), e.front());
   }
 }

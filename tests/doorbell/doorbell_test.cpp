@@ -40,7 +40,10 @@ std::string describe(const Cycle& c) {
 void expect_rings_steadily(const RunResult& r, std::size_t min_strikes, double max_spread) {
   const auto t = r.strikes();
   ASSERT_GE(t.size(), min_strikes);
-  const Intervals iv = intervals(t);
+  // The period from the second strike on: the first interval starts from the
+  // striker at rest, a start-up transient (as the first cycle's closures are
+  // below). With 10 % more emf it is 18 steps, then 16 steps every time.
+  const Intervals iv = intervals(std::vector<double>(t.begin() + 1, t.end()));
   EXPECT_LT(iv.spread(), max_spread)
       << "intervals from " << iv.min << " to " << iv.max << " s, mean " << iv.mean;
   const auto cs = cycles(r);

@@ -171,5 +171,32 @@ TEST_F(KitParts, TheSceneRunsAndTheBatteryDrivesItsCircuit) {
   EXPECT_NEAR(get<double>(w(), "battery", "current"), 6 / r, 1e-9);
 }
 
+TEST(KitCircuitParts, ResistorCapacitorAndSwitchBecomeTheirProperties) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadedScene scene =
+      lua::load_scene(source("tests/doorbell/scenes/circuit_parts.lua"), registry);
+  World& world = *scene.world;
+  EXPECT_DOUBLE_EQ(get<double>(world, "resistor", "resistance"), 100);
+  EXPECT_TRUE(get<bool>(world, "resistor", "conductive"));
+  EXPECT_DOUBLE_EQ(get<double>(world, "capacitor", "capacitance"), 1e-3);
+  EXPECT_DOUBLE_EQ(get<double>(world, "capacitor", "resistance"), 0.03);  // its ESR
+  EXPECT_NEAR(get<double>(world, "capacitor", "mass"), 0.06, 1e-12);
+  EXPECT_FALSE(get<bool>(world, "switch", "switch_closed"));
+  EXPECT_TRUE(get<bool>(world, "closed_switch", "switch_closed"));
+  EXPECT_DOUBLE_EQ(get<double>(world, "closed_switch", "resistance"), 0.01);
+  // Open: the capacitor keeps its charge; closed, it charges towards C E = 6 mC
+  // through the resistor (RC = 0.1 s).
+  world.run(24);
+  EXPECT_DOUBLE_EQ(get<double>(world, "capacitor", "plate_charge"), 1e-3);
+  world.set(world.find("switch"), "switch_closed", true);
+  world.run(24);  // 0.1 s
+  const double q = get<double>(world, "capacitor", "plate_charge");
+  const double r = 100 + 0.5 + 0.03 + 0.001 + get<double>(world, "w1", "resistance") +
+                   get<double>(world, "w2", "resistance") + get<double>(world, "w3", "resistance") +
+                   get<double>(world, "w4", "resistance");
+  EXPECT_NEAR(q, 6e-3 - 5e-3 * std::exp(-0.1 / (r * 1e-3)), 1e-6);
+}
+
 }  // namespace
 }  // namespace alloy::doorbell::test

@@ -1,4 +1,5 @@
--- Electrical parts of the kit: batteries, contacts and wires. The electricity
+-- Electrical parts of the kit: batteries, contacts, wires, resistors,
+-- capacitors and switches. The electricity
 -- resolver (docs/electricity.md) reads what they carry: a battery is an emf
 -- with an internal resistance between terminal 0 (-, its -x end) and terminal
 -- 1 (+, its +x end); conductive parts that touch connect; a wire is a
@@ -96,6 +97,70 @@ electric.wire = {
       wire_to_terminal = a.to_terminal,
       resistance = physics.wire_resistance(m.resistivity, len, a.diameter),
     }
+  end,
+}
+
+-- A small mounted two-terminal box: terminal 0 at its -x end, 1 at its +x
+-- end. Its body conducts, as a battery's caps do, so a bar laid on an end
+-- touches that terminal.
+local function two_terminal(a, p, mass)
+  p.shape = "box"
+  p.size = { a.size[1], a.size[2], a.size[3] or a.depth }
+  p.conductive = true
+  p.friction = 0.4
+  p.restitution = 0.3
+  return mounted(a, p, mass)
+end
+
+electric.resistor = {
+  doc = "a resistor lying along its x axis: terminal 0 at its -x end, terminal 1 at its +x end",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "resistance", "nonnegative", default = 10, doc = "ohm, between terminals 0 and 1" },
+    -- A 5 W wirewound power resistor in a ceramic case (22 x 10 x 9 mm, ~6 g).
+    { "size", "extent", default = { 0.022, 0.01 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.009, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.006, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    return two_terminal(a, { resistance = a.resistance }, a.mass)
+  end,
+}
+
+electric.capacitor = {
+  doc = "a capacitor lying along its x axis: terminal 0 at its -x end, terminal 1 at its +x end; "
+    .. "`charge` is on terminal 0's plate and is kept while the circuit around it changes",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    -- A 10 mF, 16 V aluminium electrolytic can (35 mm across, 50 mm long,
+    -- ~60 g); such cans have an equivalent series resistance of some tens of
+    -- milliohms (manufacturers' data sheets, "ESR at 100 Hz").
+    { "capacitance", "positive", default = 0.01, doc = "F" },
+    { "charge", "number", default = 0, doc = "C on terminal 0's plate at the start (V(0) - V(1) = charge / capacitance)" },
+    { "resistance", "nonnegative", default = 0.03, doc = "equivalent series resistance, ohm" },
+    { "size", "extent", default = { 0.05, 0.035 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.035, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.06, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    return two_terminal(a, { capacitance = a.capacitance, plate_charge = a.charge, resistance = a.resistance }, a.mass)
+  end,
+}
+
+electric.switch = {
+  doc = "a knife switch lying along its x axis: joins terminal 0 (-x end) and 1 (+x end) while "
+    .. "`switch_closed` is true; a timeline, a mod or the viewer sets it",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    { "closed", "boolean", default = false, doc = "whether it starts closed" },
+    -- A small brass knife switch: about a milliohm across its blade and jaws.
+    { "resistance", "nonnegative", default = 0.001, doc = "ohm, while closed" },
+    { "size", "extent", default = { 0.06, 0.015 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.025, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.05, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    return two_terminal(a, { switch_closed = a.closed, resistance = a.resistance }, a.mass)
   end,
 }
 
