@@ -393,9 +393,12 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   const auto emf = emf_id_.column<double>(access);
   const std::size_t nb = batteries_.size();
   for (std::size_t k = 0; k < nb; ++k) e_[k] = emf[batteries_[k]];
+  take_induced_emfs(access);
   for (int step = 0; step < config_.substeps; ++step) {
     for (std::size_t i = 0; i < coils_.size(); ++i)
       e_[nb + i] = coils_[i].inductance / h * coils_[i].current;
+    // Induction: the EMF is a source in series with the coil (held over the advance).
+    for (std::size_t i = 0; i < coils_.size(); ++i) e_[nb + i] += induced_emf_[i];
     solver_.solve(e_, potential_, branch_current_);
     for (std::size_t k = 0; k < branch_current_.size(); ++k)
       if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
@@ -403,6 +406,30 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     for (std::size_t i = 0; i < coils_.size(); ++i) coils_[i].current = branch_current_[nb + i];
   }
   write_outputs(access);
+}
+
+void ElectricityResolver::set_induced_emf(ObjectId coil, double emf) {
+  induced_queue_.emplace_back(coil, emf);
+}
+
+double ElectricityResolver::induced_emf(ObjectId coil) const {
+  for (std::size_t i = 0; i < coils_.size() && i < induced_emf_.size(); ++i)
+    if (coils_[i].slot == coil.index) return induced_emf_[i];
+  return 0.0;
+}
+
+void ElectricityResolver::take_induced_emfs(const WorldView& view) {
+  induced_emf_.assign(coils_.size(), 0.0);
+  if (induced_queue_.empty()) return;
+  // Slot -> coil, for this advance's commands (coils are few; commands one per coil).
+  const PropertyStore& store = view.store();
+  std::vector<std::int32_t> coil_of_slot(store.slot_count(), -1);
+  for (std::size_t i = 0; i < coils_.size(); ++i) coil_of_slot[coils_[i].slot] = std::int32_t(i);
+  for (const auto& [id, emf] : induced_queue_) {
+    if (!store.alive(id) || id.index >= coil_of_slot.size() || !std::isfinite(emf)) continue;
+    if (const std::int32_t i = coil_of_slot[id.index]; i >= 0) induced_emf_[std::size_t(i)] = emf;
+  }
+  induced_queue_.clear();
 }
 
 void ElectricityResolver::write_current_rates(ResolverAccess& access, double h) {

@@ -137,6 +137,15 @@ class ElectricityResolver final : public Resolver {
   void connect(ObjectId a, ObjectId b, int terminal_a = 0, int terminal_b = 0);
   /// Breaks the contact between a and b, if there is one.
   void disconnect(ObjectId a, ObjectId b);
+  /// Induction (Faraday): over the next advance only, coil `coil` carries an
+  /// EMF of `emf` volts in its branch, driving current from terminal 0 to 1
+  /// (-dPhi/dt from electricity_from_magnetism). The last command before an
+  /// advance wins; an advance with no command has none. A command for an
+  /// object that is not (or no longer) a coil, or with a non-finite value,
+  /// does nothing.
+  void set_induced_emf(ObjectId coil, double emf);
+  /// The induced EMF of coil `coil` in the last advance, V (0 if none).
+  double induced_emf(ObjectId coil) const;
 
   // --- introspection (tests, tools) ---------------------------------------------
   /// Whether a and b touch electrically, as of the last advance.
@@ -178,6 +187,8 @@ class ElectricityResolver final : public Resolver {
   };
 
   void perform_commands(const WorldView& view);
+  /// Moves the queued induced EMFs into induced_emf_ (per coil of this network).
+  void take_induced_emfs(const WorldView& view);
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
@@ -205,6 +216,11 @@ class ElectricityResolver final : public Resolver {
   std::uint64_t network_builds_ = 0;
   Network network_;
   MnaSolver solver_;
+  // Induction: the commands of the next advance, and per coil the EMF added
+  // to its branch source in the last one (a separate term, kept out of the
+  // companion model's own source).
+  std::vector<std::pair<ObjectId, double>> induced_queue_;
+  std::vector<double> induced_emf_;  // per coil, V
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index
