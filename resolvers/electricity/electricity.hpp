@@ -21,6 +21,9 @@
 // Events  connected / disconnected (a, b) when a contact is made / broken;
 //         circuit_closed / circuit_opened (a = battery, coil or resistor, value
 //         "current") when the element joins / leaves a closed loop.
+// Induction  set_induced_emf(coil, volts), queued by electricity_from_magnetism
+//         (resolvers/magnetism/): -dPhi/dt in series with the coil for the
+//         next advance (docs/electricity.md "Induction").
 // Rates   with the setting `rates = true`, a coil also publishes
 //         `current_rate`, dI/dt at the end of the advance (A/s), so that
 //         magnetism_from_electricity can pass the current on with its rate
