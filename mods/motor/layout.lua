@@ -59,6 +59,7 @@ local defaults = {
   -- 50 x 30 mm bobbin with an iron core: 3.2 ohm, 16 mH, q = 30 A m per
   -- ampere), radial, their inner faces coil_gap outside the spokes' ends.
   coil_angle = 22.5, coil_gap = 0.008, coil_length = 0.05, coil_diameter = 0.03, turns = 500,
+  wire_diameter = 0.5e-3,
   -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
   -- below the axle, north up; it pulls a south spoke to the bottom, which
   -- puts a north spoke under the slider, where the torque is largest.
@@ -128,7 +129,8 @@ return function(options)
   local r_coil = tip + o.coil_gap + o.coil_length / 2
   for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
     kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
-               diameter = o.coil_diameter, turns = o.turns }
+               diameter = o.coil_diameter, turns = o.turns,
+               wire_diameter = o.wire_diameter }
   end
 
   -- The bias magnet, standing below the axle, north up.

@@ -478,6 +478,11 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     c.released = branch_on_loop_[nb + i] ? 0.0 : 0.5 * c.inductance * c.current * c.current;
   }
 
+  // Induction: the EMF queued for this advance (electricity_from_magnetism)
+  // is a source in series with its coil, held over the advance's substeps.
+  take_induced_emfs(access);
+  for (std::size_t i = 0; i < nc; ++i) coils_[i].series_emf = induced_emf_[i];
+
   // Each substep is one trapezoidal step over h, or, as the guard after a
   // discontinuity, two backward-Euler steps over h/2 (same impedances, so the
   // same factorisation). With `trap` = 1 or 0:
@@ -522,6 +527,30 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   }
   if (config_.rates) write_current_rates(access);
   write_outputs(access);
+}
+
+void ElectricityResolver::set_induced_emf(ObjectId coil, double emf) {
+  induced_queue_.emplace_back(coil, emf);
+}
+
+double ElectricityResolver::induced_emf(ObjectId coil) const {
+  for (std::size_t i = 0; i < coils_.size() && i < induced_emf_.size(); ++i)
+    if (coils_[i].slot == coil.index) return induced_emf_[i];
+  return 0.0;
+}
+
+void ElectricityResolver::take_induced_emfs(const WorldView& view) {
+  induced_emf_.assign(coils_.size(), 0.0);
+  if (induced_queue_.empty()) return;
+  // Slot -> coil, for this advance's commands (coils are few; commands one per coil).
+  const PropertyStore& store = view.store();
+  std::vector<std::int32_t> coil_of_slot(store.slot_count(), -1);
+  for (std::size_t i = 0; i < coils_.size(); ++i) coil_of_slot[coils_[i].slot] = std::int32_t(i);
+  for (const auto& [id, emf] : induced_queue_) {
+    if (!store.alive(id) || id.index >= coil_of_slot.size() || !std::isfinite(emf)) continue;
+    if (const std::int32_t i = coil_of_slot[id.index]; i >= 0) induced_emf_[std::size_t(i)] = emf;
+  }
+  induced_queue_.clear();
 }
 
 void ElectricityResolver::write_current_rates(ResolverAccess& access) {

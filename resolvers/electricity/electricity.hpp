@@ -32,6 +32,9 @@
 //         switch or resistor, value "current"; a coil's circuit_opened also
 //         "energy", the J its collapsing field released into the gap) when the
 //         element joins / leaves a closed loop.
+// Induction  set_induced_emf(coil, volts), queued by electricity_from_magnetism
+//         (resolvers/magnetism/): -dPhi/dt in series with the coil for the
+//         next advance (docs/electricity.md "Induction").
 // Rates   with the setting `rates = true`, a coil also publishes
 //         `current_rate`, dI/dt at the end of the advance (A/s), so that
 //         magnetism_from_electricity can pass the current on with its rate
@@ -157,6 +160,15 @@ class ElectricityResolver final : public Resolver {
   void connect(ObjectId a, ObjectId b, int terminal_a = 0, int terminal_b = 0);
   /// Breaks the contact between a and b, if there is one.
   void disconnect(ObjectId a, ObjectId b);
+  /// Induction (Faraday): over the next advance only, coil `coil` carries an
+  /// EMF of `emf` volts in its branch, driving current from terminal 0 to 1
+  /// (-dPhi/dt from electricity_from_magnetism). The last command before an
+  /// advance wins; an advance with no command has none. A command for an
+  /// object that is not (or no longer) a coil, or with a non-finite value,
+  /// does nothing.
+  void set_induced_emf(ObjectId coil, double emf);
+  /// The induced EMF of coil `coil` in the last advance, V (0 if none).
+  double induced_emf(ObjectId coil) const;
 
   // --- introspection (tests, tools) ---------------------------------------------
   /// Whether a and b touch electrically, as of the last advance.
@@ -207,8 +219,8 @@ class ElectricityResolver final : public Resolver {
     double v_l = 0;
     /// An EMF in series with the coil, V, driving current from terminal 0 to
     /// 1 (a source inside the branch): enters the branch's right-hand side in
-    /// one place, the substep loop of advance(). Zero here; a coupling that
-    /// induces an EMF sets it before the loop.
+    /// one place, the substep loop of advance(). Set before the loop from the
+    /// induced EMF queued for this advance (set_induced_emf), zero without one.
     double series_emf = 0;
     /// 1/2 L I^2 (J) released this advance because the coil lost its last
     /// loop with current flowing (the spark at the opening contact).
@@ -222,6 +234,8 @@ class ElectricityResolver final : public Resolver {
   };
 
   void perform_commands(const WorldView& view);
+  /// Moves the queued induced EMFs into induced_emf_ (per coil of this network).
+  void take_induced_emfs(const WorldView& view);
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
@@ -254,6 +268,11 @@ class ElectricityResolver final : public Resolver {
   std::uint64_t network_builds_ = 0;
   Network network_;
   MnaSolver solver_;
+  // Induction: the commands of the next advance, and per coil the EMF added
+  // to its branch source in the last one (a separate term, kept out of the
+  // companion model's own source).
+  std::vector<std::pair<ObjectId, double>> induced_queue_;
+  std::vector<double> induced_emf_;  // per coil, V
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index

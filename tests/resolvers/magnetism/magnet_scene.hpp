@@ -40,9 +40,11 @@ inline void register_current_source(PluginRegistry& r) {
                          .unit = "A",
                          .doc = "current through the element"}},
          .create = [](PluginContext&) { return std::make_unique<CurrentSource>(); }});
-  // The real resolver's interaction (registered with the native plugins)
-  // calls connect() on an ElectricityResolver; the stand-in has none.
+  // The real resolver's interactions (registered with the native plugins)
+  // call connect() and set_induced_emf() on an ElectricityResolver; the
+  // stand-in has neither.
   r.remove("electricity_from_collisions");
+  r.remove("electricity_from_magnetism");
 }
 
 /// A bar on the play area at `at`, rotated by `angle` about z, of the given kind.

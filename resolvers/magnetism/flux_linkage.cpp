@@ -1,0 +1,47 @@
+#include "resolvers/magnetism/flux_linkage.hpp"
+
+#include <cmath>
+
+namespace alloy::magnetism {
+
+double pole_potential(std::span<const Pole> poles, double softening, Vec3 x,
+                      std::uint32_t exclude_body) {
+  double sum = 0;
+  for (const Pole& p : poles) {
+    if (p.body == exclude_body || p.strength == 0) continue;
+    const Vec3 r = x - p.position;
+    const double s2 = dot(r, r) + softening * softening;
+    if (s2 <= 0) continue;  // coincident with no softening: no finite potential
+    sum += p.strength / std::sqrt(s2);
+  }
+  return kMu0Over4Pi * sum;
+}
+
+FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_velocity,
+                      double softening, const CoilGeometry& coil) {
+  FluxLinkage out;
+  if (coil.linkage == 0) return out;
+  const BarPoles ends = bar_poles(coil.centre, coil.axis, coil.separation);
+  // The coil's own poles move with its body.
+  const Vec3 u_north = coil.velocity + cross(coil.angular_velocity, ends.north - coil.centre);
+  const Vec3 u_south = coil.velocity + cross(coil.angular_velocity, ends.south - coil.centre);
+  double flux = 0, rate = 0;
+  for (std::size_t i = 0; i < poles.size(); ++i) {
+    const Pole& p = poles[i];
+    if (p.body == coil.body || p.strength == 0) continue;
+    const Vec3 up = i < pole_velocity.size() ? pole_velocity[i] : Vec3{};
+    // d/dt (1 / s(x - p)) = -K(x - p) . (u_x - u_p), K the force kernel.
+    const Vec3 rs = ends.south - p.position, rn = ends.north - p.position;
+    const double ss = std::sqrt(dot(rs, rs) + softening * softening);
+    const double sn = std::sqrt(dot(rn, rn) + softening * softening);
+    if (!(ss > 0) || !(sn > 0)) continue;
+    flux += p.strength * (1.0 / ss - 1.0 / sn);
+    rate += p.strength * (-dot(softened_kernel(rs, softening), u_south - up) +
+                          dot(softened_kernel(rn, softening), u_north - up));
+  }
+  out.flux = coil.linkage * kMu0Over4Pi * flux;
+  out.rate = coil.linkage * kMu0Over4Pi * rate;
+  return out;
+}
+
+}  // namespace alloy::magnetism
