@@ -582,9 +582,30 @@ Result run_heavy_chain(double dt, const Method& m) {
   const ObjectId ball = add_sphere(*s, total * dir, 0.05, 10.0, "ball");
   s->set(ball, "planar", true);
   add_hinge(*s, ball, prev, total * dir, {0, 0, 1});
+  // The energy of every body (planar: the turn about z), against the
+  // weight's swing m g L (1 - cos theta0) as scale.
+  std::vector<ObjectId> all = links;
+  all.push_back(ball);
+  auto energy = [&] {
+    double e = 0;
+    for (const ObjectId b : all) {
+      const double m = read<double>(*s, b, "mass");
+      const Vec3 v = read<Vec3>(*s, b, "velocity"), w = read<Vec3>(*s, b, "angular_velocity");
+      const double i_z = b == ball ? 0.4 * m * 0.05 * 0.05 : m * (link * link + 0.01 * 0.01) / 12;
+      e += 0.5 * m * dot(v, v) + 0.5 * i_z * w.z * w.z + m * kG * read<Vec3>(*s, b, "position").y;
+    }
+    return e;
+  };
+  const double swing = 10.0 * kG * total * (1 - std::cos(theta0));
+  double e0 = 0;
+  bool first = true;
   Result r;
   r.stretch = 0;
+  r.energy_drift = 0;
   run_timed(*s, steps_for(3.0, dt), r, [&](std::uint64_t) {
+    const double e = energy();
+    if (first) e0 = e, first = false;
+    r.energy_drift = std::max(r.energy_drift, std::abs(e - e0) / swing);
     // Each joint's gap: where one link's end is against where the next begins.
     double gaps = 0;
     Vec3 end{0, 0, 0};
