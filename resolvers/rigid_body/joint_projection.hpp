@@ -11,15 +11,18 @@
 //
 // After the step this adds, per island of hinged bodies, the constraint
 // impulse along the start-of-step Jacobian J(q_n)^T that puts every hinge's
-// anchors (and, off the play area, its axes) back together at the new poses:
-// the same impulse changes the velocities (dv = M^-1 J^T dmu) and the poses
-// (h dv), as SHAKE does. The total hinge impulse of the step is then fixed by
-// g(q_{n+1}) = (1 - erp) g(q_n) alone, whatever the velocity solve converged
-// to: a constrained symplectic Euler step, with no energy drift. The small
-// system (J M^-1 J^T) dmu = -r is solved directly (Eigen's LDLT) and
-// iterated (the Jacobian is kept at q_n; each pass shrinks the residual by
-// about the angle a body turns in a step).
+// anchors back together at the new poses: the same impulse changes the
+// velocities (dv = M^-1 J^T dmu) and the poses (h dv), as SHAKE does. The
+// total hinge impulse of the step is then fixed by g(q_{n+1}) = (1 - erp)
+// g(q_n) alone, whatever the velocity solve converged to: a constrained
+// symplectic Euler step, with no energy drift. The small system
+// (J M^-1 J^T) dmu = -r is solved directly (Eigen): once at the velocity
+// level, then by Newton on the positions. Where Newton cannot converge (a
+// light link's geometric stiffness too fast for the step) the island's step
+// is redone along the end-of-step Jacobian, which is stable but damps.
 //
+// Only islands of planar bodies (the kit's) of at most kMaxHinges hinges are
+// projected; the others keep ODE's hinges (docs/architecture.md says why).
 // Contacts, joint limits and the friction motor of a hinge are ODE's alone:
 // the projection adds impulses only along the hinge's own rows, which a limit
 // or a motor about the axis does not touch.
@@ -36,7 +39,8 @@ namespace alloy::rigid {
 class JointProjection {
  public:
   /// Islands with more hinges than this are left to ODE's error reduction
-  /// alone: their dense solve (5 rows a hinge) would cost more than the step.
+  /// alone: their dense solve (2 to 5 rows a hinge, up to 16 Newton passes)
+  /// would cost more than the step.
   static constexpr std::size_t kMaxHinges = 16;
 
   /// Forgets every body and hinge (the world is being rebuilt).
@@ -61,7 +65,7 @@ class JointProjection {
   void project(double h, double erp);
 
   std::size_t hinge_count() const { return hinges_.size(); }
-  /// Hinges in islands too large to project (kMaxHinges).
+  /// Hinges left to ODE: in islands too large (kMaxHinges) or not planar.
   std::size_t unprojected_hinges() const { return unprojected_; }
   /// The largest hinge error left after the last project(), m or rad.
   double last_residual() const { return last_residual_; }
