@@ -76,6 +76,8 @@ std::vector<NamedMethod> rigid_methods(bool constrained) {
     for (int it : {10, 20}) m.push_back({"quick " + std::to_string(it), {.iterations = it}});
   m.push_back({"quick 40", {}, true});
   if (constrained) m.push_back({"quick 80", {.iterations = 80}});
+  // ODE's hinges alone, without the position projection (joint_projection.hpp).
+  if (constrained) m.push_back({"quick 40, no projection", {.joint_projection = false}});
   if (an::rigid_substeps_supported())
     for (int sub : {2, 4})
       m.push_back({"quick 40, " + std::to_string(sub) + " substeps", {.rigid_substeps = sub}});
@@ -228,6 +230,22 @@ std::vector<Scene> scenes() {
       {"bar_170", "Bar pendulum, 170 degrees (2 periods)", "relative period error",
        [](double dt, const Method& m) { return an::run_swing(dt, m, false, 170 * kPi / 180); },
        rigid_methods(true)});
+  s.push_back({"lever_90_stretch", "2 cm ball hinged 1 m from its anchor, 90 degrees: the hinge",
+               "largest relative stretch",
+               [](double dt, const Method& m) {
+                 Result r = an::run_swing(dt, m, true, kPi / 2);
+                 r.error = r.stretch;
+                 return r;
+               },
+               rigid_methods(true)});
+  s.push_back({"bar_170_energy", "Bar pendulum, 170 degrees: energy drift (2 periods)",
+               "energy drift per period, of the swing",
+               [](double dt, const Method& m) {
+                 Result r = an::run_swing(dt, m, false, 170 * kPi / 180);
+                 r.error = r.energy_drift;
+                 return r;
+               },
+               rigid_methods(true)});
   s.push_back({"heavy_chain", "Chain of 5 light links holding a ball 1000 times heavier (3 s)",
                "largest relative stretch",
                [](double dt, const Method& m) { return an::run_heavy_chain(dt, m); },

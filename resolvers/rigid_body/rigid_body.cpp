@@ -8,6 +8,7 @@
 #include <string>
 
 #include "resolvers/rigid_body/collisions.hpp"
+#include "resolvers/rigid_body/joint_projection.hpp"
 #include "resolvers/rigid_body/ode_support.hpp"
 #include "resolvers/rigid_body/properties.hpp"
 
@@ -71,7 +72,8 @@ const std::vector<std::string>& RigidBodyConfig::keys() {
                                              "ccd",
                                              "contact_stiffness",
                                              "contact_damping",
-                                             "max_collision_impulses"};
+                                             "max_collision_impulses",
+                                             "joint_projection"};
   return k;
 }
 
@@ -113,6 +115,7 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   else if (contacts == "found") c.substep_contacts = RigidBodyConfig::SubstepContacts::Found;
   else bad("substep_contacts must be \"kept\" or \"found\"");
   c.auto_disable = s.boolean("auto_disable", c.auto_disable);
+  c.joint_projection = s.boolean("joint_projection", c.joint_projection);
   c.ccd = s.boolean("ccd", c.ccd);
   c.auto_disable_linear = s.number("auto_disable_linear", c.auto_disable_linear);
   if (!(c.auto_disable_linear >= 0)) bad("auto_disable_linear must be >= 0 m/s");
@@ -212,6 +215,7 @@ struct RigidBodyResolver::Impl {
     parts.clear();
     gyros.clear();
     hinges.clear();
+    projection.clear();
     std::fill(part_of_slot.begin(), part_of_slot.end(), -1);
   }
 
@@ -293,6 +297,9 @@ struct RigidBodyResolver::Impl {
   std::vector<Part> parts;                 // grouped by body, each body's parts in slot order
   std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, or -1
   std::vector<Hinge> hinges;
+  /// The hinges' position projection (joint_projection.hpp); empty when the
+  /// setting joint_projection is off.
+  JointProjection projection;
   std::vector<dJointFeedback> feedback;
   std::vector<Vec3> feedback_force;  ///< per contact point: force 1 summed over the substeps
   std::vector<double> depth;           ///< per queued contact point: depth at the current substep
@@ -593,6 +600,12 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
   // zero when their orientations are equal: a convention that depends on
   // properties alone, so that limits survive a rebuild or a swap of resolver.
   hinges.reserve(pending.size());
+  std::vector<std::int32_t> projected(bodies.size(), -1);  // body -> its index in projection
+  auto projected_body = [&](std::int32_t b) {
+    if (projected[b] < 0)
+      projected[b] = projection.add_body(bodies[b].id, bodies[b].planar, bodies[b].kinematic);
+    return projected[b];
+  };
   for (const PendingHinge& h : pending) {
     const std::int32_t ba = h.a >= 0 ? body_of_cand[h.a] : -1, bb = h.b >= 0 ? body_of_cand[h.b] : -1;
     if (ba == bb) continue;  // both in one assembly: already rigid
@@ -628,10 +641,14 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
       dJointSetHingeParam(j, dParamFMax, friction);
     }
     hinges.push_back({jid, j, b2 == nullptr});
+    if (config.joint_projection)
+      projection.add_hinge(projected_body(swapped ? bb : ba),
+                           b2 ? projected_body(bb) : -1, pivot, ax);
     if (!anchor.has(h.slot)) anchor_out.set(h.slot, pivot);
     if (!axis.has(h.slot)) axis_out.set(h.slot, ax);
   }
 
+  projection.finish();
   write_poses(access, true);
   dirty = false;
 }
@@ -1504,10 +1521,12 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
                                                 2654435761u +
                                             1));
     m.begin_rotation();
+    m.projection.begin_step();
     if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, h);
     else dWorldStep(m.world, h);
     m.conserve_rotation(h);
     m.fix_planar();
+    m.projection.project(h, dWorldGetERP(m.world));
     check_motion(access);
     if (feedback && found) {
       // Points differ from substep to substep: sum each pair's force instead.

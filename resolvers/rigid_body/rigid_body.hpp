@@ -77,6 +77,17 @@ struct RigidBodyConfig {
   /// step (a chain of n touching balls needs n - 1); the remaining
   /// approach, if any, is left to the simultaneous solve.
   int max_collision_impulses = 256;
+  /// Hinges hold by a position projection after each step (SHAKE-like; see
+  /// resolvers/rigid_body/joint_projection.hpp and docs/architecture.md,
+  /// "Joint model"): each island of hinged planar bodies gets, along the
+  /// hinges' start-of-step directions, the impulse that puts its anchors
+  /// back together, on the poses and the velocities alike. At 1/240 s a
+  /// small ball on a 1 m lever then keeps its length to 1e-11 instead of
+  /// stretching 5 %, a 1000:1 chain to 4.4e-5 instead of coming apart, and
+  /// a pendulum its energy (no drift from the error reduction). Islands of
+  /// bodies that turn in 3D, or of more than 16 hinges, keep ODE's hinges.
+  /// false: ODE's hinges alone.
+  bool joint_projection = true;
   /// Most contact points per pair of parts: 4 is a box face's corners.
   int max_contacts = 4;
   /// Penetration allowed without correction, m. Resting contacts then keep a

@@ -21,6 +21,7 @@ struct Method {
   int iterations = 40;     ///< QuickStep iterations
   int rigid_substeps = 1;  ///< rigid_body `substeps` (ignored when the resolver has no such key)
   int electricity_substeps = 4;  ///< electricity `substeps`
+  bool joint_projection = true;  ///< rigid_body `joint_projection` (false: ODE's hinges alone)
 };
 
 /// Whether the rigid body resolver accepts a `substeps` setting.
@@ -36,7 +37,8 @@ struct Result {
   double cpu_seconds = 0;  ///< CPU time of the stepping loop (no set-up, no reference)
   double sim_seconds = 0;  ///< simulated time covered
   std::uint64_t steps = 0;
-  double energy_drift = -1;    ///< largest |E - E0| / |E0| over the run; < 0: not measured
+  double energy_drift = -1;    ///< largest |E - E0| / |E0| over the run (run_swing: per period at one phase); < 0: not measured
+  double energy_wobble = -1;   ///< run_swing: largest |E - E0| / E_swing within the run; < 0: not measured
   double momentum_drift = -1;  ///< largest |L - L0| / |L0| (angular momentum); < 0: not measured
   bool finite = true;          ///< no non-finite value was written (nor is the error one)
   double stretch =
@@ -112,16 +114,24 @@ Result run_bounce(double dt, const Method& m, double e);
 /// 1 m bar of rigid_scenes. Planar, as the kit's parts. Error: the relative
 /// period error |T - T_exact| / T_exact, T from the upward zero crossings
 /// over `periods` periods and T_exact = 4 sqrt(I / (m g d)) K(sin(theta0 / 2));
-/// stretch: the largest |pivot-to-centre distance - d| / d; energy_drift: the
-/// largest |E - E0| / E_swing per period (E_swing = m g d (1 - cos theta0)).
-Result run_swing(double dt, const Method& m, bool lever, double theta0, int periods = 2);
+/// stretch: the largest |pivot-to-centre distance - d| / d (not `planar`:
+/// also the centre's distance from the plane z = 0 over d, and the tilt of
+/// the body's z axis, rad: the hinge then holds its axis by itself);
+/// energy_drift: the largest |E_k - E_0| / (k E_swing) of the energies E_k
+/// at the k-th upward pass through the bottom (E_swing = m g d (1 - cos
+/// theta0)): the drift per period; energy_wobble: the largest |E - E0| /
+/// E_swing at any step, the step's O(h) swing of the energy about its mean.
+Result run_swing(double dt, const Method& m, bool lever, double theta0, int periods = 2,
+                 bool planar = true);
 /// The exact period of run_swing's pendulum, s.
 double swing_period(bool lever, double theta0);
 
 /// A chain of 5 light links (10 g, 10 cm, hinged end to end) holding a 10 kg
 /// ball (1000:1), hanging from the play area and released 60 degrees from
-/// the vertical. Error (and stretch): the largest relative change of the
-/// pivot-to-ball distance over 3 s.
+/// the vertical. Error (and stretch): the largest gap summed over the
+/// hinges, relative to the chain's length, over 3 s; energy_drift: the
+/// largest change of the bodies' energy from its value after the first
+/// step, over the ball's swing m g L (1 - cos 60 degrees).
 Result run_heavy_chain(double dt, const Method& m);
 
 // --- references (exposed for tests) -----------------------------------------------------
