@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <mutex>
+#include <string>
 #include <utility>
 
 #include "resolvers/rigid_body/ode_support.hpp"
@@ -123,6 +126,33 @@ int spread_points(dContactGeom* points, int n, int max) {
     std::swap(points[kept], points[best]);
   }
   return max;
+}
+
+// ODE's hash space numbers its cells with ints, the smallest cells 1/8 m wide
+// (levels -3 to 10): a geom whose bounds reach beyond about 2^28 m, or are not
+// finite, fails its assertion in collide(). Parts within the rigid body's
+// limits reach a few 1e6 m at most; beyond 2^27 m a geom is left out.
+constexpr double kIndexable = 134217728.0;
+
+/// Whether the hash space can number the cells of the geom's bounds.
+bool indexable(dGeomID g) {
+  dReal b[6];
+  dGeomGetAABB(g, b);
+  for (const dReal v : b)
+    if (!(std::abs(v) < kIndexable)) return false;
+  return true;
+}
+
+/// A space ODE left locked: an error thrown through dSpaceCollide skips the
+/// unlock, and a locked space can be neither changed nor destroyed (ODE
+/// asserts in both, and in its destructor). It is kept, untouched, for the
+/// rest of the process, reachable, so that the leak checker does not report
+/// it: one space and its geoms per failed collide.
+void keep_locked_space(dSpaceID space) {
+  static std::mutex mutex;
+  static auto* kept = new std::vector<dSpaceID>();  // never freed: see above
+  std::lock_guard lock(mutex);
+  kept->push_back(space);
 }
 }  // namespace
 
@@ -317,7 +347,59 @@ struct CollisionSet::Impl {
       dQuaternion oq;
       to_ode(g.capsule ? normalized(q) * capsule_axis_rotation() : normalized(q), oq);
       dGeomSetQuaternion(g.geom, oq);
+      if (!out_of_range.empty()) recheck(s, g);
     }
+  }
+
+  // --- ODE errors in the collisions pass ------------------------------------------
+  /// Slots whose geom was beyond what the hash space indexes when a collide
+  /// failed (sorted): each is disabled (out of every pair and sweep) while it
+  /// stays there, and enabled again once back.
+  std::vector<std::uint32_t> out_of_range;
+  /// Inside dSpaceCollide or dSpaceCollide2: an error thrown now leaves the space locked.
+  bool colliding = false;
+  /// The points of the previous update: they stand again if this one fails.
+  std::vector<ContactPoint> previous_points;
+
+  void recheck(std::uint32_t s, Geom& g) {
+    const auto it = std::lower_bound(out_of_range.begin(), out_of_range.end(), s);
+    if (it == out_of_range.end() || *it != s) return;
+    if (indexable(g.geom)) {
+      dGeomEnable(g.geom);
+      out_of_range.erase(it);
+      return;
+    }
+    dGeomDisable(g.geom);
+    if (!candidates.empty() && candidates.back().slot == s) candidates.pop_back();
+  }
+
+  /// After an ODE error: notes the geoms the hash space cannot index (the
+  /// likely cause, named in the report) and drops every geom, with the space
+  /// if ODE left it locked. The next update builds them again.
+  std::vector<std::uint32_t> abandon_geoms() {
+    std::vector<std::uint32_t> culprits;
+    for (std::uint32_t s : geom_slots)
+      if (!indexable(geoms[s].geom)) culprits.push_back(s);
+    for (std::uint32_t s : culprits)
+      if (!std::binary_search(out_of_range.begin(), out_of_range.end(), s))
+        out_of_range.insert(std::lower_bound(out_of_range.begin(), out_of_range.end(), s), s);
+    bool locked = colliding;
+    colliding = false;
+    if (!locked) {
+      try {
+        clear_geoms();
+      } catch (const OdeError&) {
+        locked = true;  // ODE refused to let go of them: give up the space as well
+      }
+    }
+    if (locked) {
+      keep_locked_space(space);
+      geom_slots.clear();
+      geoms.clear();
+      space = dHashSpaceCreate(nullptr);
+    }
+    geoms_dirty = joints_dirty = true;
+    return culprits;
   }
 
   /// A part's motion, read once per touching pair (not once per point).
@@ -490,26 +572,41 @@ void CollisionSet::update(const WorldView& world) {
   m.resolve_ids(world);
   m.ccd = rigid_.config().ccd;
   m.candidates.clear();
-  if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
-    m.rebuild_geoms(world);
-    m.geoms_dirty = false;
-  }
-  if (Impl::changed(m.joint_columns, m.joint_seen) || m.joints_dirty) {
-    m.rebuild_joined(world);
-    m.joints_dirty = false;
-  }
-  m.place(world);
 
   // Narrow phase into current_, then sort: ODE's pair order is not ours to rely on.
   std::swap(previous_, current_);
   current_.clear();
+  std::swap(points_, m.previous_points);
   points_.clear();
-  m.vel = world.column<Vec3>(m.velocity);
-  m.angvel = world.column<Vec3>(m.angular_velocity);
-  m.pairs = &current_;
-  m.points = &points_;
-  dSpaceCollide(m.space, &m, &Impl::near_callback);
-  sweep(world);
+  try {
+    if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
+      m.rebuild_geoms(world);
+      m.geoms_dirty = false;
+    }
+    if (Impl::changed(m.joint_columns, m.joint_seen) || m.joints_dirty) {
+      m.rebuild_joined(world);
+      m.joints_dirty = false;
+    }
+    m.place(world);
+    m.vel = world.column<Vec3>(m.velocity);
+    m.angvel = world.column<Vec3>(m.angular_velocity);
+    m.pairs = &current_;
+    m.points = &points_;
+    m.colliding = true;
+    dSpaceCollide(m.space, &m, &Impl::near_callback);
+    m.colliding = false;
+    sweep(world);
+  } catch (const OdeError& e) {
+    engine_failed(world, e.what());
+    return;
+  } catch (...) {
+    // Bad input (InputError from a shape) or the host's own failure: the set
+    // stays as the last update left it, and a space this left locked goes.
+    if (m.colliding) m.abandon_geoms();
+    std::swap(previous_, current_);
+    std::swap(points_, m.previous_points);
+    throw;
+  }
   m.sort_pairs(current_);
 
   // The rigid body's impulses are for the pairs it was given, i.e. those that
@@ -584,6 +681,36 @@ void CollisionSet::update(const WorldView& world) {
   step_ = step;
 }
 
+void CollisionSet::engine_failed(const WorldView& world, const std::string& what) {
+  // ODE stopped half way through (an assertion: ODE's handler throws, see
+  // ode_support.hpp). The process goes on: this update keeps the last one's
+  // pairs and points (no pair begins or ends, nothing is swept), the geoms
+  // are built again at the next update, and the parts the hash space cannot
+  // index are left out of collisions until they are back in range.
+  Impl& m = *impl_;
+  const std::vector<std::uint32_t> culprits = m.abandon_geoms();
+  std::swap(previous_, current_);
+  std::swap(points_, m.previous_points);
+  began_.clear(), ended_.clear(), sweeps_.clear();
+  ongoing_.clear(), ongoing_made_ = false;
+  step_ = world.step();
+  Event e{.type = "engine_error", .text = "collisions: " + what};
+  const PropertyStore& store = world.store();
+  for (std::size_t k = 0; k < culprits.size() && k < 3; ++k) {
+    const ObjectId id = store.id_at(culprits[k]);
+    if (k == 0) e.a = id;
+    e.text += (k == 0 ? "; " : ", ") + store.describe(id);
+  }
+  if (culprits.size() > 3) e.text += " and " + std::to_string(culprits.size() - 3) + " more";
+  if (!culprits.empty())
+    e.text += std::string(culprits.size() == 1 ? " lies" : " lie") +
+              " beyond the range of collision detection (" + std::to_string(int(kIndexable)) +
+              " m) and " + (culprits.size() == 1 ? "takes" : "take") +
+              " no part in collisions until back within it";
+  e.text += " (this step's contacts are the last step's)";
+  world.emit(std::move(e));
+}
+
 void CollisionSet::sweep(const WorldView& world) {
   Impl& m = *impl_;
   sweeps_.clear();
@@ -604,7 +731,9 @@ void CollisionSet::sweep(const WorldView& world) {
     dGeomRaySet(m.ray, cand.from.x, cand.from.y, cand.from.z, dir.x, dir.y, dir.z);
     dGeomRaySetLength(m.ray, len);
     Impl::RayHit hit{.m = &m, .self = cand.slot, .touching = &previous_};
+    m.colliding = true;
     dSpaceCollide2(m.ray, reinterpret_cast<dGeomID>(m.space), &hit, &Impl::ray_callback);
+    m.colliding = false;
     if (!(hit.t <= len)) continue;  // the centre crossed no surface: the discrete test sees it
 
     // Back along the path to where the part, a sphere of its inscribed radius,

@@ -142,6 +142,8 @@ class CollisionSet final : public DerivedSet {
   std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
 
   void sweep(const WorldView& world);
+  /// ODE failed inside the update (see collisions.cpp): reported, not fatal.
+  void engine_failed(const WorldView& world, const std::string& what);
 };
 
 }  // namespace alloy::rigid

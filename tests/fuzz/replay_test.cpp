@@ -3,7 +3,8 @@
 // input that once crashed alloy is a regression test that needs no clang.
 //
 // Folders, per target (scene, mod, mod_api, cli):
-//   tests/fuzz/corpus/<target>/       seeds: what a fuzzing run starts from
+//   tests/fuzz/corpus/<target>/       seeds: what a fuzzing run starts from,
+//                                     with the source folders tests/fuzz/seed_dirs names
 //   tests/fuzz/regressions/<target>/  inputs that crashed, hung or leaked, now fixed
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,12 +32,36 @@ const Target kTargets[] = {{"scene", alloy::fuzz::scene},
                            {"mod_api", alloy::fuzz::mod_api},
                            {"cli", alloy::fuzz::cli}};
 
+const fs::path kSource = ALLOY_SOURCE_DIR;
+
+/// The files under dir, sub-folders included (as libFuzzer reads a corpus).
+void add_files(const fs::path& dir, std::vector<fs::path>& files) {
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::end(it);
+       it.increment(ec))
+    if (it->is_regular_file() && it->path().filename().string()[0] != '.')
+      files.push_back(it->path());
+}
+
+/// The source folders seed_dirs names for the target.
+std::vector<fs::path> seed_dirs(const std::string& target) {
+  std::ifstream in(kSource / "tests" / "fuzz" / "seed_dirs");
+  std::vector<fs::path> dirs;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string t, dir;
+    if (line.empty() || line[0] == '#' || !(words >> t >> dir)) continue;
+    if (t == target) dirs.push_back(kSource / dir);
+  }
+  return dirs;
+}
+
 std::vector<fs::path> inputs(const std::string& kind, const std::string& target) {
   std::vector<fs::path> files;
-  const fs::path dir = fs::path(ALLOY_SOURCE_DIR) / "tests" / "fuzz" / kind / target;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (e.is_regular_file() && e.path().filename().string()[0] != '.') files.push_back(e.path());
+  add_files(kSource / "tests" / "fuzz" / kind / target, files);
+  if (kind == "corpus")
+    for (const fs::path& dir : seed_dirs(target)) add_files(dir, files);
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -61,6 +87,11 @@ TEST_P(FuzzReplay, EverySavedCrashingInputIsHandled) {
 TEST_P(FuzzReplay, EverySeedIsHandled) {
   // The seeds must exist: an empty corpus would make the fuzzer start blind.
   EXPECT_FALSE(inputs("corpus", GetParam().name).empty());
+  if (std::string(GetParam().name) == "scene") {  // the bundled scenes among them
+    const auto seeds = inputs("corpus", "scene");
+    EXPECT_NE(std::find(seeds.begin(), seeds.end(), kSource / "mods" / "doorbell" / "scene.lua"),
+              seeds.end());
+  }
   replay("corpus", GetParam());
 }
 

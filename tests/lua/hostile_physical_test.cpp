@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lua/scene_loader.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "tests/lua/mod_test_support.hpp"
 
@@ -312,6 +313,112 @@ TEST(HostileSceneParts, EditsBetweenStepsAreCheckedAsTheSceneIs) {
   EXPECT_TRUE(world.frozen_objects().empty());
   expect_fell_freely(world, world.find("witness"));
   expect_fell_freely(world, ball);
+}
+
+// ODE's collision detection asserts when a part lies where its hash space
+// cannot number the cells (beyond about 2^28 m, or a non-finite pose):
+// "aabbBound ... failed in collide()". Every edit and every motion is bounded
+// well inside that (limits::extent), so no mod reaches it today; a native
+// plugin, which writes columns unchecked, still could. The collisions pass
+// catches the error (it used to abort the process), gives up the space ODE
+// left locked, reports the part, leaves it out while it stays out of range,
+// and takes it back when it returns.
+
+/// A buggy native plugin: it moves one part at given advances.
+struct StrayMoves {
+  ObjectId part;
+  std::vector<std::pair<int, Vec3>> moves;  ///< (advance, position), from 1
+  int advances = 0;
+};
+
+class StrayResolver : public Resolver {
+ public:
+  explicit StrayResolver(StrayMoves& moves) : moves_(moves) {}
+  void build(ResolverAccess&) override {}
+  void advance(ResolverAccess& access, double) override {
+    ++moves_.advances;
+    for (const auto& [at, x] : moves_.moves)
+      if (at == moves_.advances) access.writer<Vec3>("position").set(moves_.part.index, x);
+  }
+
+ private:
+  StrayMoves& moves_;
+};
+
+TEST(HostileCollisions, APartBeyondCollisionDetectionIsReportedAndTheWorldGoesOn) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  StrayMoves stray;
+  registry.add(
+      {.info = {.name = "stray",
+                .kind = StageKind::Resolver,
+                .writes = {"position"},
+                .needs = {"stray_mark"}},
+       .properties = {{.name = "stray_mark", .kind = PropertyKind::Number}},
+       .create = [&stray](PluginContext&) { return std::make_unique<StrayResolver>(stray); }});
+  TempMods mods;
+  mods.mod("good", kGood);
+  std::vector<std::string> log;
+  lua::ModRuntime runtime(registry, runtime_options(mods, &log));
+  runtime.load("good");
+  World world(registry);
+  runtime.attach(world);
+  const ObjectId thing = world.create("thing");
+  world.set(thing, "good_count", 0.0);
+  auto box = [&](const char* name, Vec3 at, Vec3 size) {
+    const ObjectId b = world.create(name);
+    world.set(b, "shape", std::string("box"));
+    world.set(b, "size", size);
+    world.set(b, "static", true);
+    world.set(b, "position", at);
+    return b;
+  };
+  auto ball = [&](const char* name, Vec3 at) {
+    const ObjectId b = world.create(name);
+    world.set(b, "shape", std::string("sphere"));
+    world.set(b, "radius", 0.1);
+    world.set(b, "mass", 1.0);
+    world.set(b, "position", at);
+    return b;
+  };
+  box("floor", {0, -0.5, 0}, {20, 1, 20});
+  // A block on the floor with a ball resting on it: the stray part.
+  stray.part = box("block", {3, 0.5, 0}, {1, 1, 1});
+  world.set(stray.part, "stray_mark", 0.0);
+  const ObjectId rider = ball("rider", {3, 1.1, 0});
+  const ObjectId witness = ball("witness", {-3, 0.1, 0});
+  // Away for five steps (the first collide after the move fails), then back.
+  stray.moves = {{10, {1e12, 0.5, 0}}, {15, {3, 0.5, 0}}};
+  std::vector<Event> errors;
+  world.add_observer([&](const Event& e) {
+    if (e.type == "engine_error") errors.push_back(e);
+  });
+  world.run(60);
+
+  // The process lives, the world went on, and the mod with it.
+  EXPECT_EQ(world.step_count(), 60u);
+  EXPECT_EQ(std::get<double>(world.get(thing, "good_count")), 60.0);
+  EXPECT_FALSE(runtime.stopped("good"));
+  // One report, naming the part, ODE's assertion and what became of the part;
+  // no second one while the part stayed out of range.
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].source, "collisions");
+  EXPECT_EQ(errors[0].a, stray.part);
+  EXPECT_TRUE(contains(errors[0].text, "aabbBound")) << errors[0].text;
+  EXPECT_TRUE(contains(
+      errors[0].text, world.describe(stray.part) + " lies beyond the range of collision detection"))
+      << errors[0].text;
+  EXPECT_EQ(errors[0].step, 10u);
+  // Collision detection still works: the witness rests on the floor, and the
+  // rider, which fell a little while its block was away, rests on the block
+  // again (the block was taken back into the collisions).
+  const auto y = [&](ObjectId o) { return std::get<Vec3>(world.get(o, "position")).y; };
+  EXPECT_NEAR(y(witness), 0.1, 0.01);
+  EXPECT_NEAR(y(rider), 1.1, 0.01);
+  auto* collisions = dynamic_cast<rigid::CollisionSet*>(world.stage("collisions"));
+  ASSERT_NE(collisions, nullptr);
+  EXPECT_NE(collisions->find(stray.part, rider), nullptr);
+  EXPECT_TRUE(world.frozen_objects().empty());
 }
 
 }  // namespace
