@@ -263,12 +263,13 @@ std::uint64_t PropertyStore::next_lineage() {
 void PropertyStore::restore(const Objects& objects, const std::vector<const ColumnBase*>& columns) {
   const std::size_t n = objects.generations.size();
   if (objects.alive.size() != n || objects.names.size() != n)
-    throw InputError("a snapshot's object table is inconsistent: " + std::to_string(n) + " slots, " +
-                     std::to_string(objects.alive.size()) + " alive flags, " +
+    throw InputError("a snapshot's object table is inconsistent: " + std::to_string(n) +
+                     " slots, " + std::to_string(objects.alive.size()) + " alive flags, " +
                      std::to_string(objects.names.size()) + " names");
   for (std::uint32_t s : objects.free_slots)
     if (s >= n || objects.alive[s])
-      throw InputError("a snapshot's free list names slot " + std::to_string(s) + ", which is not free");
+      throw InputError("a snapshot's free list names slot " + std::to_string(s) +
+                       ", which is not free");
   generations_ = objects.generations;
   alive_ = objects.alive;
   free_slots_ = objects.free_slots;
@@ -286,7 +287,8 @@ void PropertyStore::restore(const Objects& objects, const std::vector<const Colu
     if (from) {
       if (from->present_.size() != n)
         throw InputError("a snapshot's column '" + registry_.def(p).name + "' has " +
-                         std::to_string(from->present_.size()) + " slots, its object table " + std::to_string(n));
+                         std::to_string(from->present_.size()) + " slots, its object table " +
+                         std::to_string(n));
       c.assign(*from);
     } else {
       c.clear(n);

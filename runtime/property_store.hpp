@@ -150,7 +150,8 @@ class Column final : public ColumnBase {
   std::size_t bytes() const override {
     std::size_t n = values_.size() * sizeof(T) + present_.size();
     if constexpr (std::is_same_v<T, std::string>)
-      for (const auto& v : values_) n += v.size() > 15 ? v.capacity() : 0;  // beyond the inline buffer
+      for (const auto& v : values_)
+        n += v.size() > 15 ? v.capacity() : 0;  // beyond the inline buffer
     if constexpr (std::is_same_v<T, RefList>)
       for (const auto& v : values_) n += v.capacity() * sizeof(ObjectId);
     return n;

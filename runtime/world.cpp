@@ -947,7 +947,8 @@ Snapshot::Size Snapshot::size(const Snapshot* base) const {
   z.bytes += objects.generations.size() * (sizeof(std::uint32_t) + 1 + sizeof(std::string));
   for (const auto& n : objects.names) z.bytes += n.size() > 15 ? n.capacity() : 0;
   z.bytes += objects.free_slots.size() * sizeof(std::uint32_t) + area_of_slot.size() * sizeof(int);
-  z.bytes += frozen.size() * sizeof(ObjectId) + inputs.size() * sizeof(Input) + swaps.size() * sizeof(Swap);
+  z.bytes += frozen.size() * sizeof(ObjectId) + inputs.size() * sizeof(Input) +
+             swaps.size() * sizeof(Swap);
   for (const auto& st : stage_states) z.bytes += st.bytes.size() + st.stage.size();
   return z;
 }
@@ -981,9 +982,11 @@ Snapshot World::snapshot(const Snapshot* base) const {
     const PropertyId id = *properties().find(name);
     const ColumnBase* c = store_.find_column(id);
     if (!c) continue;
-    Snapshot::Column col{name, properties().def(id).kind, nullptr, c->version(), c->membership_version()};
+    Snapshot::Column col{name, properties().def(id).kind, nullptr, c->version(),
+                         c->membership_version()};
     if (const Snapshot::Column* b = delta ? base->column(name) : nullptr;
-        b && b->kind == col.kind && b->version == col.version && b->membership_version == col.membership_version)
+        b && b->kind == col.kind && b->version == col.version &&
+        b->membership_version == col.membership_version)
       col.values = b->values;  // unchanged since the base: shared
     else
       col.values = c->clone();
@@ -1008,7 +1011,9 @@ Snapshot World::snapshot(const Snapshot* base) const {
 void World::restore(const Snapshot& s) {
   // Everything that can be checked before the world changes is checked first:
   // a snapshot that does not fit leaves the world as it was.
-  auto refuse = [](const std::string& what) { throw InputError("cannot restore the snapshot: " + what); };
+  auto refuse = [](const std::string& what) {
+    throw InputError("cannot restore the snapshot: " + what);
+  };
   if (!(s.dt > 0) || !std::isfinite(s.dt)) refuse("its time step is not a positive number");
   if (s.area_plugins.size() != areas_.size())
     refuse("it has " + std::to_string(s.area_plugins.size()) + " areas, this world " +
@@ -1016,9 +1021,11 @@ void World::restore(const Snapshot& s) {
   const std::size_t slots = s.objects.generations.size();
   if (s.area_of_slot.size() > slots) refuse("it gives areas to slots that do not exist");
   for (int a : s.area_of_slot)
-    if (a < -1 || a >= int(areas_.size())) refuse("it puts an object in area " + std::to_string(a) + ", which does not exist");
+    if (a < -1 || a >= int(areas_.size()))
+      refuse("it puts an object in area " + std::to_string(a) + ", which does not exist");
   for (ObjectId id : s.frozen)
-    if (id.index >= slots || !s.objects.alive[id.index] || s.objects.generations[id.index] != id.generation)
+    if (id.index >= slots || !s.objects.alive[id.index] ||
+        s.objects.generations[id.index] != id.generation)
       refuse("a frozen object (#" + std::to_string(id.index) + ") is not alive in it");
   std::vector<const ColumnBase*> columns(properties().size(), nullptr);
   for (const Snapshot::Column& c : s.columns) {
@@ -1029,13 +1036,15 @@ void World::restore(const Snapshot& s) {
       refuse("property '" + c.property + "' is " + std::string(to_string(c.kind)) + " in it and " +
              std::string(to_string(def.kind)) + " in this world");
     if (!c.values || c.values->presence().size() != slots)
-      refuse("its column '" + c.property + "' does not cover its " + std::to_string(slots) + " slots");
+      refuse("its column '" + c.property + "' does not cover its " + std::to_string(slots) +
+             " slots");
     columns[*id] = c.values.get();
   }
   std::vector<ScheduledInput> inputs;
   for (const Snapshot::Input& in : s.inputs) {
     const auto id = properties().find(in.property);
-    if (!id) refuse("a pending input sets property '" + in.property + "', which this world does not know");
+    if (!id)
+      refuse("a pending input sets property '" + in.property + "', which this world does not know");
     inputs.push_back(ScheduledInput{in.time, in.id, *id, in.value});
   }
   for (const auto* list : {&s.disabled, &s.enabled})
@@ -1043,7 +1052,8 @@ void World::restore(const Snapshot& s) {
       if (!plugins_.find(name)) refuse("it names plugin '" + name + "', which is not registered");
   for (const auto& a : s.area_plugins)
     for (const auto& name : a)
-      if (!plugins_.find(name)) refuse("an area uses plugin '" + name + "', which is not registered");
+      if (!plugins_.find(name))
+        refuse("an area uses plugin '" + name + "', which is not registered");
 
   // The store checks its object table before it changes anything.
   store_.restore(s.objects, columns);
@@ -1058,7 +1068,8 @@ void World::restore(const Snapshot& s) {
   inputs_ = std::move(inputs);
   next_input_ = 0;
   swaps_.clear();
-  for (const Snapshot::Swap& sw : s.swaps) swaps_.push_back(ScheduledSwap{sw.time, sw.area, sw.from, sw.to});
+  for (const Snapshot::Swap& sw : s.swaps)
+    swaps_.push_back(ScheduledSwap{sw.time, sw.area, sw.from, sw.to});
   disabled_ = s.disabled;
   enabled_ = s.enabled;
   def_.use.clear();
@@ -1092,7 +1103,9 @@ void World::restore(const Snapshot& s) {
   }
   for (const Snapshot::StageState& st : s.stage_states) {
     Slot* slot = find_slot(st.stage);
-    if (!slot) throw InputError("restored the snapshot, but it holds the state of stage '" + st.stage + "', which is not active");
+    if (!slot)
+      throw InputError("restored the snapshot, but it holds the state of stage '" + st.stage +
+                       "', which is not active");
     StateReader in(st.stage, st.bytes);
     slot->stage->restore_state(in);
     if (in.remaining() != 0)
