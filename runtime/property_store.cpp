@@ -1,5 +1,6 @@
 #include "runtime/property_store.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -252,6 +253,49 @@ std::vector<PropertyId> PropertyStore::take_resolver_changes() {
   out.swap(log_.columns);
   for (PropertyId p : out) columns_[p]->logged_ = false;
   return out;
+}
+
+std::uint64_t PropertyStore::next_lineage() {
+  static std::atomic<std::uint64_t> next{1};
+  return next++;
+}
+
+void PropertyStore::restore(const Objects& objects, const std::vector<const ColumnBase*>& columns) {
+  const std::size_t n = objects.generations.size();
+  if (objects.alive.size() != n || objects.names.size() != n)
+    throw InputError("a snapshot's object table is inconsistent: " + std::to_string(n) +
+                     " slots, " + std::to_string(objects.alive.size()) + " alive flags, " +
+                     std::to_string(objects.names.size()) + " names");
+  for (std::uint32_t s : objects.free_slots)
+    if (s >= n || objects.alive[s])
+      throw InputError("a snapshot's free list names slot " + std::to_string(s) +
+                       ", which is not free");
+  generations_ = objects.generations;
+  alive_ = objects.alive;
+  free_slots_ = objects.free_slots;
+  names_ = objects.names;
+  by_name_.clear();
+  live_count_ = 0;
+  for (std::uint32_t s = 0; s < n; ++s) {
+    if (!alive_[s]) continue;
+    ++live_count_;
+    if (!names_[s].empty()) by_name_.emplace(names_[s], ObjectId{s, generations_[s]});
+  }
+  for (PropertyId p = 0; p < registry_.size(); ++p) {
+    const ColumnBase* from = p < columns.size() ? columns[p] : nullptr;
+    ColumnBase& c = column(p);
+    if (from) {
+      if (from->present_.size() != n)
+        throw InputError("a snapshot's column '" + registry_.def(p).name + "' has " +
+                         std::to_string(from->present_.size()) + " slots, its object table " +
+                         std::to_string(n));
+      c.assign(*from);
+    } else {
+      c.clear(n);
+    }
+  }
+  ++log_.structure;
+  refresh();
 }
 
 }  // namespace alloy

@@ -52,10 +52,28 @@ class ColumnBase {
 
   virtual PropertyValue get_value(std::uint32_t slot) const = 0;
 
+  /// A copy of the values and presence flags of every slot, with the change
+  /// counters, for a snapshot. The copy is never written: it has no log.
+  virtual std::unique_ptr<ColumnBase> clone() const = 0;
+  /// Appends the exact bits of the value in `slot` to `out`, for state
+  /// hashes (state_hash.hpp defines the encoding of each kind).
+  virtual void encode(std::uint32_t slot, std::string& out) const = 0;
+  /// Memory the values and flags take, in bytes (for snapshot sizes).
+  virtual std::size_t bytes() const = 0;
+  /// The presence flag of every slot (1: the object carries the property).
+  std::span<const std::uint8_t> presence() const { return present_; }
+
  protected:
   friend class PropertyStore;
   virtual void resize(std::size_t slots) = 0;
   virtual void reset(std::uint32_t slot) = 0;
+  /// Takes the values and presence flags of `from` (a clone of a column of
+  /// the same kind), and moves both change counters: everything that compares
+  /// them (derived sets, delta snapshots) sees a change.
+  virtual void assign(const ColumnBase& from) = 0;
+  /// `slots` slots, none carrying the property (a restore that has no
+  /// values for it); moves both change counters.
+  virtual void clear(std::size_t slots) = 0;
   /// Returns false if the value has the wrong type.
   virtual bool set_value(std::uint32_t slot, const PropertyValue& v) = 0;
 
@@ -116,6 +134,47 @@ class Column final : public ColumnBase {
     mark_present(slot, false);
   }
   bool set_value(std::uint32_t slot, const PropertyValue& v) override;
+
+ public:
+  std::unique_ptr<ColumnBase> clone() const override {
+    auto c = std::make_unique<Column<T>>(id_, nullptr);
+    c->values_ = values_;
+    c->present_ = present_;
+    c->members_ = members_;
+    c->members_dirty_ = members_dirty_;
+    c->version_ = version_;
+    c->membership_version_ = membership_version_;
+    return c;
+  }
+  void encode(std::uint32_t slot, std::string& out) const override;
+  std::size_t bytes() const override {
+    std::size_t n = values_.size() * sizeof(T) + present_.size();
+    if constexpr (std::is_same_v<T, std::string>)
+      for (const auto& v : values_)
+        n += v.size() > 15 ? v.capacity() : 0;  // beyond the inline buffer
+    if constexpr (std::is_same_v<T, RefList>)
+      for (const auto& v : values_) n += v.capacity() * sizeof(ObjectId);
+    return n;
+  }
+
+ private:
+  void assign(const ColumnBase& from) override {
+    const auto& f = static_cast<const Column<T>&>(from);
+    values_ = f.values_;
+    present_ = f.present_;
+    moved();
+  }
+  void clear(std::size_t slots) override {
+    values_.assign(slots, T{});
+    present_.assign(slots, 0);
+    moved();
+  }
+  void moved() {
+    members_dirty_ = true;
+    ++version_;
+    ++membership_version_;
+    ++log_->structure;
+  }
 
   std::vector<T> values_;
 };
@@ -192,6 +251,26 @@ class PropertyStore {
   /// calls this between phases so that views always see sorted, current lists.
   void refresh();
 
+  // --- snapshots (World::snapshot, World::restore) -----------------------------
+  /// The object table: what decides which ids are alive and which id the
+  /// next create() returns.
+  struct Objects {
+    std::vector<std::uint32_t> generations;  ///< per slot, the live (or next) generation
+    std::vector<std::uint8_t> alive;         ///< per slot
+    std::vector<std::uint32_t> free_slots;   ///< in reuse order (create() takes the front)
+    std::vector<std::string> names;          ///< per slot, "" for none
+  };
+  Objects objects() const { return {generations_, alive_, free_slots_, names_}; }
+  /// Identifies this store for delta snapshots: change counters are compared
+  /// only within one store (they never repeat within it, restores included).
+  std::uint64_t lineage() const { return lineage_; }
+  /// Replaces every object and value: `objects`, and for each property id the
+  /// column clone (ColumnBase::clone) to take its values from, or null to
+  /// empty the column. Every column of the registry not listed is emptied. A
+  /// structural change: every resolver rebuilds at the next sync. The caller
+  /// checks that each clone has its property's kind.
+  void restore(const Objects& objects, const std::vector<const ColumnBase*>& columns);
+
  private:
   friend class ResolverAccess;  // the only way to a writable column
   template <class T> Column<T>& typed_mut(PropertyId id) const;
@@ -208,6 +287,9 @@ class PropertyStore {
   std::size_t live_count_ = 0;
   mutable MembershipLog log_;           // columns update it (see ColumnBase)
   std::uint64_t refreshed_at_ = ~0ull;  // log_.structure + log_.by_resolvers at the last refresh()
+  std::uint64_t lineage_ = next_lineage();
+
+  static std::uint64_t next_lineage();
 };
 
 // ---------------------------------------------------------------------------
@@ -234,6 +316,41 @@ bool Column<T>::set_value(std::uint32_t slot, const PropertyValue& v) {
   }
   mark_present(slot, true);
   return true;
+}
+
+namespace detail {
+template <class V>
+inline void append_bits(std::string& out, const V& v) {
+  static_assert(std::is_trivially_copyable_v<V>);
+  out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+}  // namespace detail
+
+template <class T>
+void Column<T>::encode(std::uint32_t slot, std::string& out) const {
+  // Field by field (never the struct's bytes, which may hold padding).
+  const T& v = values_[slot];
+  if constexpr (std::is_same_v<T, Vec3>) {
+    for (double c : {v.x, v.y, v.z}) detail::append_bits(out, c);
+  } else if constexpr (std::is_same_v<T, Quat>) {
+    for (double c : {v.w, v.x, v.y, v.z}) detail::append_bits(out, c);
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    detail::append_bits(out, std::uint64_t(v.size()));
+    out += v;
+  } else if constexpr (std::is_same_v<T, ObjectId>) {
+    detail::append_bits(out, v.index);
+    detail::append_bits(out, v.generation);
+  } else if constexpr (std::is_same_v<T, RefList>) {
+    detail::append_bits(out, std::uint64_t(v.size()));
+    for (ObjectId id : v) {
+      detail::append_bits(out, id.index);
+      detail::append_bits(out, id.generation);
+    }
+  } else if constexpr (std::is_same_v<T, EnumValue>) {
+    detail::append_bits(out, v.index);
+  } else {
+    detail::append_bits(out, v);  // double, int64, uint8 (bool)
+  }
 }
 
 template <class T>

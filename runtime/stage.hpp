@@ -23,6 +23,7 @@
 
 #include "runtime/error.hpp"
 #include "runtime/property_types.hpp"
+#include "runtime/stage_state.hpp"
 
 namespace alloy {
 
@@ -82,6 +83,30 @@ class Stage {
   /// Called after the set of objects or their memberships changed (objects
   /// created, destroyed, properties added or removed) and before the next phase.
   virtual void on_structure_changed(const WorldView&) {}
+
+  // --- state outside properties (snapshots, saves, state hashes) -------------
+  // A stage whose next step depends on something it keeps itself (a solver's
+  // warm start, a coil's current, a voice in flight, a random generator)
+  // saves it here; a stage whose state is all in properties, or that rebuilds
+  // it bit for bit from them, declares nothing (the defaults).
+  //
+  // The contract (World::snapshot, World::restore): between steps, the world
+  // calls save_state() on every active stage. On restore it creates every
+  // stage afresh, builds each resolver from the restored properties
+  // (Resolver::build), then calls restore_state() with exactly the bytes
+  // that instance saved, then primes derived sets and interactions from the
+  // restored properties as it does at the end of a step. From there, stepping
+  // must give the same bits, in every property and in every later
+  // save_state(), as the run that was never interrupted. restore_state()
+  // must read every byte it is given (the world checks), and throws
+  // InputError (StateReader does) on bytes it cannot read.
+
+  /// Writes the stage's state to `out`; returns false if it has none (then
+  /// nothing it wrote is kept and restore_state is not called).
+  virtual bool save_state(StateWriter& /*out*/) const { return false; }
+  /// Reads back what save_state wrote, after build(). Called only for a stage
+  /// that saved something.
+  virtual void restore_state(StateReader& /*in*/) {}
 };
 
 class Resolver : public Stage {

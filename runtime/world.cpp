@@ -931,4 +931,207 @@ void World::order_stages() {
   profile_.stages = std::move(timings);
 }
 
+// --- snapshots -------------------------------------------------------------------
+
+Snapshot::Size Snapshot::size(const Snapshot* base) const {
+  Size z;
+  for (const Column& c : columns) {
+    const std::size_t n = c.values->bytes() + c.property.size() + sizeof(Column);
+    z.bytes += n;
+    ++z.columns;
+    if (const Column* b = base ? base->column(c.property) : nullptr; b && b->values == c.values) {
+      z.shared_bytes += n;
+      ++z.shared_columns;
+    }
+  }
+  z.bytes += objects.generations.size() * (sizeof(std::uint32_t) + 1 + sizeof(std::string));
+  for (const auto& n : objects.names) z.bytes += n.size() > 15 ? n.capacity() : 0;
+  z.bytes += objects.free_slots.size() * sizeof(std::uint32_t) + area_of_slot.size() * sizeof(int);
+  z.bytes += frozen.size() * sizeof(ObjectId) + inputs.size() * sizeof(Input) +
+             swaps.size() * sizeof(Swap);
+  for (const auto& st : stage_states) z.bytes += st.bytes.size() + st.stage.size();
+  return z;
+}
+
+const Snapshot::Column* Snapshot::column(std::string_view property) const {
+  auto it = std::lower_bound(columns.begin(), columns.end(), property,
+                             [](const Column& c, std::string_view p) { return c.property < p; });
+  return it != columns.end() && it->property == property ? &*it : nullptr;
+}
+
+std::vector<Snapshot::StageState> World::stage_states() const {
+  std::vector<Snapshot::StageState> out;
+  for (const auto* group : {&resolvers_, &derived_, &interactions_})
+    for (const Slot* s : *group) {
+      StateWriter w;
+      if (s->stage->save_state(w)) out.push_back({s->instance, w.take()});
+    }
+  return out;
+}
+
+Snapshot World::snapshot(const Snapshot* base) const {
+  Snapshot s;
+  s.step = step_;
+  s.time = time_;
+  s.dt = def_.dt;
+  s.started = started_;
+  s.objects = store_.objects();
+  s.lineage = store_.lineage();
+  const bool delta = base && base->lineage == s.lineage;
+  for (const std::string& name : properties().names()) {  // sorted
+    const PropertyId id = *properties().find(name);
+    const ColumnBase* c = store_.find_column(id);
+    if (!c) continue;
+    Snapshot::Column col{name, properties().def(id).kind, nullptr, c->version(),
+                         c->membership_version()};
+    if (const Snapshot::Column* b = delta ? base->column(name) : nullptr;
+        b && b->kind == col.kind && b->version == col.version &&
+        b->membership_version == col.membership_version)
+      col.values = b->values;  // unchanged since the base: shared
+    else
+      col.values = c->clone();
+    s.columns.push_back(std::move(col));
+  }
+  s.frozen = frozen_;
+  s.area_of_slot = area_of_slot_;
+  for (const Area& a : areas_) s.area_plugins.push_back(a.def.plugins);
+  s.disabled = disabled_;
+  s.enabled = enabled_;
+  for (const auto& [what, plugin] : def_.use) s.use.emplace(what, plugin);
+  s.stages = active_stages();
+  s.stage_states = stage_states();
+  for (std::size_t i = next_input_; i < inputs_.size(); ++i) {
+    const ScheduledInput& in = inputs_[i];
+    s.inputs.push_back({in.time, in.id, properties().def(in.property).name, in.value});
+  }
+  for (const ScheduledSwap& sw : swaps_) s.swaps.push_back({sw.time, sw.area, sw.from, sw.to});
+  return s;
+}
+
+void World::restore(const Snapshot& s) {
+  // Everything that can be checked before the world changes is checked first:
+  // a snapshot that does not fit leaves the world as it was.
+  auto refuse = [](const std::string& what) {
+    throw InputError("cannot restore the snapshot: " + what);
+  };
+  if (!(s.dt > 0) || !std::isfinite(s.dt)) refuse("its time step is not a positive number");
+  if (s.area_plugins.size() != areas_.size())
+    refuse("it has " + std::to_string(s.area_plugins.size()) + " areas, this world " +
+           std::to_string(areas_.size()));
+  const std::size_t slots = s.objects.generations.size();
+  if (s.area_of_slot.size() > slots) refuse("it gives areas to slots that do not exist");
+  for (int a : s.area_of_slot)
+    if (a < -1 || a >= int(areas_.size()))
+      refuse("it puts an object in area " + std::to_string(a) + ", which does not exist");
+  for (ObjectId id : s.frozen)
+    if (id.index >= slots || !s.objects.alive[id.index] ||
+        s.objects.generations[id.index] != id.generation)
+      refuse("a frozen object (#" + std::to_string(id.index) + ") is not alive in it");
+  std::vector<const ColumnBase*> columns(properties().size(), nullptr);
+  for (const Snapshot::Column& c : s.columns) {
+    const auto id = properties().find(c.property);
+    if (!id) refuse("it holds property '" + c.property + "', which this world does not know");
+    const PropertyDef& def = properties().def(*id);
+    if (def.kind != c.kind)
+      refuse("property '" + c.property + "' is " + std::string(to_string(c.kind)) + " in it and " +
+             std::string(to_string(def.kind)) + " in this world");
+    if (!c.values || c.values->presence().size() != slots)
+      refuse("its column '" + c.property + "' does not cover its " + std::to_string(slots) +
+             " slots");
+    columns[*id] = c.values.get();
+  }
+  std::vector<ScheduledInput> inputs;
+  for (const Snapshot::Input& in : s.inputs) {
+    const auto id = properties().find(in.property);
+    if (!id)
+      refuse("a pending input sets property '" + in.property + "', which this world does not know");
+    inputs.push_back(ScheduledInput{in.time, in.id, *id, in.value});
+  }
+  for (const auto* list : {&s.disabled, &s.enabled})
+    for (const auto& name : *list)
+      if (!plugins_.find(name)) refuse("it names plugin '" + name + "', which is not registered");
+  for (const auto& a : s.area_plugins)
+    for (const auto& name : a)
+      if (!plugins_.find(name))
+        refuse("an area uses plugin '" + name + "', which is not registered");
+
+  // The store checks its object table before it changes anything.
+  store_.restore(s.objects, columns);
+  slots_.clear();
+  resolvers_.clear();
+  derived_.clear();
+  interactions_.clear();
+  outside_.clear();
+  step_ = s.step;
+  time_ = s.time;
+  def_.dt = s.dt;
+  inputs_ = std::move(inputs);
+  next_input_ = 0;
+  swaps_.clear();
+  for (const Snapshot::Swap& sw : s.swaps)
+    swaps_.push_back(ScheduledSwap{sw.time, sw.area, sw.from, sw.to});
+  disabled_ = s.disabled;
+  enabled_ = s.enabled;
+  def_.use.clear();
+  for (const auto& [what, plugin] : s.use) def_.use.emplace(what, plugin);
+  for (std::size_t i = 0; i < areas_.size(); ++i) {
+    areas_[i].def.plugins = s.area_plugins[i];
+    areas_[i].left.clear();
+  }
+  frozen_ = s.frozen;
+  frozen_changed_ = true;
+  area_of_slot_ = s.area_of_slot;
+  refresh_live();
+  refresh_area_scopes();
+  pending_.clear();
+  published_.clear();
+  current_stage_ = nullptr;
+  started_ = s.started;
+  synced_ = false;
+  primed_ = false;
+  advanced_ = false;
+  if (!started_) return;  // start() instantiates, builds and primes
+
+  // Every stage afresh, built from the restored properties.
+  sync_structure();
+  if (active_stages() != s.stages) {
+    std::string now, then;
+    for (const auto& n : active_stages()) now += " " + n;
+    for (const auto& n : s.stages) then += " " + n;
+    throw InputError("restored the snapshot, but this world instantiates the stages" + now +
+                     " where the snapshot had" + then);
+  }
+  for (const Snapshot::StageState& st : s.stage_states) {
+    Slot* slot = find_slot(st.stage);
+    if (!slot)
+      throw InputError("restored the snapshot, but it holds the state of stage '" + st.stage +
+                       "', which is not active");
+    StateReader in(st.stage, st.bytes);
+    slot->stage->restore_state(in);
+    if (in.remaining() != 0)
+      throw InputError("stage '" + st.stage + "' left " + std::to_string(in.remaining()) +
+                       " bytes of its saved state unread: it is damaged or from another version");
+  }
+  // Prime as the end of the step that led to the snapshot did: derived sets
+  // and interactions from the restored properties, in the same phase context
+  // (the step counter of that step, its advance done), so that the next
+  // advance performs the same commands. A snapshot of step 0 is primed as
+  // start() primes.
+  if (step_ == 0) {
+    derive_phase();
+    interact_phase();
+  } else {
+    --step_;
+    primed_ = true;
+    advanced_ = true;
+    derive_phase();
+    interact_phase();
+    advanced_ = false;
+    ++step_;
+  }
+  pending_.clear();  // their events were published before the snapshot
+  for (auto& slot : slots_) slot->primed = true;
+  primed_ = true;
+}
+
 }  // namespace alloy

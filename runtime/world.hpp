@@ -25,6 +25,7 @@
 #include "runtime/events.hpp"
 #include "runtime/plugin_registry.hpp"
 #include "runtime/profile.hpp"
+#include "runtime/snapshot.hpp"
 
 namespace alloy {
 
@@ -216,6 +217,27 @@ class World {
   /// built from properties and primed (at once if the world has started, else
   /// at start). Properties stay. Returns the stage instances removed.
   std::vector<std::string> plugin_changed(std::string_view plugin);
+
+  // --- snapshots (snapshot.hpp, docs/saves.md) ---------------------------------
+  /// Everything that decides the next step, as a value; between steps. With a
+  /// `base` taken from this world, every column that has not changed since
+  /// is shared with the base instead of copied (a delta snapshot).
+  Snapshot snapshot(const Snapshot* base = nullptr) const;
+  /// Puts the world back in the state of `snapshot`, taken from this world or
+  /// from another built from the same scene (the same plugins, properties and
+  /// areas): ids held before stay valid as the snapshot knew them. Every stage
+  /// is created afresh, built from the restored properties, given its saved
+  /// state (Stage::restore_state) and primed as at the end of a step; events
+  /// already published are dropped. From there, stepping gives the bits the
+  /// run that took the snapshot gave, for every stage that keeps its state in
+  /// properties or saves it (docs/saves.md lists the ones that do not yet).
+  /// Throws InputError, before changing anything, on a snapshot that does not
+  /// fit this world (an unknown property or one of another kind, other areas,
+  /// a damaged object table); and, after, if the stages it names are not the
+  /// ones the restored world instantiates or one refuses its state.
+  void restore(const Snapshot& snapshot);
+  /// What each active stage saves of itself (Stage::save_state), in run order.
+  std::vector<Snapshot::StageState> stage_states() const;
 
   // --- stages -----------------------------------------------------------------
   /// Stages are named after their plugin, with "@area" for a stage of an area

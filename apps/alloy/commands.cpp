@@ -24,6 +24,7 @@
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 #include "resolvers/sound/wav_writer.hpp"
+#include "runtime/state_hash.hpp"
 
 namespace alloy::app {
 
@@ -44,6 +45,8 @@ struct RunOptions {
   bool profile = false;
   bool quiet = false;
   bool watch = false;
+  bool hash = false;             ///< print the state hash after the run
+  std::uint64_t hash_every = 0;  ///< and every N steps (0: only at the end)
 };
 
 constexpr double kDefaultSeconds = 5.0;  // when neither the scene nor the user says
@@ -275,6 +278,12 @@ void schedule_swap(World& world, const std::string& spec) {
   world.schedule_swap(time, area, rest.substr(0, eq), rest.substr(eq + 1));
 }
 
+/// --hash: one line a user compares between two runs (runtime/state_hash.hpp).
+void print_hash(const World& world, std::ostream& out) {
+  out << "state hash at step " << world.step_count() << ": " << hex(hash_state(world).world)
+      << "\n";
+}
+
 int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   PluginRegistry registry;
   register_native_plugins(registry);
@@ -343,6 +352,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
           if (!opt.quiet) print_report(world, r, out);
           r.next += r.every;
         }
+      if (opt.hash_every && world.step_count() % opt.hash_every == 0) print_hash(world, out);
       if (watch && !watch->between_steps(world)) break;
     }
   } catch (const InputError& e) {
@@ -351,6 +361,8 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     throw lua::locate(scene, e);
   }
   const double wall = now_seconds() - wall0;
+  if ((opt.hash || opt.hash_every) && !(opt.hash_every && world.step_count() % opt.hash_every == 0))
+    print_hash(world, out);
   if (trace) trace->close();
   if (events) events->close(world);
   mod_log.summary();
@@ -506,6 +518,13 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                       "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
+  run_cmd->add_flag("--hash", ro.hash,
+                    "Print the state hash after the run (every property bit, ids, pending inputs: "
+                    "equal hashes, equal worlds; docs/saves.md)");
+  run_cmd
+      ->add_option("--hash-every", ro.hash_every,
+                   "Print the state hash every N steps, and after the run")
+      ->check(CLI::PositiveNumber);
   run_cmd->add_flag("--watch", ro.watch,
                     "Run in real time and reload mods whose files change (until Ctrl-C without --steps/--seconds)");
 

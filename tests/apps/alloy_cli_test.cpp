@@ -113,6 +113,26 @@ TEST(AlloyCli, ProfileListsStagesAndSkippedPlugins) {
   EXPECT_NE(r.out.find("not instantiated"), std::string::npos);
 }
 
+TEST(AlloyCli, HashPrintsTheStateHashSoThatTwoRunsCanBeCompared) {
+  Result a = cli({"run", kDemo, "--steps", "20", "--quiet", "--hash-every", "10"});
+  ASSERT_EQ(a.code, kExitOk) << a.err;
+  const std::regex line(R"(state hash at step (\d+): ([0-9a-f]{16})\n)");
+  std::vector<std::string> steps, hashes;
+  for (std::sregex_iterator it(a.out.begin(), a.out.end(), line), end; it != end; ++it)
+    steps.push_back((*it)[1]), hashes.push_back((*it)[2]);
+  EXPECT_EQ(steps, (std::vector<std::string>{"10", "20"})) << a.out;  // none repeated at the end
+  ASSERT_EQ(hashes.size(), 2u);
+  EXPECT_NE(hashes[0], hashes[1]);  // the demo's bodies fall
+  // The same run hashes alike; --hash prints the last line only.
+  Result b = cli({"run", kDemo, "--steps", "20", "--quiet", "--hash"});
+  ASSERT_EQ(b.code, kExitOk) << b.err;
+  EXPECT_EQ(b.out, "state hash at step 20: " + hashes[1] + "\n");
+  // Another length, another state.
+  Result c = cli({"run", kDemo, "--steps", "21", "--quiet", "--hash"});
+  EXPECT_EQ(c.out.find(hashes[1]), std::string::npos) << c.out;
+  EXPECT_EQ(cli({"run", kDemo, "--steps", "2", "--hash-every", "0"}).code, kExitBadInput);
+}
+
 TEST(AlloyCli, DtOverridesTheScene) {
   Result r = cli({"run", kDemo, "--seconds", "1", "--dt", "0.01"});
   ASSERT_EQ(r.code, kExitOk) << r.err;
