@@ -102,6 +102,18 @@ TEST_F(SceneLoaderTest, ASceneThatCatchesItsOwnOutOfMemoryIsStillStopped) {
   EXPECT_NE(e.where().file.find("memory_hog_pcall.lua"), std::string::npos) << e.where().file;
 }
 
+TEST_F(SceneLoaderTest, ErrorsCaughtByTheScenesOwnPcallAreChargedToItsBudget) {
+  LoadOptions options;
+  options.instruction_limit = 10'000'000;
+  const InputError e = load_error("tests/lua/limits/caught_errors.lua", options);
+  EXPECT_NE(std::string(e.what()).find("ran too long"), std::string::npos) << e.what();
+  EXPECT_NE(e.where().file.find("caught_errors.lua"), std::string::npos) << e.where().file;
+  // The same scene with room for its 20,000 errors (2,000 instructions each)
+  // loads: the charge is a cost, not a ban on pcall.
+  options.instruction_limit = 100'000'000;
+  EXPECT_NO_THROW(load_scene(source_path("tests/lua/limits/caught_errors.lua"), registry, options));
+}
+
 TEST_F(SceneLoaderTest, AnEndlessSceneIsStopped) {
   LoadOptions options;
   options.instruction_limit = 20'000'000;

@@ -48,6 +48,29 @@ std::string line_of(const std::string& scene, std::uint64_t step, const StateHas
   return line;
 }
 
+/// The compiler that built this test (and the libraries it links). The
+/// promise is the same bits from the same build (docs/saves.md): hashes
+/// recorded by one compiler are checked only by a build of the same one, so
+/// that the sanitizer build (clang) does not compare against g++'s figures.
+std::string build_tag() {
+#if defined(__clang__)
+  return "clang-" + std::to_string(__clang_major__);
+#elif defined(__GNUC__)
+  return "gcc-" + std::to_string(__GNUC__);
+#else
+  return "unknown";
+#endif
+}
+
+/// The build tag the golden file was recorded with ("# build: TAG"), or "".
+std::string golden_build_tag() {
+  std::ifstream in(kGolden);
+  const std::string prefix = "# build: ";
+  for (std::string line; std::getline(in, line);)
+    if (line.starts_with(prefix)) return line.substr(prefix.size());
+  return "";
+}
+
 std::map<std::string, std::string> read_golden() {
   std::map<std::string, std::string> out;  // "scene step" -> line
   std::ifstream in(kGolden);
@@ -110,10 +133,15 @@ TEST_P(GoldenHash, MatchesTheCheckedInHashes) {
     out << "# State hashes of the bundled scenes (runtime/state_hash.hpp), checked by\n"
            "# tests/runtime/scene_hash_test.cpp. One line per scene and step: scene, step,\n"
            "# world hash, then property=column hash. Regenerate after an intended physics\n"
-           "# change with tests/update_golden_hashes.sh (and say why in the commit).\n";
+           "# change with tests/update_golden_hashes.sh (and say why in the commit).\n"
+           "# build: "
+        << build_tag() << "\n";
     for (const auto& [key, l] : all) out << l << "\n";
     GTEST_SKIP() << "golden hashes of '" << name << "' written to " << kGolden;
   }
+  if (const std::string recorded = golden_build_tag(); recorded != build_tag())
+    GTEST_SKIP() << "the golden hashes were recorded by a " << recorded << " build; this is "
+                 << build_tag() << " (the promise is the same bits from the same build)";
   const auto golden = read_golden();
   for (std::size_t i = 0; i < kCheckpoints.size(); ++i) {
     const std::string key = name + " " + std::to_string(kCheckpoints[i]);
