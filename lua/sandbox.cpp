@@ -180,8 +180,8 @@ void prepare_state(lua_State* L, PatternBudget* patterns) {
 
   // pcall and xpcall charge each error they catch to the script's budget.
   // An error costs the host far more than the few instructions the count
-  // hook sees (a message built, the stack unwound). The wrappers are Lua functions over the originals, so a coroutine may still
-  // yield through them.
+  // hook sees (a message built, the stack unwound). The wrappers are Lua functions over the
+  // originals, so a coroutine may still yield through them.
   static const char kCatching[] =
       "local raw_pcall, raw_xpcall, charge = ...\n"
       "local function after(ok, ...)\n"

@@ -642,8 +642,8 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     }
     hinges.push_back({jid, j, b2 == nullptr});
     if (config.joint_projection)
-      projection.add_hinge(projected_body(swapped ? bb : ba),
-                           b2 ? projected_body(bb) : -1, pivot, ax);
+      projection.add_hinge(projected_body(swapped ? bb : ba), b2 ? projected_body(bb) : -1, pivot,
+                           ax);
     if (!anchor.has(h.slot)) anchor_out.set(h.slot, pivot);
     if (!axis.has(h.slot)) axis_out.set(h.slot, ax);
   }

@@ -75,7 +75,8 @@ TEST(CoupledScenes, WithTheRigidBodyEvery4HalvingTheWindowReducesTheMotorSpeedEr
     const double error = relative_error(m, reference.value);
     std::printf("window 1/%d, rigid body every 4: %.5f rad/s, error %.3f %% against 1/15360\n", n,
                 m.value, 100 * error);
-    // Measured: 0.55, 0.29, 0.13 % (0.44, 0.18, 0.14 % with backward-Euler coils), before induction.
+    // Measured: 0.55, 0.29, 0.13 % (0.44, 0.18, 0.14 % with backward-Euler coils), before
+    // induction.
     EXPECT_LT(error, previous) << "window 1/" << n;
     previous = error;
   }

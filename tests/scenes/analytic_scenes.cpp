@@ -556,8 +556,8 @@ Result run_swing(double dt, const Method& m, bool lever, double theta0, int peri
   // Euler step conserves a nearby energy, not this one.
   r.energy_drift = 0;
   for (std::size_t k = 1; k < crossing_energy.size(); ++k)
-    r.energy_drift =
-        std::max(r.energy_drift, std::abs(crossing_energy[k] - crossing_energy[0]) / e_swing / double(k));
+    r.energy_drift = std::max(
+        r.energy_drift, std::abs(crossing_energy[k] - crossing_energy[0]) / e_swing / double(k));
   if (crossing_energy.size() < 2) r.energy_drift = 1;
   r.energy_wobble = wobble;
   return r;

@@ -37,8 +37,11 @@ struct Result {
   double cpu_seconds = 0;  ///< CPU time of the stepping loop (no set-up, no reference)
   double sim_seconds = 0;  ///< simulated time covered
   std::uint64_t steps = 0;
-  double energy_drift = -1;    ///< largest |E - E0| / |E0| over the run (run_swing: per period at one phase); < 0: not measured
-  double energy_wobble = -1;   ///< run_swing: largest |E - E0| / E_swing within the run; < 0: not measured
+  /// Largest |E - E0| / |E0| over the run (run_swing: per period, at one
+  /// phase); < 0: not measured.
+  double energy_drift = -1;
+  /// run_swing: largest |E - E0| / E_swing within the run; < 0: not measured.
+  double energy_wobble = -1;
   double momentum_drift = -1;  ///< largest |L - L0| / |L0| (angular momentum); < 0: not measured
   bool finite = true;          ///< no non-finite value was written (nor is the error one)
   double stretch =
