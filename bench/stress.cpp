@@ -224,7 +224,8 @@ void projectile(Runner& R, const std::string& label, double dt, int substeps, bo
 
 /// `gap` between neighbours (m; negative: pressed together); `label` names
 /// the settings of `d` beyond its step.
-void magnets(Runner& R, int count, std::uint64_t full, WorldDef d, double gap, const std::string& label) {
+void magnets(Runner& R, int count, std::uint64_t full, WorldDef d, double gap,
+             const std::string& label) {
   const double dt = d.dt;
   Sim sim(std::move(d));
   const MagnetPack p = build_magnet_pack(*sim, count, 0.01, gap);
@@ -355,10 +356,10 @@ int main(int argc, char** argv) {
     const bool energy = r.conservative;
     const std::string settings =
         (r.settings.empty() ? "defaults" : r.settings) + (r.judged ? "" : " (shown, not judged)");
-    table.row({r.scene, settings, std::to_string(r.steps),
-               std::to_string(r.objects), std::to_string(r.non_finite),
-               energy ? bench::fmt(r.drift) : "-", energy ? bench::fmt(r.gain) : "-", r.figure,
-               bench::fmt(r.cpu), bench::fmt(per_step)});
+    table.row({r.scene, settings, std::to_string(r.steps), std::to_string(r.objects),
+               std::to_string(r.non_finite), energy ? bench::fmt(r.drift) : "-",
+               energy ? bench::fmt(r.gain) : "-", r.figure, bench::fmt(r.cpu),
+               bench::fmt(per_step)});
     ok = ok && (r.ok || !r.judged);
   }
   const std::string md = table.str();

@@ -310,7 +310,8 @@ void ModRuntime::hold_impulses() {
     if (!l->state->stopped() && l->state->program())
       for (const auto& [type, ref] : l->state->program()->handlers)
         wanted = wanted || type == "contact_ended" || type == "*";
-  const Stage* stage = wanted && world_->has_stage("collisions") ? world_->stage("collisions") : nullptr;
+  const Stage* stage =
+      wanted && world_->has_stage("collisions") ? world_->stage("collisions") : nullptr;
   if (stage == impulses_from_) return;
   impulses_from_ = stage;
   const auto* set = dynamic_cast<const rigid::CollisionSet*>(stage);

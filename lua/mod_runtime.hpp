@@ -169,7 +169,7 @@ class ModRuntime {
   rigid::ImpulseDemand impulses_;
   const Stage* impulses_from_ = nullptr;  // the collisions stage impulses_ was asked of
   std::uint64_t impulses_checked_ = ~std::uint64_t(0);  // the step hold_impulses last looked at
-  std::shared_ptr<ModRuntime*> self_;  // the world's observer holds a weak_ptr
+  std::shared_ptr<ModRuntime*> self_;                   // the world's observer holds a weak_ptr
   std::unique_ptr<FileWatcher> watcher_;
   std::vector<ModReport> reports_;
 };

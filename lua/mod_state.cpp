@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::int32_t kQuantum = 1000;  // ticks between two checks of the budgets
-static_assert(kQuantum <= INT16_MAX);  // abi::Budget::ticks
+static_assert(kQuantum <= INT16_MAX);    // abi::Budget::ticks
 // Steps of pattern matching (lua_patterns.hpp) that cost one tick. A step
 // takes 5-10 ns, about what the tick budget allows a tick (20 million ticks
 // and 0.25 s per step).

@@ -175,7 +175,8 @@ void write_audio(World& world, const std::string& path, std::ostream& out, bool 
   }
   if (quiet) return;
   char line[160];
-  std::snprintf(line, sizeof line, "audio: %s, %.3f s at %.0f Hz, ", path.c_str(), double(info.frames) / rate, rate);
+  std::snprintf(line, sizeof line, "audio: %s, %.3f s at %.0f Hz, ", path.c_str(),
+                double(info.frames) / rate, rate);
   out << line;
   if (info.peak > 0) {
     std::snprintf(line, sizeof line, "peak %.1f dBFS", 20 * std::log10(info.peak));
@@ -199,7 +200,9 @@ struct Report {
 };
 
 Report parse_report(const World& world, const std::string& spec) {
-  const auto bad = [&](const std::string& why) { return InputError("report '" + spec + "': " + why); };
+  const auto bad = [&](const std::string& why) {
+    return InputError("report '" + spec + "': " + why);
+  };
   std::string rest = spec;
   Report r;
   if (auto at = rest.rfind('@'); at != std::string::npos) {
@@ -215,18 +218,23 @@ Report parse_report(const World& world, const std::string& spec) {
   if (dot == std::string::npos) throw bad("expected OBJECT.PROPERTY[.COMPONENT][@SECONDS]");
   const std::string object = rest.substr(0, dot);
   std::string property = rest.substr(dot + 1), component;
-  if (auto d2 = property.find('.'); d2 != std::string::npos) component = property.substr(d2 + 1), property.resize(d2);
+  if (auto d2 = property.find('.'); d2 != std::string::npos)
+    component = property.substr(d2 + 1), property.resize(d2);
   r.id = world.find(object);
   if (!r.id) throw bad("no object is called '" + object + "'");
   r.property = world.properties().id(property);
   const PropertyDef& def = world.properties().def(r.property);
   if (def.kind == PropertyKind::Vec3 || def.kind == PropertyKind::Quat) {
     const bool quat = def.kind == PropertyKind::Quat;
-    if (component == "angle" && quat) r.component = 'a';
-    else if (component.size() == 1 && std::string(quat ? "wxyz" : "xyz").find(component[0]) != std::string::npos)
+    if (component == "angle" && quat)
+      r.component = 'a';
+    else if (component.size() == 1 &&
+             std::string(quat ? "wxyz" : "xyz").find(component[0]) != std::string::npos)
       r.component = component[0];
-    else throw bad("name a component: " + std::string(quat ? "w, x, y, z or angle" : "x, y or z"));
-  } else if (def.kind != PropertyKind::Number && def.kind != PropertyKind::Integer && def.kind != PropertyKind::Bool) {
+    else
+      throw bad("name a component: " + std::string(quat ? "w, x, y, z or angle" : "x, y or z"));
+  } else if (def.kind != PropertyKind::Number && def.kind != PropertyKind::Integer &&
+             def.kind != PropertyKind::Bool) {
     throw bad("only numbers, booleans and vector components can be reported");
   } else if (!component.empty()) {
     throw bad("'" + property + "' has no components");
@@ -237,25 +245,37 @@ Report parse_report(const World& world, const std::string& spec) {
 }
 
 void print_report(const World& world, const Report& r, std::ostream& out) {
-  if (!world.store().alive(r.id) || !world.store().has(r.id, r.property)) return;  // removed meanwhile
+  if (!world.store().alive(r.id) || !world.store().has(r.id, r.property))
+    return;  // removed meanwhile
   const PropertyValue v = world.store().get(r.id, r.property);
   double x = 0;
-  if (const double* d = std::get_if<double>(&v)) x = *d;
-  else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) x = double(*i);
-  else if (const bool* b = std::get_if<bool>(&v)) x = *b;
-  else if (const Vec3* p = std::get_if<Vec3>(&v)) x = r.component == 'x' ? p->x : r.component == 'y' ? p->y : p->z;
+  if (const double* d = std::get_if<double>(&v))
+    x = *d;
+  else if (const std::int64_t* i = std::get_if<std::int64_t>(&v))
+    x = double(*i);
+  else if (const bool* b = std::get_if<bool>(&v))
+    x = *b;
+  else if (const Vec3* p = std::get_if<Vec3>(&v))
+    x = r.component == 'x' ? p->x : r.component == 'y' ? p->y : p->z;
   else if (const Quat* q = std::get_if<Quat>(&v))
-    x = r.component == 'a' ? angle_z(*q) : r.component == 'w' ? q->w : r.component == 'x' ? q->x : r.component == 'y' ? q->y : q->z;
+    x = r.component == 'a'   ? angle_z(*q)
+        : r.component == 'w' ? q->w
+        : r.component == 'x' ? q->x
+        : r.component == 'y' ? q->y
+                             : q->z;
   char line[200];
   std::snprintf(line, sizeof line, "step %6llu  t=%7.3f s  report: %s = %.4g %s\n",
-                (unsigned long long)world.step_count(), world.time(), r.label.c_str(), x, r.unit.c_str());
+                (unsigned long long)world.step_count(), world.time(), r.label.c_str(), x,
+                r.unit.c_str());
   out << line;
 }
 
 /// --swap [AREA:]FROM=TO[@TIME]: a resolver swap at TIME (default 0, before the first step).
 void schedule_swap(World& world, const std::string& spec) {
   const auto bad = [&] {
-    return InputError("--swap '" + spec + "': expected [AREA:]FROM=TO[@TIME], e.g. orbit:gravity.nbody=gravity.uniform@2.5");
+    return InputError(
+        "--swap '" + spec +
+        "': expected [AREA:]FROM=TO[@TIME], e.g. orbit:gravity.nbody=gravity.uniform@2.5");
   };
   std::string rest = spec, area;
   double time = 0;
@@ -300,7 +320,9 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   if (opt.steps) {
     steps = *opt.steps;
   } else {
-    const double seconds = opt.seconds ? *opt.seconds : scene.seconds > 0 ? scene.seconds : kDefaultSeconds;
+    const double seconds = opt.seconds         ? *opt.seconds
+                           : scene.seconds > 0 ? scene.seconds
+                                               : kDefaultSeconds;
     steps = std::uint64_t(std::llround(seconds / world.dt()));
   }
 
@@ -318,7 +340,8 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   for (Report& r : reports) r.next = r.every;
   if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
-  if (!opt.trace.empty()) trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
+  if (!opt.trace.empty())
+    trace = std::make_unique<TraceWriter>(opt.trace, world, split_list(opt.trace_props));
   std::unique_ptr<EventLog> events;
   if (!opt.events.empty()) events = std::make_unique<EventLog>(opt.events);
   EventOwners owners(scene.mods.get());
@@ -505,17 +528,23 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   run_cmd->add_option("--seconds", ro.seconds, "Simulated seconds to run")
       ->excludes(steps_opt)
       ->check(CLI::PositiveNumber);
-  run_cmd->add_option("--dt", ro.dt, "Fixed time step in seconds (overrides the scene)")->check(CLI::PositiveNumber);
-  run_cmd->add_option("--trace", ro.trace, "Write a long-format CSV trace: step,time,object,property,value");
+  run_cmd->add_option("--dt", ro.dt, "Fixed time step in seconds (overrides the scene)")
+      ->check(CLI::PositiveNumber);
+  run_cmd->add_option("--trace", ro.trace,
+                      "Write a long-format CSV trace: step,time,object,property,value");
   run_cmd->add_option("--trace-props", ro.trace_props, "Comma-separated properties to trace")
       ->capture_default_str();
-  run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")->check(CLI::PositiveNumber);
+  run_cmd->add_option("--trace-every", ro.trace_every, "Trace every K-th step")
+      ->check(CLI::PositiveNumber);
   run_cmd->add_option("--events", ro.events, "Write the events as JSON lines");
-  run_cmd->add_option("--audio", ro.audio, "Write what the run sounded like as a WAV file (16-bit mono)");
-  run_cmd->add_option("--report", ro.reports,
-                      "Report a value as the run goes: OBJECT.PROPERTY[.COMPONENT][@SECONDS] (repeatable)");
-  run_cmd->add_option("--swap", ro.swaps,
-                      "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
+  run_cmd->add_option("--audio", ro.audio,
+                      "Write what the run sounded like as a WAV file (16-bit mono)");
+  run_cmd->add_option(
+      "--report", ro.reports,
+      "Report a value as the run goes: OBJECT.PROPERTY[.COMPONENT][@SECONDS] (repeatable)");
+  run_cmd->add_option(
+      "--swap", ro.swaps,
+      "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
   run_cmd->add_flag("--hash", ro.hash,
@@ -526,10 +555,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                    "Print the state hash every N steps, and after the run")
       ->check(CLI::PositiveNumber);
   run_cmd->add_flag("--watch", ro.watch,
-                    "Run in real time and reload mods whose files change (until Ctrl-C without --steps/--seconds)");
+                    "Run in real time and reload mods whose files change (until Ctrl-C without "
+                    "--steps/--seconds)");
 
   std::string check_path;
-  CLI::App* check_cmd = app.add_subcommand("check", "Load and validate a scene or a mod without running it");
+  CLI::App* check_cmd =
+      app.add_subcommand("check", "Load and validate a scene or a mod without running it");
   check_cmd->add_option("path", check_path, "Scene file or mod folder")->required();
 
   CLI::App* plugins_cmd = app.add_subcommand("plugins", "List the native plugins");

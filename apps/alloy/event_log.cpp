@@ -141,7 +141,8 @@ void Narrator::flush() {
 void Narrator::summary(const World& world, double wall_seconds) {
   flush();
   char line[160];
-  std::snprintf(line, sizeof line, "ran %llu steps of %.6g s: %.3f s simulated in %.3f s wall (%.1fx real time)\n",
+  std::snprintf(line, sizeof line,
+                "ran %llu steps of %.6g s: %.3f s simulated in %.3f s wall (%.1fx real time)\n",
                 (unsigned long long)world.step_count(), world.dt(), world.time(), wall_seconds,
                 wall_seconds > 0 ? world.time() / wall_seconds : 0.0);
   out_ << line;

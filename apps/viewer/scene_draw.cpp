@@ -175,7 +175,8 @@ ImU32 fill_colour(const World& world, ObjectId id) {
   if (has(world, id, "inductance")) return colour::kCopper;  // a coil: its winding is what shows
   const bool is_static = world.value<bool>(id, "static").value_or(false);
   // A static part has no mass, so often no density: a conductive one is metal.
-  if (is_static && !has(world, id, "density") && world.value<bool>(id, "conductive").value_or(false))
+  if (is_static && !has(world, id, "density") &&
+      world.value<bool>(id, "conductive").value_or(false))
     return colour::kBrass;
   switch (material_of(world, id)) {
     case Material::Steel:

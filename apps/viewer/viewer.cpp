@@ -13,8 +13,8 @@
 
 #include "apps/viewer/scene_writer.hpp"
 #include "lua/mod_runtime.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/plugins.hpp"
+#include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 
 namespace alloy::viewer {
@@ -411,8 +411,9 @@ void Viewer::simulate(double frame_seconds) {
 void Viewer::step_world() {
   World* w = world();
   // Taken again each step: the collisions stage may have been replaced.
-  const auto* contacts =
-      draw_options_.contact_forces ? dynamic_cast<const rigid::CollisionSet*>(w->stage("collisions")) : nullptr;
+  const auto* contacts = draw_options_.contact_forces
+                             ? dynamic_cast<const rigid::CollisionSet*>(w->stage("collisions"))
+                             : nullptr;
   contact_impulses_ = contacts ? contacts->demand_impulses() : rigid::ImpulseDemand{};
   try {
     w->step();
@@ -1088,7 +1089,8 @@ void Viewer::panel_inspector() {
     if (mass > 0) ImGui::Text("mass %.4g kg", mass);
     ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y,
                 part->angle * 180 / std::numbers::pi);
-    if (const auto v = (*w).value<Vec3>(id, "velocity")) ImGui::Text("speed %.3f m/s", length(xy(*v)));
+    if (const auto v = (*w).value<Vec3>(id, "velocity"))
+      ImGui::Text("speed %.3f m/s", length(xy(*v)));
   }
   if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);
