@@ -40,11 +40,12 @@ local defaults = {
   -- magnet, 37.5 g, q = 112 A m), inner ends 24 mm from the axle, on a wooden
   -- hub (insulating: the spokes touch nothing but the slider).
   spoke_length = 0.05, spoke_width = 0.01, spoke_inner = 0.024, hub_radius = 0.022,
-  -- The bearing: a 10 mm steel axle in a greased bronze bush. Dry friction
-  -- (N m) and the grease's viscous drag (N m s: Petroff's law, 2 pi eta r^3
-  -- l / c, is 9.0e-3 for grease of 10 Pa s, r = 5 mm, l = 23 mm, c = 20 um).
-  -- The drag is what sets the steady speed (docs/motor.md, "What sets the speed").
-  axle_friction = 0.002, bearing_drag = 9e-3,
+  -- The bearing: a 10 mm steel axle in an oiled bronze bush. Dry friction
+  -- (N m) and the oil's viscous drag (N m s: Petroff's law, 2 pi eta r^3 l /
+  -- c, is 9.0e-5 for a light oil of 0.1 Pa s, r = 5 mm, l = 23 mm, c = 20
+  -- um). The drag is small: the back-EMF sets the steady speed (docs/motor.md,
+  -- "What sets the speed").
+  axle_friction = 0.002, bearing_drag = 9e-5,
   -- The sliding contact: a brass rod 170 x 4 x 4 mm hinged 4 mm from its
   -- left end. Its underside lies on the tangent to the circle of the spokes'
   -- ends at contact_angle, the hinge hinge_distance down that line. It is
@@ -55,11 +56,16 @@ local defaults = {
   -- are dead too).
   contact_angle = 135, hinge_distance = 0.13, slider_length = 0.17, slider_width = 0.004,
   slider_lift = 0.4, slider_release = 0.1, slider_friction = 0.15, spoke_restitution = 0,
-  -- The electromagnets: the kit's coil (500 turns of 0.5 mm copper on a
-  -- 50 x 30 mm bobbin with an iron core: 3.2 ohm, 16 mH, q = 30 A m per
-  -- ampere), radial, their inner faces coil_gap outside the spokes' ends.
-  coil_angle = 22.5, coil_gap = 0.008, coil_length = 0.05, coil_diameter = 0.03, turns = 500,
-  wire_diameter = 0.5e-3,
+  -- The electromagnets: the kit's coil wound for this motor, 6000 turns of
+  -- 0.27 mm enamelled copper on a 50 mm long bobbin 56 mm across with an iron
+  -- core (248 ohm, 4.9 H), radial, their inner faces coil_gap outside the
+  -- spokes' ends. So many turns make the back-EMF constant k about 1 V s,
+  -- and the electrical damping k^2 / R = 4e-3 N m s is 50 times the oil's:
+  -- the rotor turns where the back-EMF nearly cancels the battery (the kit's
+  -- default coil, 500 turns of 0.5 mm wire, gives k = 0.03 V s, and then the
+  -- bearing sets the speed).
+  coil_angle = 22.5, coil_gap = 0.004, coil_length = 0.05, coil_diameter = 0.056, turns = 6000,
+  wire_diameter = 0.27e-3,
   -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
   -- below the axle, north up; it pulls a south spoke to the bottom, which
   -- puts a north spoke under the slider, where the torque is largest.

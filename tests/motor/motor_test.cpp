@@ -24,6 +24,9 @@ constexpr double kRelease = 0.1;  // mods/motor/scene.lua: at(0.1, "slider", { p
 constexpr double kBatteryOffAt =
     5.0;  // mods/motor/battery_off.lua: at(5.0, "battery", { emf = 0 })
 constexpr double kPitch = std::numbers::pi / 4;  // one spoke
+/// The scene's steady speed, rad/s (docs/motor.md: 4.44 at 1/240 s, 4.36 at
+/// 1/480 s, set by the back-EMF), and how far a variant may stray from it.
+constexpr double kSpeed = 4.4, kSpeedTolerance = 0.3;
 
 std::string describe(const Steadiness& s) {
   std::ostringstream o;
@@ -115,9 +118,8 @@ TEST(Motor, StartsUpAsThePaperTellsIt) {
 TEST(Motor, TurnsAnticlockwiseAtASteadySpeedFromFrame200) {
   const RunResult r = run_motor(kScene, {.seconds = kSteadyTo + 0.1});
   const Steadiness s = expect_turns_steadily(r, 5, 0.10);
-  // Measured (docs/motor.md): 4.65 rad/s with the back-EMF (4.78 without),
-  // every turn 324 or 325 steps, spread 0.31 %.
-  EXPECT_NEAR(s.mean, 4.70, 0.3);
+  // Measured (docs/motor.md): 4.44 rad/s, set by the back-EMF.
+  EXPECT_NEAR(s.mean, kSpeed, kSpeedTolerance);
   EXPECT_LT(s.spread(), 0.01);
 }
 
@@ -144,9 +146,14 @@ TEST(Motor, RemovingTheBatteryStopsIt) {
   ASSERT_EQ(cut.size(), 1u);
   EXPECT_NEAR(cut[0]->time, kBatteryOffAt, 1.5 * r.dt);  // stamped at the end of its step
   const Steadiness before = steadiness(revolutions(r, kSteadyFrom, kBatteryOffAt));
-  EXPECT_GE(before.turns, 3u) << "it ran until then";
-  // No coil is powered once the battery is gone (a step for the resolvers to see it).
-  EXPECT_TRUE(switched_on(r, kBatteryOffAt + 2 * r.dt, 1e9).empty());
+  EXPECT_GE(before.turns, 2u) << "it ran until then";
+  // No coil is powered by the battery once it is gone (a step for the
+  // resolvers to see it). The turning rotor still induces a current in the
+  // coil whose spoke the slider touches (a generator, short-circuited through
+  // the battery's 0.5 ohm): it flows against the way the battery drove it,
+  // terminal 0 to 1, and brakes the rotor.
+  for (const Record* e : switched_on(r, kBatteryOffAt + 2 * r.dt, 1e9))
+    EXPECT_LT(e->value("current"), 0) << e->a << " driven forward at " << e->time << " s";
   // It runs down and stops: measured 0.9 s (docs/motor.md).
   std::size_t last_moving = 0;
   for (std::size_t i = 0; i < r.spin.size(); ++i)
@@ -163,7 +170,7 @@ TEST(Motor, RemovingTheBatteryStopsIt) {
 TEST(MotorRobustness, HalfTheStep) {
   const RunResult r = run_motor(kScene, {.dt = kSceneDt / 2, .seconds = kSteadyTo + 0.1});
   const Steadiness s = expect_turns_steadily(r);
-  EXPECT_NEAR(s.mean, 4.70, 0.3) << "the speed hardly depends on the step";
+  EXPECT_NEAR(s.mean, kSpeed, kSpeedTolerance) << "the speed hardly depends on the step";
   expect_alternation(r, kSteadyFrom, kSteadyTo);
 }
 
@@ -193,7 +200,11 @@ TEST(MotorRobustness, HalfTheStepAndTenPercentLessEmf) {
 
 /// The bias magnet's job (paper 4.2): wherever the rotor is put down, it
 /// settles where it can start. Here it is put down turned by up to 40
-/// degrees, the slider is let go at 2 s, and it must run as the scene does.
+/// degrees, the slider is let go at 3 s, and it must run as the scene does.
+/// In its oiled bearing the rotor rocks on the bias magnet for over two
+/// seconds (the dry friction takes about 6 degrees off each swing) and stops
+/// within the dry friction's band about the detent: 2 mN m against the
+/// detent's 0.039 N m/rad, 2.9 degrees.
 class MotorPutDownOutOfPlace : public ::testing::TestWithParam<int> {};
 
 TEST_P(MotorPutDownOutOfPlace, SettlesOnTheBiasMagnetAndStarts) {
@@ -202,24 +213,24 @@ TEST_P(MotorPutDownOutOfPlace, SettlesOnTheBiasMagnetAndStarts) {
   const fs::path f =
       fs::temp_directory_path() / ("alloy_motor_put_down_" + std::to_string(::getpid()) + "_" +
                                    std::to_string(degrees + 90) + ".lua");
-  std::ofstream(f) << "world { dt = 1 / 240, seconds = 5, settings = { [\"gravity.uniform\"] = { g "
+  std::ofstream(f) << "world { dt = 1 / 240, seconds = 6, settings = { [\"gravity.uniform\"] = { g "
                       "= { 0, -9.81, 0 } } } }\n"
                       "require \"motor.layout\" { rotor_angle = "
-                   << degrees << ", slider_release = 2 }\nat(2, \"slider\", { pinned = false })\n";
+                   << degrees << ", slider_release = 3 }\nat(3, \"slider\", { pinned = false })\n";
   const RunResult r = run_motor(f.string());
   fs::remove(f);
-  // Settled by 2 s, within a couple of degrees of where the bias holds it
+  // Settled by 3 s, within the friction band of where the bias holds it
   // (the axle's own angle counts from where it was put down). A rotor put
   // down more than 22.5 degrees off goes to the next such place, 90 degrees on.
-  const double settled = r.angle[r.at(2.0)] * 180 / std::numbers::pi;
+  const double settled = r.angle[r.at(3.0)] * 180 / std::numbers::pi;
   const double off = std::remainder(settled + degrees, 90.0);
-  EXPECT_LT(std::abs(off), 2.5) << "settled at " << settled << " degrees";
-  EXPECT_LT(std::abs(r.spin[r.at(2.0)]), 1e-3);
+  EXPECT_LT(std::abs(off), 3.5) << "settled at " << settled << " degrees";
+  EXPECT_LT(std::abs(r.spin[r.at(3.0)]), 1e-3);
   // Then it starts, anticlockwise, and runs steadily.
-  const Steadiness s = steadiness(revolutions(r, 3.0, 5.0));
+  const Steadiness s = steadiness(revolutions(r, 4.0, 6.0));
   EXPECT_GE(s.turns, 1u) << describe(s);
   EXPECT_GT(s.min, 0) << describe(s);
-  EXPECT_NEAR(s.mean, 4.70, 0.3) << describe(s);
+  EXPECT_NEAR(s.mean, kSpeed, kSpeedTolerance) << describe(s);
 }
 
 INSTANTIATE_TEST_SUITE_P(Degrees, MotorPutDownOutOfPlace,
