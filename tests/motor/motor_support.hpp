@@ -50,6 +50,10 @@ struct RunResult : EventRecords {
   std::vector<double>
       angle;  ///< the rotor's angle (the axle's), unwrapped, rad; anticlockwise positive
   std::vector<double> spin;  ///< its angular velocity about +z, rad/s
+  /// The two coils' currents added, A, positive the way the battery drives
+  /// them (the coils' `current` property counts it negative); 0 before the
+  /// electricity gives them one.
+  std::vector<double> coil_current;
 
   /// The index of the first sample at or after time t.
   std::size_t at(double t) const {
@@ -71,6 +75,7 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
   if (options.dt) world.set_dt(*options.dt);
   const ObjectId battery = world.find("battery"), bearing = world.find("bearing"),
                  axle = world.find("axle");
+  const ObjectId coils[2] = {world.find("upper_coil"), world.find("lower_coil")};
   if (options.emf) world.set(battery, "emf", *options.emf);
   if (options.emf_scale != 1)
     world.set(battery, "emf", get_number(world, "battery", "emf") * options.emf_scale);
@@ -87,6 +92,7 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
   const double seconds = options.seconds ? *options.seconds : loaded.seconds;
   const auto steps = std::uint64_t(std::llround(seconds / r.dt));
   r.time.reserve(steps + 1), r.angle.reserve(steps + 1), r.spin.reserve(steps + 1);
+  r.coil_current.reserve(steps + 1);
   auto sample = [&] {
     const double a = angle_z(std::get<Quat>(world.get(axle, "orientation")));
     // Less than half a turn a step: the nearest branch is the right one.
@@ -98,6 +104,11 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
     // The rigid body gives the axle its velocities in its first advance.
     const bool moving = world.store().has(axle, world.properties().id("angular_velocity"));
     r.spin.push_back(moving ? std::get<Vec3>(world.get(axle, "angular_velocity")).z : 0.0);
+    double current = 0;
+    for (ObjectId c : coils)
+      if (world.store().has(c, world.properties().id("current")))
+        current -= std::get<double>(world.get(c, "current"));
+    r.coil_current.push_back(current);
   };
   sample();
   for (std::uint64_t i = 0; i < steps; ++i) {
@@ -126,6 +137,20 @@ inline std::vector<double> revolutions(const RunResult& r, double t0, double t1)
   return out;
 }
 
+/// The mean of the samples of v between t0 and t1.
+inline double mean_between(const RunResult& r, const std::vector<double>& v, double t0, double t1) {
+  const std::size_t i0 = r.at(t0), i1 = std::min(r.at(t1), v.size() - 1);
+  double sum = 0;
+  for (std::size_t i = i0 + 1; i <= i1; ++i) sum += v[i];
+  return i1 > i0 ? sum / double(i1 - i0) : NAN;
+}
+
+/// The rotor's mean angular velocity between t0 and t1, from its angle.
+inline double mean_speed(const RunResult& r, double t0, double t1) {
+  const std::size_t i0 = r.at(t0), i1 = std::min(r.at(t1), r.angle.size() - 1);
+  return (r.angle[i1] - r.angle[i0]) / (r.time[i1] - r.time[i0]);
+}
+
 struct Steadiness {
   std::size_t turns = 0;
   double mean = 0, min = 0, max = 0;  ///< of the per-revolution means, rad/s
@@ -142,6 +167,81 @@ inline Steadiness steadiness(const std::vector<double>& per_turn) {
   for (double w : per_turn) s.mean += w;
   s.mean /= double(per_turn.size());
   return s;
+}
+
+// --- the DC-motor model ---------------------------------------------------------------
+//
+// A DC motor with back-EMF constant k and loop resistance R turns where the
+// battery's emf V is the back-EMF plus the drop, V = k w + R I, and gives the
+// torque k I, which the load takes: the bearing's dry friction (a brake: the
+// load), and what the motor loses in itself (the slider's friction on the
+// spokes, the oil's drag), T0. So w = V / k - R (T + T0) / k^2: the no-load
+// speed V / k, the stall torque k V / R, a straight line between.
+
+/// One steady point: the battery's emf and the load (the bearing's dry
+/// friction), and what the rotor and the coils did from t0 to t1.
+struct DcPoint {
+  double emf = 0, load = 0;       ///< V; N m
+  double speed = 0, current = 0;  ///< mean rad/s; mean coil current, A
+};
+
+inline DcPoint dc_point(double emf, double load, double t0 = 2.0, double t1 = 6.0,
+                        std::optional<double> dt = {}) {
+  const RunResult r = run_motor(kScene, {.dt = dt, .seconds = t1, .emf = emf, .friction = load});
+  return {emf, load, mean_speed(r, t0, t1), mean_between(r, r.coil_current, t0, t1)};
+}
+
+/// The DC model fitted to the rotor's speeds alone (least squares of
+/// w = a V - b T - c over the points): k = 1 / a, R = b k^2, T0 = c / b.
+struct DcFit {
+  double k = 0, R = 0, T0 = 0;  ///< V s; ohm; N m
+  double speed(double emf, double load) const { return emf / k - R * (load + T0) / (k * k); }
+  double no_load_speed(double emf) const { return emf / k; }
+  double stall_torque(double emf) const { return k * emf / R; }
+};
+
+inline DcFit fit_dc_model(const std::vector<DcPoint>& points) {
+  // Normal equations of the 3 x 3 least-squares problem, by Cramer's rule.
+  double A[3][3] = {}, y[3] = {};
+  for (const DcPoint& p : points) {
+    const double row[3] = {p.emf, -p.load, -1};
+    for (int i = 0; i < 3; ++i) {
+      y[i] += row[i] * p.speed;
+      for (int j = 0; j < 3; ++j) A[i][j] += row[i] * row[j];
+    }
+  }
+  auto det = [](const double m[3][3]) {
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  };
+  const double d = det(A);
+  double x[3];
+  for (int c = 0; c < 3; ++c) {
+    double m[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[i][j] = j == c ? y[i] : A[i][j];
+    x[c] = det(m) / d;
+  }
+  DcFit f;
+  f.k = 1 / x[0];
+  f.R = x[1] * f.k * f.k;
+  f.T0 = x[2] / x[1];
+  return f;
+}
+
+/// The loop's resistance as built: the coil, the battery's inside and the
+/// three wires of one circuit (lead, a spoke's wire, a return), ohm.
+inline double loop_resistance() {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions load;
+  load.mod_paths.push_back(source("mods"));
+  lua::LoadedScene loaded = lua::load_scene(source(kScene), registry, load);
+  World& w = *loaded.world;
+  return get_number(w, "upper_coil", "resistance") +
+         get_number(w, "battery", "internal_resistance") + get_number(w, "lead", "resistance") +
+         get_number(w, "spoke_N1_wire", "resistance") + get_number(w, "upper_return", "resistance");
 }
 
 }  // namespace alloy::motor::test
