@@ -16,17 +16,11 @@ namespace alloy::motor::test {
 namespace {
 
 /// No load but the bearing's own dry friction (2 mN m) at three batteries;
-/// the bearing braked to 4 and 7 mN m (near 10 mN m it stalls
-/// where the commutated torque is weakest) at the scene's 6 V. Each point 6 s
-/// at the scene's step, measured from 2 s.
+/// the bearing braked to 4 and 7 mN m (near 10 mN m it stalls where the
+/// commutated torque is weakest) at the scene's 6 V. Each point 6 s at the
+/// scene's step, measured from 2 s (motor_support.hpp).
 const std::vector<DcPoint>& points() {
-  static const std::vector<DcPoint> p = [] {
-    std::vector<DcPoint> out;
-    for (double v : {4.5, 6.0, 7.5}) out.push_back(dc_point(v, 0.002));
-    for (double t : {0.004, 0.007}) out.push_back(dc_point(6.0, t));
-    return out;
-  }();
-  return p;
+  return scene_dc_points();
 }
 
 TEST(MotorDcModel, SpeedFollowsTheModelFittedFromTheMechanicsAlone) {

@@ -230,6 +230,19 @@ inline DcFit fit_dc_model(const std::vector<DcPoint>& points) {
   return f;
 }
 
+/// The DC model of the scene's motor, fitted as motor_dc_model_test does:
+/// no load but the bearing's 2 mN m at 4.5, 6 and 7.5 V, and 4 and 7 mN m
+/// at 6 V (computed once per process).
+inline const std::vector<DcPoint>& scene_dc_points() {
+  static const std::vector<DcPoint> p = [] {
+    std::vector<DcPoint> out;
+    for (double v : {4.5, 6.0, 7.5}) out.push_back(dc_point(v, 0.002));
+    for (double t : {0.004, 0.007}) out.push_back(dc_point(6.0, t));
+    return out;
+  }();
+  return p;
+}
+
 /// The loop's resistance as built: the coil, the battery's inside and the
 /// three wires of one circuit (lead, a spoke's wire, a return), ohm.
 inline double loop_resistance() {

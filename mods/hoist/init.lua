@@ -1,0 +1,36 @@
+-- A string, for scenes: one end wound on a drum (a part that turns: an
+-- axle), the other tied to a part (a load). What it does is in runtime.lua:
+-- the drum turning anticlockwise takes string in, the string pulls on both
+-- ends with its elastic tension, and it goes slack rather than push.
+--
+--   local hoist = require "hoist"
+--   hoist.string { name = "line", drum = "axle", radius = 0.005, load = "weight", length = 0.3 }
+local kit = require "kit"
+
+local string_part = kit.define("string", {
+  doc = "a string wound on a drum (turning anticlockwise winds it in) and tied to a load",
+  args = {
+    { "drum", "object", required = true, doc = "the part it is wound on; it winds about that part's centre" },
+    { "radius", "positive", required = true, doc = "of the drum where the string lies, m" },
+    { "load", "object", required = true, doc = "the part tied to its free end (at its centre)" },
+    { "length", "positive", required = true, doc = "free length, unstretched, from the drum to the load at the start, m" },
+    -- Braided polyester line of 1 mm (a kite line): E about 2 GPa on a
+    -- section of about 0.4 mm^2 (the braid's voids): EA about 800 N.
+    { "stiffness", "positive", default = 800, doc = "EA: tension per unit strain, N" },
+    -- Its internal friction: tension from the strain rate (a loss factor of
+    -- a few per cent at tens of hertz, and enough to settle a bounce).
+    { "damping", "nonnegative", default = 2, doc = "tension per unit strain rate, N s" },
+  },
+  build = function(a)
+    return {
+      string_drum = a.drum,
+      string_load = a.load,
+      string_radius = a.radius,
+      string_free_length = a.length,
+      string_stiffness = a.stiffness,
+      string_damping = a.damping,
+    }
+  end,
+})
+
+return { string = string_part }
