@@ -106,7 +106,8 @@ std::string differing_columns(const std::string& expected, const std::string& ac
   return out.empty() ? " none (objects, schedule or stage state differ)" : out;
 }
 
-const std::vector<std::string> kScenes = {"doorbell", "motor", "space", "magic", "rigid_demo"};
+const std::vector<std::string> kScenes = {"doorbell", "motor", "space", "magic", "rigid_demo",
+                                          "hoist"};
 
 class GoldenHash : public ::testing::TestWithParam<std::string> {};
 
