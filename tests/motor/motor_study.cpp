@@ -4,7 +4,8 @@
 // is the mean of the per-revolution mean angular velocities between frames
 // 200 and 2000 (0.833 s to 8.333 s), the bars their least and greatest.
 //
-//   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg
+//   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg, and
+//                            motor_dc_model.csv (the DC-motor model's fit)
 //
 // The SVG is written here, by hand: four panels of points with bars, no
 // plotting package needed.
@@ -79,7 +80,8 @@ std::vector<double> ticks(double lo, double hi, int want = 6) {
 }
 
 void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& points, double x0,
-           double y0, double w, double h, double y_max) {
+           double y0, double w, double h, double y_max,
+           const std::function<double(double)>& model = {}) {
   const double left = x0 + 58, right = x0 + w - 14, top = y0 + 30, bottom = y0 + h - 46;
   double lo = 1e300, hi = -1e300;
   for (double v : sweep.values) lo = std::min(lo, v), hi = std::max(hi, v);
@@ -105,7 +107,7 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
     xt = ticks(lo, hi);
   }
   for (double t : xt) {
-    const std::string label = sweep.log_x ? "1/" + num(std::round(1 / t)) : num(t);
+    const std::string label = sweep.name == "dt" ? "1/" + num(std::round(1 / t)) : num(t, 2);
     svg << "<line x1='" << fx(t) << "' x2='" << fx(t) << "' y1='" << bottom << "' y2='"
         << bottom + 4 << "' stroke='#333'/>\n<text x='" << fx(t) << "' y='" << bottom + 17
         << "' text-anchor='middle' font-size='11'>" << label << "</text>\n";
@@ -117,6 +119,18 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
   svg << "<text x='" << x0 + 16 << "' y='" << (top + bottom) / 2
       << "' text-anchor='middle' font-size='12' transform='rotate(-90 " << x0 + 16 << " "
       << (top + bottom) / 2 << ")'>steady speed, rad/s</text>\n";
+  // The DC-motor model fitted to the emf and load sweeps (docs/motor.md).
+  if (model) {
+    std::string d;
+    for (int i = 0; i <= 60; ++i) {
+      const double v = sweep.values.front() + (sweep.values.back() - sweep.values.front()) * i / 60;
+      const double y = model(v);
+      if (y < 0 || y > y_max) continue;
+      d += (d.empty() ? "M" : " L") + num(fx(v), 6) + " " + num(fy(y), 6);
+    }
+    svg << "<path d='" << d << "' fill='none' stroke='#2a2' stroke-width='1.5' "
+        << "stroke-dasharray='6 3'/>\n";
+  }
   // The scene's value.
   svg << "<line x1='" << fx(sweep.scene_value) << "' x2='" << fx(sweep.scene_value) << "' y1='"
       << top << "' y2='" << bottom << "' stroke='#c33' stroke-dasharray='4 3'/>\n";
@@ -194,6 +208,32 @@ int main(int argc, char** argv) {
                 << num(p.s.turns ? 100 * p.s.spread() : NAN, 3) << " %, "
                 << num(p.switches_per_turn(), 3) << " coil switch-ons a turn\n";
     }
+  // The DC-motor model, w = V / k - R (T + T0) / k^2, fitted to the points
+  // of the emf and the load (dry friction) sweeps where it turns cleanly.
+  std::vector<DcPoint> dc;
+  for (const Point& p : points)
+    if (p.s.turns >= 2 && p.s.mean > 0 && p.s.max < 6.5 && p.switches_per_turn() < 8.5) {
+      if (p.sweep == "emf") dc.push_back({p.x, 0.002, p.s.mean, 0});
+      if (p.sweep == "friction") dc.push_back({6.0, p.x, p.s.mean, 0});
+    }
+  const DcFit fit = fit_dc_model(dc);
+  std::cout << "DC model fitted to " << dc.size() << " points: k " << num(fit.k) << " V s, R "
+            << num(fit.R) << " ohm (the loop as built: " << num(loop_resistance()) << "), T0 "
+            << num(1e3 * fit.T0) << " mN m; no-load speed at 6 V " << num(fit.no_load_speed(6))
+            << " rad/s, stall torque at 6 V " << num(1e3 * fit.stall_torque(6)) << " mN m\n";
+  double worst = 0;
+  for (const DcPoint& p : dc)
+    worst = std::max(worst, std::abs(p.speed - fit.speed(p.emf, p.load)) / p.speed);
+  std::cout << "  worst point off the model: " << num(100 * worst, 3) << " %\n";
+  std::ofstream dcsv(out / "motor_dc_model.csv");
+  dcsv << "emf_V,load_N_m,speed_rad_s,model_rad_s\n";
+  for (const DcPoint& p : dc)
+    dcsv << num(p.emf, 6) << "," << num(p.load, 6) << "," << num(p.speed, 6) << ","
+         << num(fit.speed(p.emf, p.load), 6) << "\n";
+  const std::function<double(double)> models[4] = {[&](double v) { return fit.speed(v, 0.002); },
+                                                   [&](double t) { return fit.speed(6, t); },
+                                                   {},
+                                                   {}};
   double y_max = 0;
   for (const Point& p : points) y_max = std::max(y_max, p.s.max);
   y_max = std::ceil(y_max / 2) * 2;
@@ -212,9 +252,9 @@ int main(int argc, char** argv) {
       << w
       << "' y='54' text-anchor='middle' font-size='12'>filled: 8 coil switch-ons a turn, one per "
          "spoke; hollow: "
-         "more (the slider bounces at hand-overs)</text>\n";
+         "more (the slider bounces at hand-overs); green dashes: the DC-motor model</text>\n";
   for (std::size_t i = 0; i < sweeps.size(); ++i)
-    panel(svg, sweeps[i], points, (i % 2) * w, 66 + (i / 2) * h, w, h, y_max);
+    panel(svg, sweeps[i], points, (i % 2) * w, 66 + (i / 2) * h, w, h, y_max, models[i]);
   svg << "</svg>\n";
   std::cout << "wrote " << (out / "motor_tolerance.csv").string() << " and "
             << (out / "motor_tolerance.svg").string() << "\n";
