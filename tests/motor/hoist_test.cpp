@@ -119,5 +119,44 @@ TEST(Hoist, TooHeavyALoadIsNotLiftedAndNotDropped) {
   EXPECT_GT(heavy.lowest, -0.005) << "the bias magnet and the powered coil hold it";
 }
 
+/// A string with a bad argument, or tied to nothing: the scene does not load,
+/// and the error names the file, the line and the string.
+TEST(HoistString, BadInputNamesTheFileTheLineAndTheString) {
+  namespace fs = std::filesystem;
+  const std::pair<const char*, const char*> cases[] = {
+      {"radius = -0.005", "'radius' must be a positive number"},
+      {"radius = 0.005, drum = \"nope\"", "refers to 'nope'"},
+      {"radius = 0.005, length = 0", "'length' must be a positive number"},
+      {"radius = 0.005, stiffness = -800", "'stiffness' must be a positive number"},
+      {"radius = 0.005, damping = -1", "'damping'"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const fs::path f =
+        fs::temp_directory_path() / ("alloy_hoist_bad_" + std::to_string(::getpid()) + ".lua");
+    std::ofstream(f) << "world { dt = 1 / 240, seconds = 1 }\nlocal kit = require \"kit\"\n"
+                        "local hoist = require \"hoist\"\n"
+                        "kit.disk { name = \"axle\", at = { 0, 0 }, radius = 0.02 }\n"
+                        "kit.cylinder { name = \"load\", at = { 0.005, -0.3 }, radius = 0.02 }\n"
+                        "hoist.string { name = \"line\", drum = \"axle\", load = \"load\", "
+                        "length = 0.3, "
+                     << args << " }\n";
+    PluginRegistry registry;
+    register_native_plugins(registry);
+    lua::LoadOptions load;
+    load.mod_paths.push_back(source("mods"));
+    std::string message;
+    try {
+      lua::load_scene(f.string(), registry, load);
+    } catch (const std::exception& e) {
+      message = e.what();
+    }
+    fs::remove(f);
+    EXPECT_NE(message.find(f.filename().string() + ":6:"), std::string::npos)
+        << args << ": " << message;
+    EXPECT_NE(message.find("'line'"), std::string::npos) << args << ": " << message;
+    EXPECT_NE(message.find(expected), std::string::npos) << args << ": " << message;
+  }
+}
+
 }  // namespace
 }  // namespace alloy::motor::test
