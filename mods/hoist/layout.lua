@@ -16,7 +16,7 @@ local defaults = {
   -- The load: a steel cylinder 40 mm across, its thickness set by its mass,
   -- hanging drop metres below the axle.
   load_mass = 0.1, load_radius = 0.02, drop = 0.45,
-  string_stiffness = 800, string_damping = 2,
+  string_stiffness = 300, string_damping = 0.5,
 }
 
 return function(options)

@@ -4,8 +4,9 @@
 // is the mean of the per-revolution mean angular velocities between frames
 // 200 and 2000 (0.833 s to 8.333 s), the bars their least and greatest.
 //
-//   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg, and
-//                            motor_dc_model.csv (the DC-motor model's fit)
+//   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg,
+//                            motor_dc_model.csv (the DC-motor model's fit), and
+//                            hoist.csv and .svg (mods/hoist's lifting speed)
 //
 // The SVG is written here, by hand: four panels of points with bars, no
 // plotting package needed.
@@ -81,7 +82,8 @@ std::vector<double> ticks(double lo, double hi, int want = 6) {
 
 void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& points, double x0,
            double y0, double w, double h, double y_max,
-           const std::function<double(double)>& model = {}) {
+           const std::function<double(double)>& model = {},
+           const std::string& y_label = "steady speed, rad/s") {
   const double left = x0 + 58, right = x0 + w - 14, top = y0 + 30, bottom = y0 + h - 46;
   double lo = 1e300, hi = -1e300;
   for (double v : sweep.values) lo = std::min(lo, v), hi = std::max(hi, v);
@@ -118,7 +120,7 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
       << "' text-anchor='middle' font-size='12'>" << sweep.unit << "</text>\n";
   svg << "<text x='" << x0 + 16 << "' y='" << (top + bottom) / 2
       << "' text-anchor='middle' font-size='12' transform='rotate(-90 " << x0 + 16 << " "
-      << (top + bottom) / 2 << ")'>steady speed, rad/s</text>\n";
+      << (top + bottom) / 2 << ")'>" << y_label << "</text>\n";
   // The DC-motor model fitted to the emf and load sweeps (docs/motor.md).
   if (model) {
     std::string d;
@@ -258,5 +260,54 @@ int main(int argc, char** argv) {
   svg << "</svg>\n";
   std::cout << "wrote " << (out / "motor_tolerance.csv").string() << " and "
             << (out / "motor_tolerance.svg").string() << "\n";
+
+  // The hoist (mods/hoist): the lifting speed against the load at 6 V and
+  // against the battery with 100 g, each 8 s, and the DC model's line.
+  const Sweep hoist_sweeps[2] = {{"mass",
+                                  "The hoist: lifting speed against the load",
+                                  "load, g (the scene: 100 g)",
+                                  100,
+                                  {20, 50, 100, 150, 190, 200, 250},
+                                  {}},
+                                 {"hoist_emf",
+                                  "The hoist: lifting speed against the battery",
+                                  "emf, V (100 g)",
+                                  6.0,
+                                  {4.5, 5, 6, 7, 7.5, 8, 9},
+                                  {}}};
+  std::vector<Point> lifts;
+  std::ofstream hcsv(out / "hoist.csv");
+  hcsv << "load_kg,emf_V,lift_mm_s,axle_times_r_mm_s,model_mm_s\n";
+  for (const Sweep& sw : hoist_sweeps)
+    for (double v : sw.values) {
+      const double mass = sw.name == "mass" ? v / 1e3 : 0.1, emf = sw.name == "mass" ? 6.0 : v;
+      const Lift l = lift(mass, emf);
+      const bool lifted = l.rose > 0.01;
+      Point p{sw.name, v, {}, 8, 1};
+      p.s.turns = lifted ? 5 : 0;
+      p.s.mean = p.s.min = p.s.max = lifted ? 1e3 * l.speed : 0;
+      lifts.push_back(p);
+      hcsv << mass << "," << emf << "," << num(1e3 * l.speed, 5) << "," << num(1e3 * l.wound, 5)
+           << "," << num(1e3 * hoist_model_speed(mass, emf), 5) << "\n";
+      std::cout << "hoist " << 1e3 * mass << " g, " << emf
+                << " V: " << (lifted ? num(1e3 * l.speed, 4) + " mm/s" : std::string("not lifted"))
+                << ", the model " << num(1e3 * hoist_model_speed(mass, emf), 4) << " mm/s\n";
+    }
+  std::ofstream hsvg(out / "hoist.svg");
+  hsvg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << 2 * w << "' height='" << h + 50
+       << "' font-family='sans-serif'>\n<rect width='100%' height='100%' fill='white'/>\n"
+       << "<text x='" << w
+       << "' y='20' text-anchor='middle' font-size='12'>dot: the load's mean upward speed, "
+          "2 s to 8 s; x: not lifted; green dashes: the DC-motor model of the motor, "
+          "fitted without the string</text>\n";
+  const std::function<double(double)> hoist_models[2] = {
+      [](double g) { return 1e3 * hoist_model_speed(g / 1e3, 6); },
+      [](double v) { return 1e3 * hoist_model_speed(0.1, v); }};
+  for (int i = 0; i < 2; ++i)
+    panel(hsvg, hoist_sweeps[i], lifts, i * w, 30, w, h, 40, hoist_models[i],
+          "lifting speed, mm/s");
+  hsvg << "</svg>\n";
+  std::cout << "wrote " << (out / "hoist.csv").string() << " and " << (out / "hoist.svg").string()
+            << "\n";
   return 0;
 }

@@ -7,10 +7,14 @@
 // paper counts frames, the world counts steps, and they are the same thing.
 #pragma once
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -255,6 +259,76 @@ inline double loop_resistance() {
   return get_number(w, "upper_coil", "resistance") +
          get_number(w, "battery", "internal_resistance") + get_number(w, "lead", "resistance") +
          get_number(w, "spoke_N1_wire", "resistance") + get_number(w, "upper_return", "resistance");
+}
+
+// --- the hoist (mods/hoist) ------------------------------------------------------------
+
+constexpr double kDrumRadius = 0.005;  // mods/hoist/layout.lua: the 10 mm axle
+constexpr double kBearingFriction = 0.002, kG = 9.81;
+
+struct Lift {
+  double speed = 0;   ///< the load's mean upward speed, m/s
+  double wound = 0;   ///< the axle's mean angular velocity times the drum's radius, m/s
+  double rose = 0;    ///< how far the load rose from 0.1 s to the end, m
+  double lowest = 0;  ///< its lowest point below where it started, m (<= 0)
+};
+
+/// The hoist with a load of `mass` kg and a battery of `emf` V, run for 8 s;
+/// speeds from 2 s to 8 s.
+inline Lift run_lift(double mass, double emf) {
+  namespace fs = std::filesystem;
+  static int n = 0;
+  const fs::path f = fs::temp_directory_path() / ("alloy_hoist_" + std::to_string(::getpid()) +
+                                                  "_" + std::to_string(n++) + ".lua");
+  std::ofstream(f) << "world { dt = 1 / 240, seconds = 8, settings = { [\"gravity.uniform\"] = "
+                      "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" } } }\n"
+                      "local h = require \"hoist.layout\" { load_mass = "
+                   << mass << ", emf = " << emf
+                   << " }\nat(h.slider_release, \"slider\", { pinned = false })\n";
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions load;
+  load.mod_paths.push_back(source("mods"));
+  lua::LoadedScene loaded = lua::load_scene(f.string(), registry, load);
+  fs::remove(f);
+  World& w = *loaded.world;
+  const ObjectId body = w.find("load"), axle = w.find("axle");
+  std::vector<double> t, y, angle;
+  auto sample = [&] {
+    const double a = angle_z(std::get<Quat>(w.get(axle, "orientation")));
+    angle.push_back(
+        angle.empty() ? a : angle.back() + std::remainder(a - angle.back(), 2 * std::numbers::pi));
+    t.push_back(w.time());
+    y.push_back(std::get<Vec3>(w.get(body, "position")).y);
+  };
+  sample();
+  const auto steps = std::llround(8.0 / w.dt());
+  for (long long i = 0; i < steps; ++i) w.step(), sample();
+  auto at = [&](double when) {
+    return std::size_t(std::lower_bound(t.begin(), t.end(), when - 1e-9) - t.begin());
+  };
+  const std::size_t a = at(2.0), b = t.size() - 1;
+  Lift l;
+  l.speed = (y[b] - y[a]) / (t[b] - t[a]);
+  l.wound = kDrumRadius * (angle[b] - angle[a]) / (t[b] - t[a]);
+  l.rose = y[b] - y[at(0.1)];
+  l.lowest = *std::min_element(y.begin(), y.end()) - y[0];
+  return l;
+}
+
+/// run_lift, each load and battery once per process.
+inline Lift lift(double mass, double emf) {
+  static std::map<std::pair<double, double>, Lift> done;
+  const auto key = std::make_pair(mass, emf);
+  if (auto i = done.find(key); i != done.end()) return i->second;
+  return done[key] = run_lift(mass, emf);
+}
+
+/// The hoist's lifting speed by the DC model of the scene's motor, with the
+/// load's torque m g r added to the bearing's friction, m/s.
+inline double hoist_model_speed(double mass, double emf) {
+  const DcFit f = fit_dc_model(scene_dc_points());
+  return kDrumRadius * f.speed(emf, mass * kG * kDrumRadius + kBearingFriction);
 }
 
 }  // namespace alloy::motor::test
