@@ -30,6 +30,10 @@ local defaults = {
   -- the coils' EMF of about a volt at a brisk turn (two coils in series,
   -- 6.5 ohm).
   lamp_resistance = 5.5, lamp_efficacy = 10,
+  -- The falling weight (weight = true): a 40 g steel ball on a string wound
+  -- on the hub, hanging from its left side, weight_drop below the axle. The
+  -- string: 20 N/m (an elastic cord: 2 cm of stretch under the weight), damped 0.3 N s/m.
+  weight = false, weight_mass = 0.04, weight_drop = 0.15, string_stiffness = 20, string_damping = 0.3,
   -- The crank: a wooden arm across the hub's face, glued to it (inside the
   -- hub's outline, so that it touches no spoke).
   crank_length = 0.04,
@@ -75,6 +79,16 @@ return function(options)
   kit.bar { name = "crank", material = "wood", at = C, length = o.crank_length, width = 0.01,
             depth = 0.005, angle = rad(22.5) }
   kit.glue { name = "crank_glue", a = "axle", b = "crank" }
+
+  if o.weight then
+    local steel = kit.material("steel").density
+    local radius = (3 * o.weight_mass / (4 * math.pi * steel)) ^ (1 / 3)
+    -- It hangs in front of the rotor (z = 3 cm), clear of the spokes' 1 cm depth.
+    kit.disk { name = "weight", material = "steel", at = { C[1] - o.hub_radius, C[2] - o.weight_drop },
+               radius = radius,
+               props = { position = { C[1] - o.hub_radius, C[2] - o.weight_drop, 0.03 }, string_drum = "axle", string_radius = o.hub_radius,
+                         string_stiffness = o.string_stiffness, string_damping = o.string_damping } }
+  end
 
   -- The two coils, radial, inner faces towards the rotor.
   local r_coil = tip + o.coil_gap + o.coil_length / 2
