@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -219,6 +220,8 @@ TEST_F(LightTest, PhotocellResistanceFollowsTheLampsDistance) {
     const double i = 5.0 / (r + 2 * kWire + electricity::kMinResistance);
     EXPECT_NEAR(num(w, pc, "current"), i, 1e-8 * i) << d;
     rs.push_back(r);
+    std::printf("lamp %.3f lm; photocell at %.1f m: %.3f lux, %.1f Ohm, %.4f mA\n", flux, d, e, r,
+                1e3 * num(w, pc, "current"));
   }
   EXPECT_NEAR(rs[1] / rs[0], std::pow(4.0, kGamma), 1e-9);
   EXPECT_NEAR(rs[2] / rs[1], std::pow(4.0, kGamma), 1e-9);
@@ -291,6 +294,9 @@ TEST_F(LightTest, LampAndPhotocellLoopSettles) {
   EXPECT_NEAR(last, fixed, 1e-6 * fixed);
   EXPECT_LT(change, 1e-9 * fixed);  // settled, not cycling
   const double v = lamp_voltage(fixed);
+  std::printf(
+      "loop settles at R = %.2f Ohm (closed form %.2f), lamp %.3f V (%.3f V without the cell)\n",
+      last, fixed, num(w, l, "voltage"), lamp_voltage(1e12));
   EXPECT_NEAR(num(w, l, "voltage"), v, 1e-5 * v);
   // The cell matters: without it the lamp would have 6.5 V.
   EXPECT_LT(v, 0.95 * lamp_voltage(1e12));
