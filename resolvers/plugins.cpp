@@ -3,6 +3,7 @@
 #include "resolvers/electricity/electricity_from_collisions.hpp"
 #include "resolvers/gravity/nbody_gravity.hpp"
 #include "resolvers/gravity/uniform_gravity.hpp"
+#include "resolvers/light/light_interactions.hpp"
 #include "resolvers/magnetism/electricity_from_magnetism.hpp"
 #include "resolvers/magnetism/magnetism_plugins.hpp"
 #include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
@@ -171,6 +172,7 @@ void register_native_plugins(PluginRegistry& registry) {
   magnetism::register_rigid_body_from_magnetism(registry);
   magnetism::register_electricity_from_magnetism(registry);
   sound::register_sound_plugins(registry);
+  light::register_light_plugins(registry);
 }
 
 }  // namespace alloy

@@ -18,6 +18,8 @@ namespace alloy {
 ///                               (resolvers/magnetism/; need magnet, or current)
 ///   sound, sound_from_collisions
 ///                               (resolvers/sound/; need acoustic)
+///   light, illuminance, light_from_electricity, electricity_from_light
+///                               (resolvers/light/; need luminous_efficacy or light_receiver)
 /// and the property types they define.
 void register_native_plugins(PluginRegistry& registry);
 

@@ -290,6 +290,23 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
           text_centred(dl, iv(cam.to_screen(p.to_world({plus_right ? -hx * 0.6 : hx * 0.6, 0}))),
                        IM_COL32_WHITE, "-", letter);
         }
+      } else if (has(world, id, "luminous_efficacy")) {
+        // A lamp: a glass bulb in its holder, glowing with its luminous flux
+        // on a log scale (a halo up to 2.5 times the bulb; full at 30 lm, a 3 W
+        // bulb; a generator's 0.1 lm still shows).
+        const double hy = p.shape == Shape2D::Box ? p.half.y : p.radius;
+        const ImVec2 c = iv(cam.to_screen(p.to_world({0, 0})));
+        const float r = float(std::min(hx, hy) * px * 0.8);
+        const double flux = world.value<double>(id, "luminous_flux").value_or(0);
+        const float glow = float(
+            std::clamp(std::log10(1 + 10 * std::max(flux, 0.0)) / std::log10(301.0), 0.0, 1.0));
+        if (glow > 0.01f)
+          dl->AddCircleFilled(c, r * (1 + 1.5f * glow), IM_COL32(255, 220, 120, int(110 * glow)));
+        dl->AddCircleFilled(c, r,
+                            glow > 0.01f
+                                ? IM_COL32(255, int(200 + 55 * glow), int(90 + 140 * glow), 255)
+                                : IM_COL32(200, 205, 210, 255));
+        dl->AddCircle(c, r, scale_rgb(base, 0.6f), 0, 1.2f);
       } else if (has(world, id, "capacitance") && p.shape == Shape2D::Box) {
         // A capacitor: two dark plates across its middle, the charged one
         // (terminal 0's plate positive: -x) tinted.

@@ -318,9 +318,12 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   for (Part& p : parts_)
     if (p.kind == PartKind::Resistor ||
         (p.kind == PartKind::Switch && switch_closed[p.slot] != 0)) {
-      const double r = p.kind == PartKind::Resistor
-                           ? resistance[p.slot]
-                           : resistance.value_or(p.slot, config_.contact_resistance);
+      double r = p.kind == PartKind::Resistor
+                     ? resistance[p.slot]
+                     : resistance.value_or(p.slot, config_.contact_resistance);
+      if (p.kind == PartKind::Resistor)
+        if (auto it = resistance_override_.find(p.slot); it != resistance_override_.end())
+          r = it->second;
       p.element = std::int32_t(net.conductances.size());
       net.conductances.push_back({p.node[0], p.node[1], 1.0 / positive_resistance(r)});
     }
@@ -446,6 +449,7 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
 
 void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   perform_commands(access);
+  take_resistance_commands(access);
   const double h = dt / config_.substeps;
   if (dirty_ || h != h_ || inputs_changed(access)) build_network(access, h);
 
@@ -551,6 +555,26 @@ void ElectricityResolver::take_induced_emfs(const WorldView& view) {
     if (const std::int32_t i = coil_of_slot[id.index]; i >= 0) induced_emf_[std::size_t(i)] = emf;
   }
   induced_queue_.clear();
+}
+
+void ElectricityResolver::set_resistance(ObjectId part, double ohms) {
+  resistance_queue_.emplace_back(part, ohms);
+}
+
+double ElectricityResolver::set_resistance_of(ObjectId part) const {
+  auto it = resistance_override_.find(part.index);
+  return it == resistance_override_.end() ? -1.0 : it->second;
+}
+
+void ElectricityResolver::take_resistance_commands(const WorldView& view) {
+  if (resistance_queue_.empty() && resistance_override_.empty()) return;
+  const PropertyStore& store = view.store();
+  std::map<std::uint32_t, double> next;
+  for (const auto& [id, ohms] : resistance_queue_)
+    if (store.alive(id) && std::isfinite(ohms) && ohms >= 0) next[id.index] = ohms;
+  resistance_queue_.clear();
+  // Only a changed value changes the matrix; the same value again costs nothing.
+  if (next != resistance_override_) resistance_override_ = std::move(next), dirty_ = true;
 }
 
 void ElectricityResolver::write_current_rates(ResolverAccess& access) {

@@ -169,6 +169,17 @@ class ElectricityResolver final : public Resolver {
   void set_induced_emf(ObjectId coil, double emf);
   /// The induced EMF of coil `coil` in the last advance, V (0 if none).
   double induced_emf(ObjectId coil) const;
+  /// A resistor whose resistance something else decides (a photocell, from
+  /// electricity_from_light): over the next advance only, resistor `part`
+  /// has `ohms` instead of its `resistance` property. The last command before
+  /// an advance wins; an advance with no command uses the property. A command
+  /// for an object that is not a resistor, or with a negative or non-finite
+  /// value, does nothing. A changed value is a new network (refactorised,
+  /// with a guard step, as an edited `resistance` is).
+  void set_resistance(ObjectId part, double ohms);
+  /// The resistance set_resistance sent for `part` for the last advance,
+  /// Ohm, or a negative number if none was (then a resistor used its property).
+  double set_resistance_of(ObjectId part) const;
 
   // --- introspection (tests, tools) ---------------------------------------------
   /// Whether a and b touch electrically, as of the last advance.
@@ -236,6 +247,9 @@ class ElectricityResolver final : public Resolver {
   void perform_commands(const WorldView& view);
   /// Moves the queued induced EMFs into induced_emf_ (per coil of this network).
   void take_induced_emfs(const WorldView& view);
+  /// Moves the queued set_resistance commands into resistance_override_;
+  /// marks the network dirty if a value changed.
+  void take_resistance_commands(const WorldView& view);
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
   void write_outputs(ResolverAccess& access);
@@ -273,6 +287,10 @@ class ElectricityResolver final : public Resolver {
   // companion model's own source).
   std::vector<std::pair<ObjectId, double>> induced_queue_;
   std::vector<double> induced_emf_;  // per coil, V
+  // set_resistance: the commands of the next advance, and the values the
+  // network was built with (slot -> Ohm), compared each advance.
+  std::vector<std::pair<ObjectId, double>> resistance_queue_;
+  std::map<std::uint32_t, double> resistance_override_;
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index

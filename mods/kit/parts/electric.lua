@@ -1,5 +1,5 @@
 -- Electrical parts of the kit: batteries, contacts, wires, resistors,
--- capacitors and switches. The electricity
+-- capacitors, switches, lamps and photocells. The electricity
 -- resolver (docs/electricity.md) reads what they carry: a battery is an emf
 -- with an internal resistance between terminal 0 (-, its -x end) and terminal
 -- 1 (+, its +x end); conductive parts that touch connect; a wire is a
@@ -161,6 +161,56 @@ electric.switch = {
   }),
   build = function(a)
     return two_terminal(a, { switch_closed = a.closed, resistance = a.resistance }, a.mass)
+  end,
+}
+
+electric.lamp = {
+  doc = "a filament lamp lying along its x axis: a resistor (terminal 0 at -x, 1 at +x) whose "
+    .. "electrical power becomes light (the light resolver, docs/light.md)",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    -- A 6 V, 0.5 A torch bulb (3 W): 12 ohm with its filament hot. The
+    -- resistance is taken as constant (the cold filament's tenth of it, and
+    -- the inrush it makes, are not modelled).
+    { "resistance", "positive", default = 12, doc = "ohm, the hot filament" },
+    -- Small tungsten bulbs give 8 to 12 lumens per watt (manufacturers'
+    -- catalogues of miniature lamps); a 3 W one about 30 lm.
+    { "efficacy", "nonnegative", default = 10, doc = "lm per W of electrical power" },
+    -- The bulb in its holder: 30 x 20 x 20 mm, about 10 g.
+    { "size", "extent", default = { 0.03, 0.02 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.02, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.01, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    return two_terminal(a, { resistance = a.resistance, luminous_efficacy = a.efficacy }, a.mass)
+  end,
+}
+
+electric.photocell = {
+  doc = "a photocell (light-dependent resistor) lying along its x axis, its face up (+y): "
+    .. "terminal 0 at -x, 1 at +x; R = dark (E / E0)^-gamma, at least lit_resistance",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    -- A CdS cell like the GL5528 (5 mm): 1 Mohm in the dark, 8-20 kohm at
+    -- 10 lux, gamma about 0.7 (its data sheet); E0 = 0.0139 lux puts 10 kohm
+    -- at 10 lux on this law; in bright light such cells level off near 100 ohm.
+    { "dark_resistance", "positive", default = 1e6, doc = "ohm" },
+    { "dark_illuminance", "positive", default = 0.0139, doc = "lux: E0, up to which it stays dark" },
+    { "gamma", "nonnegative", default = 0.7, doc = "the law's exponent" },
+    { "lit_resistance", "positive", default = 100, doc = "ohm, the least (full light)" },
+    { "size", "extent", default = { 0.012, 0.005 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.005, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.001, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    if a.lit_resistance > a.dark_resistance then
+      error("kit.photocell 'lit_resistance' (" .. a.lit_resistance .. " ohm) must not exceed 'dark_resistance' ("
+        .. a.dark_resistance .. " ohm)", 0)
+    end
+    -- `resistance` is what the circuit sees until the light reaches it: the dark value.
+    return two_terminal(a, { resistance = a.dark_resistance, light_receiver = true,
+                             dark_resistance = a.dark_resistance, dark_illuminance = a.dark_illuminance,
+                             photo_gamma = a.gamma, lit_resistance = a.lit_resistance }, a.mass)
   end,
 }
 

@@ -1,0 +1,87 @@
+-- A hand on a crank, as a stage of the world: a part that carries
+-- `drive_torque` is turned by that torque, every step, for as long as it
+-- carries it (the scene's timeline sets it, changes it, takes it away).
+-- Nothing here knows what the part is connected to: on the generator's
+-- crank it turns a rotor of magnets past two coils, and the lamp lights
+-- because of the induction, not because of anything said here.
+
+mod.property { name = "drive_torque", kind = "vec3", unit = "N m",
+               doc = "a torque applied to this part every step (a hand on a crank), world frame" }
+
+mod.interaction {
+  name = "rigid_body_from_drive",
+  doc = "a part carrying drive_torque is turned by it",
+  reads = { "drive_torque" },
+  needs = { "drive_torque" },
+  target = "rigid_body",
+  apply = function(w)
+    local torque = w:read("drive_torque")
+    for i in torque:each() do w.target.add_torque(i, torque[i]) end
+  end,
+}
+
+-- A weight on a string wound round a drum (the rotor's hub): the string
+-- leaves the drum on its left (-x) side and runs straight to the weight. It
+-- is elastic (Hooke, with damping) and goes slack rather than push. Its free
+-- length grows by r x the angle the drum turns anticlockwise (string paid
+-- out) and shrinks as it turns back (wound up), so a falling weight turns
+-- the drum anticlockwise with a torque r T, and the drum's load holds the
+-- weight back with the same T. The free length at the start is the distance
+-- from the drum's tangent point to the weight (taut, unstretched); the angle
+-- turned is kept in the mod's state (a hot reload keeps it; a restored world
+-- starts the string afresh from where the weight is).
+mod.property { name = "string_drum", kind = "ref", doc = "the part this weight's string is wound on" }
+mod.property { name = "string_radius", unit = "m", min = 0, min_exclusive = true,
+               doc = "radius the string is wound at on its drum" }
+mod.property { name = "string_stiffness", unit = "N/m", min = 0, min_exclusive = true,
+               doc = "the string's stiffness, tension per metre of stretch" }
+mod.property { name = "string_damping", unit = "N s/m", min = 0,
+               doc = "the string's internal damping, tension per m/s of stretching" }
+
+mod.interaction {
+  name = "rigid_body_from_string",
+  doc = "a weight's string pulls it towards its drum and turns the drum (tension from stretch)",
+  reads = { "string_drum", "string_radius", "string_stiffness", "string_damping", "position",
+            "velocity", "orientation", "angular_velocity" },
+  needs = { "string_drum" },
+  target = "rigid_body",
+  apply = function(w)
+    local drum, radius = w:read("string_drum"), w:read("string_radius")
+    local stiffness, damping = w:read("string_stiffness"), w:read("string_damping")
+    local pos, vel = w:read("position"), w:read("velocity")
+    local ori, spin = w:read("orientation"), w:read("angular_velocity")
+    w.state.strings = w.state.strings or {}
+    for i in drum:each() do
+      local d = drum[i]
+      if d and pos:has(d) and pos:has(i) then
+        local r = radius[i]
+        -- At the weight's depth: the weight may hang in front of the drum's plane.
+        local tangent = vec3(pos[d].x - r, pos[d].y, pos[i].z)
+        local angle = ori[d]:angle_z()
+        local s = w.state.strings[i]
+        if not s or s.drum ~= d then
+          s = { drum = d, length = (pos[i] - tangent):length(), last = angle, turned = 0 }
+          w.state.strings[i] = s
+        end
+        local delta = angle - s.last
+        -- angle_z spans (-2 pi, 2 pi] and jumps when the quaternion changes
+        -- sign: a step turns the drum far less than half a turn.
+        while delta > math.pi do delta = delta - 2 * math.pi end
+        while delta < -math.pi do delta = delta + 2 * math.pi end
+        s.turned, s.last = s.turned + delta, angle
+        local span = pos[i] - tangent
+        local dist = span:length()
+        local stretch = dist - (s.length + r * s.turned)
+        if stretch > 0 and dist > 0 then
+          local u = span / dist
+          local rate = vel[i]:dot(u) - r * spin[d].z
+          local tension = stiffness[i] * stretch + damping[i] * rate
+          if tension > 0 then
+            w.target.add_force(i, u * -tension)
+            w.target.add_force_at(d, u * tension, tangent)
+          end
+        end
+      end
+    end
+  end,
+}

@@ -1,0 +1,17 @@
+-- The generator driven by a falling weight: a 40 g steel ball on a string
+-- wound on the rotor's hub. Let go at 0.2 s, it falls, turns the rotor, and
+-- the lamp lights; the lamp's load is what keeps the fall slow.
+-- `alloy run mods/generator/weight.lua`.
+world {
+  name = "generator_weight",
+  description = "the motor's rotor turned by a falling weight on a string lights a lamp",
+  dt = 1 / 240,
+  seconds = 8,
+  report = { "axle.angular_velocity.z@1", "weight.velocity.y@1", "lamp.radiant_power@1" },
+  settings = {
+    ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
+    rigid_body = { solver = "step" },
+  },
+}
+
+require "generator.layout" { weight = true }

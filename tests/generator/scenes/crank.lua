@@ -1,0 +1,12 @@
+-- The generator (mods/generator/layout.lua) with no timeline: the tests set
+-- the hand's torque on the crank themselves (tests/generator/generator_test.cpp).
+world {
+  name = "generator_crank",
+  dt = 1 / 240,
+  seconds = 6,
+  settings = {
+    ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
+    rigid_body = { solver = "step" },
+  },
+}
+require "generator.layout" ()
