@@ -5,11 +5,11 @@
 // the world back as it was before the last edit and keeps the present for
 // redo. A snapshot is the whole state, so undo while running also takes the
 // clock back to the moment of the edit: the world goes on from there, as if
-// the edit had never been made. Snapshots are deltas against the previous
-// one, so that a long history shares every column an edit did not touch.
+// the edit had never been made.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <string>
 
@@ -24,7 +24,7 @@ class History {
 
   /// Records the world before an edit described by `what` ("move bar",
   /// "hinge"); clears what could be redone.
-  void record(const World& world, std::string what);
+  void record(World& world, std::string what);
   /// Drops the last record (an edit that turned out to change nothing).
   void forget_last();
   /// Puts the world back as it was before the last edit. False (nothing
@@ -42,6 +42,16 @@ class History {
   /// Edits recorded since the last mark_saved() (the file is out of date).
   bool dirty() const { return edits_since_save_ != 0; }
   void mark_saved() { edits_since_save_ = 0; }
+  /// Counts records, undos and redos: the viewer brings the stage set up to
+  /// date (sync) after a frame in which it changed.
+  std::uint64_t changes() const { return changes_; }
+
+  /// Brings the world's stage set up to date with the edits made since its
+  /// last step (the stages a new part needs are instantiated, built and
+  /// primed: what the next step would do first). A snapshot is only
+  /// restorable when taken so: restore rebuilds the stages the properties
+  /// call for and checks them against the snapshot's list.
+  static void sync(World& world);
 
  private:
   struct Entry {
@@ -50,6 +60,7 @@ class History {
   };
   std::deque<Entry> undo_, redo_;
   long edits_since_save_ = 0;
+  std::uint64_t changes_ = 0;
 };
 
 }  // namespace alloy::viewer

@@ -15,7 +15,8 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
       {"press", ScriptEvent::Kind::Press},           {"move", ScriptEvent::Kind::Move},
       {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
       {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
-      {"wheel", ScriptEvent::Kind::Wheel},           {"text", ScriptEvent::Kind::Text}};
+      {"wheel", ScriptEvent::Kind::Wheel},           {"text", ScriptEvent::Kind::Text},
+      {"palette", ScriptEvent::Kind::Palette}};
   std::vector<ScriptEvent> out;
   std::istringstream in(text);
   int n = 0;
@@ -33,7 +34,7 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
     if (!(ls >> kind) || !kinds.count(kind))
       throw InputError(
           ErrorLocation{file, n, ""},
-          "expected an event: press, move, release, rpress, rrelease, key, wheel or text");
+          "expected an event: press, move, release, rpress, rrelease, key, wheel, text or palette");
     e.kind = kinds.at(kind);
     bool ok = true;
     switch (e.kind) {
@@ -52,6 +53,11 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
         break;
       case ScriptEvent::Kind::Text:
         ok = bool(ls >> e.key);
+        break;
+      case ScriptEvent::Kind::Palette:
+        std::getline(ls >> std::ws, e.key);
+        while (!e.key.empty() && (e.key.back() == ' ' || e.key.back() == '\r')) e.key.pop_back();
+        ok = !e.key.empty();
         break;
       case ScriptEvent::Kind::Wheel:
         ok = bool(ls >> e.wheel);

@@ -11,6 +11,8 @@
 //   40       wheel      1                    mouse wheel notches (turns a carried part)
 //   50       key        ctrl+z               with modifiers: ctrl+, shift+ (ctrl+shift+s)
 //   60       text       lever.lua            types text into the field that has the focus
+//   70       palette    steel bar            picks a palette entry by its label (as a click on
+//                                            its button): the next press puts it there
 #pragma once
 
 #include <filesystem>
@@ -22,7 +24,7 @@
 namespace alloy::viewer {
 
 struct ScriptEvent {
-  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel, Text };
+  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel, Text, Palette };
   int frame = 0;
   Kind kind = Kind::Move;
   Vec2 at;                           ///< mouse events, m

@@ -520,6 +520,18 @@ bool Viewer::frame() {
   pump_script();
   SDL_Event e;
   while (SDL_PollEvent(&e)) handle(e);
+  // Edits this frame: the stages the new parts need are made now, so that the
+  // world is whole between frames (and a snapshot of it restores).
+  if (history_.changes() != synced_changes_) {
+    synced_changes_ = history_.changes();
+    if (World* w = world()) {
+      try {
+        History::sync(*w);
+      } catch (const std::exception& ex) {
+        note(std::string("after the edit: ") + ex.what(), true);
+      }
+    }
+  }
 
   double seconds = kHeadlessFrame;
   const std::uint64_t now = SDL_GetPerformanceCounter();
@@ -713,11 +725,28 @@ void Viewer::pump_script() {
         break;
       }
       case ScriptEvent::Kind::Text: {
-        SDL_Event t{};
-        t.type = SDL_TEXTINPUT;
-        t.text.windowID = SDL_GetWindowID(window_);
-        std::snprintf(t.text.text, sizeof t.text.text, "%s", e.key.c_str());
-        SDL_PushEvent(&t);
+        // SDL carries text in pieces of at most 31 bytes.
+        for (std::size_t at = 0; at < e.key.size(); at += 31) {
+          SDL_Event t{};
+          t.type = SDL_TEXTINPUT;
+          t.text.windowID = SDL_GetWindowID(window_);
+          std::snprintf(t.text.text, sizeof t.text.text, "%s", e.key.substr(at, 31).c_str());
+          SDL_PushEvent(&t);
+        }
+        break;
+      }
+      case ScriptEvent::Kind::Palette: {
+        const auto& entries = palette_entries();
+        const auto it = std::find_if(entries.begin(), entries.end(),
+                                     [&](const PaletteEntry& p) { return p.label == e.key; });
+        if (it == entries.end()) {
+          note("script line " + std::to_string(e.line) + ": no palette entry '" + e.key + "'",
+               true);
+          break;
+        }
+        set_tool(Tool::Place);
+        placing_ = int(it - entries.begin());
+        place_drag_ = false;
         break;
       }
     }

@@ -217,6 +217,7 @@ class Viewer {
 
   // Files and history.
   History history_;
+  std::uint64_t synced_changes_ = 0;
   enum class Popup { None, Open, SaveAs, ConfirmNew, ConfirmOpen };
   Popup popup_ = Popup::None;
   bool popup_fresh_ = false;  // opened this frame: focus its text field
