@@ -398,7 +398,10 @@ ObjectId Editor::pick_joint(Vec2 point, double margin) const {
   ObjectId best;
   double best_d = margin;
   for (const ObjectId j : carriers(world_->store(), *joint)) {
-    const auto anchor = world_->value<Vec3>(j, "anchor");
+    auto anchor = world_->value<Vec3>(j, "anchor");
+    if (enum_of(j, "joint") == "fixed")  // drawn on its first part (scene_draw)
+      if (const auto a = world_->value<ObjectId>(j, "body_a"); a && world_->store().alive(*a))
+        anchor = world_->value<Vec3>(*a, "position");
     if (!anchor) continue;
     const double d = length(xy(*anchor) - point);
     if (d <= best_d) best = j, best_d = d;
@@ -424,7 +427,10 @@ EditResult Editor::make_joint(const char* kind, ObjectId a, ObjectId b, Vec2 at,
     world_->set(j, "joint", EnumValue{std::int32_t(it - def.enum_values.begin())});
     world_->set(j, "body_a", a);
     if (b) world_->set(j, "body_b", b);
-    world_->set(j, "anchor", Vec3{at.x, at.y, z});
+    // Glue's anchor is its first part's centre, as the kit makes it (the
+    // rigid body does not move a fixed joint's anchor; it is drawn there).
+    const Vec3 centre = world_->value<Vec3>(a, "position").value_or(Vec3{at.x, at.y, z});
+    world_->set(j, "anchor", what == "hinge" ? Vec3{at.x, at.y, z} : centre);
     if (what == "hinge") world_->set(j, "axis", Vec3{0, 0, 1});
   } catch (...) {
     world_->destroy(j);

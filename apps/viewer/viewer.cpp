@@ -519,6 +519,12 @@ bool Viewer::frame() {
   ImGui::SetCurrentContext(imgui_);
   pump_script();
   SDL_Event e;
+  // Paused and idle (nothing held, no script, no ring fading), a window
+  // waits for input instead of drawing the same picture 60 times a second:
+  // a quarter of a second at most, so that messages still fade.
+  if (!opt_.headless && paused_ && single_steps_ == 0 && !editor_.carrying() && !resizing_ &&
+      script_next_ >= script_.size() && rings_.empty() && SDL_WaitEventTimeout(&e, 250))
+    handle(e);
   while (SDL_PollEvent(&e)) handle(e);
   // Edits this frame: the stages the new parts need are made now, so that the
   // world is whole between frames (and a snapshot of it restores).
@@ -1336,11 +1342,16 @@ void Viewer::draw_tool_feedback(ImDrawList* dl, World& w) {
   }
   if (!selected_ || !w.store().alive(selected_)) return;
   // The selected joint: a ring about its pivot.
-  if (w.value<EnumValue>(selected_, "joint"))
-    if (const auto anchor = w.value<Vec3>(selected_, "anchor")) {
+  if (const auto kind = w.value<EnumValue>(selected_, "joint")) {
+    auto anchor = w.value<Vec3>(selected_, "anchor");
+    if (kind->index != 0)  // glue: drawn on its first part
+      if (const auto a = w.value<ObjectId>(selected_, "body_a"); a && w.store().alive(*a))
+        anchor = w.value<Vec3>(*a, "position");
+    if (anchor) {
       const ScreenPoint c = camera_.to_screen(xy(*anchor));
       dl->AddCircle({c.x, c.y}, 11, colour::kSelected, 24, 2.5f);
     }
+  }
   // The selected part's resize handle: a square at a corner (a disk's rim).
   if (const auto h = resize_handle()) {
     const ScreenPoint c = camera_.to_screen(*h);
