@@ -353,3 +353,42 @@ TEST(ViewerEditor, AScriptBuildsALeverOnAHingeFromAnEmptyBoardAndAlloyRunRunsItT
 
 }  // namespace
 }  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(ViewerEditor, NewAsksFirstWhenEditsAreNotSavedAndEscapeKeepsThem) {
+  auto v = new_board();
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  ASSERT_TRUE(v->history().dirty());
+  key(*v, SDLK_n, KMOD_LCTRL);
+  EXPECT_TRUE(bool(v->world()->find("steel_bar")));  // asked, not done
+  key(*v, SDLK_ESCAPE);
+  key(*v, SDLK_n, KMOD_LCTRL);  // asked again: the popup had closed
+  EXPECT_TRUE(bool(v->world()->find("steel_bar")));
+  key(*v, SDLK_RETURN);
+  EXPECT_FALSE(bool(v->world()->find("steel_bar")));
+  EXPECT_FALSE(v->history().can_undo());
+  EXPECT_TRUE(v->untitled());
+}
+
+TEST(ViewerEditor, SaveOfAnUntitledBoardAsksForANameAndOpenLoadsIt) {
+  auto v = new_board();
+  v->drop_part(entry("rubber ball"), {0, 0.3});
+  const fs::path file = test::temp_dir() / "ball.lua";
+  fs::remove(file);
+  key(*v, SDLK_s, KMOD_LCTRL);  // untitled: Save is Save as
+  EXPECT_FALSE(fs::exists(file));
+  v->add_script(parse_script("1 text " + file.string() + "\n3 key Return\n", "t"));
+  for (int i = 0; i < 5; ++i) v->frame();  // the field takes the focus a frame after it opens
+  ASSERT_TRUE(fs::exists(file)) << all_messages(*v);
+  EXPECT_EQ(v->save_path(), file.string());
+  EXPECT_FALSE(v->untitled());
+  auto w = new_board();
+  EXPECT_FALSE(w->open(test::temp_dir() / "no_such.lua"));
+  EXPECT_TRUE(w->open(file));
+  EXPECT_TRUE(bool(w->world()->find("ball")));
+}
+
+}  // namespace
+}  // namespace alloy::viewer
