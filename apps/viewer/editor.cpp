@@ -361,3 +361,297 @@ EditResult Editor::remove(ObjectId part) {
 }
 
 }  // namespace alloy::viewer
+
+// --- joining parts ------------------------------------------------------------------
+
+namespace alloy::viewer {
+
+std::vector<ObjectId> Editor::pick_all(Vec2 point, double margin) const {
+  std::vector<Part2D> under;
+  if (!world_) return {};
+  for (const Part2D& p : read_parts(*world_))
+    if (contains(p, point, margin)) under.push_back(p);
+  std::stable_sort(under.begin(), under.end(), [](const Part2D& a, const Part2D& b) {
+    if (a.is_static != b.is_static) return !a.is_static;
+    return area(a) < area(b);
+  });
+  std::vector<ObjectId> out;
+  for (const Part2D& p : under) out.push_back(p.id);
+  return out;
+}
+
+ObjectId Editor::joint_between(ObjectId a, ObjectId b) const {
+  const auto joint = world_->properties().find("joint");
+  if (!joint) return {};
+  for (const ObjectId j : carriers(world_->store(), *joint)) {
+    const ObjectId ja = world_->value<ObjectId>(j, "body_a").value_or(ObjectId{});
+    const ObjectId jb = world_->value<ObjectId>(j, "body_b").value_or(ObjectId{});
+    if ((ja == a && jb == b) || (ja == b && jb == a)) return j;
+  }
+  return {};
+}
+
+ObjectId Editor::pick_joint(Vec2 point, double margin) const {
+  if (!world_) return {};
+  const auto joint = world_->properties().find("joint");
+  if (!joint) return {};
+  ObjectId best;
+  double best_d = margin;
+  for (const ObjectId j : carriers(world_->store(), *joint)) {
+    auto anchor = world_->value<Vec3>(j, "anchor");
+    if (enum_of(j, "joint") == "fixed")  // drawn on its first part (scene_draw)
+      if (const auto a = world_->value<ObjectId>(j, "body_a"); a && world_->store().alive(*a))
+        anchor = world_->value<Vec3>(*a, "position");
+    if (!anchor) continue;
+    const double d = length(xy(*anchor) - point);
+    if (d <= best_d) best = j, best_d = d;
+  }
+  return best;
+}
+
+EditResult Editor::make_joint(const char* kind, ObjectId a, ObjectId b, Vec2 at, ObjectId* made) {
+  const auto joint_prop = world_->properties().find("joint");
+  if (!joint_prop) return EditResult::refused("no rigid body plugin is registered: no joints");
+  const PropertyDef& def = world_->properties().def(*joint_prop);
+  const auto it = std::find(def.enum_values.begin(), def.enum_values.end(), kind);
+  if (it == def.enum_values.end())
+    return EditResult::refused(std::string("the rigid body has no '") + kind + "' joint");
+  const std::string what = std::string(kind) == "hinge" ? "hinge" : "glue";
+  if (const ObjectId j = joint_between(a, b))
+    return EditResult::refused(world_->describe(a) + " and " +
+                               (b ? world_->describe(b) : std::string("the board")) +
+                               " are joined already (by " + world_->describe(j) + ")");
+  const double z = world_->value<Vec3>(a, "position").value_or(Vec3{}).z;
+  const ObjectId j = world_->create(unique_name(what));
+  try {
+    world_->set(j, "joint", EnumValue{std::int32_t(it - def.enum_values.begin())});
+    world_->set(j, "body_a", a);
+    if (b) world_->set(j, "body_b", b);
+    // Glue's anchor is its first part's centre, as the kit makes it (the
+    // rigid body does not move a fixed joint's anchor; it is drawn there).
+    const Vec3 centre = world_->value<Vec3>(a, "position").value_or(Vec3{at.x, at.y, z});
+    world_->set(j, "anchor", what == "hinge" ? Vec3{at.x, at.y, z} : centre);
+    if (what == "hinge") world_->set(j, "axis", Vec3{0, 0, 1});
+  } catch (...) {
+    world_->destroy(j);
+    throw;
+  }
+  if (made) *made = j;
+  const std::string other = b ? world_->describe(b) : std::string("the board");
+  return {true, (what == "hinge" ? "hinged " : "glued ") + world_->describe(a) + " to " + other};
+}
+
+EditResult Editor::hinge_at(Vec2 at, double margin, ObjectId* made) {
+  if (!world_) return EditResult::refused("no world");
+  return guarded([&] {
+    const std::vector<ObjectId> under = pick_all(at, margin);
+    if (under.empty())
+      return EditResult::refused(
+          "a hinge goes through a part: click on a part (where two overlap, it joins them)");
+    const auto a = read_part(*world_, under[0]);
+    if (a->is_static)
+      return EditResult::refused(world_->describe(under[0]) +
+                                 " is fixed (static): a hinge through it alone holds nothing");
+    return make_joint("hinge", under[0], under.size() > 1 ? under[1] : ObjectId{}, at, made);
+  });
+}
+
+EditResult Editor::glue_at(Vec2 at, double margin, ObjectId* made) {
+  if (!world_) return EditResult::refused("no world");
+  return guarded([&] {
+    const std::vector<ObjectId> under = pick_all(at, margin);
+    if (under.empty())
+      return EditResult::refused("glue goes where two parts overlap or touch: click there");
+    const auto a = read_part(*world_, under[0]);
+    if (a->is_static)
+      return EditResult::refused(world_->describe(under[0]) + " is fixed (static) already");
+    return make_joint("fixed", under[0], under.size() > 1 ? under[1] : ObjectId{}, at, made);
+  });
+}
+
+EditResult Editor::string_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, double slack,
+                                  std::vector<ObjectId>* made) {
+  if (!world_ || !world_->store().alive(a))
+    return EditResult::refused("a string starts on a part: click a part first");
+  if (b && !world_->store().alive(b)) return EditResult::refused("no part at the string's end");
+  if (a == b) return EditResult::refused("a string from a part to itself holds nothing");
+  const double span = length(at_b - at_a);
+  const double total = span * std::max(1.0, slack);
+  if (span < 2 * kLinkLength)
+    return EditResult::refused("the ends are too close for a string (at least 5 cm apart)");
+  return guarded([&] {
+    // Links in two straight runs that meet below the middle: the string's
+    // length is `total`, so with slack it hangs in a V from the start.
+    int n = std::clamp(int(std::lround(total / kLinkLength)), 2, 14);
+    n += n % 2;
+    const double seg = total / n;
+    const double sag = std::sqrt(std::max(0.0, total * total / 4 - span * span / 4));
+    const Vec2 mid = (at_a + at_b) * 0.5 + Vec2{0, -sag};
+    const double z = world_->value<Vec3>(a, "position").value_or(Vec3{}).z;
+    const double density = 7850;  // steel: links light enough to hang, heavy enough to stay stiff
+    const std::string base = unique_name("string");
+    std::vector<ObjectId> out, links;
+    try {
+      Vec2 prev = at_a;
+      for (int k = 0; k < n; ++k) {
+        const Vec2 from = k < n / 2 ? at_a : mid, to = k < n / 2 ? mid : at_b;
+        const int i = k < n / 2 ? k : k - n / 2;
+        const Vec2 dir = (to - from) * (1.0 / std::max(1e-12, length(to - from)));
+        const Vec2 p0 = from + dir * (seg * i), p1 = from + dir * (seg * (i + 1));
+        const Vec2 c = (p0 + p1) * 0.5;
+        const ObjectId l = world_->create(base + "_" + std::to_string(k + 1));
+        out.push_back(l);
+        links.push_back(l);
+        const PropertyId shape = world_->properties().id("shape");
+        world_->set(l, shape, world_->properties().enum_value(shape, "box").value_or(EnumValue{}));
+        world_->set(l, "size", Vec3{seg, kLinkWidth, kLinkWidth});
+        world_->set(l, "position", Vec3{c.x, c.y, z});
+        world_->set(l, "orientation", Quat::from_angle_z(std::atan2(dir.y, dir.x)));
+        world_->set(l, "density", density);
+        world_->set(l, "mass", density * seg * kLinkWidth * kLinkWidth);
+        world_->set(l, "friction", 0.4);
+        world_->set(l, "restitution", 0.1);
+        world_->set(l, "planar", true);
+        ObjectId h;
+        make_joint("hinge", l, k == 0 ? a : links[std::size_t(k) - 1], prev, &h);
+        out.push_back(h);
+        prev = p1;
+      }
+      ObjectId h;
+      const EditResult last = make_joint("hinge", links.back(), b, at_b, &h);
+      if (!last.ok) throw std::runtime_error(last.message);
+      out.push_back(h);
+    } catch (...) {
+      for (auto it = out.rbegin(); it != out.rend(); ++it)
+        if (world_->store().alive(*it)) world_->destroy(*it);
+      throw;
+    }
+    if (made) *made = out;
+    char cm[32];
+    std::snprintf(cm, sizeof cm, "%.0f cm", total * 100);
+    return EditResult{true, "a " + std::string(cm) + " string of " + std::to_string(n) +
+                                " links from " + world_->describe(a) + " to " +
+                                (b ? world_->describe(b) : std::string("the board"))};
+  });
+}
+
+// --- sizes and properties -----------------------------------------------------------
+
+EditResult Editor::resize(ObjectId part, Vec2 size) {
+  if (!world_ || !world_->store().alive(part)) return EditResult::refused("no such part");
+  return guarded([&] {
+    const auto p = read_part(*world_, part);
+    if (!p) return EditResult::refused(world_->describe(part) + " has no shape to resize");
+    constexpr double kSmallest = 0.002;
+    if (!(size.x >= kSmallest) || !(size.y >= kSmallest))
+      return EditResult::refused("a part is at least 2 mm across");
+    // The mass follows the volume; a part given a mass without a density
+    // keeps its mean density all the same.
+    double ratio = 1;
+    switch (p->shape) {
+      case Shape2D::Box: {
+        const Vec3 s = world_->value<Vec3>(part, "size").value_or(Vec3{});
+        ratio = (size.x * size.y) / (s.x * s.y);
+        world_->set(part, "size", Vec3{size.x, size.y, s.z});
+        break;
+      }
+      case Shape2D::Disk: {
+        const double r = p->radius, nr = size.x / 2;
+        const bool cylinder = enum_of(part, "shape") == "cylinder";
+        ratio = cylinder ? (nr * nr) / (r * r) : (nr * nr * nr) / (r * r * r);
+        world_->set(part, "radius", nr);
+        break;
+      }
+      case Shape2D::Capsule: {
+        const double r = p->radius, l = 2 * p->half_length;
+        const double nr = size.y / 2, nl = std::max(0.0, size.x - size.y);
+        const double v0 = std::numbers::pi * r * r * (l + 4.0 / 3 * r),
+                     v1 = std::numbers::pi * nr * nr * (nl + 4.0 / 3 * nr);
+        ratio = v1 / v0;
+        world_->set(part, "radius", nr);
+        world_->set(part, "length", nl);
+        break;
+      }
+    }
+    if (const auto m = world_->value<double>(part, "mass"); m && *m > 0)
+      world_->set(part, "mass", *m * ratio);
+    char buf[96];
+    if (p->shape == Shape2D::Disk)
+      std::snprintf(buf, sizeof buf, ": radius %.1f mm", size.x * 500);
+    else
+      std::snprintf(buf, sizeof buf, ": %.1f x %.1f mm", size.x * 1000, size.y * 1000);
+    return EditResult{true, "resized " + world_->describe(part) + buf};
+  });
+}
+
+std::string Editor::enum_of(ObjectId id, const char* prop) const {
+  const auto pid = world_->properties().find(prop);
+  if (!pid || !world_->store().has(id, *pid)) return "";
+  const PropertyValue v = world_->store().get(id, *pid);
+  const EnumValue* e = std::get_if<EnumValue>(&v);
+  const auto& names = world_->properties().def(*pid).enum_values;
+  return e && e->index >= 0 && std::size_t(e->index) < names.size() ? names[std::size_t(e->index)]
+                                                                    : "";
+}
+
+EditResult Editor::set_property(ObjectId id, const std::string& property,
+                                const PropertyValue& value) {
+  if (!world_ || !world_->store().alive(id)) return EditResult::refused("no such object");
+  const auto pid = world_->properties().find(property);
+  if (!pid) return EditResult::refused("unknown property '" + property + "'");
+  const PropertyDef& def = world_->properties().def(*pid);
+  // The bounds in words, for the message when a value is refused.
+  std::string range;
+  char buf[64];
+  if (def.min) {
+    std::snprintf(buf, sizeof buf, "%s %g", def.min_exclusive ? ">" : ">=", *def.min);
+    range += buf;
+  }
+  if (def.max) {
+    std::snprintf(buf, sizeof buf, "%s<= %g", range.empty() ? "" : ", ", *def.max);
+    range += buf;
+  }
+  try {
+    world_->set(id, *pid, value);
+  } catch (const std::exception& e) {
+    return EditResult::refused(
+        world_->describe(id) + "." + property + ": " + e.what() +
+        (range.empty() ? "" : " (range " + range + (def.unit.empty() ? "" : " " + def.unit) + ")"));
+  }
+  return EditResult{true, "set " + world_->describe(id) + "." + property};
+}
+
+const std::vector<Editor::MaterialDef>& Editor::materials() {
+  // The kit's table (mods/kit/materials.lua): what a part of each material
+  // weighs, grips and bounces, and whether it conducts.
+  static const std::vector<MaterialDef> list = {
+      {"steel", 7850, 0.5, 0.6, true},   {"iron", 7870, 0.5, 0.5, true},
+      {"brass", 8500, 0.4, 0.5, true},   {"copper", 8960, 0.45, 0.4, true},
+      {"bronze", 8600, 0.35, 0.6, true}, {"wood", 700, 0.4, 0.5, false},
+      {"rubber", 1100, 0.9, 0.8, false}, {"felt", 300, 0.6, 0.05, false},
+  };
+  return list;
+}
+
+EditResult Editor::set_material(ObjectId part, const std::string& material) {
+  if (!world_ || !world_->store().alive(part)) return EditResult::refused("no such part");
+  const auto& list = materials();
+  const auto m = std::find_if(list.begin(), list.end(),
+                              [&](const MaterialDef& d) { return material == d.name; });
+  if (m == list.end()) return EditResult::refused("the kit has no material '" + material + "'");
+  return guarded([&] {
+    const auto mass = world_->value<double>(part, "mass");
+    const auto density = world_->value<double>(part, "density");
+    if (mass && density && *density > 0) world_->set(part, "mass", *mass * m->density / *density);
+    if (density || mass) world_->set(part, "density", m->density);
+    world_->set(part, "friction", m->friction);
+    world_->set(part, "restitution", m->restitution);
+    if (m->conductive)
+      world_->set(part, "conductive", true);
+    else if (has(part, "conductive"))
+      world_->remove(part, "conductive");
+    return EditResult{true, world_->describe(part) + " is " + m->name + " now"};
+  });
+}
+
+}  // namespace alloy::viewer

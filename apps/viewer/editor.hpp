@@ -48,6 +48,8 @@ class Editor {
   /// place (or back where it was picked up); the message says so.
   EditResult drop();
   bool carrying() const { return !held_.empty(); }
+  /// Whether what is held was moved or turned since it was picked up.
+  bool moved() const { return !(grab_point_ == target_) || turn_ != 0; }
   ObjectId carried() const { return carrying() ? held_.front().id : ObjectId{}; }
   /// Where the hand took hold, and where it is now (for drawing).
   Vec2 hand() const { return target_; }
@@ -64,6 +66,47 @@ class Editor {
   EditResult remove(ObjectId part);
   /// Moves a part (with what is joined to it) out of any part it lies inside.
   EditResult settle(ObjectId part);
+
+  // --- joining parts (the rigid body's joints: hinge and fixed) --------------
+  /// Every part under `point`, the one a click means first: moving parts
+  /// before static ones, then the smallest.
+  std::vector<ObjectId> pick_all(Vec2 point, double margin = 0) const;
+  /// A hinge (an axle) at `at` through the two topmost parts there, or
+  /// through the one part there and the board. `made`: the joint.
+  EditResult hinge_at(Vec2 at, double margin = 0, ObjectId* made = nullptr);
+  /// Glue at `at`: the two topmost parts there are fixed together (one part
+  /// alone is fixed to the board).
+  EditResult glue_at(Vec2 at, double margin = 0, ObjectId* made = nullptr);
+  /// A string from part `a` at `at_a` to part `b` at `at_b` (b null: the
+  /// board at `at_b`): a chain of short light links hinged end to end, the
+  /// first hinged to a and the last to b. `slack` > 1 makes it longer than
+  /// the distance (it sags). `made`: the links and hinges.
+  EditResult string_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, double slack = 1.0,
+                            std::vector<ObjectId>* made = nullptr);
+  /// A string's links: 4 mm steel, each about this long, m.
+  static constexpr double kLinkLength = 0.025, kLinkWidth = 0.004;
+  /// The joint whose pivot lies within `margin` of `point` (m), or null.
+  ObjectId pick_joint(Vec2 point, double margin) const;
+
+  // --- sizes and properties ----------------------------------------------------
+  /// Resizes a part in the play area: a box to `size` (full extents along its
+  /// x and y, m; its depth is kept), a disk or cylinder to radius size.x, a
+  /// capsule to radius size.y / 2 and straight length size.x. Its mass follows
+  /// the volume (same density). Refused below 2 mm or beyond the world's limits.
+  EditResult resize(ObjectId part, Vec2 size);
+  /// Sets one property from the inspector; bounds are the registry's (the
+  /// message names the property, its unit and range).
+  EditResult set_property(ObjectId id, const std::string& property, const PropertyValue& value);
+  /// The kit's materials (mods/kit/materials.lua), by name.
+  struct MaterialDef {
+    const char* name;
+    double density, friction, restitution;
+    bool conductive;
+  };
+  static const std::vector<MaterialDef>& materials();
+  /// Makes a part of another material: its density, mass (same volume),
+  /// friction, restitution and whether it conducts. Magnetism is left as it is.
+  EditResult set_material(ObjectId part, const std::string& material);
 
   /// Whether the object is an electrical part (a wire can end on it).
   bool electrical(ObjectId id) const;
@@ -84,6 +127,9 @@ class Editor {
     bool moving;  // has a body: velocity is zeroed
   };
   bool has(ObjectId id, const char* prop) const;
+  EditResult make_joint(const char* kind, ObjectId a, ObjectId b, Vec2 at, ObjectId* made);
+  ObjectId joint_between(ObjectId a, ObjectId b) const;
+  std::string enum_of(ObjectId id, const char* prop) const;
   void place(const std::vector<Held>& group, Vec2 hand, double turn);
   double worst_overlap(const std::vector<ObjectId>& group, std::string* with) const;
   EditResult move_out(const std::vector<Held>& group, Vec2 hand, double turn, Vec2 fallback_hand,

@@ -1,6 +1,7 @@
 #include "apps/viewer/input_script.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -11,13 +12,11 @@ namespace alloy::viewer {
 
 std::vector<ScriptEvent> parse_script(const std::string& text, const std::string& file) {
   static const std::map<std::string, ScriptEvent::Kind> kinds = {
-      {"press", ScriptEvent::Kind::Press},
-      {"move", ScriptEvent::Kind::Move},
-      {"release", ScriptEvent::Kind::Release},
-      {"rpress", ScriptEvent::Kind::RightPress},
-      {"rrelease", ScriptEvent::Kind::RightRelease},
-      {"key", ScriptEvent::Kind::Key},
-      {"wheel", ScriptEvent::Kind::Wheel}};
+      {"press", ScriptEvent::Kind::Press},           {"move", ScriptEvent::Kind::Move},
+      {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
+      {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
+      {"wheel", ScriptEvent::Kind::Wheel},           {"text", ScriptEvent::Kind::Text},
+      {"palette", ScriptEvent::Kind::Palette}};
   std::vector<ScriptEvent> out;
   std::istringstream in(text);
   int n = 0;
@@ -33,13 +32,32 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
       throw InputError(ErrorLocation{file, n, ""}, "expected a frame number first");
     }
     if (!(ls >> kind) || !kinds.count(kind))
-      throw InputError(ErrorLocation{file, n, ""},
-                       "expected an event: press, move, release, rpress, rrelease, key or wheel");
+      throw InputError(
+          ErrorLocation{file, n, ""},
+          "expected an event: press, move, release, rpress, rrelease, key, wheel, text or palette");
     e.kind = kinds.at(kind);
     bool ok = true;
     switch (e.kind) {
       case ScriptEvent::Kind::Key:
         ok = bool(ls >> e.key);
+        // Modifiers before the key's name: ctrl+z, ctrl+shift+s.
+        for (bool more = true; ok && more;) {
+          more = false;
+          for (const char* m : {"ctrl+", "shift+"})
+            if (e.key.size() > std::strlen(m) && e.key.compare(0, std::strlen(m), m) == 0) {
+              (m[0] == 'c' ? e.ctrl : e.shift) = true;
+              e.key.erase(0, std::strlen(m));
+              more = true;
+            }
+        }
+        break;
+      case ScriptEvent::Kind::Text:
+        ok = bool(ls >> e.key);
+        break;
+      case ScriptEvent::Kind::Palette:
+        std::getline(ls >> std::ws, e.key);
+        while (!e.key.empty() && (e.key.back() == ' ' || e.key.back() == '\r')) e.key.pop_back();
+        ok = !e.key.empty();
         break;
       case ScriptEvent::Kind::Wheel:
         ok = bool(ls >> e.wheel);

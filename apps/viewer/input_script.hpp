@@ -9,6 +9,10 @@
 //   20       rpress     0.5 1.0              right button (r-) variants
 //   30       key        space                a key by its SDL name: space, p, r, w, Delete, ...
 //   40       wheel      1                    mouse wheel notches (turns a carried part)
+//   50       key        ctrl+z               with modifiers: ctrl+, shift+ (ctrl+shift+s)
+//   60       text       lever.lua            types text into the field that has the focus
+//   70       palette    steel bar            picks a palette entry by its label (as a click on
+//                                            its button): the next press puts it there
 #pragma once
 
 #include <filesystem>
@@ -20,13 +24,14 @@
 namespace alloy::viewer {
 
 struct ScriptEvent {
-  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel };
+  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel, Text, Palette };
   int frame = 0;
   Kind kind = Kind::Move;
-  Vec2 at;          ///< mouse events, m
-  std::string key;  ///< Key: SDL key name
-  int wheel = 0;    ///< Wheel: notches
-  int line = 0;     ///< line in the file, for messages
+  Vec2 at;                           ///< mouse events, m
+  std::string key;                   ///< Key: SDL key name; Text: the text typed
+  bool ctrl = false, shift = false;  ///< Key: held with it
+  int wheel = 0;                     ///< Wheel: notches
+  int line = 0;                      ///< line in the file, for messages
 };
 
 /// Parses a script; throws InputError with the file and line of a bad line.

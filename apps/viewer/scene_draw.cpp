@@ -364,7 +364,12 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   if (const auto joint = world.properties().find("joint")) {
     const PropertyStore& store = world.store();
     for (const ObjectId j : carriers(store, *joint)) {
-      const auto anchor = world.value<Vec3>(j, "anchor");
+      auto anchor = world.value<Vec3>(j, "anchor");
+      // The rigid body keeps a hinge's anchor current, not glue's: glue is
+      // drawn on its first part, where it moves with it.
+      if (enum_name(world, j, "joint") == "fixed")
+        if (const auto a = world.value<ObjectId>(j, "body_a"); a && world.store().alive(*a))
+          anchor = world.value<Vec3>(*a, "position");
       if (!anchor) continue;
       const ImVec2 c = iv(cam.to_screen(xy(*anchor)));
       const auto b = world.value<ObjectId>(j, "body_b");

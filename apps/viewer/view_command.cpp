@@ -11,7 +11,7 @@ namespace alloy::viewer {
 CLI::App* add_view_command(CLI::App& app, ViewerOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "view", "Open a scene in the viewer: build and change contraptions while they run");
-  cmd->add_option("scene", o.scene, "Scene file (.lua) or mod folder")->required();
+  cmd->add_option("scene", o.scene, "Scene file (.lua) or mod folder; none: a new, empty board");
   cmd->add_option("--screenshot", o.screenshot, "Write the last frame as a PNG (runs headless)");
   cmd->add_option("--frames", o.frames,
                   "Frames to run, then close (1/60 s of simulated time each when headless)")

@@ -3,6 +3,7 @@
 #include <imgui.h>
 #include <imgui_impl_sdl.h>
 #include <imgui_impl_sdlrenderer.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cfloat>
@@ -116,7 +117,10 @@ Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
   save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() +
                "_saved.lua";
   if (save_path_ == "_saved.lua") save_path_ = "scene_saved.lua";
-  load();
+  if (opt_.scene.empty())
+    new_board();
+  else
+    load();
 }
 
 Viewer::~Viewer() {
@@ -259,8 +263,207 @@ void Viewer::load() {
 }
 
 void Viewer::reset() {
+  // Undoable: the world as it was is recorded, and a snapshot restores into
+  // the world the same file builds again.
+  if (World* w = world()) history_.record(*w, "reset");
   editor_.attach(world());
+  const bool had = scene_ != nullptr;
   load();
+  if (had && !load_error_.empty())
+    history_.forget_last();
+  else if (had)
+    note("reset to the file: Ctrl+Z brings the edits back");
+}
+
+// --- files and history -------------------------------------------------------------
+
+namespace {
+
+// The empty board: a floor 1 m wide, at the kit's scale (a battery is a
+// tenth of it), under uniform gravity.
+constexpr const char* kNewBoard = R"(-- A new board (alloy view: New).
+local kit = require "kit"
+
+world {
+  name = "new board",
+  dt = 1 / 240,
+  seconds = 10,
+  settings = { ["gravity.uniform"] = { g = { 0, -9.81, 0 } } },
+}
+
+kit.floor { name = "floor", at = { 0, -0.01 }, size = { 1.0, 0.02 } }
+)";
+
+}  // namespace
+
+void Viewer::new_board() {
+  const fs::path dir = fs::temp_directory_path() / ("alloy_view_" + std::to_string(::getpid()));
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const fs::path file = dir / "new_board.lua";
+  try {
+    write_file_whole(file, kNewBoard);
+  } catch (const std::exception& e) {
+    note(std::string("cannot make a new board: ") + e.what(), true);
+    return;
+  }
+  const fs::path before = opt_.scene;
+  opt_.scene = file;
+  load();
+  if (!load_error_.empty()) {
+    opt_.scene = before;
+    return;
+  }
+  history_.clear();
+  untitled_ = true;
+  save_path_ = "untitled.lua";
+  fitted_ = false;
+  note("a new board: drop parts from the palette, join them with Hinge, Glue or String");
+}
+
+bool Viewer::open(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    note("cannot open '" + path.string() + "': no such file or folder", true);
+    return false;
+  }
+  const fs::path before = opt_.scene;
+  const bool had = scene_ != nullptr;
+  opt_.scene = path;
+  load();
+  if (!load_error_.empty() && had) {
+    // The world as it was goes on; the file stays the one it came from.
+    opt_.scene = before;
+    return false;
+  }
+  history_.clear();
+  untitled_ = false;
+  save_path_ =
+      path.extension() == ".lua" ? path.string() : (path.filename().string() + "_saved.lua");
+  fitted_ = false;
+  if (load_error_.empty()) note("opened " + path.string());
+  return load_error_.empty();
+}
+
+bool Viewer::undo() {
+  World* w = world();
+  if (!w) return false;
+  if (editor_.carrying()) (void)editor_.drop();
+  const std::string what = history_.undo_what();
+  try {
+    if (!history_.undo(*w)) {
+      note("nothing to undo");
+      return false;
+    }
+  } catch (const std::exception& e) {
+    note(std::string("cannot undo: ") + e.what(), true);
+    return false;
+  }
+  editor_.attach(w);
+  note("undone: " + what);
+  return true;
+}
+
+bool Viewer::redo() {
+  World* w = world();
+  if (!w) return false;
+  if (editor_.carrying()) (void)editor_.drop();
+  const std::string what = history_.redo_what();
+  try {
+    if (!history_.redo(*w)) {
+      note("nothing to redo");
+      return false;
+    }
+  } catch (const std::exception& e) {
+    note(std::string("cannot redo: ") + e.what(), true);
+    return false;
+  }
+  editor_.attach(w);
+  note("redone: " + what);
+  return true;
+}
+
+void Viewer::set_tool(Tool t) {
+  tool_ = t;
+  wire_start_ = {};
+  string_started_ = false;
+  string_start_ = {};
+  if (t != Tool::Place) placing_ = -1;
+}
+
+void Viewer::ask(Popup p) {
+  popup_ = p;
+  popup_fresh_ = true;
+  const std::string init = p == Popup::SaveAs ? save_path_ : p == Popup::Open ? "" : "";
+  std::snprintf(path_buf_, sizeof path_buf_, "%s", init.c_str());
+}
+
+void Viewer::popup_enter() {
+  // Enter in a popup: what its first button does.
+  switch (popup_) {
+    case Popup::Open: {
+      const std::string path = path_buf_;
+      if (path.empty()) return;
+      if (history_.dirty()) {
+        pending_open_ = path;
+        ask(Popup::ConfirmOpen);
+        return;
+      }
+      popup_ = Popup::None;
+      open(path);
+      return;
+    }
+    case Popup::SaveAs: {
+      const std::string path = path_buf_;
+      if (path.empty()) return;
+      popup_ = Popup::None;
+      save(path);
+      return;
+    }
+    case Popup::ConfirmNew:
+      popup_ = Popup::None;
+      new_board();
+      return;
+    case Popup::ConfirmOpen:
+      popup_ = Popup::None;
+      open(pending_open_);
+      return;
+    case Popup::None:
+      return;
+  }
+}
+
+std::optional<Vec2> Viewer::resize_handle() const {
+  if (tool_ != Tool::Hand || !selected_) return std::nullopt;
+  const World* w = scene_ ? scene_->world.get() : nullptr;
+  if (!w || !w->store().alive(selected_)) return std::nullopt;
+  const auto p = read_part(*w, selected_);
+  if (!p) return std::nullopt;
+  switch (p->shape) {
+    case Shape2D::Box:
+      return p->to_world(p->half);
+    case Shape2D::Disk:
+      return p->to_world({p->radius, 0});
+    case Shape2D::Capsule:
+      return p->to_world({p->half_length + p->radius, p->radius});
+  }
+  return std::nullopt;
+}
+
+void Viewer::on_drag(Vec2 at) {
+  World* w = world();
+  if (!w || !resizing_ || !w->store().alive(resizing_)) return;
+  const auto p = read_part(*w, resizing_);
+  if (!p) return;
+  // The handle is a corner (or the rim): the part grows about its centre so
+  // that the handle stays under the mouse.
+  const Vec2 local = p->to_local(at);
+  Vec2 size{2 * std::abs(local.x), 2 * std::abs(local.y)};
+  if (p->shape == Shape2D::Disk) size = {2 * length(local), 2 * length(local)};
+  size = {std::max(size.x, 0.004), std::max(size.y, 0.004)};
+  if (p->shape == Shape2D::Capsule) size.x = std::max(size.x, size.y);
+  const EditResult r = editor_.resize(resizing_, size);
+  if (!r.ok) note(r.message, true);
 }
 
 void Viewer::note(const std::string& message, bool error) {
@@ -316,7 +519,25 @@ bool Viewer::frame() {
   ImGui::SetCurrentContext(imgui_);
   pump_script();
   SDL_Event e;
+  // Paused and idle (nothing held, no script, no ring fading), a window
+  // waits for input instead of drawing the same picture 60 times a second:
+  // a quarter of a second at most, so that messages still fade.
+  if (!opt_.headless && paused_ && single_steps_ == 0 && !editor_.carrying() && !resizing_ &&
+      script_next_ >= script_.size() && rings_.empty() && SDL_WaitEventTimeout(&e, 250))
+    handle(e);
   while (SDL_PollEvent(&e)) handle(e);
+  // Edits this frame: the stages the new parts need are made now, so that the
+  // world is whole between frames (and a snapshot of it restores).
+  if (history_.changes() != synced_changes_) {
+    synced_changes_ = history_.changes();
+    if (World* w = world()) {
+      try {
+        History::sync(*w);
+      } catch (const std::exception& ex) {
+        note(std::string("after the edit: ") + ex.what(), true);
+      }
+    }
+  }
 
   double seconds = kHeadlessFrame;
   const std::uint64_t now = SDL_GetPerformanceCounter();
@@ -506,7 +727,32 @@ void Viewer::pump_script() {
         if (k == SDLK_UNKNOWN)
           note("script line " + std::to_string(e.line) + ": unknown key '" + e.key + "'", true);
         else
-          push_key(k);
+          push_key(k, Uint16((e.ctrl ? KMOD_LCTRL : 0) | (e.shift ? KMOD_LSHIFT : 0)));
+        break;
+      }
+      case ScriptEvent::Kind::Text: {
+        // SDL carries text in pieces of at most 31 bytes.
+        for (std::size_t at = 0; at < e.key.size(); at += 31) {
+          SDL_Event t{};
+          t.type = SDL_TEXTINPUT;
+          t.text.windowID = SDL_GetWindowID(window_);
+          std::snprintf(t.text.text, sizeof t.text.text, "%s", e.key.substr(at, 31).c_str());
+          SDL_PushEvent(&t);
+        }
+        break;
+      }
+      case ScriptEvent::Kind::Palette: {
+        const auto& entries = palette_entries();
+        const auto it = std::find_if(entries.begin(), entries.end(),
+                                     [&](const PaletteEntry& p) { return p.label == e.key; });
+        if (it == entries.end()) {
+          note("script line " + std::to_string(e.line) + ": no palette entry '" + e.key + "'",
+               true);
+          break;
+        }
+        set_tool(Tool::Place);
+        placing_ = int(it - entries.begin());
+        place_drag_ = false;
         break;
       }
     }
@@ -583,6 +829,7 @@ void Viewer::handle(const SDL_Event& e) {
       if (panning_ && had)
         camera_.centre = camera_.centre - Vec2{dx / camera_.scale, -dy / camera_.scale};
       if (editor_.carrying()) editor_.carry_to(at);
+      if (resizing_) on_drag(at);
       hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
       break;
     }
@@ -593,7 +840,7 @@ void Viewer::handle(const SDL_Event& e) {
       mouse_down_[b] = mouse_pressed_[b] = true;
       mouse_x_ = float(e.button.x);
       mouse_y_ = float(e.button.y);
-      if (over_panel(mouse_x_, mouse_y_) || popup) break;
+      if (over_panel(mouse_x_, mouse_y_) || popup || popup_ != Popup::None) break;
       on_press(camera_.to_world(mouse_x_, mouse_y_), e.button.button, Uint16(SDL_GetModState()));
       break;
     }
@@ -617,6 +864,13 @@ void Viewer::handle(const SDL_Event& e) {
       break;
     }
     case SDL_KEYDOWN:
+      if (popup_ != Popup::None) {
+        // A file popup is open: Enter does what its first button does,
+        // Escape closes it; other keys are typing.
+        if (e.key.keysym.sym == SDLK_RETURN || e.key.keysym.sym == SDLK_KP_ENTER) popup_enter();
+        if (e.key.keysym.sym == SDLK_ESCAPE) popup_ = Popup::None;
+        break;
+      }
       if (imgui_ready_ && ImGui::GetIO().WantTextInput) break;
       on_key(e.key.keysym.sym, e.key.keysym.mod);
       break;
@@ -665,20 +919,73 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
         wire_start_at_ = at;
         break;
       }
-      const EditResult r = editor_.connect_wire(wire_start_, wire_start_at_, part, at);
+      const EditResult r =
+          edit("wire", [&] { return editor_.connect_wire(wire_start_, wire_start_at_, part, at); });
       note(r.message, !r.ok);
       wire_start_ = {};
       break;
     }
+    case Tool::Hinge:
+    case Tool::Glue: {
+      const bool hinge = tool_ == Tool::Hinge;
+      ObjectId made;
+      const EditResult r = edit(hinge ? "hinge" : "glue", [&] {
+        return hinge ? editor_.hinge_at(at, 4 / camera_.scale, &made)
+                     : editor_.glue_at(at, 4 / camera_.scale, &made);
+      });
+      note(r.message, !r.ok);
+      if (r.ok) selected_ = made;
+      if (!(mod & KMOD_SHIFT)) set_tool(Tool::Hand);
+      break;
+    }
+    case Tool::String: {
+      // First click: the start (a part); second: the end (a part, or the board).
+      if (!string_started_) {
+        if (!part) {
+          note("a string starts on a part: click the part to hang it from or tie it to");
+          break;
+        }
+        string_start_ = part;
+        string_start_at_ = at;
+        string_started_ = true;
+        break;
+      }
+      std::vector<ObjectId> made;
+      const ObjectId from = string_start_;
+      const Vec2 from_at = string_start_at_;
+      const EditResult r = edit("string", [&] {
+        return editor_.string_between(from, from_at, part == from ? ObjectId{} : part, at, 1.0,
+                                      &made);
+      });
+      note(r.message, !r.ok);
+      string_started_ = false;
+      string_start_ = {};
+      if (r.ok && !(mod & KMOD_SHIFT)) set_tool(Tool::Hand);
+      break;
+    }
     case Tool::Hand: {
+      // The selected part's resize handle comes first, then a joint's pivot.
+      if (const auto h = resize_handle(); h && length(*h - at) * camera_.scale <= 7) {
+        resizing_ = selected_;
+        history_.record(*w, "resize " + w->describe(selected_));
+        break;
+      }
+      if (const ObjectId j = editor_.pick_joint(at, 6 / camera_.scale)) {
+        selected_ = j;
+        break;
+      }
       if (!part) {
         selected_ = {};
         panning_ = true;
         break;
       }
       selected_ = part;
+      history_.record(*w, "move " + w->describe(part));
       const EditResult r = editor_.grab(part, at);
-      if (!r.ok) note(r.message, true);
+      if (!r.ok) {
+        history_.forget_last();
+        note(r.message, true);
+      }
       break;
     }
   }
@@ -697,9 +1004,17 @@ void Viewer::on_release(Vec2 at, Uint8 button) {
     }
     return;
   }
+  if (resizing_) {
+    on_drag(at);
+    resizing_ = {};
+    return;
+  }
   if (editor_.carrying()) {
     editor_.carry_to(at);
+    // A click that moved nothing only selected: it is not an edit to undo.
+    const bool moved = editor_.moved();
     const EditResult r = editor_.drop();
+    if (!moved) history_.forget_last();
     note(r.message, !r.ok);
   }
 }
@@ -712,8 +1027,16 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
     case SDLK_SPACE:
       paused_ = !paused_;
       break;
-    case SDLK_PERIOD:
     case SDLK_n:
+      if (ctrl) {
+        if (history_.dirty())
+          ask(Popup::ConfirmNew);
+        else
+          new_board();
+        break;
+      }
+      [[fallthrough]];
+    case SDLK_PERIOD:
       paused_ = true;
       step_once();
       break;
@@ -721,7 +1044,31 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
       if (ctrl) reset();
       break;
     case SDLK_s:
-      if (ctrl) save(save_path_);
+      if (ctrl && ((mod & KMOD_SHIFT) || untitled_))
+        ask(Popup::SaveAs);
+      else if (ctrl)
+        save(save_path_);
+      break;
+    case SDLK_o:
+      if (ctrl) ask(Popup::Open);
+      break;
+    case SDLK_z:
+      if (ctrl && (mod & KMOD_SHIFT))
+        redo();
+      else if (ctrl)
+        undo();
+      break;
+    case SDLK_y:
+      if (ctrl) redo();
+      break;
+    case SDLK_h:
+      set_tool(tool_ == Tool::Hinge ? Tool::Hand : Tool::Hinge);
+      break;
+    case SDLK_j:
+      set_tool(tool_ == Tool::Glue ? Tool::Hand : Tool::Glue);
+      break;
+    case SDLK_t:
+      set_tool(tool_ == Tool::String ? Tool::Hand : Tool::String);
       break;
     case SDLK_q:
     case SDLK_e: {
@@ -729,25 +1076,28 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
       if (editor_.carrying())
         editor_.turn(a);
       else if (target && w) {
-        const EditResult r = editor_.rotate(target, a);
+        const EditResult r =
+            edit("turn " + w->describe(target), [&] { return editor_.rotate(target, a); });
         if (!r.ok || !r.message.empty()) note(r.message, !r.ok);
       }
       break;
     }
     case SDLK_p:
       if (target && w) {
-        const EditResult r = editor_.toggle_pin(target);
+        const EditResult r =
+            edit("pin " + w->describe(target), [&] { return editor_.toggle_pin(target); });
         note(r.message, !r.ok);
       }
       break;
     case SDLK_w:
-      tool_ = tool_ == Tool::Wire ? Tool::Hand : Tool::Wire;
-      wire_start_ = {};
+      set_tool(tool_ == Tool::Wire ? Tool::Hand : Tool::Wire);
       break;
     case SDLK_DELETE:
     case SDLK_BACKSPACE:
       if (selected_ && w) {
-        const EditResult r = editor_.remove(selected_);
+        const ObjectId doomed = selected_;
+        const EditResult r =
+            edit("remove " + w->describe(doomed), [&] { return editor_.remove(doomed); });
         note(r.message, !r.ok);
         if (r.ok) selected_ = hovered_ = {};
       }
@@ -774,9 +1124,7 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
       muted_ = !muted_;
       break;
     case SDLK_ESCAPE:
-      tool_ = Tool::Hand;
-      placing_ = -1;
-      wire_start_ = {};
+      set_tool(Tool::Hand);
       break;
     default:
       break;
@@ -788,16 +1136,21 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
 EditResult Viewer::drop_part(const PaletteEntry& entry, Vec2 at) {
   World* w = world();
   if (!w) return EditResult::refused("there is no world to put a part in");
+  history_.record(*w, "add " + entry.label);
   try {
     const std::string name = editor_.unique_name(entry.base);
     const std::vector<ObjectId> ids = make_part(*w, entry, at, opt_.load, name);
-    if (ids.empty()) return EditResult::refused("the kit made nothing for " + entry.label);
+    if (ids.empty()) {
+      history_.forget_last();
+      return EditResult::refused("the kit made nothing for " + entry.label);
+    }
     selected_ = ids.front();
     const EditResult r = editor_.settle(ids.front());
     const std::string msg = r.message.empty() ? "added " + w->describe(ids.front()) : r.message;
     note(msg, !r.ok);
     return {r.ok, msg};
   } catch (const std::exception& e) {
+    history_.forget_last();
     note(std::string("cannot add ") + entry.label + ": " + e.what(), true);
     return EditResult::refused(e.what());
   }
@@ -806,12 +1159,14 @@ EditResult Viewer::drop_part(const PaletteEntry& entry, Vec2 at) {
 EditResult Viewer::swap(const std::string& area, const std::string& from, const std::string& to) {
   World* w = world();
   if (!w) return EditResult::refused("no world");
+  history_.record(*w, "swap " + from + " for " + to);
   try {
     w->swap(area, from, to);
     const std::string msg = "swapped " + from + " for " + to + (area.empty() ? "" : " in " + area);
     note(msg);
     return {true, msg};
   } catch (const std::exception& e) {
+    history_.forget_last();
     note(e.what(), true);
     return EditResult::refused(e.what());
   }
@@ -831,6 +1186,15 @@ bool Viewer::save(const fs::path& path) {
     meta.origin = opt_.scene.string();
     save_scene(*w, meta, path);
     note("saved " + path.string());
+    history_.mark_saved();
+    save_path_ = path.string();
+    if (untitled_) {
+      // The new board is this file now: Reset loads it.
+      untitled_ = false;
+      opt_.scene = path;
+      std::error_code ec;
+      scene_mtime_ = fs::last_write_time(path, ec);
+    }
     return true;
   } catch (const std::exception& e) {
     note(std::string("cannot save: ") + e.what(), true);
@@ -917,6 +1281,7 @@ void Viewer::draw(bool capture, Image* image) {
       const ScreenPoint s = camera_.to_screen(from);
       dl->AddLine({s.x, s.y}, {mouse_x_, mouse_y_}, colour::kWireIdle, 2.5f);
     }
+    draw_tool_feedback(dl, *w);
     if (tool_ == Tool::Place && placing_ >= 0 && mouse_x_ >= 0 && !over_panel(mouse_x_, mouse_y_)) {
       const char* label = palette_entries()[std::size_t(placing_)].label.c_str();
       dl->AddCircle({mouse_x_, mouse_y_}, 10, colour::kSelected, 20, 2);
@@ -929,6 +1294,7 @@ void Viewer::draw(bool capture, Image* image) {
   next_panels_.clear();
   if (opt_.panels) draw_panels();
   panel_error();
+  file_popups();
   panel_messages();
   context_menu();
   panels_ = next_panels_;
@@ -952,6 +1318,46 @@ void Viewer::draw(bool capture, Image* image) {
       throw std::runtime_error(std::string("cannot read the picture back: ") + SDL_GetError());
   }
   SDL_RenderPresent(renderer_);
+}
+
+void Viewer::draw_tool_feedback(ImDrawList* dl, World& w) {
+  // A string being drawn: a dashed line from its first end to the mouse.
+  if (tool_ == Tool::String && string_started_ && mouse_x_ >= 0) {
+    const ScreenPoint a = camera_.to_screen(string_start_at_);
+    const float dx = mouse_x_ - a.x, dy = mouse_y_ - a.y;
+    const int dashes = std::max(1, int(std::sqrt(dx * dx + dy * dy) / 10));
+    for (int i = 0; i < dashes; i += 2)
+      dl->AddLine({a.x + dx * i / dashes, a.y + dy * i / dashes},
+                  {a.x + dx * (i + 1) / dashes, a.y + dy * (i + 1) / dashes}, colour::kSelected, 2);
+    dl->AddCircleFilled({a.x, a.y}, 4, colour::kSelected, 12);
+  }
+  // Hinge and glue: a ring or a square where a click would put one.
+  if ((tool_ == Tool::Hinge || tool_ == Tool::Glue) && mouse_x_ >= 0 &&
+      !over_panel(mouse_x_, mouse_y_)) {
+    if (tool_ == Tool::Hinge)
+      dl->AddCircle({mouse_x_, mouse_y_}, 7, colour::kSelected, 20, 2);
+    else
+      dl->AddRect({mouse_x_ - 5, mouse_y_ - 5}, {mouse_x_ + 5, mouse_y_ + 5}, colour::kSelected, 0,
+                  0, 2);
+  }
+  if (!selected_ || !w.store().alive(selected_)) return;
+  // The selected joint: a ring about its pivot.
+  if (const auto kind = w.value<EnumValue>(selected_, "joint")) {
+    auto anchor = w.value<Vec3>(selected_, "anchor");
+    if (kind->index != 0)  // glue: drawn on its first part
+      if (const auto a = w.value<ObjectId>(selected_, "body_a"); a && w.store().alive(*a))
+        anchor = w.value<Vec3>(*a, "position");
+    if (anchor) {
+      const ScreenPoint c = camera_.to_screen(xy(*anchor));
+      dl->AddCircle({c.x, c.y}, 11, colour::kSelected, 24, 2.5f);
+    }
+  }
+  // The selected part's resize handle: a square at a corner (a disk's rim).
+  if (const auto h = resize_handle()) {
+    const ScreenPoint c = camera_.to_screen(*h);
+    dl->AddRectFilled({c.x - 5, c.y - 5}, {c.x + 5, c.y + 5}, IM_COL32_WHITE);
+    dl->AddRect({c.x - 5, c.y - 5}, {c.x + 5, c.y + 5}, colour::kSelected, 0, 0, 2);
+  }
 }
 
 void Viewer::draw_panels() {
@@ -989,10 +1395,32 @@ void Viewer::panel_toolbar() {
                          ImGuiSliderFlags_Logarithmic))
     set_time_scale(scale);
   ImGui::Separator();
-  int tool = tool_ == Tool::Wire ? 1 : 0;
-  if (ImGui::RadioButton("Hand", tool == 0)) tool_ = Tool::Hand, wire_start_ = {};
-  ImGui::SameLine();
-  if (ImGui::RadioButton("Wire (W)", tool == 1)) tool_ = Tool::Wire, wire_start_ = {};
+  // Tools: two rows of three.
+  struct ToolButton {
+    const char* label;
+    Tool tool;
+    const char* tip;
+  };
+  static constexpr ToolButton tools[] = {
+      {"Hand", Tool::Hand, "move, turn (wheel), select; drag the square handle to resize"},
+      {"Wire W", Tool::Wire, "click a battery or coil end, then another part"},
+      {"Hinge H", Tool::Hinge,
+       "click where two parts overlap: an axle through both (one part: through it and the board)"},
+      {"Glue J", Tool::Glue, "click where two parts overlap or touch: they move as one"},
+      {"String T", Tool::String,
+       "click a part, then another part or the board: a chain of small links"},
+  };
+  const float tw = (kLeftWidth - 20 - 2 * 6) / 3;
+  for (std::size_t i = 0; i < std::size(tools); ++i) {
+    if (i % 3) ImGui::SameLine();
+    const bool on = tool_ == tools[i].tool;
+    if (on) ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0.55f, 0.8f, 1.0f, 1));
+    if (ImGui::Button(tools[i].label, {tw, 0})) set_tool(tools[i].tool);
+    if (on) ImGui::PopStyleColor();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tools[i].tip);
+  }
+  if (tool_ == Tool::String && string_started_)
+    ImGui::TextColored(ImVec4(0.1f, 0.4f, 0.8f, 1), "string: now click its other end");
   ImGui::Checkbox("labels", &draw_options_.labels);
   ImGui::SameLine();
   ImGui::Checkbox("poles", &draw_options_.poles);
@@ -1000,12 +1428,98 @@ void Viewer::panel_toolbar() {
   ImGui::SameLine();
   ImGui::Checkbox("contacts", &draw_options_.contact_forces);
   ImGui::Separator();
-  char path[512];
-  std::snprintf(path, sizeof path, "%s", save_path_.c_str());
-  ImGui::SetNextItemWidth(kLeftWidth - 70);
-  if (ImGui::InputText("##save", path, sizeof path)) save_path_ = path;
+  panel_files();
+  ImGui::End();
+}
+
+void Viewer::panel_files() {
+  // File: New, Open, Save, Save as; Undo, Redo (the keys say the same).
+  const float bw = (kLeftWidth - 20 - 3 * 6) / 4;
+  if (ImGui::Button("New", {bw, 0})) {
+    if (history_.dirty())
+      ask(Popup::ConfirmNew);
+    else
+      new_board();
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("an empty board with a floor (Ctrl+N)");
   ImGui::SameLine();
-  if (ImGui::Button("Save")) save(save_path_);
+  if (ImGui::Button("Open", {bw, 0})) ask(Popup::Open);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("a scene file or a mod folder (Ctrl+O)");
+  ImGui::SameLine();
+  if (ImGui::Button("Save", {bw, 0})) {
+    if (untitled_)
+      ask(Popup::SaveAs);
+    else
+      save(save_path_);
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("to %s (Ctrl+S)", untitled_ ? "a file you name" : save_path_.c_str());
+  ImGui::SameLine();
+  if (ImGui::Button("as..", {bw, 0})) ask(Popup::SaveAs);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Save as (Ctrl+Shift+S)");
+  ImGui::TextDisabled("%s%s", untitled_ ? "untitled" : save_path_.c_str(),
+                      history_.dirty() ? "  (edited)" : "");
+  const float uw = (kLeftWidth - 20 - 6) / 2;
+  if (!history_.can_undo()) ImGui::BeginDisabled();
+  if (ImGui::Button("Undo", {uw, 0})) undo();
+  if (!history_.can_undo()) ImGui::EndDisabled();
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+    ImGui::SetTooltip("Ctrl+Z  %s", history_.undo_what().c_str());
+  ImGui::SameLine();
+  if (!history_.can_redo()) ImGui::BeginDisabled();
+  if (ImGui::Button("Redo", {uw, 0})) redo();
+  if (!history_.can_redo()) ImGui::EndDisabled();
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+    ImGui::SetTooltip("Ctrl+Y  %s", history_.redo_what().c_str());
+}
+
+void Viewer::file_popups() {
+  if (popup_ == Popup::None) return;
+  int win_w = opt_.width, win_h = opt_.height;
+  SDL_GetWindowSize(window_, &win_w, &win_h);
+  ImGui::SetNextWindowPos({float(win_w) / 2, float(win_h) / 3}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowSize({std::min(520.0f, float(win_w) - 40), 0});
+  const char* title = popup_ == Popup::Open         ? "Open a scene"
+                      : popup_ == Popup::SaveAs     ? "Save as"
+                      : popup_ == Popup::ConfirmNew ? "New board"
+                                                    : "Open";
+  ImGui::Begin(title, nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  remember_panel();
+  if (popup_ == Popup::Open || popup_ == Popup::SaveAs) {
+    ImGui::TextDisabled(popup_ == Popup::Open ? "a scene file (.lua) or a mod folder"
+                                              : "the scene file to write (.lua)");
+    if (popup_fresh_) ImGui::SetKeyboardFocusHere();
+    popup_fresh_ = false;
+    ImGui::SetNextItemWidth(-1);
+    ImGui::InputText("##path", path_buf_, sizeof path_buf_, ImGuiInputTextFlags_AutoSelectAll);
+    if (popup_ == Popup::Open) {
+      // The scene files beside the present one, to click instead of typing.
+      std::error_code ec;
+      fs::path dir = opt_.scene.has_parent_path() && !untitled_ ? opt_.scene.parent_path() : ".";
+      if (fs::is_directory(opt_.scene, ec) && !untitled_) dir = opt_.scene;
+      std::vector<std::string> files;
+      for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+        if (it->path().extension() == ".lua" && it->path().filename() != "mod.lua")
+          files.push_back(it->path().string());
+      std::sort(files.begin(), files.end());
+      if (files.size() > 12) files.resize(12);
+      for (const std::string& f : files)
+        if (ImGui::Selectable(f.c_str()))
+          std::snprintf(path_buf_, sizeof path_buf_, "%s", f.c_str());
+      if (history_.dirty())
+        ImGui::TextColored(ImVec4(0.75f, 0.3f, 0.05f, 1),
+                           "the edits since the last save will be asked about");
+    }
+    if (ImGui::Button(popup_ == Popup::Open ? "Open (Enter)" : "Save (Enter)")) popup_enter();
+  } else {
+    ImGui::TextUnformatted(popup_ == Popup::ConfirmNew
+                               ? "Start a new board? The edits since the last save are lost."
+                               : "Open another scene? The edits since the last save are lost.");
+    if (ImGui::Button("Yes, discard them (Enter)")) popup_enter();
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Cancel (Esc)")) popup_ = Popup::None;
   ImGui::End();
 }
 
@@ -1066,9 +1580,11 @@ void Viewer::panel_inspector() {
   World* w = world();
   if (!w || !selected_ || !w->store().alive(selected_)) {
     selected_ = {};
-    ImGui::TextDisabled("click a part to see it here");
+    ImGui::TextDisabled("click a part to see and edit it here");
     ImGui::TextDisabled("drag: move   wheel / Q E: turn");
     ImGui::TextDisabled("P: pin   W: wire   Del: remove");
+    ImGui::TextDisabled("H: hinge  J: glue  T: string");
+    ImGui::TextDisabled("Ctrl+Z / Ctrl+Y: undo / redo");
     ImGui::TextDisabled("right-click: menu   F: fit view");
     ImGui::End();
     return;
@@ -1076,6 +1592,7 @@ void Viewer::panel_inspector() {
   const ObjectId id = selected_;
   const auto part = read_part(*w, id);
   ImGui::TextColored(ImVec4(0.43f, 0.16f, 0.63f, 1), "%s", w->describe(id).c_str());
+  const auto joint_kind = w->value<EnumValue>(id, "joint");
   if (part) {
     ImGui::SameLine();
     const char* what = (*w).value<double>(id, "emf")           ? "battery"
@@ -1090,7 +1607,14 @@ void Viewer::panel_inspector() {
     ImGui::Text("at (%.3f, %.3f) m, %.1f deg", part->centre.x, part->centre.y,
                 part->angle * 180 / std::numbers::pi);
     if (const auto v = (*w).value<Vec3>(id, "velocity"))
-      ImGui::Text("speed %.3f m/s", length(xy(*v)));
+      ImGui::Text("centre moves at %.3f m/s", length(xy(*v)));
+    // A turning part (an axle, a rotor): its angular speed, which the speed
+    // of its centre does not show.
+    if (const auto om = (*w).value<Vec3>(id, "angular_velocity"))
+      ImGui::Text("turns at %.3f rad/s = %.1f rpm", om->z, om->z * 60 / (2 * std::numbers::pi));
+  } else if (joint_kind) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("%s", joint_kind->index == 0 ? "hinge (an axle)" : "glue");
   }
   if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);
@@ -1104,14 +1628,18 @@ void Viewer::panel_inspector() {
   if (part && !part->is_static) {
     bool pinned = part->pinned;
     if (ImGui::Checkbox("pinned to the board (P)", &pinned))
-      note(editor_.set_pinned(id, pinned).message);
+      note(edit("pin " + w->describe(id), [&] { return editor_.set_pinned(id, pinned); }).message);
   }
-  if (ImGui::Button("turn +15")) note(editor_.rotate(id, kTurnStep).message);
-  ImGui::SameLine();
-  if (ImGui::Button("turn -15")) note(editor_.rotate(id, -kTurnStep).message);
-  ImGui::SameLine();
+  if (part) {
+    if (ImGui::Button("turn +15"))
+      note(edit("turn " + w->describe(id), [&] { return editor_.rotate(id, kTurnStep); }).message);
+    ImGui::SameLine();
+    if (ImGui::Button("turn -15"))
+      note(edit("turn " + w->describe(id), [&] { return editor_.rotate(id, -kTurnStep); }).message);
+    ImGui::SameLine();
+  }
   if (ImGui::Button("remove")) {
-    const EditResult r = editor_.remove(id);
+    const EditResult r = edit("remove " + w->describe(id), [&] { return editor_.remove(id); });
     note(r.message, !r.ok);
     selected_ = hovered_ = {};
     ImGui::End();
@@ -1122,16 +1650,124 @@ void Viewer::panel_inspector() {
     wire_start_ = id;
     wire_start_at_ = part ? part->centre : Vec2{};
   }
+  // Material: from the kit's list (density, mass, friction, bounce, conduction).
+  if (part && !part->is_static && (*w).value<double>(id, "density")) {
+    const char* now = material_name(material_of(*w, id));
+    ImGui::SetNextItemWidth(kRightWidth - 90);
+    if (ImGui::BeginCombo("material", now)) {
+      for (const Editor::MaterialDef& m : Editor::materials())
+        if (ImGui::Selectable(m.name, std::string(m.name) == now)) {
+          const std::string name = m.name;
+          const EditResult r = edit("material of " + w->describe(id),
+                                    [&] { return editor_.set_material(id, name); });
+          note(r.message, !r.ok);
+        }
+      ImGui::EndCombo();
+    }
+  }
+  // Every property, editable: Enter (or leaving the field) sets it; the
+  // registry's bounds are checked and a refused value is a message.
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
   if (ImGui::CollapsingHeader("properties")) {
     const PropertyRegistry& reg = w->properties();
-    if (ImGui::BeginTable("props", 2, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
+    // Scrolls within a third of the window, so that a small window keeps its board.
+    if (ImGui::BeginTable(
+            "props", 2,
+            ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp | ImGuiTableFlags_ScrollY,
+            {0, std::max(120.0f, float(win_h) * 0.34f)})) {
+      ImGui::TableSetupColumn("name", ImGuiTableColumnFlags_WidthFixed, 112);
+      ImGui::TableSetupColumn("value", ImGuiTableColumnFlags_WidthStretch);
       for (PropertyId p = 0; p < reg.size(); ++p) {
         if (!w->store().has(id, p)) continue;
+        const PropertyDef& def = reg.def(p);
         ImGui::TableNextRow();
         ImGui::TableNextColumn();
-        ImGui::TextUnformatted(reg.def(p).name.c_str());
+        ImGui::TextUnformatted(def.name.c_str());
+        if (ImGui::IsItemHovered()) {
+          std::string tip = def.doc;
+          char buf[96];
+          if (!def.unit.empty()) tip += "\nunit: " + def.unit;
+          if (def.min || def.max) {
+            std::snprintf(buf, sizeof buf, "\nrange: %s%g .. %g", def.min_exclusive ? "> " : "",
+                          def.min.value_or(-HUGE_VAL), def.max.value_or(HUGE_VAL));
+            tip += buf;
+          }
+          ImGui::SetTooltip("%s", tip.c_str());
+        }
         ImGui::TableNextColumn();
-        ImGui::TextUnformatted(value_text(*w, p, w->store().get(id, p)).c_str());
+        ImGui::SetNextItemWidth(-1);
+        const std::string label = "##" + def.name;
+        const PropertyValue v = w->store().get(id, p);
+        std::optional<PropertyValue> to;
+        const std::string fmt = "%.6g" + (def.unit.empty() ? "" : " " + def.unit);
+        switch (def.kind) {
+          case PropertyKind::Number: {
+            double d = std::get<double>(v);
+            if (ImGui::InputDouble(label.c_str(), &d, 0, 0, fmt.c_str(),
+                                   ImGuiInputTextFlags_EnterReturnsTrue))
+              to = d;
+            break;
+          }
+          case PropertyKind::Integer: {
+            std::int64_t i = std::get<std::int64_t>(v);
+            if (ImGui::InputScalar(label.c_str(), ImGuiDataType_S64, &i, nullptr, nullptr, nullptr,
+                                   ImGuiInputTextFlags_EnterReturnsTrue))
+              to = i;
+            break;
+          }
+          case PropertyKind::Bool: {
+            bool b = std::get<bool>(v);
+            if (ImGui::Checkbox(label.c_str(), &b)) to = b;
+            break;
+          }
+          case PropertyKind::Vec3: {
+            Vec3 x = std::get<Vec3>(v);
+            double c[3] = {x.x, x.y, x.z};
+            if (ImGui::InputScalarN(label.c_str(), ImGuiDataType_Double, c, 3, nullptr, nullptr,
+                                    "%.4g", ImGuiInputTextFlags_EnterReturnsTrue))
+              to = Vec3{c[0], c[1], c[2]};
+            break;
+          }
+          case PropertyKind::Quat: {
+            double deg = angle_z(std::get<Quat>(v)) * 180 / std::numbers::pi;
+            if (ImGui::InputDouble(label.c_str(), &deg, 0, 0, "%.3f deg",
+                                   ImGuiInputTextFlags_EnterReturnsTrue))
+              to = Quat::from_angle_z(deg * std::numbers::pi / 180);
+            break;
+          }
+          case PropertyKind::Enum: {
+            const int now = std::get<EnumValue>(v).index;
+            const char* shown = now >= 0 && std::size_t(now) < def.enum_values.size()
+                                    ? def.enum_values[std::size_t(now)].c_str()
+                                    : "?";
+            if (ImGui::BeginCombo(label.c_str(), shown)) {
+              for (std::size_t k = 0; k < def.enum_values.size(); ++k)
+                if (ImGui::Selectable(def.enum_values[k].c_str(), int(k) == now) && int(k) != now)
+                  to = EnumValue{std::int32_t(k)};
+              ImGui::EndCombo();
+            }
+            break;
+          }
+          case PropertyKind::String: {
+            char buf[256];
+            std::snprintf(buf, sizeof buf, "%s", std::get<std::string>(v).c_str());
+            if (ImGui::InputText(label.c_str(), buf, sizeof buf,
+                                 ImGuiInputTextFlags_EnterReturnsTrue))
+              to = std::string(buf);
+            break;
+          }
+          case PropertyKind::Ref:
+          case PropertyKind::RefList:
+            ImGui::TextUnformatted(value_text(*w, p, v).c_str());
+            break;
+        }
+        if (to) {
+          const std::string name = def.name;
+          const PropertyValue value = *to;
+          const EditResult r = edit("set " + w->describe(id) + "." + name,
+                                    [&] { return editor_.set_property(id, name, value); });
+          if (!r.ok) note(r.message, true);
+        }
       }
       ImGui::EndTable();
     }
@@ -1271,18 +1907,31 @@ void Viewer::context_menu() {
     const ObjectId id = context_part_;
     ImGui::TextDisabled("%s", w->describe(id).c_str());
     const auto part = read_part(*w, id);
+    const std::string name = w->describe(id);
     if (part && !part->is_static &&
         ImGui::MenuItem(part->pinned ? "Unpin" : "Pin to the board", "P"))
-      note(editor_.set_pinned(id, !part->pinned).message);
-    if (ImGui::MenuItem("Turn 90 left")) note(editor_.rotate(id, std::numbers::pi / 2).message);
-    if (ImGui::MenuItem("Turn 90 right")) note(editor_.rotate(id, -std::numbers::pi / 2).message);
+      note(edit("pin " + name, [&] { return editor_.set_pinned(id, !part->pinned); }).message);
+    if (ImGui::MenuItem("Turn 90 left"))
+      note(edit("turn " + name, [&] { return editor_.rotate(id, std::numbers::pi / 2); }).message);
+    if (ImGui::MenuItem("Turn 90 right"))
+      note(edit("turn " + name, [&] { return editor_.rotate(id, -std::numbers::pi / 2); }).message);
+    if (ImGui::MenuItem("Hinge here", "H")) {
+      const EditResult r =
+          edit("hinge", [&] { return editor_.hinge_at(context_at_, 4 / camera_.scale); });
+      note(r.message, !r.ok);
+    }
+    if (ImGui::MenuItem("Glue here", "J")) {
+      const EditResult r =
+          edit("glue", [&] { return editor_.glue_at(context_at_, 4 / camera_.scale); });
+      note(r.message, !r.ok);
+    }
     if (editor_.electrical(id) && ImGui::MenuItem("Wire from here", "W")) {
       tool_ = Tool::Wire;
       wire_start_ = id;
       wire_start_at_ = context_at_;
     }
     if (ImGui::MenuItem("Remove", "Del")) {
-      const EditResult r = editor_.remove(id);
+      const EditResult r = edit("remove " + name, [&] { return editor_.remove(id); });
       note(r.message, !r.ok);
       selected_ = hovered_ = {};
     }

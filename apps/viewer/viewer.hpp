@@ -33,6 +33,7 @@
 #include "apps/viewer/audio_out.hpp"
 #include "apps/viewer/camera.hpp"
 #include "apps/viewer/editor.hpp"
+#include "apps/viewer/history.hpp"
 #include "apps/viewer/input_script.hpp"
 #include "apps/viewer/palette.hpp"
 #include "apps/viewer/png_writer.hpp"
@@ -44,7 +45,9 @@
 
 namespace alloy::viewer {
 
-enum class Tool { Hand, Wire, Place };
+/// What a click on the play area does. Hinge, Glue: join the parts under
+/// the click (or the part and the board). String: two clicks, one per end.
+enum class Tool { Hand, Wire, Place, Hinge, Glue, String };
 
 class Viewer {
  public:
@@ -100,7 +103,37 @@ class Viewer {
   /// Swaps plugin `from` for `to` in `area` ("" everywhere) between steps.
   EditResult swap(const std::string& area, const std::string& from, const std::string& to);
   Tool tool() const { return tool_; }
+  void set_tool(Tool t);
   ObjectId selected() const { return selected_; }
+  void select(ObjectId id) { selected_ = id; }
+
+  // --- files and history --------------------------------------------------------
+  /// An empty board with a floor (a scene of its own, "untitled" until saved).
+  void new_board();
+  /// Loads another scene file or mod folder; false (with the reason in
+  /// messages, the present world kept) if it cannot.
+  bool open(const std::filesystem::path& path);
+  /// Where Save writes (Save as changes it).
+  const std::string& save_path() const { return save_path_; }
+  /// True for a New board that has not been saved yet.
+  bool untitled() const { return untitled_; }
+  /// Undo / redo the last edit (Ctrl+Z, Ctrl+Y); false if there was none.
+  bool undo();
+  bool redo();
+  History& history() { return history_; }
+  /// Records the world before an edit (for undo); every edit the player
+  /// makes goes through it. Runs `f`; a refused edit leaves no record.
+  template <class F>
+  EditResult edit(const std::string& what, F&& f) {
+    World* w = world();
+    if (!w) return EditResult::refused("no world");
+    history_.record(*w, what);
+    EditResult r = f();
+    if (!r.ok) history_.forget_last();
+    return r;
+  }
+  /// Resize handle of the selected part: where it is drawn (m), if any.
+  std::optional<Vec2> resize_handle() const;
 
  private:
   void init_sdl();
@@ -125,6 +158,10 @@ class Viewer {
   void panel_messages();
   void panel_error();
   void context_menu();
+  void panel_files();
+  void file_popups();
+  void draw_tool_feedback(ImDrawList* dl, World& w);
+  void on_drag(Vec2 at);
   void fit_view();
   void play_rect(float& x0, float& y0, float& x1, float& y1) const;
   void remember_panel();
@@ -176,6 +213,25 @@ class Viewer {
   };
   std::vector<Rect> panels_, next_panels_;
   std::string save_path_;
+  bool untitled_ = false;
+
+  // Files and history.
+  History history_;
+  std::uint64_t synced_changes_ = 0;
+  enum class Popup { None, Open, SaveAs, ConfirmNew, ConfirmOpen };
+  Popup popup_ = Popup::None;
+  bool popup_fresh_ = false;  // opened this frame: focus its text field
+  char path_buf_[512] = {};
+  std::string pending_open_;
+  void ask(Popup p);
+  void popup_enter();
+
+  // Joining and resizing.
+  ObjectId string_start_;
+  Vec2 string_start_at_;
+  bool string_started_ = false;
+  ObjectId resizing_;      // the part whose handle is held
+  std::string fields_of_;  // inspector: the object whose fields are being typed in
 
   // What happened.
   std::vector<std::string> log_;

@@ -1,0 +1,394 @@
+// Tests for the viewer as an editor (issue 17): New, Save as, undo and redo
+// of every kind of edit, the hinge, glue and string tools, the resize
+// handle, the inspector's edits, and a lever built from an empty board by a
+// script that `alloy run` then runs the same.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <sstream>
+
+#include "apps/viewer/input_script.hpp"
+#include "apps/viewer/viewer.hpp"
+#include "runtime/state_hash.hpp"
+#include "viewer_support.hpp"
+
+namespace alloy::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A headless viewer on a new board, paused (no step between edits).
+std::unique_ptr<Viewer> new_board() {
+  ViewerOptions o = test::headless("");
+  o.paused = true;
+  auto v = std::make_unique<Viewer>(o);
+  v->frame();
+  return v;
+}
+
+std::uint64_t hash(Viewer& v) {
+  return hash_state(*v.world()).world;
+}
+
+/// What differs between the world now and a hash taken before (for messages).
+std::string differences(Viewer& v, const StateHash& then) {
+  std::string out;
+  for (const std::string& d : hash_differences(then, hash_state(*v.world()))) out += d + "; ";
+  return out;
+}
+
+const PaletteEntry& entry(const std::string& label) {
+  for (const PaletteEntry& e : palette_entries())
+    if (e.label == label) return e;
+  ADD_FAILURE() << "no palette entry " << label;
+  return palette_entries().front();
+}
+
+void key(Viewer& v, SDL_Keycode k, Uint16 mod = KMOD_NONE) {
+  v.push_key(k, mod);
+  v.frame();
+}
+void click(Viewer& v, Vec2 at) {
+  v.push_mouse(SDL_MOUSEMOTION, at);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, at);
+  v.push_mouse(SDL_MOUSEBUTTONUP, at);
+  v.frame();
+}
+void drag(Viewer& v, Vec2 from, Vec2 to) {
+  v.push_mouse(SDL_MOUSEMOTION, from);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, from);
+  v.frame();
+  v.push_mouse(SDL_MOUSEMOTION, (from + to) * 0.5);
+  v.frame();
+  v.push_mouse(SDL_MOUSEMOTION, to);
+  v.frame();
+  v.push_mouse(SDL_MOUSEBUTTONUP, to);
+  v.frame();
+}
+
+std::string all_messages(Viewer& v) {
+  std::string s;
+  for (const auto& m : v.messages()) s += m + "\n";
+  return s;
+}
+
+/// Does `edit`, then checks that Ctrl+Z gives back the world's hash from
+/// before and Ctrl+Y the one after, twice over.
+void expect_undoable(Viewer& v, const std::string& what, const std::function<void()>& edit,
+                     std::size_t records = 1) {
+  SCOPED_TRACE(what);
+  const StateHash before_full = hash_state(*v.world());
+  const std::uint64_t before = before_full.world;
+  const std::size_t depth = v.history().undo_depth();
+  edit();
+  v.frame();
+  const StateHash after_full = hash_state(*v.world());
+  const std::uint64_t after = after_full.world;
+  ASSERT_NE(before, after) << what << " changed nothing";
+  ASSERT_EQ(v.history().undo_depth(), depth + records) << what << " was not recorded as asked";
+  for (std::size_t k = 1; k < records; ++k) key(v, SDLK_z, KMOD_LCTRL);
+  for (std::size_t k = 1; k < records; ++k) key(v, SDLK_y, KMOD_LCTRL);
+  ASSERT_EQ(hash(v), after) << "redo of the first steps of " << what;
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t k = 1; k < records; ++k) key(v, SDLK_z, KMOD_LCTRL);
+    key(v, SDLK_z, KMOD_LCTRL);
+    EXPECT_EQ(hash(v), before) << "undo of " << what << ": " << differences(v, before_full) << " / "
+                               << all_messages(v);
+    key(v, SDLK_y, KMOD_LCTRL);
+    for (std::size_t k = 1; k < records; ++k) key(v, SDLK_y, KMOD_LCTRL);
+    EXPECT_EQ(hash(v), after) << "redo of " << what << ": " << differences(v, after_full)
+                              << all_messages(v);
+  }
+}
+
+TEST(ViewerEditor, NewIsAnEmptyBoardWithAFloorAndUntitled) {
+  auto v = new_board();
+  ASSERT_TRUE(v->load_error().empty()) << v->load_error();
+  EXPECT_TRUE(v->untitled());
+  EXPECT_TRUE(bool(v->world()->find("floor")));
+  EXPECT_EQ(read_parts(*v->world()).size(), 1u);
+  EXPECT_FALSE(v->history().can_undo());
+}
+
+TEST(ViewerEditor, EveryKindOfEditIsUndoneAndRedoneToTheSameStateHash) {
+  auto v = new_board();
+  World& w = *v->world();
+  expect_undoable(*v, "add a bar", [&] { v->drop_part(entry("steel bar"), {0, 0.3}); });
+  const ObjectId bar = w.find("steel_bar");
+  ASSERT_TRUE(bool(bar));
+  expect_undoable(*v, "add a post", [&] { v->drop_part(entry("post"), {-0.2, 0.06}); });
+  expect_undoable(*v, "move by the hand", [&] { drag(*v, {0.02, 0.3}, {0.1, 0.4}); });
+  EXPECT_NEAR(test::position_of(w, "steel_bar").x, 0.08, 2e-3);  // to the pixel
+  v->select(bar);
+  expect_undoable(*v, "turn (E)", [&] { key(*v, SDLK_e); });
+  expect_undoable(*v, "pin (P)", [&] { key(*v, SDLK_p); });
+  key(*v, SDLK_p);  // unpinned again, itself an edit
+  expect_undoable(*v, "hinge to the board", [&] {
+    key(*v, SDLK_h);
+    click(*v, {0.08, 0.4});
+  });
+  expect_undoable(
+      *v, "glue",
+      [&] {
+        v->drop_part(entry("steel disk"), {-0.3, 0.5});
+        key(*v, SDLK_j);
+        click(*v, {-0.3, 0.5});
+      },
+      2);
+  expect_undoable(*v, "string", [&] {
+    key(*v, SDLK_t);
+    click(*v, {-0.2, 0.1});
+    click(*v, {-0.3, 0.5});
+  });
+  v->select(bar);
+  v->frame();
+  const auto handle = v->resize_handle();
+  ASSERT_TRUE(handle);
+  expect_undoable(*v, "resize by the handle", [&] { drag(*v, *handle, *handle + Vec2{0.05, 0}); });
+  expect_undoable(*v, "set a property", [&] {
+    v->edit("set", [&] { return v->editor().set_property(bar, "friction", 0.9); });
+  });
+  expect_undoable(*v, "material", [&] {
+    v->edit("material", [&] { return v->editor().set_material(bar, "wood"); });
+  });
+  expect_undoable(
+      *v, "battery and coil",
+      [&] {
+        v->drop_part(entry("battery"), {0.3, 0.2});
+        v->drop_part(entry("coil"), {0.3, 0.5});
+      },
+      2);
+  expect_undoable(*v, "wire", [&] {
+    key(*v, SDLK_w);
+    click(*v, {0.3 + 0.05, 0.2});
+    click(*v, {0.3 - 0.02, 0.5});
+  });
+  v->select(bar);
+  expect_undoable(*v, "remove (Delete)", [&] { key(*v, SDLK_DELETE); });
+  expect_undoable(*v, "reset", [&] { v->reset(); });
+  EXPECT_EQ(read_parts(*v->world()).size(), read_parts(*v->world()).size());
+}
+
+TEST(ViewerEditor, UndoWhileRunningTakesTheWorldBackToTheEdit) {
+  auto v = new_board();
+  v->set_paused(false);
+  v->drop_part(entry("rubber ball"), {0, 0.5});
+  const double t_edit = v->world()->time();
+  for (int i = 0; i < 20; ++i) v->frame();
+  ASSERT_GT(v->world()->time(), t_edit + 0.2);
+  key(*v, SDLK_z, KMOD_LCTRL);
+  EXPECT_FALSE(bool(v->world()->find("ball")));
+  EXPECT_LE(v->world()->time(), t_edit + 1.0 / 30);
+  key(*v, SDLK_y, KMOD_LCTRL);
+  EXPECT_TRUE(bool(v->world()->find("ball")));
+}
+
+TEST(ViewerEditor, AHingeAtAPointJoinsTheTwoPartsThereAndTurnsAbout) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("post"), {0, 0.06});
+  v->drop_part(entry("wooden plank"), {0.05, 0.13});
+  v->drop_part(entry("steel disk"), {0.15, 0.165});
+  key(*v, SDLK_h);
+  click(*v, {0, 0.121});  // where the plank lies on the post
+  const ObjectId hinge = w.find("hinge");
+  ASSERT_TRUE(bool(hinge)) << (v->messages().empty() ? "" : v->messages().back());
+  EXPECT_EQ(w.value<ObjectId>(hinge, "body_a"), w.find("plank"));
+  EXPECT_EQ(w.value<ObjectId>(hinge, "body_b"), w.find("post"));
+  EXPECT_EQ(v->selected(), hinge);
+  // The disk on the long arm turns the plank clockwise about the hinge.
+  v->set_paused(false);
+  for (int i = 0; i < 30; ++i) v->frame();
+  const Vec3 pivot = std::get<Vec3>(w.get(hinge, "anchor"));
+  EXPECT_NEAR(pivot.x, 0, 2e-3);
+  EXPECT_NEAR(pivot.y, 0.121, 2e-3);
+  const double angle = angle_z(std::get<Quat>(w.get(w.find("plank"), "orientation")));
+  EXPECT_LT(angle, -0.05);
+  // A click on a pivot selects the joint; Delete removes it.
+  v->set_paused(true);
+  key(*v, SDLK_ESCAPE);
+  click(*v, xy(pivot));
+  EXPECT_EQ(v->selected(), hinge);
+  key(*v, SDLK_DELETE);
+  EXPECT_FALSE(w.store().alive(hinge));
+}
+
+TEST(ViewerEditor, AHingeOnEmptyBoardOrOnAStaticPartAloneIsRefused) {
+  auto v = new_board();
+  key(*v, SDLK_h);
+  click(*v, {0.3, 0.5});
+  EXPECT_NE(v->messages().back().find("goes through a part"), std::string::npos);
+  key(*v, SDLK_h);
+  click(*v, {0.3, -0.01});  // the floor alone
+  EXPECT_NE(v->messages().back().find("static"), std::string::npos);
+  EXPECT_FALSE(v->history().can_undo());
+}
+
+TEST(ViewerEditor, AStringHangsABallFromAPostAndHoldsIt) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("shelf"), {0, 0.4});
+  v->drop_part(entry("rubber ball"), {0.0, 0.2});
+  key(*v, SDLK_t);
+  click(*v, {0.0, 0.39});
+  click(*v, {0.0, 0.21});
+  ASSERT_TRUE(bool(w.find("string_1"))) << v->messages().back();
+  v->set_paused(false);
+  for (int i = 0; i < 60; ++i) v->frame();
+  // Without the string the ball would have fallen to the floor (y = 0.02).
+  EXPECT_GT(test::position_of(w, "ball").y, 0.12);
+}
+
+TEST(ViewerEditor, TheResizeHandleGrowsABarAndItsMass) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  const ObjectId bar = w.find("steel_bar");
+  const double m0 = std::get<double>(w.get(bar, "mass"));
+  v->select(bar);
+  v->frame();
+  const Vec2 h = *v->resize_handle();
+  EXPECT_NEAR(h.x, 0.075, 1e-9);
+  drag(*v, h, {0.15, 0.31});
+  const Vec3 size = std::get<Vec3>(w.get(bar, "size"));
+  EXPECT_NEAR(size.x, 0.3, 2e-3);
+  EXPECT_NEAR(size.y, 0.02, 2e-3);
+  EXPECT_NEAR(std::get<double>(w.get(bar, "mass")), m0 * size.x * size.y / (0.15 * 0.01), 1e-9);
+}
+
+TEST(ViewerEditor, TheInspectorRefusesAValueOutOfRangeAndSaysTheRange) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  const ObjectId bar = w.find("steel_bar");
+  const EditResult r = v->edit("set", [&] { return v->editor().set_property(bar, "mass", -1.0); });
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("steel_bar.mass"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("kg"), std::string::npos) << r.message;
+  EXPECT_EQ(v->history().undo_depth(), 1u);  // the drop only
+  const EditResult m = v->edit("mat", [&] { return v->editor().set_material(bar, "wood"); });
+  ASSERT_TRUE(m.ok) << m.message;
+  EXPECT_EQ(std::get<double>(w.get(bar, "density")), 700);
+  EXPECT_NEAR(std::get<double>(w.get(bar, "mass")), 700 * 0.15 * 0.01 * 0.01, 1e-12);
+  EXPECT_FALSE(w.value<bool>(bar, "conductive").has_value());
+  EXPECT_FALSE(v->editor().set_material(bar, "cheese").ok);
+}
+
+TEST(ViewerEditor, ScriptKeysTakeModifiersAndPaletteEntriesByLabel) {
+  const auto events = parse_script("1 key ctrl+shift+s\n2 palette steel bar\n3 text a.lua\n", "s");
+  ASSERT_EQ(events.size(), 3u);
+  EXPECT_EQ(events[0].key, "s");
+  EXPECT_TRUE(events[0].ctrl);
+  EXPECT_TRUE(events[0].shift);
+  EXPECT_EQ(events[1].kind, ScriptEvent::Kind::Palette);
+  EXPECT_EQ(events[1].key, "steel bar");
+  EXPECT_EQ(events[2].kind, ScriptEvent::Kind::Text);
+  EXPECT_THROW(parse_script("1 palette\n", "s"), InputError);
+}
+
+/// The lever of docs/kit.md: a post, a plank hinged on it, a disk glued to
+/// its long arm, saved with Ctrl+Shift+S, all from a script.
+std::string lever_script(const fs::path& save_to) {
+  std::ostringstream s;
+  s << "0 key space\n"  // pause while building
+    << "2 palette post\n3 press 0 0.06\n4 release 0 0.06\n"
+    << "6 palette wooden plank\n7 press 0.05 0.13\n8 release 0.05 0.13\n"
+    << "10 key h\n11 press 0 0.121\n12 release 0 0.121\n"
+    << "14 palette steel disk\n15 press 0.15 0.165\n16 release 0.15 0.165\n"
+    << "18 key j\n19 press 0.15 0.142\n20 release 0.15 0.142\n"
+    << "22 key ctrl+shift+s\n24 text " << save_to.string() << "\n26 key Return\n";
+  return s.str();
+}
+
+TEST(ViewerEditor, AScriptBuildsALeverOnAHingeFromAnEmptyBoardAndAlloyRunRunsItTheSame) {
+  const fs::path dir = test::temp_dir();
+  const fs::path saved = dir / "lever.lua";
+  fs::remove(saved);
+  ViewerOptions o = test::headless("");
+  auto v = std::make_unique<Viewer>(o);
+  v->add_script(parse_script(lever_script(saved), "lever.script"));
+  for (int i = 0; i < 30; ++i) v->frame();
+  ASSERT_TRUE(fs::exists(saved)) << (v->messages().empty() ? "" : v->messages().back());
+  EXPECT_FALSE(v->untitled());
+  EXPECT_FALSE(v->history().dirty());
+  World& w = *v->world();
+  ASSERT_TRUE(bool(w.find("hinge")));
+  ASSERT_TRUE(bool(w.find("glue")));
+  ASSERT_EQ(w.time(), 0);  // built paused: the file holds the world at t = 0
+  {
+    // The file holds the world as it is: the same state hash at t = 0.
+    test::Loaded l0 = test::load(saved);
+    l0.world().start();
+    EXPECT_EQ(hex(hash_state(l0.world()).world), hex(hash_state(w).world));
+  }
+  // The viewer runs it for 0.5 s ...
+  const int steps = int(std::lround(0.5 / w.dt()));
+  for (int i = 0; i < steps; ++i) v->step_once();
+  v->frame();
+  ASSERT_EQ(w.step_count(), std::uint64_t(steps));
+  const double angle = angle_z(std::get<Quat>(w.get(w.find("plank"), "orientation")));
+  EXPECT_LT(angle, -0.1);  // the disk's side went down
+  // ... and so does the saved scene loaded afresh: the same bits.
+  test::Loaded l = test::load(saved);
+  l.world().start();
+  for (int i = 0; i < steps; ++i) l.world().step();
+  EXPECT_EQ(hex(hash_state(l.world()).world), hex(hash_state(w).world));
+#ifdef ALLOY_BINARY
+  // And `alloy run`, the command a player would use.
+  const std::string cmd = std::string(ALLOY_BINARY) + " run " + saved.string() + " --steps " +
+                          std::to_string(steps) + " --hash --quiet 2>&1";
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  ASSERT_TRUE(pipe);
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
+  ::pclose(pipe);
+  EXPECT_NE(out.find(hex(hash_state(w).world)), std::string::npos) << out;
+#endif
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(ViewerEditor, NewAsksFirstWhenEditsAreNotSavedAndEscapeKeepsThem) {
+  auto v = new_board();
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  ASSERT_TRUE(v->history().dirty());
+  key(*v, SDLK_n, KMOD_LCTRL);
+  EXPECT_TRUE(bool(v->world()->find("steel_bar")));  // asked, not done
+  key(*v, SDLK_ESCAPE);
+  key(*v, SDLK_n, KMOD_LCTRL);  // asked again: the popup had closed
+  EXPECT_TRUE(bool(v->world()->find("steel_bar")));
+  key(*v, SDLK_RETURN);
+  EXPECT_FALSE(bool(v->world()->find("steel_bar")));
+  EXPECT_FALSE(v->history().can_undo());
+  EXPECT_TRUE(v->untitled());
+}
+
+TEST(ViewerEditor, SaveOfAnUntitledBoardAsksForANameAndOpenLoadsIt) {
+  auto v = new_board();
+  v->drop_part(entry("rubber ball"), {0, 0.3});
+  const fs::path file = test::temp_dir() / "ball.lua";
+  fs::remove(file);
+  key(*v, SDLK_s, KMOD_LCTRL);  // untitled: Save is Save as
+  EXPECT_FALSE(fs::exists(file));
+  v->add_script(parse_script("1 text " + file.string() + "\n3 key Return\n", "t"));
+  for (int i = 0; i < 5; ++i) v->frame();  // the field takes the focus a frame after it opens
+  ASSERT_TRUE(fs::exists(file)) << all_messages(*v);
+  EXPECT_EQ(v->save_path(), file.string());
+  EXPECT_FALSE(v->untitled());
+  auto w = new_board();
+  EXPECT_FALSE(w->open(test::temp_dir() / "no_such.lua"));
+  EXPECT_TRUE(w->open(file));
+  EXPECT_TRUE(bool(w->world()->find("ball")));
+}
+
+}  // namespace
+}  // namespace alloy::viewer
