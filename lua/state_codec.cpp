@@ -70,7 +70,6 @@ class Encoder {
       : L_(L), mod_(mod), lim_(lim) {}
 
   std::vector<std::byte> run(int index) {
-    path_.push_back("state");
     if (lua_type(L_, index) != LUA_TTABLE)
       fail(std::string("is a ") + type_name(index) + ", not a table");
     put_byte(kStateFormat);
@@ -79,10 +78,16 @@ class Encoder {
   }
 
  private:
+  // The key path is kept as keys and written out only for an error: a
+  // snapshot of a large state formats nothing.
+  std::string path_text(std::size_t keys) const {
+    std::string path = "state";
+    for (std::size_t k = 0; k < keys; ++k)
+      path += key_text(path_[k].type, path_[k].number, path_[k].text);
+    return path;
+  }
   [[noreturn]] void fail(const std::string& what) const {
-    std::string path;
-    for (const auto& p : path_) path += p;
-    throw InputError("mod '" + mod_ + "': " + path + " " + what);
+    throw InputError("mod '" + mod_ + "': " + path_text(path_.size()) + " " + what);
   }
   std::string type_name(int index) const {
     const int t = lua_type(L_, index);
@@ -151,9 +156,7 @@ class Encoder {
     const void* self = lua_topointer(L_, index);
     for (std::size_t i = 0; i < on_path_.size(); ++i)
       if (on_path_[i] == self) {
-        std::string back;
-        for (std::size_t k = 0; k <= i; ++k) back += path_[k];
-        fail("is " + back + " again: a cycle (a state is a tree of tables)");
+        fail("is " + path_text(i) + " again: a cycle (a state is a tree of tables)");
       }
     if (!seen_.insert(self).second)
       fail(
@@ -194,7 +197,7 @@ class Encoder {
         put_text(k.text);
         lua_pushlstring(L_, k.text.data(), k.text.size());
       }
-      path_.push_back(key_text(k.type, k.number, k.text));
+      path_.push_back(k);
       lua_rawget(L_, index);
       value(-1, depth);
       lua_pop(L_, 1);
@@ -208,7 +211,7 @@ class Encoder {
   const StateLimits& lim_;
   std::vector<std::byte> out_;
   std::size_t entries_ = 0;
-  std::vector<std::string> path_;
+  std::vector<Key> path_;  // on_path_[i] is the table at path_[0 .. i)
   std::vector<const void*> on_path_;
   std::unordered_set<const void*> seen_;
 };
