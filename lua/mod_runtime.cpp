@@ -324,6 +324,88 @@ void ModRuntime::attach(World& world) {
   world.add_observer([weak](const Event& e) {
     if (auto p = weak.lock(); p && *p) (*p)->dispatch(e);
   });
+  world.add_state_owner(StateOwner{[weak](Snapshot& out) {
+                                     if (auto p = weak.lock(); p && *p) (*p)->save_states(out);
+                                   },
+                                   [weak](const Snapshot& in) -> std::function<void()> {
+                                     if (auto p = weak.lock(); p && *p)
+                                       return (*p)->prepare_states(in);
+                                     return {};
+                                   }});
+}
+
+void ModRuntime::save_states(Snapshot& out) {
+  for (const auto& l : mods_)
+    out.mod_states.push_back(
+        {l->state->name(), l->state->manifest().version, l->state->save_state()});
+}
+
+namespace {
+
+// New state tables not yet committed: freed if the restore is abandoned.
+struct PreparedStates {
+  std::vector<std::pair<std::shared_ptr<ModState>, int>> tables;
+  bool committed = false;
+  PreparedStates() = default;
+  PreparedStates(const PreparedStates&) = delete;
+  PreparedStates& operator=(const PreparedStates&) = delete;
+  ~PreparedStates() {
+    if (!committed)
+      for (auto& [mod, ref] : tables) mod->drop_state(ref);
+  }
+};
+
+}  // namespace
+
+std::function<void()> ModRuntime::prepare_states(const Snapshot& in) {
+  for (std::size_t i = 0; i < in.mod_states.size(); ++i) {
+    const Snapshot::ModState& m = in.mod_states[i];
+    if (!find(m.mod)) {
+      std::string loaded;
+      for (const auto& l : mods_) loaded += (loaded.empty() ? "" : ", ") + l->state->name();
+      throw InputError("cannot restore the snapshot: it holds the state of mod '" + m.mod +
+                       "' (version " + m.version +
+                       "), which is not loaded (loaded: " + (loaded.empty() ? "none" : loaded) +
+                       "); load the mod, or its state would be lost");
+    }
+    for (std::size_t j = 0; j < i; ++j)
+      if (in.mod_states[j].mod == m.mod)
+        throw InputError("cannot restore the snapshot: it holds the state of mod '" + m.mod +
+                         "' twice");
+  }
+  auto prepared = std::make_shared<PreparedStates>();
+  std::vector<std::pair<std::string, std::string>> notes;  // mod, text
+  for (const auto& l : mods_) {
+    const std::shared_ptr<ModState>& mod = l->state;
+    const auto it = std::find_if(in.mod_states.begin(), in.mod_states.end(),
+                                 [&](const Snapshot::ModState& m) { return m.mod == mod->name(); });
+    int ref = -2;
+    if (it == in.mod_states.end()) {
+      ref = mod->prepare_fresh_state();
+      notes.emplace_back(
+          mod->name(),
+          "mod '" + mod->name() + "': the snapshot holds no state of it; it starts with a new one");
+    } else {
+      bool migrated = false;
+      ref = mod->prepare_state(it->bytes, it->version, &migrated);
+      if (migrated)
+        notes.emplace_back(mod->name(), "mod '" + mod->name() + "': state of version " +
+                                            it->version + " migrated to " +
+                                            mod->manifest().version + " by on_migrate");
+      else if (it->version != mod->manifest().version)
+        notes.emplace_back(mod->name(), "mod '" + mod->name() + "': state of version " +
+                                            it->version + " restored as it is into version " +
+                                            mod->manifest().version +
+                                            " (the mod has no on_migrate)");
+    }
+    prepared->tables.emplace_back(mod, ref);
+  }
+  return [this, prepared, notes = std::move(notes)] {
+    if (prepared->committed) return;
+    prepared->committed = true;
+    for (auto& [mod, ref] : prepared->tables) mod->commit_state(ref);
+    for (const auto& [mod, text] : notes) report({ModReport::Kind::Note, mod, text});
+  };
 }
 
 ModReport ModRuntime::reload(const std::string& name) {

@@ -98,8 +98,23 @@ class ModRuntime {
   void load(const Manifest& manifest);
 
   /// The world whose stages the mods' plugins make: events and handlers go
-  /// through it, and reloads tell it which plugins changed. One world.
+  /// through it, and reloads tell it which plugins changed; its snapshots
+  /// hold each mod's state table (save_states, prepare_states). One world.
   void attach(World& world);
+
+  // --- the mods' state in snapshots (docs/modding.md, "Mod state and migrations") ----
+  /// Adds each loaded mod's state table, encoded, to `out.mod_states`, in
+  /// load order. Throws InputError naming the mod and the key path of a value
+  /// a state may not hold (the snapshot is then not taken).
+  void save_states(Snapshot& out);
+  /// Reads `in.mod_states` for a restore: every mod it names must be loaded
+  /// (else an InputError naming it); each state is checked and decoded, and a
+  /// state saved by another version of its mod goes through the mod's
+  /// on_migrate(old_version, state), once; a loaded mod the snapshot does not
+  /// hold gets a new state and its on_load. Nothing changes until the
+  /// returned commit is called (World::restore calls it when the world takes
+  /// the snapshot); an error in any mod changes nothing in any.
+  std::function<void()> prepare_states(const Snapshot& in);
   World* world() const { return world_; }
 
   /// Reloads `name` from disk as a transaction; never throws for the mod's

@@ -776,7 +776,8 @@ std::unique_ptr<Program> ModState::load_program() {
     lua_rawgeti(L, LUA_REGISTRYINDEX, c.mod_ref);
     for (auto [key, ref] : {std::pair<const char*, int*>{"on_load", &prog->on_load},
                             {"on_reload", &prog->on_reload},
-                            {"on_unload", &prog->on_unload}}) {
+                            {"on_unload", &prog->on_unload},
+                            {"on_migrate", &prog->on_migrate}}) {
       lua_getfield(L, -1, key);
       if (lua_isfunction(L, -1))
         *ref = luaL_ref(L, LUA_REGISTRYINDEX);
@@ -815,7 +816,7 @@ void ModState::release(Program& p) {
   lua_State* L = host_->state();
   for (auto& s : p.stages) luaL_unref(L, LUA_REGISTRYINDEX, s.def_ref), s.def_ref = -2;
   for (auto& [type, ref] : p.handlers) luaL_unref(L, LUA_REGISTRYINDEX, ref), ref = -2;
-  for (int* r : {&p.on_load, &p.on_reload, &p.on_unload})
+  for (int* r : {&p.on_load, &p.on_reload, &p.on_unload, &p.on_migrate})
     if (*r != -2) luaL_unref(L, LUA_REGISTRYINDEX, *r), *r = -2;
   p.loader.reset();
 }
@@ -848,6 +849,120 @@ void ModState::call_hook(int ref, const char* what) {
   }
   end_call();
   if (stopped_) throw InputError(stop_reason_);
+}
+
+std::vector<std::byte> ModState::save_state() {
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+  push_state();
+  return encode_state(L, -1, manifest_.name, state_limits());
+}
+
+void ModState::call_state_hook(int fn, const char* what, int state_ref, const std::string* from) {
+  lua_State* L = host_->state();
+  const bool was_stopped = stopped_;
+  const std::string in = "mod '" + manifest_.name + "': " + what + " failed: ";
+  if (was_stopped)
+    throw InputError(in + "the mod is stopped (" + stop_message_ + "); reload it first");
+  // A stop in the hook is undone: the restore that called it is refused as a
+  // whole, and the mod goes on as it was.
+  auto unstop = [&] {
+    if (was_stopped || !stopped_) return;
+    stopped_ = false;
+    stop_reported = false;
+    stop_event_sent = false;
+    abi_budget_->stopped = 0;
+    stop_reason_.clear();
+    stop_message_.clear();
+    stop_unplaced_ = false;
+  };
+  lua_rawgeti(L, LUA_REGISTRYINDEX, fn);
+  if (from) lua_pushlstring(L, from->data(), from->size());
+  lua_rawgeti(L, LUA_REGISTRYINDEX, state_ref);
+  begin_loading();
+  try {
+    host_->call(from ? 2 : 1, 1,
+                ErrorLocation{display_path(manifest_.folder / runtime_file()), 0, ""});
+  } catch (const InputError& e) {
+    end_call();
+    place_stop(e.where());
+    const InputError b = bounded(e);
+    unstop();
+    throw InputError(b.where(), in + b.bare());
+  }
+  end_call();
+  if (stopped_ && !was_stopped) {
+    const std::string why = stop_message_;
+    unstop();
+    lua_pop(L, 1);
+    throw InputError(in + why);
+  }
+}
+
+int ModState::prepare_state(const std::vector<std::byte>& bytes, const std::string& from,
+                            bool* migrated) {
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+  const StateLimits limits = state_limits();
+  check_state(bytes, manifest_.name, limits);
+  std::string error;
+  if (!decode_state(L, bytes, &error))
+    throw InputError("mod '" + manifest_.name + "': its saved state of " +
+                     std::to_string(bytes.size()) +
+                     " bytes does not fit in its Lua state: " + error);
+  int ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  if (migrated) *migrated = false;
+  if (from == manifest_.version || !program_ || program_->on_migrate == -2) return ref;
+  const std::string what =
+      "on_migrate(\"" + from + "\", state) (to version " + manifest_.version + ")";
+  try {
+    call_state_hook(program_->on_migrate, what.c_str(), ref, &from);
+    if (!lua_isnil(L, -1) && !lua_istable(L, -1))
+      throw InputError("mod '" + manifest_.name + "': " + what + " returned a " +
+                       luaL_typename(L, -1) + "; return the state table, or nothing");
+    if (lua_istable(L, -1)) {
+      luaL_unref(L, LUA_REGISTRYINDEX, ref);
+      ref = luaL_ref(L, LUA_REGISTRYINDEX);
+    }
+    lua_rawgeti(L, LUA_REGISTRYINDEX, ref);
+    try {
+      (void)encode_state(L, -1, manifest_.name, limits);  // what it made must be a state
+    } catch (const InputError& e) {
+      throw InputError("after " + what + ": " + e.bare());
+    }
+  } catch (...) {
+    luaL_unref(L, LUA_REGISTRYINDEX, ref);
+    throw;
+  }
+  if (migrated) *migrated = true;
+  return ref;
+}
+
+int ModState::prepare_fresh_state() {
+  lua_State* L = host_->state();
+  StackGuard guard(L);
+  lua_newtable(L);
+  const int ref = luaL_ref(L, LUA_REGISTRYINDEX);
+  if (!program_ || program_->on_load == -2) return ref;
+  try {
+    call_state_hook(program_->on_load, "on_load(state) (the snapshot holds no state of the mod)",
+                    ref, nullptr);
+  } catch (...) {
+    luaL_unref(L, LUA_REGISTRYINDEX, ref);
+    throw;
+  }
+  return ref;
+}
+
+void ModState::commit_state(int ref) {
+  lua_State* L = host_->state();
+  luaL_unref(L, LUA_REGISTRYINDEX, state_ref_);
+  state_ref_ = ref;
+  for (LuaStage* s : stages_) s->reset_state();
+}
+
+void ModState::drop_state(int ref) {
+  luaL_unref(host_->state(), LUA_REGISTRYINDEX, ref);
 }
 
 void ModState::detach(LuaStage* s) {

@@ -25,6 +25,7 @@
 #include "lua/lua_host.hpp"
 #include "lua/mod_loader.hpp"
 #include "lua/stage_abi.hpp"
+#include "lua/state_codec.hpp"
 #include "runtime/stage.hpp"
 
 namespace alloy::lua {
@@ -72,6 +73,14 @@ struct ModBudget {
   /// a runaway loop: only for trusted code, and to measure what they cost
   /// (bench/lua_stage.cpp).
   bool ticks = true;
+  /// The mod's `state` table as snapshots and saves hold it (state_codec.hpp,
+  /// docs/modding.md "Mod state and migrations"): its encoded bytes, its
+  /// entries (keys, over all its tables) and how deeply its tables nest (the
+  /// state itself is 1). A snapshot of a state past one is refused, naming
+  /// the mod and the key; so is a saved state past one when restored.
+  std::size_t state_bytes = 16u << 20;
+  std::size_t state_entries = 1'000'000;
+  std::size_t state_depth = 64;
 };
 
 /// The kind of one argument of an interaction function, after the object.
@@ -115,7 +124,8 @@ struct Program {
   std::vector<StageDecl> stages;
   std::vector<std::pair<std::string, int>> handlers;  ///< event type ("*": all), function ref
   int on_load = -2, on_reload = -2, on_unload = -2;   ///< function refs, or -2
-  std::vector<std::string> files;                     ///< display names of the files it ran
+  int on_migrate = -2;             ///< on_migrate(old_version, state) -> state, or -2
+  std::vector<std::string> files;  ///< display names of the files it ran
   /// The loader that ran them: `require` in the mod's functions goes on
   /// using its module cache for as long as the program runs.
   std::shared_ptr<ModLoader> loader;
@@ -159,6 +169,31 @@ class ModState : public std::enable_shared_from_this<ModState> {
 
   /// Pushes the mod's state table (the same table across reloads).
   void push_state();
+
+  // --- the state table in snapshots (state_codec.hpp) -------------------------------
+  StateLimits state_limits() const {
+    return {budget_.state_bytes, budget_.state_entries, budget_.state_depth};
+  }
+  /// The state table, encoded. Throws InputError naming the mod and the key
+  /// path of what cannot be saved.
+  std::vector<std::byte> save_state();
+  /// A new state table from `bytes`, saved by version `from` of the mod:
+  /// checked, decoded and, when `from` is not the manifest's version, passed
+  /// through the program's on_migrate(from, state) under the load budget (its
+  /// result, or the table it changed, checked as a state). Returns the
+  /// table's registry ref, for commit_state or drop_state. Throws InputError
+  /// naming the mod; the current state, the program and the mod's stop flag
+  /// are as they were. `migrated` tells whether on_migrate ran.
+  int prepare_state(const std::vector<std::byte>& bytes, const std::string& from,
+                    bool* migrated = nullptr);
+  /// A new, empty state table given to on_load (a mod a snapshot did not
+  /// hold starts as if just loaded). Same contract as prepare_state.
+  int prepare_fresh_state();
+  /// Makes the table `ref` the state (its live stages see it as w.state)
+  /// and frees the old one.
+  void commit_state(int ref);
+  /// Frees a prepared table that will not be used.
+  void drop_state(int ref);
   /// Lifts a budget stop before a reload, with a new, empty state table (the
   /// old one may be half-updated: the mod was stopped in the middle of its
   /// work) and a full collection. restop() puts the stop back if the reload
@@ -241,6 +276,10 @@ class ModState : public std::enable_shared_from_this<ModState> {
   static int over_budget(lua_State* L);
   static int print_fn(lua_State* L);
   [[noreturn]] void stop(lua_State* L, const std::string& why);
+  // Calls hook `fn` with (`from`, state `state_ref`) or (state `state_ref`)
+  // under the load budget; a failure or a budget stop is an InputError that
+  // leaves the mod as it was (not stopped). Leaves the hook's result pushed.
+  void call_state_hook(int fn, const char* what, int state_ref, const std::string* from);
   // Stops the mod without raising (the caller refuses what it was asked and
   // the error unwinds the mod's code); place_stop adds the location later.
   void mark_stopped(const std::string& why);

@@ -6,10 +6,12 @@
 // the time and the fixed step, the timeline's pending inputs and swaps, the
 // stage set (which plugins are swapped in or out, globally and per area),
 // each object's area, the frozen objects, and each stage's own state
-// (Stage::save_state). It does not hold the registry's definitions, the
-// plugins' code or settings, the mods' Lua state, observers, events already
-// published or profile timings: those come from the world it is restored
-// into, which must be built from the same scene.
+// (Stage::save_state), and each mod's `state` table (mod_states, filled by
+// the mods' runtime through World::add_state_owner). It does not hold the
+// registry's definitions, the plugins' code or settings, the rest of the
+// mods' Lua state (upvalues, globals), observers, events already published
+// or profile timings: those come from the world it is restored into, which
+// must be built from the same scene.
 //
 // Columns are immutable once taken and shared between copies of a snapshot,
 // and between a delta snapshot and its base (World::snapshot(&base)): a
@@ -54,6 +56,25 @@ struct Snapshot {
     std::vector<std::byte> bytes;
   };
 
+  /// One mod's `state` table (docs/modding.md, "Mod state and migrations").
+  ///
+  /// For a save file: write `mod`, `version` and `bytes` as they are (two
+  /// strings and a byte string); nothing in them refers to anything else in
+  /// the snapshot but object slots, which the object table keeps valid.
+  /// `bytes` is the state codec's output (lua/state_codec.hpp, format
+  /// "alloy-mod-state-1"): a version byte, then the table as a tree of
+  /// tagged values with keys in sorted order and numbers as their exact
+  /// bits, so that equal states give equal bytes. Restore checks every byte
+  /// (a damaged one is an InputError naming the mod), refuses a mod that is
+  /// not loaded, and runs the mod's on_migrate(version, state) when `version`
+  /// differs from the loaded mod's.
+  struct ModState {
+    std::string mod;               ///< the mod's name (its manifest's `name`)
+    std::string version;           ///< its manifest's `version` when the snapshot was taken
+    std::vector<std::byte> bytes;  ///< the state table, encoded
+    friend bool operator==(const ModState&, const ModState&) = default;
+  };
+
   std::uint64_t step = 0;  ///< World::step_count()
   double time = 0;         ///< World::time(), s
   double dt = 0;           ///< the fixed step, s
@@ -68,8 +89,11 @@ struct Snapshot {
   std::map<std::string, std::string> use;  ///< provider chosen for each thing, after swaps
   std::vector<std::string> stages;         ///< active stage instances, in run order
   std::vector<StageState> stage_states;    ///< the stages that saved something, in run order
-  std::vector<Input> inputs;               ///< pending, in the order they will be applied
-  std::vector<Swap> swaps;                 ///< pending, by time
+  /// Every loaded mod with a runtime, in load order (empty in a world without
+  /// mods). A world whose mods' runtime is not attached ignores them.
+  std::vector<ModState> mod_states;
+  std::vector<Input> inputs;  ///< pending, in the order they will be applied
+  std::vector<Swap> swaps;    ///< pending, by time
   /// The store it was taken from (PropertyStore::lineage), for deltas.
   std::uint64_t lineage = 0;
 

@@ -950,6 +950,7 @@ Snapshot::Size Snapshot::size(const Snapshot* base) const {
   z.bytes += frozen.size() * sizeof(ObjectId) + inputs.size() * sizeof(Input) +
              swaps.size() * sizeof(Swap);
   for (const auto& st : stage_states) z.bytes += st.bytes.size() + st.stage.size();
+  for (const auto& m : mod_states) z.bytes += m.bytes.size() + m.mod.size() + m.version.size();
   return z;
 }
 
@@ -1005,6 +1006,8 @@ Snapshot World::snapshot(const Snapshot* base) const {
     s.inputs.push_back({in.time, in.id, properties().def(in.property).name, in.value});
   }
   for (const ScheduledSwap& sw : swaps_) s.swaps.push_back({sw.time, sw.area, sw.from, sw.to});
+  for (const StateOwner& o : state_owners_)
+    if (o.save) o.save(s);
   return s;
 }
 
@@ -1055,8 +1058,16 @@ void World::restore(const Snapshot& s) {
       if (!plugins_.find(name))
         refuse("an area uses plugin '" + name + "', which is not registered");
 
+  // Owners of outside state (the mods) read and check theirs, and run their
+  // migrations, while everything can still be refused.
+  std::vector<std::function<void()>> commits;
+  for (const StateOwner& o : state_owners_)
+    if (o.prepare)
+      if (auto c = o.prepare(s)) commits.push_back(std::move(c));
+
   // The store checks its object table before it changes anything.
   store_.restore(s.objects, columns);
+  for (auto& c : commits) c();
   slots_.clear();
   resolvers_.clear();
   derived_.clear();

@@ -26,6 +26,7 @@
 #include "runtime/plugin_registry.hpp"
 #include "runtime/profile.hpp"
 #include "runtime/snapshot.hpp"
+#include "runtime/state_owner.hpp"
 
 namespace alloy {
 
@@ -238,6 +239,9 @@ class World {
   void restore(const Snapshot& snapshot);
   /// What each active stage saves of itself (Stage::save_state), in run order.
   std::vector<Snapshot::StageState> stage_states() const;
+  /// State outside the world that its snapshots carry (state_owner.hpp): the
+  /// mods' state tables. Owners are asked in the order they were added.
+  void add_state_owner(StateOwner owner) { state_owners_.push_back(std::move(owner)); }
 
   // --- stages -----------------------------------------------------------------
   /// Stages are named after their plugin, with "@area" for a stage of an area
@@ -354,6 +358,7 @@ class World {
   mutable std::vector<Event> pending_;
   std::vector<Event> published_;
   std::vector<Observer> observers_;
+  std::vector<StateOwner> state_owners_;
   Profile profile_;
 };
 
