@@ -269,7 +269,7 @@ TEST(SceneRestore, Doorbell) {
   expect_restores("doorbell", {1, 40, 97, 161, 250, 377});
 }
 TEST(SceneRestore, Motor) {
-  expect_restores("motor", {1, 40});
+  expect_restores("motor", {1, 40, 121, 200, 311});
 }
 
 }  // namespace
