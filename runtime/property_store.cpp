@@ -298,4 +298,12 @@ void PropertyStore::restore(const Objects& objects, const std::vector<const Colu
   refresh();
 }
 
+std::size_t PropertyStore::reinstate(const std::vector<const ColumnBase*>& columns) {
+  std::size_t n = 0;
+  for (PropertyId p = 0; p < registry_.size() && p < columns.size(); ++p)
+    if (columns[p] && column(p).reinstate(*columns[p])) ++n;
+  if (n) refresh();
+  return n;
+}
+
 }  // namespace alloy

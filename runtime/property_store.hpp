@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <span>
@@ -74,6 +75,11 @@ class ColumnBase {
   /// `slots` slots, none carrying the property (a restore that has no
   /// values for it); moves both change counters.
   virtual void clear(std::size_t slots) = 0;
+  /// Takes the values of `from` (a clone of a column of the same kind) if
+  /// some differ from ours in a bit: moves the value counter only, or both
+  /// when the presence flags differ too (then as assign). Returns whether
+  /// anything changed.
+  virtual bool reinstate(const ColumnBase& from) = 0;
   /// Returns false if the value has the wrong type.
   virtual bool set_value(std::uint32_t slot, const PropertyValue& v) = 0;
 
@@ -168,6 +174,24 @@ class Column final : public ColumnBase {
     values_.assign(slots, T{});
     present_.assign(slots, 0);
     moved();
+  }
+  bool reinstate(const ColumnBase& from) override {
+    const auto& f = static_cast<const Column<T>&>(from);
+    if (present_ != f.present_) {
+      assign(from);
+      return true;
+    }
+    bool same;
+    if constexpr (std::is_trivially_copyable_v<T>)  // bits: -0.0 is not 0.0, NaN is NaN
+      same = values_.size() == f.values_.size() &&
+             (values_.empty() ||
+              std::memcmp(values_.data(), f.values_.data(), values_.size() * sizeof(T)) == 0);
+    else
+      same = values_ == f.values_;
+    if (same) return false;
+    values_ = f.values_;
+    ++version_;
+    return true;
   }
   void moved() {
     members_dirty_ = true;
@@ -270,6 +294,10 @@ class PropertyStore {
   /// structural change: every resolver rebuilds at the next sync. The caller
   /// checks that each clone has its property's kind.
   void restore(const Objects& objects, const std::vector<const ColumnBase*>& columns);
+  /// After restore: puts back the values of `columns` (as given to restore)
+  /// wherever a stage's rebuild wrote other bits into them. Returns how many
+  /// columns it put back.
+  std::size_t reinstate(const std::vector<const ColumnBase*>& columns);
 
  private:
   friend class ResolverAccess;  // the only way to a writable column

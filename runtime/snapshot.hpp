@@ -79,6 +79,10 @@ struct Snapshot {
   double time = 0;         ///< World::time(), s
   double dt = 0;           ///< the fixed step, s
   bool started = false;    ///< taken after World::start() (stages built and primed)
+  /// A structure sync (every resolver rebuilt) is due at the next step: the
+  /// last step changed memberships (a resolver gave objects a column), or an
+  /// object was frozen. The restored world resyncs then too.
+  bool resync = false;
   PropertyStore::Objects objects;
   std::vector<Column> columns;    ///< every column the world had, by property name
   std::vector<ObjectId> frozen;   ///< World::frozen_objects()

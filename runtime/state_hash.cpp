@@ -113,6 +113,7 @@ StateHash hash_state(const Snapshot& s) {
   put(b, s.time);
   put(b, s.dt);
   put(b, std::uint8_t(s.started ? 1 : 0));
+  put(b, std::uint8_t(s.resync ? 1 : 0));
   put(b, std::uint64_t(s.inputs.size()));
   for (const auto& in : s.inputs) {
     put(b, in.time);

@@ -18,7 +18,7 @@
 //             hashed, so a lookup that created an empty column changes nothing.
 //   objects   slot count (u64); per slot its generation (u32), alive flag
 //             (u8) and name; the free list: count (u64), slots (u32) in order.
-//   schedule  step (u64), time (f64), dt (f64), started (u8); the pending
+//   schedule  step (u64), time (f64), dt (f64), started (u8), resync (u8); the pending
 //             inputs: count, then each one's time, object id, property name,
 //             value kind (u8, PropertyValue's index) and value; the pending
 //             swaps: count, then each one's time, area, from, to.

@@ -976,6 +976,8 @@ Snapshot World::snapshot(const Snapshot* base) const {
   s.time = time_;
   s.dt = def_.dt;
   s.started = started_;
+  s.resync = started_ && (!synced_ || frozen_changed_ || seen_structure_ != store_.structure_version() ||
+                          seen_by_resolvers_ != store_.resolver_membership_version());
   s.objects = store_.objects();
   s.lineage = store_.lineage();
   const bool delta = base && base->lineage == s.lineage;
@@ -1112,6 +1114,10 @@ void World::restore(const Snapshot& s) {
     throw InputError("restored the snapshot, but this world instantiates the stages" + now +
                      " where the snapshot had" + then);
   }
+  // A build derives some properties again from the others (the rigid body
+  // writes back each pose it normalised): the snapshot's bits are the truth,
+  // put back before the stages take their own state from it.
+  store_.reinstate(columns);
   for (const Snapshot::StageState& st : s.stage_states) {
     Slot* slot = find_slot(st.stage);
     if (!slot)
@@ -1143,6 +1149,9 @@ void World::restore(const Snapshot& s) {
   pending_.clear();  // their events were published before the snapshot
   for (auto& slot : slots_) slot->primed = true;
   primed_ = true;
+  // The run that took the snapshot rebuilds every resolver at its next step:
+  // so does this one (the rebuild is not neutral: it measures from properties).
+  if (s.resync) synced_ = false;
 }
 
 }  // namespace alloy

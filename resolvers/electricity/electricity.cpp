@@ -452,6 +452,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   take_resistance_commands(access);
   const double h = dt / config_.substeps;
   if (dirty_ || h != h_ || inputs_changed(access)) build_network(access, h);
+  if (restored_) apply_restored();
 
   // The state is in properties (written at the end of every advance, or
   // edited from outside): a coil's `current`, a capacitor's `plate_charge`.
@@ -687,6 +688,111 @@ void register_electricity_resolver(PluginRegistry& registry) {
             return std::make_unique<ElectricityResolver>(ElectricityConfig::from(ctx.settings()));
           },
   });
+}
+
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+// Saved as raw bytes: every byte a field.
+struct SavedContact {
+  ObjectId a, b;
+  std::int64_t terminal_a, terminal_b;
+};
+struct SavedClosed {
+  ObjectId id;
+  std::uint64_t closed;
+};
+}  // namespace
+
+bool ElectricityResolver::save_state(StateWriter& out) const {
+  out.put(kStateVersion);
+  std::vector<SavedContact> contacts;
+  for (const auto& [key, c] : contacts_)
+    contacts.push_back({key.first, key.second, c.terminal_a, c.terminal_b});
+  out.put_vector(contacts);
+  std::vector<SavedClosed> closed;
+  for (const auto& [id, on] : reported_closed_) closed.push_back({id, on ? 1u : 0u});
+  out.put_vector(closed);
+  // Restored and not advanced yet: the history is still the saved one.
+  const SavedHistory now{guard_, network_, batteries_, battery_emf_, coils_, capacitors_};
+  const SavedHistory& h = restored_ ? *restored_ : now;
+  out.put<std::uint8_t>(h.guard);
+  out.put<std::uint32_t>(h.network.node_count);
+  out.put_vector(h.network.conductances);
+  out.put_vector(h.network.branches);
+  out.put_vector(h.batteries);
+  out.put_vector(h.battery_emf);
+  out.put<std::uint64_t>(h.coils.size());
+  for (const Coil& c : h.coils) {
+    out.put<std::uint64_t>(c.slot);
+    out.put(c.current), out.put(c.v_l), out.put(c.series_emf);
+  }
+  out.put<std::uint64_t>(h.capacitors.size());
+  for (const Capacitor& c : h.capacitors) {
+    out.put<std::uint64_t>(c.slot);
+    out.put(c.charge), out.put(c.current);
+  }
+  return true;
+}
+
+void ElectricityResolver::restore_state(StateReader& in) {
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  contacts_.clear();
+  for (const SavedContact& c : in.get_vector<SavedContact>())
+    contacts_[{c.a, c.b}] = Contact{int(c.terminal_a), int(c.terminal_b)};
+  reported_closed_.clear();
+  for (const SavedClosed& c : in.get_vector<SavedClosed>()) reported_closed_[c.id] = c.closed != 0;
+  auto saved = std::make_unique<SavedHistory>();
+  saved->guard = in.get<std::uint8_t>() != 0;
+  saved->network.node_count = in.get<std::uint32_t>();
+  saved->network.conductances = in.get_vector<Conductance>();
+  saved->network.branches = in.get_vector<TheveninBranch>();
+  saved->batteries = in.get_vector<std::uint32_t>();
+  saved->battery_emf = in.get_vector<double>();
+  const auto coils = in.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < coils && in.remaining() > 0; ++i) {
+    Coil c{};
+    c.slot = std::uint32_t(in.get<std::uint64_t>());
+    c.current = in.get<double>(), c.v_l = in.get<double>(), c.series_emf = in.get<double>();
+    saved->coils.push_back(c);
+  }
+  const auto capacitors = in.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < capacitors && in.remaining() > 0; ++i) {
+    Capacitor c{};
+    c.slot = std::uint32_t(in.get<std::uint64_t>());
+    c.charge = in.get<double>(), c.current = in.get<double>();
+    saved->capacitors.push_back(c);
+  }
+  if (saved->coils.size() != coils || saved->capacitors.size() != capacitors)
+    throw InputError("the saved state of stage '" + in.stage() + "' is cut short");
+  restored_ = std::move(saved);
+}
+
+void ElectricityResolver::apply_restored() {
+  // build_network after a restore starts from nothing, as after a network
+  // change. If the network is the one the saved history was built for, the
+  // uninterrupted resolver kept its history (build_network's `same`): so do
+  // we. Otherwise its history was dropped too, and the fresh build is right.
+  const std::unique_ptr<SavedHistory> saved = std::move(restored_);
+  auto same_slots = [](const auto& a, const auto& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                      [](const auto& x, const auto& y) { return x.slot == y.slot; });
+  };
+  if (!(saved->network == network_) || saved->batteries != batteries_ ||
+      !same_slots(saved->coils, coils_) || !same_slots(saved->capacitors, capacitors_) ||
+      saved->battery_emf.size() != battery_emf_.size())
+    return;
+  guard_ = saved->guard;
+  battery_emf_ = saved->battery_emf;
+  for (std::size_t i = 0; i < coils_.size(); ++i)
+    coils_[i].current = saved->coils[i].current, coils_[i].v_l = saved->coils[i].v_l,
+    coils_[i].series_emf = saved->coils[i].series_emf;
+  for (std::size_t i = 0; i < capacitors_.size(); ++i)
+    capacitors_[i].charge = saved->capacitors[i].charge,
+    capacitors_[i].current = saved->capacitors[i].current;
 }
 
 }  // namespace alloy::electricity

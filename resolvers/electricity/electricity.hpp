@@ -50,6 +50,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -151,6 +152,13 @@ class ElectricityResolver final : public Resolver {
 
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
+  /// Contacts, reported loop states and the integrators' history (each
+  /// coil's v_L and series EMF, each capacitor's last current, the batteries'
+  /// last emfs, the guard flag) with the network they were built for: the
+  /// restored resolver carries them over at its first network build when
+  /// that network is the same, as the uninterrupted one would (docs/saves.md).
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
   /// Joins terminal `terminal_a` of part a to terminal `terminal_b` of part b
@@ -304,6 +312,17 @@ class ElectricityResolver final : public Resolver {
 
   // Per-solve results.
   std::vector<double> e_, potential_, branch_current_;
+  // restore_state: the history saved, applied after the first build_network.
+  struct SavedHistory {
+    bool guard = true;
+    Network network;
+    std::vector<std::uint32_t> batteries;
+    std::vector<double> battery_emf;
+    std::vector<Coil> coils;
+    std::vector<Capacitor> capacitors;
+  };
+  std::unique_ptr<SavedHistory> restored_;
+  void apply_restored();
 };
 
 /// Registers the `electricity` resolver and its property types only (for

@@ -14,7 +14,22 @@ int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orienta
   return rotate(inverse, point - part_position).x > 0 ? 1 : 0;
 }
 
+bool ElectricityFromCollisions::save_state(StateWriter& out) const {
+  std::vector<ObjectId> ids;  // a, b of each pair
+  for (const auto& [a, b] : before_) ids.push_back(a), ids.push_back(b);
+  out.put_vector(ids);
+  return true;
+}
+
+void ElectricityFromCollisions::restore_state(StateReader& in) {
+  const auto ids = in.get_vector<ObjectId>();
+  connected_.clear();
+  for (std::size_t i = 0; i + 1 < ids.size(); i += 2) connected_.emplace_back(ids[i], ids[i + 1]);
+  before_ = connected_;
+}
+
 void ElectricityFromCollisions::apply(const WorldView& world) {
+  before_ = connected_;
   const auto conductive = conductive_.column<std::uint8_t>(world);
   const auto position = position_.column<Vec3>(world);
   const auto orientation = orientation_.column<Quat>(world);

@@ -35,6 +35,11 @@ class ElectricityFromCollisions final : public Interaction {
  public:
   ElectricityFromCollisions(ElectricityResolver& target, const rigid::CollisionSet& contacts);
   void apply(const WorldView& world) override;
+  /// The pairs connected before the last apply: a restore primes the
+  /// interactions again, and this apply must then queue what the last one
+  /// queued (docs/saves.md).
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   /// The terminal of a part that a touch at `point` (world frame, m) reaches:
   /// 1 if the point lies on the part's +x side of its centre, else 0.
@@ -44,6 +49,7 @@ class ElectricityFromCollisions final : public Interaction {
   ElectricityResolver& target_;
   const rigid::CollisionSet& contacts_;
   std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
+  std::vector<std::pair<ObjectId, ObjectId>> before_;     // connected_ before the last apply
   PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};
 };
 

@@ -164,6 +164,12 @@ class RigidBodyResolver final : public Resolver {
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
   std::uint64_t state_version() const override { return state_version_; }
+  /// The ODE state that properties do not hold bit for bit (docs/saves.md):
+  /// assemblies' mass and frames, the poses the hinges were measured in at
+  /// the last build, each body's exact state where it is not its part's
+  /// properties, sleep flags, the impulses published by the last advance.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
   /// Force at the part's centre of mass, N. A stale id throws AccessError.
