@@ -293,14 +293,12 @@ TEST(ViewerEditor, ScriptKeysTakeModifiersAndPaletteEntriesByLabel) {
 /// The lever of docs/kit.md: a post, a plank hinged on it, a disk glued to
 /// its long arm, saved with Ctrl+Shift+S, all from a script.
 std::string lever_script(const fs::path& save_to) {
-  std::ostringstream s;
-  s << "0 key space\n"  // pause while building
-    << "2 palette post\n3 press 0 0.06\n4 release 0 0.06\n"
-    << "6 palette wooden plank\n7 press 0.05 0.13\n8 release 0.05 0.13\n"
-    << "10 key h\n11 press 0 0.121\n12 release 0 0.121\n"
-    << "14 palette steel disk\n15 press 0.15 0.165\n16 release 0.15 0.165\n"
-    << "18 key j\n19 press 0.15 0.142\n20 release 0.15 0.142\n"
-    << "22 key ctrl+shift+s\n24 text " << save_to.string() << "\n26 key Return\n";
+  // The script docs/kit.md walks through, then Save as.
+  std::ifstream in(test::source("tests/viewer/scripts/lever.script"));
+  std::stringstream s;
+  s << in.rdbuf();
+  EXPECT_FALSE(s.str().empty()) << "tests/viewer/scripts/lever.script not read";
+  s << "22 key ctrl+shift+s\n24 text " << save_to.string() << "\n26 key Return\n";
   return s.str();
 }
 
