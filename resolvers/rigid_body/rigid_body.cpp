@@ -879,6 +879,7 @@ std::size_t RigidBodyResolver::awake_count() const {
 }
 
 void RigidBodyResolver::build(ResolverAccess& access) {
+  unapplied_.clear();
   ensure_ode();
   Impl& m = *impl_;
   m.resolve_ids(access);
@@ -923,6 +924,10 @@ constexpr std::uint32_t kStateVersion = 1;
 }
 
 bool RigidBodyResolver::save_state(StateWriter& out) const {
+  if (!unapplied_.empty()) {  // restored, not rebuilt yet: see restore_state
+    for (std::byte b : unapplied_) out.put(b);
+    return true;
+  }
   const Impl& m = *impl_;
   out.put(kStateVersion);
   // A defining column edited since the last build (by a stage that ran after
@@ -976,11 +981,21 @@ void RigidBodyResolver::restore_state(StateReader& in) {
   const auto bodies = in.get<std::uint64_t>(), parts = in.get<std::uint64_t>(),
              hinges = in.get<std::uint64_t>();
   if (!was_dirty && (m.dirty || bodies != m.bodies.size() || parts != m.parts.size() ||
-                     hinges != m.hinges.size()))
-    refuse("it has " + std::to_string(bodies) + " bodies, " + std::to_string(parts) +
-           " parts and " + std::to_string(hinges) + " hinges, the world built from the properties " +
-           std::to_string(m.bodies.size()) + ", " + std::to_string(m.parts.size()) + " and " +
-           std::to_string(m.hinges.size()));
+                     hinges != m.hinges.size())) {
+    // Saved in a world whose structure changed in the step that led to the
+    // snapshot (an object frozen): the world resyncs at its next step
+    // (Snapshot::resync) and rebuilds us from properties, as it does the
+    // uninterrupted run's rigid body; till then we save the bytes we were
+    // given, as that one would save its own.
+    StateWriter head;
+    head.put(kStateVersion);
+    head.put<std::uint8_t>(0);
+    head.put(bodies), head.put(parts), head.put(hinges);
+    unapplied_ = head.take();
+    while (in.remaining() > 0) unapplied_.push_back(in.get<std::byte>());
+    m.dirty = true;
+    return;
+  }
   if (was_dirty) {
     // Saved between a failed build and the next try: the next advance builds again.
     m.dirty = true;
