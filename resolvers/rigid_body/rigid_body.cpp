@@ -351,8 +351,8 @@ struct RigidBodyResolver::Impl {
     std::int64_t body, planar, fixed, b1, b2;
     Vec3 pivot, axis;
   };
-  std::vector<SetupPose> setup_poses;       // of every body a hinge holds
-  std::vector<HingeSetup> hinge_setup;      // parallel to hinges
+  std::vector<SetupPose> setup_poses;   // of every body a hinge holds
+  std::vector<HingeSetup> hinge_setup;  // parallel to hinges
   std::vector<ProjectionCall> projection_calls;
   /// A body of one part in its own frame: its state is its part's
   /// properties, bit for bit (write_poses), and a restore reads it there.
@@ -972,7 +972,8 @@ bool RigidBodyResolver::save_state(StateWriter& out) const {
 void RigidBodyResolver::restore_state(StateReader& in) {
   Impl& m = *impl_;
   auto refuse = [&](const std::string& what) {
-    throw InputError("the saved state of stage '" + in.stage() + "' does not fit this world: " + what);
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' does not fit this world: " + what);
   };
   if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
     refuse("it is of version " + std::to_string(v) + ", this build reads " +
@@ -1084,8 +1085,10 @@ void RigidBodyResolver::restore_state(StateReader& in) {
     }
     if (config_.auto_disable)
       for (Impl::Body& b : m.bodies) {
-        if (in.get<std::uint8_t>()) dBodyEnable(b.id);
-        else dBodyDisable(b.id);
+        if (in.get<std::uint8_t>())
+          dBodyEnable(b.id);
+        else
+          dBodyDisable(b.id);
         b.asleep = in.get<std::uint8_t>() != 0;
         b.load_force = in.get<Vec3>(), b.load_torque = in.get<Vec3>();
         b.awake_force = in.get<Vec3>(), b.awake_torque = in.get<Vec3>();

@@ -291,7 +291,6 @@ TEST(SceneRestore, DoorbellAfterAHotReload) {
 }
 TEST(SceneRestore, Motor) {
   expect_restores("motor", {1, 40, 121, 200, 311});
-
 }
 
 // A packed delta (runtime/packed_delta.hpp) unpacks to the snapshot it was
