@@ -976,8 +976,9 @@ Snapshot World::snapshot(const Snapshot* base) const {
   s.time = time_;
   s.dt = def_.dt;
   s.started = started_;
-  s.resync = started_ && (!synced_ || frozen_changed_ || seen_structure_ != store_.structure_version() ||
-                          seen_by_resolvers_ != store_.resolver_membership_version());
+  s.resync =
+      started_ && (!synced_ || frozen_changed_ || seen_structure_ != store_.structure_version() ||
+                   seen_by_resolvers_ != store_.resolver_membership_version());
   s.objects = store_.objects();
   s.lineage = store_.lineage();
   const bool delta = base && base->lineage == s.lineage;

@@ -351,8 +351,8 @@ struct RigidBodyResolver::Impl {
     std::int64_t body, planar, fixed, b1, b2;
     Vec3 pivot, axis;
   };
-  std::vector<SetupPose> setup_poses;       // of every body a hinge holds
-  std::vector<HingeSetup> hinge_setup;      // parallel to hinges
+  std::vector<SetupPose> setup_poses;   // of every body a hinge holds
+  std::vector<HingeSetup> hinge_setup;  // parallel to hinges
   std::vector<ProjectionCall> projection_calls;
   /// A body of one part in its own frame: its state is its part's
   /// properties, bit for bit (write_poses), and a restore reads it there.
@@ -879,6 +879,7 @@ std::size_t RigidBodyResolver::awake_count() const {
 }
 
 void RigidBodyResolver::build(ResolverAccess& access) {
+  unapplied_.clear();
   ensure_ode();
   Impl& m = *impl_;
   m.resolve_ids(access);
@@ -923,6 +924,10 @@ constexpr std::uint32_t kStateVersion = 1;
 }
 
 bool RigidBodyResolver::save_state(StateWriter& out) const {
+  if (!unapplied_.empty()) {  // restored, not rebuilt yet: see restore_state
+    for (std::byte b : unapplied_) out.put(b);
+    return true;
+  }
   const Impl& m = *impl_;
   out.put(kStateVersion);
   // A defining column edited since the last build (by a stage that ran after
@@ -967,7 +972,8 @@ bool RigidBodyResolver::save_state(StateWriter& out) const {
 void RigidBodyResolver::restore_state(StateReader& in) {
   Impl& m = *impl_;
   auto refuse = [&](const std::string& what) {
-    throw InputError("the saved state of stage '" + in.stage() + "' does not fit this world: " + what);
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' does not fit this world: " + what);
   };
   if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
     refuse("it is of version " + std::to_string(v) + ", this build reads " +
@@ -976,11 +982,21 @@ void RigidBodyResolver::restore_state(StateReader& in) {
   const auto bodies = in.get<std::uint64_t>(), parts = in.get<std::uint64_t>(),
              hinges = in.get<std::uint64_t>();
   if (!was_dirty && (m.dirty || bodies != m.bodies.size() || parts != m.parts.size() ||
-                     hinges != m.hinges.size()))
-    refuse("it has " + std::to_string(bodies) + " bodies, " + std::to_string(parts) +
-           " parts and " + std::to_string(hinges) + " hinges, the world built from the properties " +
-           std::to_string(m.bodies.size()) + ", " + std::to_string(m.parts.size()) + " and " +
-           std::to_string(m.hinges.size()));
+                     hinges != m.hinges.size())) {
+    // Saved in a world whose structure changed in the step that led to the
+    // snapshot (an object frozen): the world resyncs at its next step
+    // (Snapshot::resync) and rebuilds us from properties, as it does the
+    // uninterrupted run's rigid body; till then we save the bytes we were
+    // given, as that one would save its own.
+    StateWriter head;
+    head.put(kStateVersion);
+    head.put<std::uint8_t>(0);
+    head.put(bodies), head.put(parts), head.put(hinges);
+    unapplied_ = head.take();
+    while (in.remaining() > 0) unapplied_.push_back(in.get<std::byte>());
+    m.dirty = true;
+    return;
+  }
   if (was_dirty) {
     // Saved between a failed build and the next try: the next advance builds again.
     m.dirty = true;
@@ -1069,8 +1085,10 @@ void RigidBodyResolver::restore_state(StateReader& in) {
     }
     if (config_.auto_disable)
       for (Impl::Body& b : m.bodies) {
-        if (in.get<std::uint8_t>()) dBodyEnable(b.id);
-        else dBodyDisable(b.id);
+        if (in.get<std::uint8_t>())
+          dBodyEnable(b.id);
+        else
+          dBodyDisable(b.id);
         b.asleep = in.get<std::uint8_t>() != 0;
         b.load_force = in.get<Vec3>(), b.load_torque = in.get<Vec3>();
         b.awake_force = in.get<Vec3>(), b.awake_torque = in.get<Vec3>();

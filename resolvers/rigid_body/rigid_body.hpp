@@ -22,6 +22,7 @@
 // edited from outside between steps.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <span>
 #include <vector>
@@ -355,6 +356,9 @@ class RigidBodyResolver final : public Resolver {
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
   std::uint64_t engine_errors_ = 0;
+  /// Saved state restored into a world that rebuilds us at its next step
+  /// (restore_state), saved again as it was until then.
+  std::vector<std::byte> unapplied_;
 };
 
 }  // namespace alloy::rigid
