@@ -854,8 +854,9 @@ void ModState::call_hook(int ref, const char* what) {
 std::vector<std::byte> ModState::save_state() {
   lua_State* L = host_->state();
   StackGuard guard(L);
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("cdata_parts"));
   push_state();
-  return encode_state(L, -1, manifest_.name, state_limits());
+  return encode_state(L, -1, manifest_.name, state_limits(), -2);
 }
 
 void ModState::call_state_hook(int fn, const char* what, int state_ref, const std::string* from) {
@@ -906,7 +907,10 @@ int ModState::prepare_state(const std::vector<std::byte>& bytes, const std::stri
   const StateLimits limits = state_limits();
   check_state(bytes, manifest_.name, limits);
   std::string error;
-  if (!decode_state(L, bytes, &error))
+  lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("cdata_make"));
+  const bool decoded = decode_state(L, bytes, &error, -1);
+  lua_remove(L, decoded ? -2 : -1);
+  if (!decoded)
     throw InputError("mod '" + manifest_.name + "': its saved state of " +
                      std::to_string(bytes.size()) +
                      " bytes does not fit in its Lua state: " + error);
@@ -924,9 +928,10 @@ int ModState::prepare_state(const std::vector<std::byte>& bytes, const std::stri
       luaL_unref(L, LUA_REGISTRYINDEX, ref);
       ref = luaL_ref(L, LUA_REGISTRYINDEX);
     }
+    lua_rawgeti(L, LUA_REGISTRYINDEX, prelude_ref("cdata_parts"));
     lua_rawgeti(L, LUA_REGISTRYINDEX, ref);
     try {
-      (void)encode_state(L, -1, manifest_.name, limits);  // what it made must be a state
+      (void)encode_state(L, -1, manifest_.name, limits, -2);  // what it made must be a state
     } catch (const InputError& e) {
       throw InputError("after " + what + ": " + e.bare());
     }

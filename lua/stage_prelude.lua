@@ -933,6 +933,18 @@ end
 -- The mod's state table, when it is replaced.
 function M.set_state(rec, state) rec.w.state = state end
 
+-- A vec3 or quat in the mod's state, as its doubles, and back
+-- (lua/state_codec.hpp): the state codec calls these for cdata values.
+function M.cdata_parts(v)
+  if is_vec3(v) then return "vec3", v.x, v.y, v.z end
+  if is_quat(v) then return "quat", v.w, v.x, v.y, v.z end
+  return nil
+end
+function M.cdata_make(kind, a, b, c, d)
+  if kind == "vec3" then return vec3(a, b, c) end
+  return quat(a, b, c, d)
+end
+
 -- One call of the stage's function `phase`, with the step's numbers.
 function M.run(rec, phase, dt, time, step)
   local f = rawget(rec.def, phase)  -- raw: the mod's table may have a metatable

@@ -66,8 +66,8 @@ bool key_less(const Key& a, const Key& b) {
 
 class Encoder {
  public:
-  Encoder(lua_State* L, const std::string& mod, const StateLimits& lim)
-      : L_(L), mod_(mod), lim_(lim) {}
+  Encoder(lua_State* L, const std::string& mod, const StateLimits& lim, int cdata_parts)
+      : L_(L), mod_(mod), lim_(lim), cdata_parts_(cdata_parts) {}
 
   std::vector<std::byte> run(int index) {
     if (lua_type(L_, index) != LUA_TTABLE)
@@ -136,10 +136,36 @@ class Encoder {
       case LUA_TTABLE:
         table(index, depth + 1);
         return;
+      case kCdata:
+        if (cdata(index)) return;
+        [[fallthrough]];
       default:
         fail("is a " + type_name(index) +
              ": a mod's state holds numbers, strings, booleans and tables of them");
     }
+  }
+
+  // A vec3 or a quat: its doubles. Another cdata: false.
+  bool cdata(int index) {
+    if (cdata_parts_ == 0) return false;
+    index = abs_index(L_, index);
+    if (!lua_checkstack(L_, 8)) fail("nests too deeply for the Lua stack");
+    lua_pushvalue(L_, cdata_parts_);
+    lua_pushvalue(L_, index);
+    if (lua_pcall(L_, 1, 5, 0) != 0) {
+      lua_pop(L_, 1);
+      return false;
+    }
+    const char* kind = lua_tostring(L_, -5);
+    const int n = kind && std::strcmp(kind, "vec3") == 0   ? 3
+                  : kind && std::strcmp(kind, "quat") == 0 ? 4
+                                                           : 0;
+    if (n > 0) {
+      put_byte(n == 3 ? 'v' : 'q');
+      for (int i = 0; i < n; ++i) put<double>(lua_tonumber(L_, -4 + i));
+    }
+    lua_pop(L_, 5);
+    return n > 0;
   }
 
   void table(int index, std::size_t depth) {
@@ -209,6 +235,7 @@ class Encoder {
   lua_State* L_;
   const std::string& mod_;
   const StateLimits& lim_;
+  int cdata_parts_;
   std::vector<std::byte> out_;
   std::size_t entries_ = 0;
   std::vector<Key> path_;  // on_path_[i] is the table at path_[0 .. i)
@@ -271,6 +298,12 @@ class Checker {
         return;
       case 't':
       case 'f':
+        return;
+      case 'v':
+        for (int i = 0; i < 3; ++i) get<double>();
+        return;
+      case 'q':
+        for (int i = 0; i < 4; ++i) get<double>();
         return;
       case '{':
         table(depth + 1);
@@ -355,10 +388,32 @@ struct Builder {
       case 'f':
         lua_pushboolean(L, 0);
         return;
+      case 'v':
+        cdata(L, 3);
+        return;
+      case 'q':
+        cdata(L, 4);
+        return;
       default:
         table(L);
         return;  // '{', checked
     }
+  }
+  // A vec3 or quat, made by the function at stack index 2 (else a table).
+  void cdata(lua_State* L, int n) {
+    luaL_checkstack(L, 8, "a mod's state nests too deeply");
+    if (lua_isnil(L, 2)) {
+      lua_createtable(L, n, 0);
+      for (int i = 1; i <= n; ++i) {
+        lua_pushnumber(L, get<double>());
+        lua_rawseti(L, -2, i);
+      }
+      return;
+    }
+    lua_pushvalue(L, 2);
+    lua_pushstring(L, n == 3 ? "vec3" : "quat");
+    for (int i = 0; i < n; ++i) lua_pushnumber(L, get<double>());
+    lua_call(L, n + 1, 1);
   }
   void table(lua_State* L) {
     luaL_checkstack(L, 4, "a mod's state nests too deeply");
@@ -381,9 +436,10 @@ struct Builder {
 }  // namespace
 
 std::vector<std::byte> encode_state(lua_State* L, int index, const std::string& mod,
-                                    const StateLimits& limits) {
+                                    const StateLimits& limits, int cdata_parts) {
   StackGuard guard(L);
-  return Encoder(L, mod, limits).run(abs_index(L, index));
+  if (cdata_parts != 0) cdata_parts = abs_index(L, cdata_parts);
+  return Encoder(L, mod, limits, cdata_parts).run(abs_index(L, index));
 }
 
 void check_state(const std::vector<std::byte>& bytes, const std::string& mod,
@@ -391,11 +447,17 @@ void check_state(const std::vector<std::byte>& bytes, const std::string& mod,
   Checker(bytes, mod, limits).run();
 }
 
-bool decode_state(lua_State* L, const std::vector<std::byte>& bytes, std::string* error) {
+bool decode_state(lua_State* L, const std::vector<std::byte>& bytes, std::string* error,
+                  int cdata_make) {
+  if (cdata_make != 0) cdata_make = abs_index(L, cdata_make);
   Builder b{bytes.data()};
   lua_pushcfunction(L, &Builder::run);
   lua_pushlightuserdata(L, &b);
-  if (lua_pcall(L, 1, 1, 0) != 0) {
+  if (cdata_make != 0)
+    lua_pushvalue(L, cdata_make);
+  else
+    lua_pushnil(L);
+  if (lua_pcall(L, 2, 1, 0) != 0) {
     if (error) *error = lua_isstring(L, -1) ? lua_tostring(L, -1) : "an error without a message";
     lua_pop(L, 1);
     return false;

@@ -125,6 +125,11 @@ TEST_F(Codec, WhatAStateMayNotHoldIsRefusedNamingTheModAndTheKeyPath) {
       encode_error("return { i = setmetatable({}, { __index = function() error('ran') end }) }"),
       "state.i has a metatable"));
   EXPECT_TRUE(contains(encode_error("return setmetatable({}, {})"), "state has a metatable"));
+  // Without the prelude's vec3 and quat (a bare Lua state), every cdata value.
+  EXPECT_TRUE(contains(encode_error("return { c = require('ffi').new('int[1]') }"),
+                       "state.c is a cdata value"));
+  // Lua itself refuses a NaN key (t[0/0] = 1 raises), so only damaged bytes
+  // can hold one: DamagedBytesAreRefused... checks the decoder refuses it.
 }
 
 TEST_F(Codec, DepthCountAndBytesAreBounded) {
@@ -248,11 +253,15 @@ mod.resolver {
     s.sum = s.sum + dt / 3        -- an inexact double: must come back bit for bit
     s.log[#s.log + 1] = s.n % 7
     if #s.log > 5 then table.remove(s.log, 1) end
+    s.v = s.v + vec3(dt / 7, 0, 1)  -- a vec3 and a quat: kept as their doubles
+    s.q = s.q * quat.from_angle_z(dt)
     local c = w:write("count")
-    for i in c:each() do c[i] = s.n * 1000 + s.sum + s.log[1] end
+    for i in c:each() do c[i] = s.n * 1000 + s.sum + s.log[1] + s.v.x + s.q:angle_z() end
   end,
 }
-function mod.on_load(state) state.n = 0; state.sum = 0; state.log = {} end
+function mod.on_load(state)
+  state.n = 0; state.sum = 0; state.log = {}; state.v = vec3(0, 0, 0); state.q = quat.identity
+end
 )LUA" + extra;
 }
 
@@ -334,6 +343,28 @@ TEST(ModStateSnapshot, RestoredInAnotherWorldOfTheSameSceneItContinuesBitForBit)
   b.world->run(3);  // elsewhere, with another state
   const Snapshot s = a.world->snapshot();
   expect_continues(*a.world, *b.world, s, 300);
+}
+
+TEST(ModStateSnapshot, AVec3AndAQuatComeBackAsThemselves) {
+  TempMods mods;
+  write_counter(mods, "1.0", R"LUA(
+mod.resolver { name = "counter.check", writes = {}, advance = function(w)
+  local v, q = w.state.v, w.state.q
+  assert(tostring(v):find("vec3") or type(v) == "cdata", "state.v is a " .. type(v))
+  local moved = v + vec3(1, 1, 1)   -- arithmetic: a vec3, not a table
+  local turned = q:rotate(vec3(1, 0, 0))
+  w.state.checked = (w.state.checked or 0) + 1
+end }
+)LUA");
+  std::vector<std::string> log;
+  CounterWorld c(mods, &log);
+  c.world->run(10);
+  const Snapshot s = c.world->snapshot();
+  c.world->run(10);
+  c.world->restore(s);
+  c.world->run(3);
+  EXPECT_EQ(stage_failures(*c.runtime), "");
+  EXPECT_TRUE(c.world->snapshot().mod_states[0].bytes != s.mod_states[0].bytes);
 }
 
 TEST(ModStateSnapshot, AStateThatCannotBeSavedRefusesTheSnapshotNamingModAndKey) {
