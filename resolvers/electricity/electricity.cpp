@@ -1,5 +1,6 @@
 #include "resolvers/electricity/electricity.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -487,6 +488,34 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   // is a source in series with its coil, held over the advance's substeps.
   take_induced_emfs(access);
   for (std::size_t i = 0; i < nc; ++i) coils_[i].series_emf = induced_emf_[i];
+  // Mutual inductance: coil i's companion gains sum_j (2 M_ij / h)(I_j' - I_j).
+  // The known part goes into its source; the unknown currents are solved by
+  // superposition: with T the coupled coils' currents per unit source in each
+  // other's branch, (1 + (2/h) T M) I'_C = I0_C, then one solve with the
+  // coupling sources known (docs/electricity.md "Mutual inductance").
+  take_mutual_inductances(access);
+  std::vector<std::uint32_t> coupled;  // coil indices
+  Eigen::MatrixXd mutual_m, transfer;
+  if (!mutual_.empty()) {
+    std::vector<std::int32_t> index(nc, -1);
+    for (const Mutual& m : mutual_)
+      for (std::uint32_t c : {m.a, m.b})
+        if (index[c] < 0) index[c] = std::int32_t(coupled.size()), coupled.push_back(c);
+    const std::size_t k = coupled.size();
+    mutual_m = Eigen::MatrixXd::Zero(k, k);
+    for (const Mutual& m : mutual_)
+      mutual_m(index[m.a], index[m.b]) = mutual_m(index[m.b], index[m.a]) = m.m;
+    transfer = Eigen::MatrixXd::Zero(k, k);
+    std::vector<double> unit(e_.size(), 0.0);
+    for (std::size_t col = 0; col < k; ++col) {
+      unit.assign(e_.size(), 0.0);
+      unit[nb + coupled[col]] = 1.0;
+      solver_.solve(unit, potential_, branch_current_);
+      for (std::size_t row = 0; row < k; ++row)
+        if (branch_on_loop_[nb + coupled[row]])
+          transfer(row, col) = branch_current_[nb + coupled[row]];
+    }
+  }
 
   // Each substep is one trapezoidal step over h, or, as the guard after a
   // discontinuity, two backward-Euler steps over h/2 (same impedances, so the
@@ -503,16 +532,38 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Capacitor& c = capacitors_[j];
       e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
     }
+    const std::size_t k = coupled.size();
+    Eigen::VectorXd before(k), after(k);
+    if (k > 0) {
+      for (std::size_t a = 0; a < k; ++a) before[a] = coils_[coupled[a]].current;
+      const Eigen::VectorXd known = (2 / h) * (mutual_m * before);
+      for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += known[a];
+      solver_.solve(e_, potential_, branch_current_);
+      Eigen::VectorXd i0(k);
+      for (std::size_t a = 0; a < k; ++a)
+        i0[a] = branch_on_loop_[nb + coupled[a]] ? branch_current_[nb + coupled[a]] : 0.0;
+      const Eigen::MatrixXd system =
+          Eigen::MatrixXd::Identity(k, k) + (2 / h) * transfer * mutual_m;
+      after = system.partialPivLu().solve(i0);
+      const Eigen::VectorXd coupling = -(2 / h) * (mutual_m * after);
+      for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += coupling[a];
+    }
     solver_.solve(e_, potential_, branch_current_);
     for (std::size_t k = 0; k < branch_current_.size(); ++k)
       if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+    // The mutual part of each coupled coil's inductive voltage.
+    std::vector<double> mutual_v(k > 0 ? nc : 0, 0.0);
+    for (std::size_t a = 0; a < k; ++a)
+      for (std::size_t b = 0; b < k; ++b)
+        if (a != b) mutual_v[coupled[a]] += 2 / h * mutual_m(a, b) * (after[b] - before[b]);
     for (std::size_t i = 0; i < nc; ++i) {
       Coil& c = coils_[i];
       const double next = branch_current_[nb + i];
       // An opened coil carries no current and has no dI/dt: its history is 0
       // (left to the formula, it would alternate in sign forever).
-      c.v_l =
-          branch_on_loop_[nb + i] ? 2 * c.inductance / h * (next - c.current) - trap * c.v_l : 0.0;
+      c.v_l = branch_on_loop_[nb + i] ? 2 * c.inductance / h * (next - c.current) +
+                                            (k > 0 ? mutual_v[i] : 0.0) - trap * c.v_l
+                                      : 0.0;
       c.current = next;
     }
     for (std::size_t j = 0; j < capacitors_.size(); ++j) {
@@ -538,6 +589,43 @@ void ElectricityResolver::set_induced_emf(ObjectId coil, double emf) {
   induced_queue_.emplace_back(coil, emf);
 }
 
+void ElectricityResolver::set_mutual_inductance(ObjectId a, ObjectId b, double henries) {
+  mutual_queue_.emplace_back(a, b, henries);
+}
+double ElectricityResolver::mutual_inductance(ObjectId a, ObjectId b) const {
+  for (const Mutual& m : mutual_)
+    if (m.a < coils_.size() && m.b < coils_.size() &&
+        ((coils_[m.a].slot == a.index && coils_[m.b].slot == b.index) ||
+         (coils_[m.a].slot == b.index && coils_[m.b].slot == a.index)))
+      return m.m;
+  return 0.0;
+}
+void ElectricityResolver::take_mutual_inductances(const WorldView& view) {
+  mutual_.clear();
+  if (mutual_queue_.empty()) return;
+  const PropertyStore& store = view.store();
+  std::vector<std::int32_t> coil_of_slot(store.slot_count(), -1);
+  for (std::size_t i = 0; i < coils_.size(); ++i) coil_of_slot[coils_[i].slot] = std::int32_t(i);
+  auto coil = [&](ObjectId id) -> std::int32_t {
+    return store.alive(id) && id.index < coil_of_slot.size() ? coil_of_slot[id.index] : -1;
+  };
+  for (const auto& [a, b, m] : mutual_queue_) {
+    const std::int32_t i = coil(a), j = coil(b);
+    if (i < 0 || j < 0 || i == j || !std::isfinite(m) || m == 0) continue;
+    // A coupling of 1 or more would make the inductance matrix indefinite.
+    const double limit =
+        0.99 * std::sqrt(coils_[std::size_t(i)].inductance * coils_[std::size_t(j)].inductance);
+    const double held = std::clamp(m, -limit, limit);
+    const auto lo = std::uint32_t(std::min(i, j)), hi = std::uint32_t(std::max(i, j));
+    auto it = std::find_if(mutual_.begin(), mutual_.end(),
+                           [&](const Mutual& x) { return x.a == lo && x.b == hi; });
+    if (it != mutual_.end())
+      it->m = held;  // the last command wins
+    else
+      mutual_.push_back({lo, hi, held});
+  }
+  mutual_queue_.clear();
+}
 double ElectricityResolver::induced_emf(ObjectId coil) const {
   for (std::size_t i = 0; i < coils_.size() && i < induced_emf_.size(); ++i)
     if (coils_[i].slot == coil.index) return induced_emf_[i];

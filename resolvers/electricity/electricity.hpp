@@ -52,6 +52,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -188,6 +189,17 @@ class ElectricityResolver final : public Resolver {
   /// The resistance set_resistance sent for `part` for the last advance,
   /// Ohm, or a negative number if none was (then a resistor used its property).
   double set_resistance_of(ObjectId part) const;
+  /// Mutual inductance (a transformer): over the next advance only, coils a
+  /// and b share M henries, so that a's inductive voltage is L_a dI_a/dt +
+  /// M dI_b/dt and b's likewise (currents from terminal 0 to 1). Solved
+  /// implicitly with the coils' own companion models (docs/electricity.md
+  /// "Mutual inductance"). |M| is held below 0.99 sqrt(L_a L_b) (a coupling
+  /// of 1 or more has no stable solution). The last command for a pair before
+  /// an advance wins; an advance with none has no coupling. Commands naming a
+  /// non-coil, the same coil twice or a non-finite M do nothing.
+  void set_mutual_inductance(ObjectId a, ObjectId b, double henries);
+  /// The mutual inductance of coils a and b in the last advance, H (0 if none).
+  double mutual_inductance(ObjectId a, ObjectId b) const;
 
   // --- introspection (tests, tools) ---------------------------------------------
   /// Whether a and b touch electrically, as of the last advance.
@@ -299,6 +311,16 @@ class ElectricityResolver final : public Resolver {
   // network was built with (slot -> Ohm), compared each advance.
   std::vector<std::pair<ObjectId, double>> resistance_queue_;
   std::map<std::uint32_t, double> resistance_override_;
+  // Mutual inductance: the commands of the next advance, the pairs (coil
+  // indices) of the last one, and the coupled coils' response to a unit
+  // source in each other's branch (rebuilt every advance that has pairs).
+  struct Mutual {
+    std::uint32_t a, b;  // coil indices
+    double m;            // H
+  };
+  std::vector<std::tuple<ObjectId, ObjectId, double>> mutual_queue_;
+  std::vector<Mutual> mutual_;
+  void take_mutual_inductances(const WorldView& view);
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index

@@ -36,6 +36,8 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       pole_velocity_[i] = v + cross(w, poles[i].position - centre);
   }
 
+  std::vector<CoilGeometry> geometry;  // the coils with a usable geometry, for the mutual part
+  std::vector<ObjectId> geometry_id;
   for (std::uint32_t slot : c.magnet.members()) {
     if (c.kind(slot) != MagnetKind::Electromagnet || !inductance.has(slot)) continue;
     const auto d = pole_separation(c, slot);
@@ -53,13 +55,26 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     if (const MagneticBody* own = forces_.find(id)) coil.body = std::uint32_t(own - bodies.data());
     FluxLinkage f;
     if (is_finite(coil.centre) && is_finite(coil.axis) && is_finite(coil.velocity) &&
-        is_finite(coil.angular_velocity) && std::isfinite(coil.linkage))
+        is_finite(coil.angular_velocity) && std::isfinite(coil.linkage)) {
       f = coil_flux(poles, pole_velocity_, forces_.softening(), coil);
+      if (coil.linkage != 0) geometry.push_back(coil), geometry_id.push_back(id);
+    }
     if (!std::isfinite(f.flux) || !std::isfinite(f.rate)) f = {};
     coils_.push_back({id, f});
     // Faraday and Lenz: the EMF opposes the change of the flux that links it.
     target_.set_induced_emf(id, -f.rate);
   }
+
+  // A transformer: every pair of coils shares M (the same model as the flux
+  // above, so M_ab = M_ba); the electricity resolver adds -M dI/dt to each.
+  mutuals_.clear();
+  for (std::size_t a = 0; a < geometry.size(); ++a)
+    for (std::size_t b = a + 1; b < geometry.size(); ++b) {
+      const double m = mutual_inductance(geometry[a], geometry[b], forces_.softening());
+      if (m == 0 || !std::isfinite(m)) continue;
+      mutuals_.push_back({geometry_id[a], geometry_id[b], m});
+      target_.set_mutual_inductance(geometry_id[a], geometry_id[b], m);
+    }
 }
 
 void register_electricity_from_magnetism(PluginRegistry& registry) {

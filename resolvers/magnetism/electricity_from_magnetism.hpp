@@ -14,11 +14,12 @@
 //   reads    the magnetic_forces derived set (its poles), magnet, turns,
 //            coil_factor, pole_separation, inductance, position, orientation,
 //            velocity, angular_velocity and the shape (for the defaults)
-//   target   electricity (set_induced_emf)
+//   target   electricity (set_induced_emf, set_mutual_inductance)
 //   needs    magnet
 // The coil's own current is not a source here: its self-inductance is the
-// circuit's `inductance`. Changes of other coils' currents (a transformer's
-// mutual inductance) are not induced: only motion is (docs/magnetism.md).
+// circuit's `inductance`. Changes of other coils' currents (a transformer)
+// enter as each pair's mutual inductance (flux_linkage.hpp), queued with
+// set_mutual_inductance and solved implicitly by electricity.
 #pragma once
 
 #include <optional>
@@ -55,11 +56,18 @@ class ElectricityFromMagnetism : public Interaction {
   const std::vector<CoilFlux>& coils() const { return coils_; }
   /// The coil `id` as of the last apply, or nullptr.
   const CoilFlux* find(ObjectId id) const;
+  /// A pair of coils and their mutual inductance, as queued in the last apply.
+  struct CoilPair {
+    ObjectId a, b;
+    double mutual_inductance;  ///< H
+  };
+  const std::vector<CoilPair>& mutual_inductances() const { return mutuals_; }
 
  private:
   electricity::ElectricityResolver& target_;
   const MagneticForces& forces_;
   std::vector<CoilFlux> coils_;
+  std::vector<CoilPair> mutuals_;
   std::vector<Vec3> pole_velocity_;
   std::optional<MagnetColumns::Ids> ids_;
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};

@@ -44,4 +44,14 @@ FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_ve
   return out;
 }
 
+double mutual_inductance(const CoilGeometry& a, const CoilGeometry& b, double softening) {
+  const BarPoles ends = bar_poles(b.centre, b.axis, b.separation);
+  // Any body other than a's: b's poles are never skipped as a's own.
+  const std::uint32_t body = a.body == kNoBody - 1 ? kNoBody - 2 : kNoBody - 1;
+  const Pole unit[2] = {{ends.north, b.linkage, body}, {ends.south, -b.linkage, body}};
+  CoilGeometry still = a;  // the flux, not its rate
+  still.velocity = {}, still.angular_velocity = {};
+  return coil_flux(unit, {}, softening, still).flux;
+}
+
 }  // namespace alloy::magnetism

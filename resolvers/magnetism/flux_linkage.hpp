@@ -60,4 +60,14 @@ struct FluxLinkage {
 FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_velocity,
                       double softening, const CoilGeometry& coil);
 
+/// Mutual inductance of coils a and b, H: the flux linking a (coil_flux)
+/// from b's poles carrying one ampere (+-k_b N_b at b's ends), with a's own
+/// poles at theirs. The pole model makes it symmetric, M_ab = M_ba:
+///   M = k_a N_a k_b N_b mu0/(4 pi) (1/s(S_a - N_b) - 1/s(S_a - S_b) - 1/s(N_a - N_b) + 1/s(N_a -
+///   S_b)).
+/// The EMF a change of b's current induces in a is -M dI_b/dt (the
+/// electricity resolver solves it with the coils' companions); the motion
+/// part, I_b dM/dt, is already in coil_flux's rate.
+double mutual_inductance(const CoilGeometry& a, const CoilGeometry& b, double softening);
+
 }  // namespace alloy::magnetism

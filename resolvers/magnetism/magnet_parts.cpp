@@ -1,6 +1,8 @@
 #include "resolvers/magnetism/magnet_parts.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "resolvers/magnetism/pole_model.hpp"
@@ -44,13 +46,20 @@ std::vector<PropertyDef> magnetism_property_defs() {
       {.name = prop::kSusceptibility,
        .kind = K::Number,
        .unit = "1",
-       .doc = "soft iron: intrinsic volume susceptibility chi (iron: 100 to 5000)",
+       .doc = "soft iron: intrinsic volume susceptibility chi (iron: 100 to 5000); on an "
+              "electromagnet, that of its iron core",
        .min = 0.0},
       {.name = prop::kSaturationPole,
        .kind = K::Number,
        .unit = "A*m",
        .doc = "soft iron: largest induced pole strength; default from iron's saturation "
               "magnetisation 1.71e6 A/m x volume / pole_separation",
+       .min = 0.0},
+      {.name = prop::kCoreDiameter,
+       .kind = K::Number,
+       .unit = "m",
+       .doc = "electromagnet with a susceptibility: diameter of its soft-iron core, a rod "
+              "along x as long as the part; default the diameter of the part's cross-section",
        .min = 0.0},
       {.name = prop::kPoleStrengthRate,
        .kind = K::Number,
@@ -100,6 +109,7 @@ MagnetColumns::Ids MagnetColumns::Ids::resolve(const WorldView& w) {
         .coil_time_constant = w.property(prop::kCoilTimeConstant),
         .susceptibility = w.property(prop::kSusceptibility),
         .saturation_pole = w.property(prop::kSaturationPole),
+        .core_diameter = w.property(prop::kCoreDiameter),
         .position = w.property(prop::kPosition),
         .orientation = w.property(prop::kOrientation),
         .shape = w.property(prop::kShape),
@@ -126,6 +136,7 @@ MagnetColumns MagnetColumns::bind(const WorldView& w, const Ids& i) {
   c.coil_time_constant = w.column<double>(i.coil_time_constant);
   c.susceptibility = w.column<double>(i.susceptibility);
   c.saturation_pole = w.column<double>(i.saturation_pole);
+  c.core_diameter = w.column<double>(i.core_diameter);
   c.position = w.column<Vec3>(i.position);
   c.orientation = w.column<Quat>(i.orientation);
   c.shape = w.column<EnumValue>(i.shape);
@@ -151,18 +162,26 @@ std::optional<PartBulk> part_bulk(const MagnetColumns& c, std::uint32_t slot) {
     // Diameter of the circle with the same cross-section.
     const double diameter = std::sqrt(4.0 * b.cross_section / pi);
     b.aspect_ratio = diameter > 0 ? b.length / diameter : 1.0;
+    b.extent = s;
+    b.shape = PartBulk::Shape::Box;
   } else if (shape == c.shape_sphere && c.radius.has(slot)) {
     const double r = c.radius[slot];
     b.length = 2 * r;
     b.cross_section = pi * r * r;
     b.volume = 4.0 / 3.0 * pi * r * r * r;
     b.aspect_ratio = 1.0;
+    b.extent = {2 * r, 2 * r, 2 * r};
+    b.shape = PartBulk::Shape::Sphere;
+    b.radius = r;
   } else if (shape == c.shape_capsule && c.radius.has(slot) && c.length.has(slot)) {
     const double r = c.radius[slot], l = c.length[slot];
     b.length = l + 2 * r;
     b.cross_section = pi * r * r;
     b.volume = pi * r * r * l + 4.0 / 3.0 * pi * r * r * r;
     b.aspect_ratio = r > 0 ? b.length / (2 * r) : 1.0;
+    b.extent = {l + 2 * r, 2 * r, 2 * r};
+    b.shape = PartBulk::Shape::Capsule;
+    b.radius = r;
   } else {
     return std::nullopt;
   }
@@ -184,17 +203,65 @@ std::optional<double> coil_factor(const MagnetColumns& c, std::uint32_t slot) {
   return b->cross_section / *d;
 }
 
+double chord(const PartBulk& b, Vec3 u) {
+  const Vec3 a{std::abs(u.x), std::abs(u.y), std::abs(u.z)};
+  switch (b.shape) {
+    case PartBulk::Shape::Sphere:
+      return 2 * b.radius;
+    case PartBulk::Shape::Capsule: {
+      // Half-chord t: t u is a radius from the axis segment [-l/2, l/2] x.
+      const double half = 0.5 * (b.extent.x - 2 * b.radius), r = b.radius;
+      const double across = std::sqrt(std::max(0.0, 1.0 - a.x * a.x));
+      if (across > 0 && r / across * a.x <= half) return 2 * r / across;
+      // Through the end cap: |t u - half x|^2 = r^2.
+      const double t =
+          half * a.x + std::sqrt(std::max(0.0, half * half * a.x * a.x - half * half + r * r));
+      return 2 * t;
+    }
+    case PartBulk::Shape::Box:
+    default: {
+      double t = std::numeric_limits<double>::infinity();
+      if (a.x > 0) t = std::min(t, b.extent.x / a.x);
+      if (a.y > 0) t = std::min(t, b.extent.y / a.y);
+      if (a.z > 0) t = std::min(t, b.extent.z / a.z);
+      return std::isfinite(t) ? t : b.length;
+    }
+  }
+}
+
 std::optional<SoftIronModel> soft_iron_model(const MagnetColumns& c, std::uint32_t slot) {
   const auto b = part_bulk(c, slot);
   const auto d = pole_separation(c, slot);
   if (!b || !d || !(*d > 0)) return std::nullopt;
   const double chi = c.susceptibility.value_or(slot, 0.0);
-  const double chi_app = apparent_susceptibility(chi, demagnetizing_factor(b->aspect_ratio));
-  // The bar's moment chi_app V H, carried by two poles d apart.
   SoftIronModel m;
-  m.gain = chi_app * b->volume / *d;
-  m.saturation = c.saturation_pole.has(slot) ? c.saturation_pole[slot]
-                                             : kIronSaturationMagnetization * b->volume / *d;
+  m.bulk = *b;
+  m.chord_scale = *d / b->length;  // kMagneticLengthRatio unless pole_separation says otherwise
+  if (c.kind(slot) == MagnetKind::Electromagnet) {
+    // The core: a rod along x, as long as the coil, magnetised along the
+    // coil's axis only (its transverse apparent chi is at most 2, against
+    // 1/N_x along it; and one pole pair carries the coil and its core).
+    const double dc =
+        c.core_diameter.value_or(slot, std::sqrt(4.0 * b->cross_section / std::numbers::pi));
+    if (!(dc > 0) || !std::isfinite(dc)) return std::nullopt;
+    m.axial_only = true;
+    m.volume = std::numbers::pi / 4 * dc * dc * b->length;
+    m.susceptibility = {apparent_susceptibility(chi, demagnetizing_factor(b->length / dc)), 0, 0};
+    m.separation = {*d, kMagneticLengthRatio * dc, kMagneticLengthRatio * dc};
+  } else {
+    // A box: the prism's own factors; a sphere or a capsule: the ellipsoid's
+    // (for a capsule, the spheroid of its length and diameter).
+    const Vec3 n = b->shape == PartBulk::Shape::Box ? prism_demagnetizing_factors(b->extent * 0.5)
+                                                    : demagnetizing_factors(b->extent * 0.5);
+    m.volume = b->volume;
+    m.susceptibility = {apparent_susceptibility(chi, n.x), apparent_susceptibility(chi, n.y),
+                        apparent_susceptibility(chi, n.z)};
+    m.separation = {m.separation_along({1, 0, 0}), m.separation_along({0, 1, 0}),
+                    m.separation_along({0, 0, 1})};
+  }
+  // saturation_pole is a pole strength along x: the moment at saturation is it times d.
+  m.saturation = c.saturation_pole.has(slot) ? c.saturation_pole[slot] * *d
+                                             : kIronSaturationMagnetization * m.volume;
   return m;
 }
 
@@ -212,6 +279,9 @@ std::string check_part(const MagnetColumns& c, std::uint32_t slot) {
       if (!pole_separation(c, slot) || !coil_factor(c, slot))
         return "an electromagnet needs a shape (box 'size', sphere 'radius', capsule 'radius' "
                "and 'length'), or 'pole_separation' and 'coil_factor'";
+      if (c.susceptibility.has(slot) && !soft_iron_model(c, slot))
+        return "an electromagnet with an iron core ('susceptibility') needs a shape (box 'size', "
+               "sphere 'radius', capsule 'radius' and 'length') and a positive 'core_diameter'";
       return "";
     case MagnetKind::SoftIron:
       if (!c.susceptibility.has(slot)) return "soft iron needs a 'susceptibility'";

@@ -8,7 +8,11 @@
 //   electromagnet  turns, coil_factor (default from the shape), coil_time_constant;
 //                  pole_strength is written by the magnetism resolver from the coil current
 //   soft_iron      susceptibility, saturation_pole (default from iron's saturation);
-//                  its poles are induced by the field, see magnetic_forces.hpp
+//                  its poles are induced by the field along the field (isotropic
+//                  iron, demagnetised by its shape), see magnetic_forces.hpp
+//   electromagnet with susceptibility: the coil has a soft-iron core (a rod
+//                  along x of diameter core_diameter), which the field of the
+//                  other parts magnetises along the coil's axis
 //
 // All kinds: pole_separation (default 0.85 x the part's length along x).
 // Geometry (position, orientation, shape, size, radius, length) belongs to the
@@ -35,6 +39,7 @@ inline constexpr const char* kCoilFactor = "coil_factor";
 inline constexpr const char* kCoilTimeConstant = "coil_time_constant";
 inline constexpr const char* kSusceptibility = "susceptibility";
 inline constexpr const char* kSaturationPole = "saturation_pole";
+inline constexpr const char* kCoreDiameter = "core_diameter";
 // Read, owned by the rigid body.
 inline constexpr const char* kPosition = "position";
 inline constexpr const char* kOrientation = "orientation";
@@ -65,7 +70,7 @@ void ensure_geometry_properties(PropertyRegistry& registry);
 struct MagnetColumns {
   ColumnView<EnumValue> magnet;
   ColumnView<double> pole_strength, pole_separation, turns, coil_factor, coil_time_constant,
-      susceptibility, saturation_pole;
+      susceptibility, saturation_pole, core_diameter;
   ColumnView<Vec3> position;
   ColumnView<Quat> orientation;
   ColumnView<EnumValue> shape;
@@ -79,7 +84,8 @@ struct MagnetColumns {
   /// them in every step (a lookup by name per column was 2 % of the motor's step).
   struct Ids {
     PropertyId magnet, pole_strength, pole_separation, turns, coil_factor, coil_time_constant,
-        susceptibility, saturation_pole, position, orientation, shape, size, radius, length;
+        susceptibility, saturation_pole, core_diameter, position, orientation, shape, size, radius,
+        length;
     int shape_box = -1, shape_sphere = -1, shape_capsule = -1;
     static Ids resolve(const WorldView& world);
   };
@@ -95,8 +101,18 @@ struct PartBulk {
   double length = 0;         ///< extent along local x, m
   double cross_section = 0;  ///< area across x, m^2
   double volume = 0;         ///< m^3
-  double aspect_ratio = 1;   ///< length / equivalent diameter (for demagnetisation)
+  double aspect_ratio = 1;   ///< length / equivalent diameter
+  /// Full extents along local x, y, z, m (box: size; sphere: 2r each;
+  /// capsule: length + 2r, 2r, 2r): the ellipsoid its demagnetising
+  /// factors are taken from.
+  Vec3 extent;
+  enum class Shape : std::uint8_t { Box, Sphere, Capsule } shape = Shape::Box;
+  double radius = 0;  ///< sphere and capsule, m
 };
+
+/// Length of the chord through the part's centre along the unit direction
+/// `u` (local frame), m: where the poles of a moment along u are spread.
+double chord(const PartBulk& bulk, Vec3 u);
 
 /// The part's bulk geometry, or nullopt if it carries no usable shape.
 std::optional<PartBulk> part_bulk(const MagnetColumns& c, std::uint32_t slot);
@@ -110,11 +126,24 @@ std::optional<double> pole_separation(const MagnetColumns& c, std::uint32_t slot
 /// moment N I A spread over its poles); nullopt if the geometry is missing.
 std::optional<double> coil_factor(const MagnetColumns& c, std::uint32_t slot);
 
-/// What the induction solve needs of a soft-iron part.
+/// What the induction solve needs of a soft-iron part (or of a coil's iron
+/// core), in the part's local frame (magnetic_forces turns it into an
+/// InducedPart at the part's pose).
 struct SoftIronModel {
-  double gain = 0;        ///< induced pole strength per axial field, m^2
-  double saturation = 0;  ///< A*m
+  Vec3 susceptibility;    ///< apparent chi along local x, y, z: chi / (1 + N_i chi)
+  Vec3 separation;        ///< pole separation along local x, y, z, m
+  double volume = 0;      ///< of the iron, m^3
+  double saturation = 0;  ///< largest moment, A*m^2
+  /// Pole separation of a moment along the local unit direction u, m: the
+  /// chord along u scaled like the x axis's (0.85 by default). Unused for a
+  /// coil's core, whose moment stays on the coil's axis.
+  double separation_along(Vec3 u) const { return chord_scale * chord(bulk, u); }
+  PartBulk bulk;
+  double chord_scale = 0;
+  bool axial_only = false;  ///< a coil's core: magnetised along local x only
 };
+/// The model of a soft-iron part, or of an electromagnet's iron core (an
+/// electromagnet carrying `susceptibility`); nullopt without one.
 std::optional<SoftIronModel> soft_iron_model(const MagnetColumns& c, std::uint32_t slot);
 
 /// Why a magnetic part cannot be simulated ("" if it can): the message names

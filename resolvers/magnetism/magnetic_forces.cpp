@@ -28,61 +28,129 @@ void MagneticForces::update(const WorldView& world) {
   poles_.clear();
   body_of_slot_.assign(store.slot_count(), kNoBody);
 
-  // 1. Gather the parts: their axes, the fixed poles of magnets and coils, and
-  //    the soft-iron bars whose poles depend on the field.
+  // 1. Gather the parts: their frames, the fixed poles of magnets and coils,
+  //    and the soft iron (free parts and coils' cores) whose moment depends
+  //    on the field.
   struct Frame {
-    Vec3 centre, axis;
-    double separation;
+    Vec3 centre;
+    Vec3 axes[3];       // the part's local x, y, z in the world
+    double separation;  // of its fixed poles (along x)
   };
   std::vector<Frame> frames;
-  std::vector<double> strength;  // per body: fixed, or induced once solved
-  std::vector<Pole> fixed;
-  std::vector<InducedBar> bars;
+  std::vector<double> fixed_strength;  // per body: the magnet's or coil's own q
+  std::vector<std::int32_t> iron_of;   // per body: index in models / parts, or -1
+  std::vector<SoftIronModel> models;
   for (std::uint32_t slot : c.magnet.members()) {
     const auto d = pole_separation(c, slot);
     if (!c.position.has(slot) || !d || !(*d > 0)) continue;  // the resolver's build names these
     const Vec3 centre = c.position[slot];
-    Vec3 axis = rotate(c.orientation.value_or(slot, Quat{}), {1, 0, 0});
-    axis = axis / length(axis);
-    if (!is_finite(centre) || !is_finite(axis)) continue;  // not ours to repair; never spread it
+    const Quat o = c.orientation.value_or(slot, Quat{});
+    Frame f{centre, {rotate(o, {1, 0, 0}), rotate(o, {0, 1, 0}), rotate(o, {0, 0, 1})}, *d};
+    for (Vec3& a : f.axes) a = a / length(a);
+    if (!is_finite(centre) || !is_finite(f.axes[0]) || !is_finite(f.axes[1]) ||
+        !is_finite(f.axes[2]))
+      continue;  // not ours to repair; never spread it
 
-    const auto b = std::uint32_t(bodies_.size());
-    body_of_slot_[slot] = b;
+    body_of_slot_[slot] = std::uint32_t(bodies_.size());
     bodies_.push_back({.id = store.id_at(slot)});
-    frames.push_back({centre, axis, *d});
-    strength.push_back(0.0);
-    if (c.kind(slot) == MagnetKind::SoftIron) {
-      if (auto m = soft_iron_model(c, slot); m && m->gain > 0)
-        bars.push_back({centre, axis, *d, m->gain, m->saturation, b});
-    } else {
+    frames.push_back(f);
+    fixed_strength.push_back(0.0);
+    iron_of.push_back(-1);
+    const MagnetKind kind = c.kind(slot);
+    if (kind != MagnetKind::SoftIron) {
       const double q = c.pole_strength.value_or(slot, 0.0);
-      if (q != 0 && std::isfinite(q)) {
-        strength[b] = q;
-        const BarPoles p = bar_poles(centre, axis, *d);
-        fixed.push_back({p.north, q, b});
-        fixed.push_back({p.south, -q, b});
-      }
+      if (q != 0 && std::isfinite(q)) fixed_strength.back() = q;
     }
+    if (kind == MagnetKind::SoftIron ||
+        (kind == MagnetKind::Electromagnet && c.susceptibility.has(slot)))
+      if (auto m = soft_iron_model(c, slot);
+          m && (m->susceptibility.x > 0 || m->susceptibility.y > 0 || m->susceptibility.z > 0)) {
+        iron_of.back() = std::int32_t(models.size());
+        models.push_back(*m);
+      }
   }
+  const auto n_bodies = std::uint32_t(bodies_.size());
 
-  // 2. The poles the field induces in soft iron, consistently with one another.
-  const InductionResult induced = solve_induction(fixed, bars, softening_, summation_);
-  for (std::size_t i = 0; i < bars.size(); ++i) strength[bars[i].body] = induced.strength[i];
+  // The induction solve's view of the iron at the given frames.
+  auto induced_parts = [&](const std::vector<Frame>& at) {
+    std::vector<InducedPart> parts(models.size());
+    for (std::uint32_t b = 0; b < n_bodies; ++b) {
+      if (iron_of[b] < 0) continue;
+      const SoftIronModel& m = models[std::size_t(iron_of[b])];
+      InducedPart& p = parts[std::size_t(iron_of[b])];
+      p.centre = at[b].centre;
+      for (int i = 0; i < 3; ++i) p.axes[i] = at[b].axes[i];
+      p.susceptibility[0] = m.susceptibility.x, p.susceptibility[1] = m.susceptibility.y,
+      p.susceptibility[2] = m.susceptibility.z;
+      p.separation[0] = m.separation.x, p.separation[1] = m.separation.y,
+      p.separation[2] = m.separation.z;
+      p.volume = m.volume;
+      p.saturation = m.saturation;
+      p.body = b;
+    }
+    return parts;
+  };
+  auto fixed_poles = [&](const std::vector<Frame>& at, const std::vector<double>& q) {
+    std::vector<Pole> out;
+    for (std::uint32_t b = 0; b < n_bodies; ++b) {
+      if (q[b] == 0) continue;
+      const BarPoles p = bar_poles(at[b].centre, at[b].axes[0], at[b].separation);
+      out.push_back({p.north, q[b], b});
+      out.push_back({p.south, -q[b], b});
+    }
+    return out;
+  };
+  // Every body's one pole pair: a magnet's or a coil's along its x axis (a
+  // coil's core adds its axial moment to it); free iron's along its moment,
+  // spread over the part's chord in that direction, so that a sphere's poles
+  // do not depend on how it is turned.
+  struct PolePair {
+    Vec3 axis;
+    double separation = 0, strength = 0;
+  };
+  auto pole_pairs = [&](const std::vector<Frame>& at, const std::vector<double>& q,
+                        const std::vector<Vec3>& moment) {
+    std::vector<PolePair> out(n_bodies);
+    for (std::uint32_t b = 0; b < n_bodies; ++b) {
+      const Frame& f = at[b];
+      out[b] = {f.axes[0], f.separation, q[b]};
+      if (iron_of[b] < 0) continue;
+      const SoftIronModel& m = models[std::size_t(iron_of[b])];
+      const Vec3 mb = moment[std::size_t(iron_of[b])];
+      if (m.axial_only) {
+        out[b].strength += dot(mb, f.axes[0]) / f.separation;
+        continue;
+      }
+      const double size = length(mb);
+      if (!(size > 0) || !std::isfinite(size)) continue;
+      const Vec3 u = mb / size;
+      const double d =
+          m.separation_along({dot(u, f.axes[0]), dot(u, f.axes[1]), dot(u, f.axes[2])});
+      out[b] = {u, d, size / d};
+    }
+    return out;
+  };
+
+  // 2. The moments the field induces in the iron, consistently with one another.
+  const std::vector<Pole> fixed = fixed_poles(frames, fixed_strength);
+  const std::vector<InducedPart> parts = induced_parts(frames);
+  const InductionResult induced = solve_induction(fixed, parts, softening_, summation_);
   if (!induced.converged && induction_converged_)
     world.emit({.type = "magnetic_induction_unconverged",
                 .text = "soft-iron parts too strongly coupled for the pole model; using the "
                         "field of the magnets alone"});
   induction_iterations_ = induced.iterations;
   induction_converged_ = induced.converged;
+  const std::vector<PolePair> pairs = pole_pairs(frames, fixed_strength, induced.moment);
 
   // 3. Every pole, grouped by part, north first.
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
-    bodies_[b].pole_strength = strength[b];
+  for (std::uint32_t b = 0; b < n_bodies; ++b) {
+    bodies_[b].pole_strength = pairs[b].strength;
     bodies_[b].first_pole = std::uint32_t(poles_.size());
-    if (strength[b] == 0) continue;
-    const BarPoles p = bar_poles(frames[b].centre, frames[b].axis, frames[b].separation);
-    poles_.push_back({p.north, strength[b], b});
-    poles_.push_back({p.south, -strength[b], b});
+    if (pairs[b].strength == 0) continue;
+    const BarPoles p = bar_poles(frames[b].centre, pairs[b].axis, pairs[b].separation);
+    poles_.push_back({p.north, pairs[b].strength, b});
+    poles_.push_back({p.south, -pairs[b].strength, b});
     bodies_[b].pole_count = 2;
   }
 
@@ -90,7 +158,7 @@ void MagneticForces::update(const WorldView& world) {
   std::vector<Vec3> pole_force(poles_.size());
   used_tree_ = summation_.use_tree(poles_.size());
   accumulate_pole_forces(poles_, softening_, pole_force, summation_, &tree_);
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+  for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
     for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
       body.force += pole_force[i];
@@ -108,7 +176,7 @@ void MagneticForces::update(const WorldView& world) {
 
   // 5. Rates along the present motion: the same evaluation with every part
   //    moved on by kRateTime at its velocity and angular velocity (the
-  //    induced poles solved again there, the fixed strengths held), as a
+  //    induced moments solved again there, the fixed strengths held), as a
   //    forward difference. All parts move at once, so a pair of moving parts
   //    gets the rate of their mutual force, and the parts of one rigid
   //    assembly keep their relative places (their mutual forces cancel in the
@@ -118,9 +186,9 @@ void MagneticForces::update(const WorldView& world) {
   // The electromagnets' pole-strength rates (magnetism with rates = true):
   // a coil whose current is rising moves its poles' strength on as well.
   const auto q_rate = pole_strength_rate_.column<double>(world);
-  std::vector<double> strength_rate(bodies_.size(), 0.0);
+  std::vector<double> strength_rate(n_bodies, 0.0);
   bool any = false;
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+  for (std::uint32_t b = 0; b < n_bodies; ++b) {
     const std::uint32_t slot = bodies_[b].id.index;
     if (c.kind(slot) == MagnetKind::SoftIron || !q_rate.has(slot)) continue;
     const double r = q_rate[slot];
@@ -132,51 +200,46 @@ void MagneticForces::update(const WorldView& world) {
   if (velocity_id && spin_id) {
     const auto velocity = world.column<Vec3>(*velocity_id);
     const auto spin = world.column<Vec3>(*spin_id);
-    for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+    for (std::uint32_t b = 0; b < n_bodies; ++b) {
       const std::uint32_t slot = bodies_[b].id.index;
       const Vec3 v = velocity.value_or(slot, Vec3{});
       const Vec3 w = spin.value_or(slot, Vec3{});
       if (!is_finite(v) || !is_finite(w) || (v == Vec3{} && w == Vec3{})) continue;
       any = true;
       moved[b].centre = frames[b].centre + kRateTime * v;
-      const Vec3 axis = frames[b].axis + kRateTime * cross(w, frames[b].axis);
-      moved[b].axis = axis / length(axis);
+      for (int i = 0; i < 3; ++i) {
+        const Vec3 axis = frames[b].axes[i] + kRateTime * cross(w, frames[b].axes[i]);
+        moved[b].axes[i] = axis / length(axis);
+      }
     }
   }
   if (!any) return;
-  // The fixed poles (magnets, coils) at their moved places and strengths.
-  std::vector<Pole> fixed_moved;
-  std::vector<InducedBar> bars_moved = bars;
-  for (InducedBar& bar : bars_moved) bar.centre = moved[bar.body].centre, bar.axis = moved[bar.body].axis;
-  std::vector<double> strength_moved = strength;
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) strength_moved[b] += kRateTime * strength_rate[b];
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
-    if (c.kind(bodies_[b].id.index) == MagnetKind::SoftIron || strength_moved[b] == 0) continue;
-    const BarPoles bp = bar_poles(moved[b].centre, moved[b].axis, moved[b].separation);
-    fixed_moved.push_back({bp.north, strength_moved[b], b});
-    fixed_moved.push_back({bp.south, -strength_moved[b], b});
-  }
-  const InductionResult induced_moved = solve_induction(fixed_moved, bars_moved, softening_, summation_);
-  for (std::size_t i = 0; i < bars_moved.size(); ++i)
-    strength_moved[bars_moved[i].body] = induced_moved.converged || !induced.converged
-                                             ? induced_moved.strength[i]
-                                             : strength[bars_moved[i].body];
+  std::vector<double> fixed_moved_strength = fixed_strength;
+  for (std::uint32_t b = 0; b < n_bodies; ++b)
+    fixed_moved_strength[b] += kRateTime * strength_rate[b];
+  const InductionResult induced_moved = solve_induction(
+      fixed_poles(moved, fixed_moved_strength), induced_parts(moved), softening_, summation_);
+  const std::vector<PolePair> pairs_moved = pole_pairs(
+      moved, fixed_moved_strength,
+      induced_moved.converged || !induced.converged ? induced_moved.moment : induced.moment);
   std::vector<Pole> poles_moved;
-  std::vector<std::uint32_t> first_moved(bodies_.size(), 0), count_moved(bodies_.size(), 0);
+  std::vector<std::uint32_t> first_moved(n_bodies, 0), count_moved(n_bodies, 0);
   poles_moved.reserve(poles_.size() + 2);
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+  for (std::uint32_t b = 0; b < n_bodies; ++b) {
     first_moved[b] = std::uint32_t(poles_moved.size());
-    if (strength_moved[b] == 0 || (bodies_[b].pole_count == 0 && strength_rate[b] == 0)) continue;
-    const BarPoles p = bar_poles(moved[b].centre, moved[b].axis, moved[b].separation);
-    poles_moved.push_back({p.north, strength_moved[b], b});
-    poles_moved.push_back({p.south, -strength_moved[b], b});
+    if (pairs_moved[b].strength == 0 || (bodies_[b].pole_count == 0 && strength_rate[b] == 0))
+      continue;
+    const BarPoles p = bar_poles(moved[b].centre, pairs_moved[b].axis, pairs_moved[b].separation);
+    poles_moved.push_back({p.north, pairs_moved[b].strength, b});
+    poles_moved.push_back({p.south, -pairs_moved[b].strength, b});
     count_moved[b] = 2;
   }
   std::vector<Vec3> force_moved(poles_moved.size());
   accumulate_pole_forces(poles_moved, softening_, force_moved, summation_, &tree_);
-  for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+  for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
-    if (count_moved[b] == 0 || (body.pole_count != 0 && body.force == Vec3{} && body.torque == Vec3{}))
+    if (count_moved[b] == 0 ||
+        (body.pole_count != 0 && body.force == Vec3{} && body.torque == Vec3{}))
       continue;
     Vec3 f{}, t{};
     for (std::uint32_t i = first_moved[b]; i < first_moved[b] + count_moved[b]; ++i) {

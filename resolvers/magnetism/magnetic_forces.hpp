@@ -3,7 +3,7 @@
 // poles the field induces in soft iron) and the force and torque on each part.
 //
 // Contract:
-//   reads     magnet, pole_strength, pole_separation, susceptibility,
+//   reads     magnet, pole_strength, pole_separation, susceptibility, core_diameter,
 //             saturation_pole, position, orientation, shape, size, radius, length;
 //             the magnetism resolver (whose electromagnets it sees through pole_strength)
 //   writes    only its own data below; recomputed only when an input changed

@@ -46,9 +46,10 @@ void register_magnetism_plugins(PluginRegistry& registry) {
   registry.add({
       .info = {.name = MagneticForces::kName,
                .kind = StageKind::Derived,
-               .reads = with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
-                                    prop::kSusceptibility, prop::kSaturationPole, prop::kPosition,
-                                    prop::kOrientation, prop::kPoleStrengthRate}),
+               .reads =
+                   with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
+                               prop::kSusceptibility, prop::kSaturationPole, prop::kCoreDiameter,
+                               prop::kPosition, prop::kOrientation, prop::kPoleStrengthRate}),
                .needs = {prop::kMagnet},
                .resolvers = {MagnetismResolver::kName},
                .doc =

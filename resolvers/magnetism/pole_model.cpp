@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace alloy::magnetism {
 
@@ -79,80 +80,205 @@ double demagnetizing_factor(double p) {
   return (1.0 - p / s * std::acos(p)) / (1.0 - p * p);
 }
 
-InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<const InducedBar> bars,
-                                double softening, const SummationOptions& options) {
-  const std::size_t n = bars.size();
+Vec3 demagnetizing_factors(Vec3 semi_axes) {
+  const double a[3] = {semi_axes.x, semi_axes.y, semi_axes.z};
+  const double top = std::max({a[0], a[1], a[2]});
+  if (!(std::min({a[0], a[1], a[2]}) > 0) || !std::isfinite(top))
+    return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  // Scale-free: semi-axes relative to the largest; s = e^y, so the integrand
+  // s f(s) is smooth in y and decays as e^y below the smallest axis squared
+  // and as e^(-y/2) above the largest. Simpson's rule in y.
+  double e[3];
+  for (int i = 0; i < 3; ++i) e[i] = (a[i] / top) * (a[i] / top);
+  const double y_lo = std::log(std::min({e[0], e[1], e[2]})) - 36.0, y_hi = 36.0;
+  constexpr int kIntervals = 600;  // even
+  const double dy = (y_hi - y_lo) / kIntervals;
+  double sum[3] = {};
+  for (int k = 0; k <= kIntervals; ++k) {
+    const double w = (k == 0 || k == kIntervals) ? 1.0 : (k % 2 ? 4.0 : 2.0);
+    const double s = std::exp(y_lo + k * dy);
+    const double r = std::sqrt((e[0] + s) * (e[1] + s) * (e[2] + s));
+    for (int i = 0; i < 3; ++i) sum[i] += w * s / ((e[i] + s) * r);
+  }
+  // The three sum to 1 exactly for the ellipsoid; normalising removes the
+  // quadrature's (tiny) common error and the tail beyond y_hi.
+  const double total = sum[0] + sum[1] + sum[2];
+  return {sum[0] / total, sum[1] / total, sum[2] / total};
+}
+
+namespace {
+/// Aharoni's N_z of the prism with half sides a, b, c (pi D_z, divided by pi).
+double prism_factor_z(double a, double b, double c) {
+  const double r = std::sqrt(a * a + b * b + c * c), rab = std::sqrt(a * a + b * b),
+               rbc = std::sqrt(b * b + c * c), rac = std::sqrt(a * a + c * c);
+  const double abc = a * b * c;
+  const double s = (b * b - c * c) / (2 * b * c) * std::log((r - a) / (r + a)) +
+                   (a * a - c * c) / (2 * a * c) * std::log((r - b) / (r + b)) +
+                   b / (2 * c) * std::log((rab + a) / (rab - a)) +
+                   a / (2 * c) * std::log((rab + b) / (rab - b)) +
+                   c / (2 * a) * std::log((rbc - b) / (rbc + b)) +
+                   c / (2 * b) * std::log((rac - a) / (rac + a)) + 2 * std::atan(a * b / (c * r)) +
+                   (a * a * a + b * b * b - 2 * c * c * c) / (3 * abc) +
+                   (a * a + b * b - 2 * c * c) / (3 * abc) * r + c / (a * b) * (rac + rbc) -
+                   (rab * rab * rab + rbc * rbc * rbc + rac * rac * rac) / (3 * abc);
+  return s / std::numbers::pi;
+}
+}  // namespace
+
+Vec3 prism_demagnetizing_factors(Vec3 h) {
+  if (!(std::min({h.x, h.y, h.z}) > 0) || !std::isfinite(h.x + h.y + h.z))
+    return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  // Each factor is N_z with the axes permuted so that its axis comes last.
+  return {prism_factor_z(h.y, h.z, h.x), prism_factor_z(h.z, h.x, h.y),
+          prism_factor_z(h.x, h.y, h.z)};
+}
+
+MeanFieldSamples mean_field_samples(const InducedPart& part) {
+  MeanFieldSamples out;
+  double s_min = std::numeric_limits<double>::infinity();
+  for (double d : part.separation) s_min = std::min(s_min, 0.5 * d);
+  double ends = 0;
+  out.count = 1;
+  for (int j = 0; j < 3; ++j) {
+    const double s = 0.5 * part.separation[j];
+    if (!(s > s_min)) continue;
+    const double w = (1.0 - (s_min / s) * (s_min / s)) / 6.0;
+    out.point[out.count] = part.centre + part.axes[j] * s;
+    out.weight[out.count++] = w;
+    out.point[out.count] = part.centre - part.axes[j] * s;
+    out.weight[out.count++] = w;
+    ends += 2 * w;
+  }
+  out.point[0] = part.centre;
+  out.weight[0] = 1.0 - ends;
+  return out;
+}
+
+Vec3 saturate_moment(Vec3 u, double m_sat) {
+  if (!(m_sat > 0)) return u;
+  const double r = length(u);
+  if (!(r > 1e-8 * m_sat)) return u;  // tanh(x)/x = 1 to rounding
+  return u * (m_sat * std::tanh(r / m_sat) / r);
+}
+
+namespace {
+/// d saturate_moment / d u: g I + (sech^2 - g) u u^T / |u|^2, g = m_sat tanh(r/m_sat) / r.
+Eigen::Matrix3d saturate_moment_jacobian(Vec3 u, double m_sat) {
+  const double r = length(u);
+  if (!(m_sat > 0) || !(r > 1e-8 * m_sat)) return Eigen::Matrix3d::Identity();
+  const double t = std::tanh(r / m_sat), g = m_sat * t / r, sech2 = 1.0 - t * t;
+  const Eigen::Vector3d n(u.x / r, u.y / r, u.z / r);
+  return g * Eigen::Matrix3d::Identity() + (sech2 - g) * n * n.transpose();
+}
+Eigen::Vector3d eig(Vec3 v) {
+  return {v.x, v.y, v.z};
+}
+Vec3 vec(const Eigen::Vector3d& v) {
+  return {v[0], v[1], v[2]};
+}
+}  // namespace
+
+InductionResult solve_induction(std::span<const Pole> fixed_poles,
+                                std::span<const InducedPart> parts, double softening,
+                                const SummationOptions& options) {
+  const std::size_t n = parts.size();
   InductionResult out;
-  out.strength.assign(n, 0.0);
+  out.moment.assign(n, Vec3{});
   if (n == 0) return out;
 
-  // Three axial samples per bar: its south end, its centre, its north end.
-  std::vector<Vec3> points(3 * n);
-  std::vector<std::uint32_t> exclude(3 * n);
-  for (std::size_t b = 0; b < n; ++b)
-    for (int k = 0; k < 3; ++k) {
-      points[3 * b + k] = bars[b].centre + bars[b].axis * ((k - 1) * 0.5 * bars[b].separation);
-      exclude[3 * b + k] = bars[b].body;
-    }
-
-  // Axial field from the fixed poles (permanent magnets, electromagnets).
-  std::vector<Vec3> h_fixed(3 * n);
-  pole_fields(fixed_poles, softening, points, exclude, h_fixed, options);
-  Eigen::VectorXd h(n), gain(n), qsat(n);
+  // The mean-field sample points of every part.
+  std::vector<MeanFieldSamples> samples(n);
+  std::vector<Vec3> points;
+  std::vector<std::uint32_t> exclude;
+  std::vector<std::size_t> first(n);
   for (std::size_t b = 0; b < n; ++b) {
-    double a = 0;
-    for (int k = 0; k < 3; ++k) a += kAxialSampleWeights[k] * dot(bars[b].axis, h_fixed[3 * b + k]);
-    h[b] = a;
-    gain[b] = bars[b].gain;
-    qsat[b] = bars[b].saturation;
+    samples[b] = mean_field_samples(parts[b]);
+    first[b] = points.size();
+    for (int k = 0; k < samples[b].count; ++k) {
+      points.push_back(samples[b].point[k]);
+      exclude.push_back(parts[b].body);
+    }
   }
+  auto mean = [&](std::size_t b, std::span<const Vec3> h) {
+    Vec3 m{};
+    for (int k = 0; k < samples[b].count; ++k)
+      m += h[first[b] + std::size_t(k)] * samples[b].weight[k];
+    return m;
+  };
 
-  // Coupling: axial field at bar b from bar c magnetised with unit strength.
-  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n, n);
-  for (std::size_t c = 0; c < n; ++c) {
-    const BarPoles pc = bar_poles(bars[c].centre, bars[c].axis, bars[c].separation);
-    const Pole unit[2] = {{pc.north, 1.0, bars[c].body}, {pc.south, -1.0, bars[c].body}};
-    for (std::size_t b = 0; b < n; ++b) {
-      if (b == c || bars[b].body == bars[c].body) continue;
-      Vec3 hk[3];
-      pole_fields(unit, softening, std::span(points).subspan(3 * b, 3),
-                  std::span(exclude).subspan(3 * b, 3), hk);
-      double a = 0;
-      for (int k = 0; k < 3; ++k) a += kAxialSampleWeights[k] * dot(bars[b].axis, hk[k]);
-      g(b, c) = a;
+  // Mean field from the fixed poles (permanent magnets, electromagnets), and
+  // each part's linear response V chi (3 x 3, world).
+  std::vector<Vec3> h_fixed(points.size());
+  pole_fields(fixed_poles, softening, points, exclude, h_fixed, options);
+  Eigen::VectorXd h(3 * n);
+  std::vector<Eigen::Matrix3d> response(n);
+  for (std::size_t b = 0; b < n; ++b) {
+    h.segment<3>(3 * b) = eig(mean(b, h_fixed));
+    response[b].setZero();
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d e = eig(parts[b].axes[i]);
+      response[b] += parts[b].volume * parts[b].susceptibility[i] * e * e.transpose();
     }
   }
 
-  auto sat = [&](const Eigen::VectorXd& u) {
-    Eigen::VectorXd s(n);
-    for (std::size_t b = 0; b < n; ++b) s[b] = saturate(u[b], qsat[b]);
-    return s;
-  };
-  auto residual = [&](const Eigen::VectorXd& s) -> Eigen::VectorXd {
-    return s - sat(gain.cwiseProduct(h + g * s));
-  };
+  // Coupling: the mean field at b from c's moment, carried by a pole pair
+  // along each of c's principal axes (unit moment along e_cj: poles +-1/d_cj).
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  std::vector<Vec3> hk(points.size());
+  for (std::size_t c = 0; c < n; ++c)
+    for (int j = 0; j < 3; ++j) {
+      if (parts[c].susceptibility[j] == 0) continue;  // never magnetised along it
+      const double d = parts[c].separation[j];
+      const BarPoles pc = bar_poles(parts[c].centre, parts[c].axes[j], d);
+      const Pole unit[2] = {{pc.north, 1.0 / d, parts[c].body},
+                            {pc.south, -1.0 / d, parts[c].body}};
+      for (std::size_t b = 0; b < n; ++b) {
+        if (b == c || parts[b].body == parts[c].body) continue;
+        const auto span = std::span(points).subspan(first[b], std::size_t(samples[b].count));
+        const auto out_span = std::span(hk).subspan(first[b], span.size());
+        pole_fields(unit, softening, span, std::span(exclude).subspan(first[b], span.size()),
+                    out_span);
+        g.block<3, 3>(3 * b, 3 * c) += eig(mean(b, hk)) * eig(parts[c].axes[j]).transpose();
+      }
+    }
 
-  const Eigen::VectorXd uncoupled = sat(gain.cwiseProduct(h));
-  Eigen::VectorXd s = uncoupled;
-  Eigen::VectorXd r = residual(s);
-  // Tolerance relative to the largest pole the fixed field alone would induce.
+  auto linear = [&](const Eigen::VectorXd& x) -> Eigen::VectorXd {
+    const Eigen::VectorXd field = h + g * x;
+    Eigen::VectorXd u(3 * n);
+    for (std::size_t b = 0; b < n; ++b) u.segment<3>(3 * b) = response[b] * field.segment<3>(3 * b);
+    return u;
+  };
+  auto sat = [&](const Eigen::VectorXd& u) -> Eigen::VectorXd {
+    Eigen::VectorXd m(3 * n);
+    for (std::size_t b = 0; b < n; ++b)
+      m.segment<3>(3 * b) = eig(saturate_moment(vec(u.segment<3>(3 * b)), parts[b].saturation));
+    return m;
+  };
+  auto residual = [&](const Eigen::VectorXd& x) -> Eigen::VectorXd { return x - sat(linear(x)); };
+
+  const Eigen::VectorXd uncoupled = sat(linear(Eigen::VectorXd::Zero(3 * n)));
+  Eigen::VectorXd x = uncoupled;
+  Eigen::VectorXd r = residual(x);
+  // Tolerance relative to the largest moment the fixed field alone would induce.
   const double scale = std::max(uncoupled.cwiseAbs().maxCoeff(), 1e-300);
   const double tol = 1e-11 * scale;
   constexpr int kMaxIterations = 30;
   bool converged = r.cwiseAbs().maxCoeff() <= tol;
   for (int it = 0; it < kMaxIterations && !converged; ++it) {
-    const Eigen::VectorXd u = gain.cwiseProduct(h + g * s);
-    Eigen::MatrixXd jac = Eigen::MatrixXd::Identity(n, n);
+    const Eigen::VectorXd u = linear(x);
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Identity(3 * n, 3 * n);
     for (std::size_t b = 0; b < n; ++b)
-      jac.row(b) -= saturate_slope(u[b], qsat[b]) * gain[b] * g.row(b);
-    const Eigen::VectorXd ds = jac.partialPivLu().solve(-r);
+      jac.middleRows<3>(3 * b) -=
+          saturate_moment_jacobian(vec(u.segment<3>(3 * b)), parts[b].saturation) * response[b] *
+          g.middleRows<3>(3 * b);
+    const Eigen::VectorXd dx = jac.partialPivLu().solve(-r);
     // Backtracking keeps Newton from jumping across the saturation knee.
     double lambda = 1.0;
     const double r0 = r.norm();
-    Eigen::VectorXd s_new, r_new;
+    Eigen::VectorXd x_new, r_new;
     for (int k = 0; k < 12; ++k, lambda *= 0.5) {
-      s_new = s + lambda * ds;
-      r_new = residual(s_new);
+      x_new = x + lambda * dx;
+      r_new = residual(x_new);
       if (r_new.allFinite() && r_new.norm() < r0) break;
     }
     if (!r_new.allFinite() || !(r_new.norm() < r0)) {
@@ -161,14 +287,14 @@ InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<con
       converged = r.cwiseAbs().maxCoeff() <= 1e-7 * scale;
       break;
     }
-    s = s_new;
+    x = x_new;
     r = r_new;
     out.iterations = it + 1;
     converged = r.cwiseAbs().maxCoeff() <= tol;
   }
-  out.converged = converged && s.allFinite();
-  const Eigen::VectorXd& result = out.converged ? s : uncoupled;
-  for (std::size_t b = 0; b < n; ++b) out.strength[b] = result[b];
+  out.converged = converged && x.allFinite();
+  const Eigen::VectorXd& result = out.converged ? x : uncoupled;
+  for (std::size_t b = 0; b < n; ++b) out.moment[b] = vec(result.segment<3>(3 * b));
   return out;
 }
 

@@ -137,39 +137,83 @@ inline double saturate_slope(double q_linear, double q_saturation) {
   return 1.0 - t * t;
 }
 
-/// Simpson weights of the three field samples along an induced bar (its south
-/// end, its centre, its north end): the bar's magnetisation follows the mean
-/// axial field along it, not the field at one point.
-inline constexpr double kAxialSampleWeights[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};
+/// Demagnetising factors (N_x, N_y, N_z) of an ellipsoid with semi-axes
+/// (a, b, c) along its principal axes, by quadrature of the ellipsoid's
+/// integral N_i = (abc/2) int_0^inf ds / ((a_i^2 + s) sqrt((a^2+s)(b^2+s)(c^2+s))).
+/// They sum to 1; a sphere's are 1/3 each, a needle's (0, 1/2, 1/2). A box is
+/// given the factors of the ellipsoid with the same axis ratios (an
+/// approximation: docs/magnetism.md "Soft iron"). Non-positive or non-finite
+/// semi-axes give the sphere's.
+Vec3 demagnetizing_factors(Vec3 semi_axes);
 
-/// A soft-iron bar, as the induction solve sees it.
-struct InducedBar {
-  Vec3 centre;             ///< m
-  Vec3 axis;               ///< unit vector along the bar (local x in world)
-  double separation = 0;   ///< pole separation d, m
-  double gain = 0;         ///< linear pole strength per axial field, m^2 (chi_app * V / d)
-  double saturation = 0;   ///< saturation pole strength, A*m (<= 0: none)
-  std::uint32_t body = 0;  ///< body index, as in Pole::body
+/// Demagnetising factors (N_x, N_y, N_z) of a rectangular prism with half
+/// sides (a, b, c), uniformly magnetised: Aharoni's closed form (J. Appl.
+/// Phys. 83, 3432, 1998), the magnetometric factors (the volume mean of the
+/// demagnetising field). They sum to 1; a cube's are 1/3 each. For a square
+/// bar they lie within a few per cent of the spheroid of the same length and
+/// cross-section (2.5 : 1 : 1, 0.164 against 0.160), which is what the
+/// kit's bars were given before the iron was isotropic. Non-positive or
+/// non-finite sides give the cube's.
+Vec3 prism_demagnetizing_factors(Vec3 half_sides);
+
+/// A soft-iron part as the induction solve sees it: its principal axes, its
+/// apparent susceptibility along each (shape-limited), and where its mean field
+/// is sampled. Isotropic iron has the same intrinsic chi along every axis; its
+/// shape (demagnetising factors) makes the apparent chi differ, which is what
+/// turns a bar across a field.
+struct InducedPart {
+  Vec3 centre;   ///< m, world
+  Vec3 axes[3];  ///< unit principal axes in the world (the part's local x, y, z)
+  double susceptibility[3] =
+      {};  ///< apparent chi along each axis, chi / (1 + N_i chi); 0: rigid along it
+  double separation[3] = {};  ///< pole separation along each axis, m (> 0)
+  double volume = 0;          ///< m^3
+  double saturation = 0;      ///< largest moment Ms V, A*m^2 (<= 0: none)
+  std::uint32_t body = 0;     ///< body index, as in Pole::body
 };
+
+/// The points at which a part's mean field is sampled, and their weights
+/// (they sum to 1). The volume average of a field free of sources inside the
+/// part is its value at the centre plus (1/10) sum_j a_j^2 d^2H/dx_j^2 for an
+/// ellipsoid of semi-axes a_j; since the field's Laplacian is zero, only the
+/// excess of each axis over the shortest one matters. So: the centre, and the
+/// two ends of each axis longer than the shortest, at +-separation/2, weighted
+/// (1 - (s_min / s_j)^2) / 6 each: a sphere is sampled at its centre alone (the
+/// exact mean, by the mean-value property, and the same however it is turned);
+/// a long bar by Simpson's rule along its axis (weights 1/6, 4/6, 1/6).
+struct MeanFieldSamples {
+  Vec3 point[7];
+  double weight[7] = {};
+  int count = 0;
+};
+MeanFieldSamples mean_field_samples(const InducedPart& part);
+
+/// Smooth saturation of a moment: u if |u| << m_sat, tends to m_sat u/|u|.
+Vec3 saturate_moment(Vec3 linear, double saturation);
 
 /// Result of the induction solve.
 struct InductionResult {
-  std::vector<double> strength;  ///< induced pole strength of each bar, A*m (north at +axis)
-  int iterations = 0;            ///< Newton iterations used
-  bool converged = true;         ///< false: the uncoupled estimate was kept
+  std::vector<Vec3> moment;  ///< induced moment of each part, A*m^2, world
+  int iterations = 0;        ///< Newton iterations used
+  bool converged = true;     ///< false: the uncoupled estimate was kept
 };
 
-/// Solves the induced pole strengths s of soft-iron bars consistently:
+/// Solves the induced moments m of soft-iron parts consistently:
 ///
-///   s_b = sat_b( gain_b * Haxial_b(s) ),
-///   Haxial_b(s) = axis_b . sum_k w_k H(sample_k of b)   (fixed poles + other bars' poles)
+///   m_b = sat_b( V_b chi_b H_b(m) ),   chi_b = sum_i chi_bi e_bi e_bi^T,
+///   H_b(m) = mean field over b (mean_field_samples) from the fixed poles and
+///            from every other part's moment,
 ///
-/// by Newton's method on the dense system (bars are few: tens in a kit scene),
-/// starting from the uncoupled estimate (bars ignore one another). If Newton
-/// fails to converge (strongly coupled bars beyond the model's validity) the
-/// uncoupled estimate is returned and `converged` is false.
-/// `options` sums the fixed poles' field (the bar-bar coupling stays dense).
-InductionResult solve_induction(std::span<const Pole> fixed_poles, std::span<const InducedBar> bars,
-                                double softening, const SummationOptions& options = {});
+/// by Newton's method on the dense system of 3n unknowns (parts are few: tens
+/// in a kit scene), starting from the uncoupled estimate (parts ignore one
+/// another). For the coupling, a part's moment is carried by three pole pairs
+/// along its principal axes (exact to the dipole and the quadrupole; the
+/// forces use one pair along the moment, magnetic_forces.cpp). If Newton fails
+/// to converge (strongly coupled parts beyond the model's validity) the
+/// uncoupled estimate is returned and `converged` is false. `options` sums the
+/// fixed poles' field (the part-part coupling stays dense).
+InductionResult solve_induction(std::span<const Pole> fixed_poles,
+                                std::span<const InducedPart> parts, double softening,
+                                const SummationOptions& options = {});
 
 }  // namespace alloy::magnetism

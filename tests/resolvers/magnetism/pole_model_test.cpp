@@ -119,69 +119,84 @@ TEST(MagnetismPoleModel, DemagnetizingFactorsOfSpheroids) {
   EXPECT_NEAR(apparent_susceptibility(1e9, 0.1), 10.0, 1e-6);
 }
 
-TEST(MagnetismPoleModel, InducedPoleIsLinearInTheFieldThenSaturates) {
-  // One source pole far to the left: nearly uniform H along +x at the bar.
+/// An iron part at `centre` with principal axes x, y, z, intrinsic chi and
+/// the demagnetising factors of the ellipsoid of semi-axes `semi`.
+InducedPart iron_part(Vec3 centre, Vec3 semi, double chi, double saturation, std::uint32_t body) {
+  InducedPart p;
+  p.centre = centre;
+  p.axes[0] = {1, 0, 0}, p.axes[1] = {0, 1, 0}, p.axes[2] = {0, 0, 1};
+  const Vec3 n = demagnetizing_factors(semi);
+  p.susceptibility[0] = apparent_susceptibility(chi, n.x);
+  p.susceptibility[1] = apparent_susceptibility(chi, n.y);
+  p.susceptibility[2] = apparent_susceptibility(chi, n.z);
+  p.separation[0] = 1.7 * semi.x, p.separation[1] = 1.7 * semi.y, p.separation[2] = 1.7 * semi.z;
+  p.volume = 4.0 / 3.0 * kPi * semi.x * semi.y * semi.z;
+  p.saturation = saturation;
+  p.body = body;
+  return p;
+}
+
+TEST(MagnetismPoleModel, InducedMomentIsLinearInTheFieldThenSaturates) {
+  // One source pole far to the left: nearly uniform H along +x at the part.
   const double Q = 1000, R = 10;
   const std::vector<Pole> source = {{{-R, 0, 0}, Q, 0}};
   const double h = Q / (4 * kPi * R * R);
-  InducedBar bar{
-      .centre = {}, .axis = {1, 0, 0}, .separation = 0.1, .gain = 2e-3, .saturation = 0, .body = 1};
-  auto solve = [&](double qsat) {
-    bar.saturation = qsat;
-    return solve_induction(source, std::span(&bar, 1), 0.0).strength[0];
+  InducedPart part = iron_part({}, {0.05, 0.01, 0.01}, 1000, 0, 1);
+  const double linear = part.volume * part.susceptibility[0] * h;
+  auto solve = [&](double msat) {
+    part.saturation = msat;
+    return solve_induction(source, std::span(&part, 1), 0.0).moment[0];
   };
-  EXPECT_NEAR(solve(0.0), 2e-3 * h, 1e-4 * 2e-3 * h);  // no saturation: linear
-  const double qsat = 2e-3 * h;                        // saturation at the linear value
-  EXPECT_NEAR(solve(qsat), qsat * std::tanh(1.0), 1e-4 * qsat);
-  EXPECT_LT(solve(qsat), qsat);
-  // A bar across the field is not magnetised along its axis.
-  bar.axis = {0, 1, 0};
-  EXPECT_NEAR(solve(0.0), 0.0, 1e-9 * 2e-3 * h);
+  EXPECT_NEAR(solve(0.0).x, linear, 1e-4 * linear);  // no saturation: linear
+  EXPECT_NEAR(solve(linear).x, linear * std::tanh(1.0),
+              1e-4 * linear);  // saturation at the linear value
+  EXPECT_LT(solve(linear).x, linear);
+  // Turned across the field, the same bar takes the transverse response.
+  std::swap(part.axes[0], part.axes[1]);
+  EXPECT_NEAR(solve(0.0).x, part.volume * part.susceptibility[1] * h, 1e-4 * linear);
+  EXPECT_LT(part.susceptibility[1], part.susceptibility[0] / 5) << "shape anisotropy";
 }
 
-TEST(MagnetismPoleModel, CoupledBarsInAChainReinforceEachOtherConsistently) {
+TEST(MagnetismPoleModel, CoupledPartsInAChainReinforceEachOtherConsistently) {
   const std::vector<Pole> source = {{{-0.2, 0, 0}, 20.0, 0}, {{-0.3, 0, 0}, -20.0, 0}};
-  std::vector<InducedBar> bars = {
-      {.centre = {-0.1, 0, 0},
-       .axis = {1, 0, 0},
-       .separation = 0.085,
-       .gain = 7e-3,
-       .saturation = 800,
-       .body = 1},
-      {.centre = {0.005, 0, 0},
-       .axis = {1, 0, 0},
-       .separation = 0.085,
-       .gain = 7e-3,
-       .saturation = 800,
-       .body = 2},
+  const std::vector<InducedPart> parts = {
+      iron_part({-0.1, 0, 0}, {0.05, 0.01, 0.01}, 1000, 1.0, 1),
+      iron_part({0.005, 0.01, 0}, {0.05, 0.01, 0.01}, 1000, 1.0, 2),
   };
-  const InductionResult r = solve_induction(source, bars, 0.005);
+  const InductionResult r = solve_induction(source, parts, 0.005);
   ASSERT_TRUE(r.converged);
   EXPECT_GE(r.iterations, 1);
-  // Uncoupled estimates, bar by bar.
-  std::vector<double> alone;
-  for (const InducedBar& b : bars)
-    alone.push_back(solve_induction(source, std::span(&b, 1), 0.005).strength[0]);
-  EXPECT_GT(r.strength[0], alone[0]);  // a chain of iron magnetises more than its links
-  EXPECT_GT(r.strength[1], alone[1]);
-  // The answer satisfies the equations: recompute each bar's axial field.
-  for (std::size_t b = 0; b < bars.size(); ++b) {
+  std::vector<Vec3> alone;
+  for (const InducedPart& p : parts)
+    alone.push_back(solve_induction(source, std::span(&p, 1), 0.005).moment[0]);
+  EXPECT_GT(r.moment[0].x, alone[0].x);  // a chain of iron magnetises more than its links
+  EXPECT_GT(r.moment[1].x, alone[1].x);
+  // The answer satisfies the equations: each part's mean field from the
+  // source and the other part's three axial pole pairs.
+  for (std::size_t b = 0; b < parts.size(); ++b) {
     std::vector<Pole> others = source;
-    for (std::size_t c = 0; c < bars.size(); ++c) {
-      if (c == b) continue;
-      const BarPoles p = bar_poles(bars[c].centre, bars[c].axis, bars[c].separation);
-      others.push_back({p.north, r.strength[c], bars[c].body});
-      others.push_back({p.south, -r.strength[c], bars[c].body});
+    const std::size_t c = 1 - b;
+    for (int j = 0; j < 3; ++j) {
+      const double d = parts[c].separation[j];
+      const double q = dot(r.moment[c], parts[c].axes[j]) / d;
+      const BarPoles p = bar_poles(parts[c].centre, parts[c].axes[j], d);
+      others.push_back({p.north, q, parts[c].body});
+      others.push_back({p.south, -q, parts[c].body});
     }
-    double axial = 0;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 x = bars[b].centre + bars[b].axis * ((k - 1) * 0.5 * bars[b].separation);
-      Vec3 h;
-      const std::uint32_t self = bars[b].body;
-      pole_fields(others, 0.005, std::span(&x, 1), std::span(&self, 1), std::span(&h, 1));
-      axial += kAxialSampleWeights[k] * h.x;
+    const MeanFieldSamples s = mean_field_samples(parts[b]);
+    Vec3 mean{};
+    for (int k = 0; k < s.count; ++k) {
+      Vec3 hk;
+      const std::uint32_t self = parts[b].body;
+      pole_fields(others, 0.005, std::span(&s.point[k], 1), std::span(&self, 1), std::span(&hk, 1));
+      mean += hk * s.weight[k];
     }
-    EXPECT_NEAR(r.strength[b], saturate(bars[b].gain * axial, 800), 1e-9 * std::abs(r.strength[b]));
+    Vec3 u{};
+    for (int i = 0; i < 3; ++i)
+      u += parts[b].axes[i] *
+           (parts[b].volume * parts[b].susceptibility[i] * dot(parts[b].axes[i], mean));
+    const Vec3 expected = saturate_moment(u, 1.0);
+    EXPECT_LT(length(r.moment[b] - expected), 1e-9 * length(expected));
   }
 }
 
