@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/energy_ledger.hpp"
 #include "runtime/error.hpp"
 #include "runtime/property_types.hpp"
 #include "runtime/stage_state.hpp"
@@ -107,6 +108,15 @@ class Stage {
   /// Reads back what save_state wrote, after build(). Called only for a stage
   /// that saved something.
   virtual void restore_state(StateReader& /*in*/) {}
+
+  // --- energy (runtime/energy_ledger.hpp, docs/energy.md) ----------------------
+  /// Reports the energy the stage moved since its last report (sources,
+  /// sinks, transfers; then starts its sums again from 0) and the energy it
+  /// holds now (stores). Called between steps by EnergyLedger::record, only
+  /// when a ledger is kept; a stage that moves no energy reports nothing
+  /// (the default). Must not change anything the next step depends on.
+  /// `view` is the stage's own (scoped to its area).
+  virtual void report_energy(const WorldView& /*view*/, EnergyReport& /*out*/) {}
 };
 
 class Resolver : public Stage {

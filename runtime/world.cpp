@@ -286,6 +286,12 @@ std::vector<std::string> World::active_stages() const {
   return out;
 }
 
+WorldView World::stage_view(std::string_view name) const {
+  for (const auto& s : slots_)
+    if (s->instance == name) return WorldView(*this, s->scope);
+  return WorldView(*this);
+}
+
 // --- the step ------------------------------------------------------------------
 
 void World::start() {

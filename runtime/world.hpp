@@ -250,6 +250,10 @@ class World {
   Stage* stage(std::string_view name);
   /// Active stage names in run order.
   std::vector<std::string> active_stages() const;
+  /// A view of the world as stage `name` sees it (scoped to its area; every
+  /// object if there is no such stage), between steps: for tools that ask a
+  /// stage about the world (EnergyLedger::record).
+  WorldView stage_view(std::string_view name) const;
 
   PluginRegistry& plugins() { return plugins_; }
   /// The definition a stage instance ("name", or "name@area") was made

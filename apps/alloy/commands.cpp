@@ -24,6 +24,7 @@
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 #include "resolvers/sound/wav_writer.hpp"
+#include "runtime/energy_ledger.hpp"
 #include "runtime/state_hash.hpp"
 
 namespace alloy::app {
@@ -46,6 +47,7 @@ struct RunOptions {
   bool quiet = false;
   bool watch = false;
   bool hash = false;             ///< print the state hash after the run
+  bool energy = false;           ///< keep the energy ledger and print its balance
   std::uint64_t hash_every = 0;  ///< and every N steps (0: only at the end)
 };
 
@@ -357,6 +359,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     out << "\n";
   }
   const double wall0 = now_seconds();
+  std::string energy_table;
   try {
     world.start();
     narrator.end_step();
@@ -366,8 +369,11 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
       out << "\n";
     }
     if (trace) trace->sample(world);
+    std::unique_ptr<EnergyLedger> ledger;
+    if (opt.energy) ledger = std::make_unique<EnergyLedger>(), ledger->record(world);
     for (std::uint64_t i = 0; i < steps; ++i) {
       world.step();
+      if (ledger) ledger->record(world);
       narrator.end_step();
       if (trace && world.step_count() % opt.trace_every == 0) trace->sample(world);
       for (Report& r : reports)
@@ -378,6 +384,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
       if (opt.hash_every && world.step_count() % opt.hash_every == 0) print_hash(world, out);
       if (watch && !watch->between_steps(world)) break;
     }
+    if (ledger) energy_table = ledger->table();
   } catch (const InputError& e) {
     // A resolver refused an object (or a setting) only once the world ran:
     // point at the scene line that made it.
@@ -392,6 +399,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   if (!opt.quiet) narrator.summary(world, wall);
   if (!opt.audio.empty()) write_audio(world, opt.audio, out, opt.quiet);
   if (opt.profile) print_profile(out, world.profile());
+  out << energy_table;
   return kExitOk;
 }
 
@@ -546,6 +554,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       "--swap", ro.swaps,
       "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
+  run_cmd->add_flag("--energy", ro.energy,
+                    "Keep the energy ledger and print the balance of the run: sources, sinks, "
+                    "stored change and the residue as a fraction of the energy moved");
   run_cmd->add_flag("--quiet", ro.quiet, "No narration");
   run_cmd->add_flag("--hash", ro.hash,
                     "Print the state hash after the run (every property bit, ids, pending inputs: "

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace alloy::electricity {
 
@@ -506,14 +507,17 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     for (const Mutual& m : mutual_)
       mutual_m(index[m.a], index[m.b]) = mutual_m(index[m.b], index[m.a]) = m.m;
     transfer = Eigen::MatrixXd::Zero(k, k);
-    std::vector<double> unit(e_.size(), 0.0);
+    // Unit responses go to scratch vectors: potential_ and branch_current_
+    // stay the last substep's (the energy books start from them).
+    std::vector<double> unit(e_.size(), 0.0), unit_potential(potential_.size()),
+        unit_current(branch_current_.size());
     for (std::size_t col = 0; col < k; ++col) {
       unit.assign(e_.size(), 0.0);
       unit[nb + coupled[col]] = 1.0;
-      solver_.solve(unit, potential_, branch_current_);
+      solver_.solve(unit, unit_potential, unit_current);
       for (std::size_t row = 0; row < k; ++row)
         if (branch_on_loop_[nb + coupled[row]])
-          transfer(row, col) = branch_current_[nb + coupled[row]];
+          transfer(row, col) = unit_current[nb + coupled[row]];
     }
   }
 
@@ -532,16 +536,18 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Capacitor& c = capacitors_[j];
       e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
     }
+    books_.begin(potential_, branch_current_, coils_, capacitors_);
     const std::size_t k = coupled.size();
     Eigen::VectorXd before(k), after(k);
     if (k > 0) {
       for (std::size_t a = 0; a < k; ++a) before[a] = coils_[coupled[a]].current;
       const Eigen::VectorXd known = (2 / h) * (mutual_m * before);
       for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += known[a];
-      solver_.solve(e_, potential_, branch_current_);
+      std::vector<double> free_potential(potential_.size()), free_current(branch_current_.size());
+      solver_.solve(e_, free_potential, free_current);
       Eigen::VectorXd i0(k);
       for (std::size_t a = 0; a < k; ++a)
-        i0[a] = branch_on_loop_[nb + coupled[a]] ? branch_current_[nb + coupled[a]] : 0.0;
+        i0[a] = branch_on_loop_[nb + coupled[a]] ? free_current[nb + coupled[a]] : 0.0;
       const Eigen::MatrixXd system =
           Eigen::MatrixXd::Identity(k, k) + (2 / h) * transfer * mutual_m;
       after = system.partialPivLu().solve(i0);
@@ -572,6 +578,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       c.charge += h / 2 * (next + trap * c.current);
       c.current = next;
     }
+    book_substep(trap, trap > 0 ? h : h / 2);
   };
   for (int step = 0; step < config_.substeps; ++step) {
     if (guard_) {
@@ -583,6 +590,87 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   }
   if (config_.rates) write_current_rates(access);
   write_outputs(access);
+}
+
+void ElectricityResolver::Books::begin(const std::vector<double>& potential,
+                                       const std::vector<double>& current,
+                                       const std::vector<Coil>& coils,
+                                       const std::vector<Capacitor>& capacitors) {
+  potential0 = potential, current0 = current;
+  v_l0.resize(coils.size()), coil_current0.resize(coils.size());
+  for (std::size_t i = 0; i < coils.size(); ++i)
+    v_l0[i] = coils[i].v_l, coil_current0[i] = coils[i].current;
+  charge0.resize(capacitors.size()), cap_current0.resize(capacitors.size());
+  for (std::size_t j = 0; j < capacitors.size(); ++j)
+    charge0[j] = capacitors[j].charge, cap_current0[j] = capacitors[j].current;
+}
+
+void ElectricityResolver::book_substep(double trap, double hs) {
+  // Energy of one substep of length hs, from the element laws and the
+  // integrator's own values. For the trapezoidal rule every product is of
+  // the substep's mean current and mean voltage: then the coil's share is
+  // exactly the change of 1/2 L I^2 (v_L' + v_L = 2L/h (I' - I)), the
+  // capacitor's exactly that of q^2/2C, and by Tellegen's theorem (applied to
+  // the mean of two solutions of the same network) battery work = heat +
+  // stored change - EMF work, to rounding. A guard half-step (backward
+  // Euler) uses the end values; its products exceed the stored change by
+  // 1/2 L dI^2 and dq^2/2C, which is booked as "switching" (the numerical
+  // damping of the guard, and the field of a coil whose loop opened: the
+  // spark). The EMF over a trapezoidal substep is the mean of the one in
+  // force at its start (kept in the history v_L) and the one now.
+  const std::size_t nb = batteries_.size(), nc = coils_.size();
+  auto mean = [&](double a0, double a1) { return trap > 0 ? 0.5 * (a0 + a1) : a1; };
+  const auto& p = potential_;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double i = mean(books_.current0[k], branch_current_[k]);
+    books_.battery += battery_emf_[k] * i * hs;
+    books_.heat += network_.branches[k].z * i * i * hs;
+  }
+  for (std::size_t n = 0; n < nc; ++n) {
+    const Coil& c = coils_[n];
+    const double i = mean(books_.coil_current0[n], c.current);
+    const double r = network_.branches[nb + n].z - 2 * c.inductance / h_;
+    const double v_l = mean(books_.v_l0[n], c.v_l);
+    books_.heat += r * i * i * hs;
+    books_.emf_work +=
+        mean(books_.emf0.size() > n ? books_.emf0[n] : c.series_emf, c.series_emf) * i * hs;
+    const double i0 = books_.coil_current0[n];
+    books_.switching += v_l * i * hs - 0.5 * c.inductance * (c.current * c.current - i0 * i0);
+  }
+  for (std::size_t n = 0; n < capacitors_.size(); ++n) {
+    const Capacitor& c = capacitors_[n];
+    const double i = mean(books_.cap_current0[n], c.current);
+    const double r = network_.branches[nb + nc + n].z - h_ / (2 * c.capacitance);
+    const double q0 = books_.charge0[n];
+    books_.heat += r * i * i * hs;
+    books_.switching += mean(q0, c.charge) / c.capacitance * i * hs -
+                        (c.charge * c.charge - q0 * q0) / (2 * c.capacitance);
+  }
+  for (std::size_t k = 0; k < network_.conductances.size(); ++k) {
+    if (!conductance_on_loop_[k]) continue;
+    const Conductance& g = network_.conductances[k];
+    const double v =
+        mean(books_.potential0.size() == p.size() ? books_.potential0[g.a] - books_.potential0[g.b]
+                                                  : 0.0,
+             p[g.a] - p[g.b]);
+    books_.heat += g.g * v * v * hs;
+  }
+  books_.emf0.resize(nc);
+  for (std::size_t n = 0; n < nc; ++n) books_.emf0[n] = coils_[n].series_emf;
+}
+
+void ElectricityResolver::report_energy(const WorldView&, EnergyReport& out) {
+  out.source("battery work", std::exchange(books_.battery, 0.0));
+  out.sink("heat (I^2 R)", std::exchange(books_.heat, 0.0));
+  out.sink("switching (guard steps, opened coils)", std::exchange(books_.switching, 0.0));
+  // Induction's EMF works on the circuits with the energy the magnetic
+  // forces take from (or give to) the moving parts: a transfer.
+  out.transfer("magnetism", std::exchange(books_.emf_work, 0.0));
+  double fields = 0, charges = 0;
+  for (const Coil& c : coils_) fields += 0.5 * c.inductance * c.current * c.current;
+  for (const Capacitor& c : capacitors_) charges += c.charge * c.charge / (2 * c.capacitance);
+  out.store("coil fields (1/2 L I^2)", fields);
+  out.store("capacitors (q^2 / 2C)", charges);
 }
 
 void ElectricityResolver::set_induced_emf(ObjectId coil, double emf) {

@@ -160,6 +160,9 @@ class ElectricityResolver final : public Resolver {
   /// that network is the same, as the uninterrupted one would (docs/saves.md).
   bool save_state(StateWriter& out) const override;
   void restore_state(StateReader& in) override;
+  /// Battery work, I^2 R heat, switching losses, the EMF's work
+  /// (transfer "magnetism"), the coils' and capacitors' energy (docs/energy.md).
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
   /// Joins terminal `terminal_a` of part a to terminal `terminal_b` of part b
@@ -345,6 +348,18 @@ class ElectricityResolver final : public Resolver {
   };
   std::unique_ptr<SavedHistory> restored_;
   void apply_restored();
+
+  /// The energy books (report_energy): the state at a substep's start, and
+  /// the sums since the last report, J.
+  struct Books {
+    std::vector<double> potential0, current0, v_l0, coil_current0, charge0, cap_current0;
+    std::vector<double> emf0;  // per coil: the series EMF of the last solve, V
+    double battery = 0, heat = 0, switching = 0, emf_work = 0;
+    void begin(const std::vector<double>& potential, const std::vector<double>& current,
+               const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
+  };
+  Books books_;
+  void book_substep(double trap, double hs);
 };
 
 /// Registers the `electricity` resolver and its property types only (for

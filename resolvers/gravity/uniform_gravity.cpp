@@ -38,6 +38,22 @@ void UniformGravity::advance(ResolverAccess& access, double) {
   if (access.store().column(static_).version() != static_seen_) write(access);
 }
 
+void UniformGravity::report_energy(const WorldView& view, EnergyReport& out) {
+  // Over the bodies that feel this g (the gravity column in the stage's
+  // scope): U = -m g . x. A body that joins or leaves moves U with no work
+  // done; the books show that as a residue (docs/energy.md).
+  const auto gravity = view.column<Vec3>("gravity");
+  const auto mass = view.column<double>("mass");
+  const auto position = view.column<Vec3>("position");
+  double u = 0;
+  for (std::uint32_t s : gravity.members())
+    if (mass.has(s) && position.has(s)) u -= mass[s] * dot(gravity[s], position[s]);
+  out.store("potential energy (uniform field)", u);
+  // The energy the field gave the bodies is what its store lost.
+  out.transfer("gravity", reported_ ? u - reported_potential_ : 0.0);
+  reported_potential_ = u, reported_ = true;
+}
+
 void UniformGravity::on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) {
   if (gravity_ == kNoProperty) gravity_ = access.property("gravity");
   auto gravity = access.writer<Vec3>(gravity_);

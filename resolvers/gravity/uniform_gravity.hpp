@@ -31,6 +31,10 @@ class UniformGravity final : public Resolver {
   void advance(ResolverAccess& access, double dt) override;
   void on_scope_exit(ResolverAccess& access, std::span<const std::uint32_t> left) override;
   Vec3 g() const { return g_; }
+  /// Potential energy -m g . x of the bodies it acts on (store), and its
+  /// change since the last report (transfer "gravity": what the rigid body
+  /// books as gravity's work on them). docs/energy.md.
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
  private:
   void write(ResolverAccess& access);
@@ -38,6 +42,8 @@ class UniformGravity final : public Resolver {
   Vec3 g_;
   PropertyId mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty, gravity_ = kNoProperty;
   std::uint64_t static_seen_ = ~std::uint64_t(0);
+  double reported_potential_ = 0;  // J, at the last report
+  bool reported_ = false;
 };
 
 }  // namespace alloy::gravity

@@ -1,5 +1,7 @@
 #include "resolvers/magnetism/magnetic_forces.hpp"
 
+#include <cmath>
+
 #include "resolvers/magnetism/magnet_parts.hpp"
 
 namespace alloy::magnetism {
@@ -249,6 +251,64 @@ void MagneticForces::update(const WorldView& world) {
     const Vec3 df = (f - body.force) / kRateTime, dt = (t - body.torque) / kRateTime;
     if (is_finite(df) && is_finite(dt)) body.force_rate = df, body.torque_rate = dt;
   }
+}
+
+void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
+  // U = mu0/4pi sum q_i q_j / sqrt(r^2 + eps^2) over pole pairs of two parts:
+  // the potential of the softened force law at given strengths. Direct,
+  // O(poles^2), and only while a ledger is kept.
+  std::vector<std::uint8_t> kinds(bodies_.size(), 0);
+  if (ids_) {
+    const MagnetColumns c = MagnetColumns::bind(view, *ids_);
+    const PropertyStore& store = view.store();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      const ObjectId id = bodies_[b].id;
+      if (!store.alive(id) || !c.magnet.has(id.index)) continue;
+      const MagnetKind k = c.kind(id.index);
+      kinds[b] = k == MagnetKind::Permanent ? 1 : k == MagnetKind::SoftIron ? 2 : 0;
+    }
+  }
+  const double eps2 = softening_ * softening_;
+  // Pairs of two parts that are not coils; `kind_mask` 1: both permanent, 2:
+  // one or both soft iron. Strengths from `q`, positions from `x`.
+  auto energy = [&](std::span<const Pole> q, std::span<const Pole> x,
+                    const std::vector<std::uint8_t>& kind, int kind_mask) {
+    double u = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (!kind[x[i].body]) continue;
+      for (std::size_t j = i + 1; j < x.size(); ++j) {
+        if (!kind[x[j].body] || x[j].body == x[i].body) continue;
+        const int pair = kind[x[i].body] == 1 && kind[x[j].body] == 1 ? 1 : 2;
+        if (!(pair & kind_mask)) continue;
+        const Vec3 r = x[j].position - x[i].position;
+        u += kMu0Over4Pi * q[i].strength * q[j].strength / std::sqrt(dot(r, r) + eps2);
+      }
+    }
+    return u;
+  };
+  const double permanent = energy(poles_, poles_, kinds, 1);
+  out.store("permanent magnets' interaction", permanent);
+  // The work along the motion since the last report, at the strengths of the
+  // last report, when the parts and their poles are the same.
+  bool same = reported_ && reported_poles_.size() == poles_.size() &&
+              reported_bodies_.size() == bodies_.size() && reported_kinds_ == kinds;
+  for (std::size_t b = 0; same && b < bodies_.size(); ++b)
+    same = reported_bodies_[b] == bodies_[b].id;
+  for (std::size_t i = 0; same && i < poles_.size(); ++i)
+    same = reported_poles_[i].body == poles_[i].body;
+  double perm_work = 0, iron_work = 0;
+  if (same) {
+    perm_work = energy(reported_poles_, reported_poles_, kinds, 1) - permanent;
+    iron_work = energy(reported_poles_, reported_poles_, kinds, 2) -
+                energy(reported_poles_, poles_, kinds, 2);
+  }
+  out.source("soft iron's work (no circuit magnetises it)", iron_work);
+  out.transfer("magnetism", -(perm_work + iron_work));
+  reported_poles_.assign(poles_.begin(), poles_.end());
+  reported_bodies_.clear();
+  for (const MagneticBody& b : bodies_) reported_bodies_.push_back(b.id);
+  reported_kinds_ = std::move(kinds);
+  reported_ = true;
 }
 
 }  // namespace alloy::magnetism

@@ -70,6 +70,15 @@ class MagneticForces : public DerivedSet {
   /// Its forces matter only to the stages that read them (the rigid body's
   /// interaction): with the rigid body every n-th step, summed once in n.
   bool on_demand() const override { return true; }
+  /// The work the forces between parts that are not coils did on the parts
+  /// since the last report, at the pole strengths of the last report (the
+  /// strengths the forces of the step were computed with): transfer
+  /// "magnetism", given to the rigid body. The permanent magnets' share is
+  /// minus the change of their interaction energy (a store). Soft iron's
+  /// share has no store: the model's induced iron is magnetised by no
+  /// circuit's work, so what it does is reported as a source (docs/energy.md).
+  /// The work of a coil's field is the EMF's: electricity books it.
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
   /// Every magnetic part with a position, in slot order.
   std::span<const MagneticBody> bodies() const { return bodies_; }
@@ -105,6 +114,12 @@ class MagneticForces : public DerivedSet {
   int induction_iterations_ = 0;
   bool induction_converged_ = true;
   std::uint64_t updates_ = 0;
+  // The poles at the last report_energy, their parts, and whether each part
+  // is a permanent magnet (1), soft iron (2) or a coil (0).
+  std::vector<Pole> reported_poles_;
+  std::vector<ObjectId> reported_bodies_;
+  std::vector<std::uint8_t> reported_kinds_;
+  bool reported_ = false;
   std::optional<MagnetColumns::Ids> ids_;  // resolved at the first update
   PropertyRef pole_strength_rate_{prop::kPoleStrengthRate};
 };

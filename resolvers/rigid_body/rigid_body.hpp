@@ -171,6 +171,11 @@ class RigidBodyResolver final : public Resolver {
   /// properties, sleep flags, the impulses published by the last advance.
   bool save_state(StateWriter& out) const override;
   void restore_state(StateReader& in) override;
+  /// Kinetic energy (store), the work of each stage's loads (transfer named
+  /// after the physics: "gravity" for rigid_body_from_gravity), viscous drag,
+  /// restitution, the integrator's share and the contacts' and joints' (the
+  /// residue) as sinks (docs/energy.md). Books are kept from the first call on.
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
   /// Force at the part's centre of mass, N. A stale id throws AccessError.
@@ -330,6 +335,31 @@ class RigidBodyResolver final : public Resolver {
   };
   LoadQueue forces_;
   SourceMarks load_sources_, rated_sources_;  // of forces_ and rated_loads_
+
+  /// The energy books (report_energy): sums since the last report, J. Kept
+  /// only once a ledger asked (books_on_): they cost three passes over the
+  /// bodies a substep.
+  struct EnergyBooks {
+    double drag = 0, restitution = 0, integration = 0, contacts = 0;
+    std::vector<std::pair<std::string, double>> work;  // per transfer name
+    /// A load of this substep: its body, force, torque, lever arm (from the
+    /// body's centre at the substep's start), and where it acts, in the
+    /// world at the start and in the body's frame.
+    struct Applied {
+      std::uint32_t body;
+      Vec3 force, torque, arm;
+      std::uint32_t source;  // index into work
+      Vec3 at, local;
+    };
+    std::vector<Applied> applied;
+    std::vector<Vec3> v0, w0;  // per body, at the substep's start (after restitution)
+  };
+  bool books_on_ = false;
+  EnergyBooks books_;
+  double kinetic_energy() const;
+  std::uint32_t work_account(const std::string& stage);
+  void book_loads_before(double tau);
+  void book_loads_after(double h, double ke_before);
   /// Per body, the stage whose load did the most to it in this window (into
   /// the marks' names; null: none), for check_motion's message.
   std::vector<const std::string*> strongest_source_;
