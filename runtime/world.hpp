@@ -238,6 +238,12 @@ class World {
   void restore(const Snapshot& snapshot);
   /// What each active stage saves of itself (Stage::save_state), in run order.
   std::vector<Snapshot::StageState> stage_states() const;
+  /// Called after each stage that ran in a step (advance, derive, interact),
+  /// with its instance name: replays hash the world there to name the stage
+  /// after which a run first differs (runtime/replay.hpp). One hook; an empty
+  /// function removes it.
+  using StageHook = std::function<void(const std::string& stage)>;
+  void set_stage_hook(StageHook hook) { stage_hook_ = std::move(hook); }
 
   // --- stages -----------------------------------------------------------------
   /// Stages are named after their plugin, with "@area" for a stage of an area
@@ -354,6 +360,7 @@ class World {
   mutable std::vector<Event> pending_;
   std::vector<Event> published_;
   std::vector<Observer> observers_;
+  StageHook stage_hook_;
   Profile profile_;
 };
 
