@@ -153,6 +153,18 @@ class Column final : public ColumnBase {
     return c;
   }
   void encode(std::uint32_t slot, std::string& out) const override;
+  /// A column of no store (no log: it is never written), holding `values` and
+  /// `present` (one of each per slot; an absent slot's value is T{}), for a
+  /// snapshot read back from a save file (runtime/save_file.hpp).
+  static std::unique_ptr<ColumnBase> detached(PropertyId id, std::vector<T> values,
+                                              std::vector<std::uint8_t> present) {
+    auto c = std::make_unique<Column<T>>(id, nullptr);
+    c->values_ = std::move(values);
+    c->present_ = std::move(present);
+    for (std::uint32_t i = 0; i < c->present_.size(); ++i)
+      if (c->present_[i]) c->members_.push_back(i);
+    return c;
+  }
   std::size_t bytes() const override {
     std::size_t n = values_.size() * sizeof(T) + present_.size();
     if constexpr (std::is_same_v<T, std::string>)

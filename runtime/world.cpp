@@ -366,6 +366,7 @@ void World::advance_phase() {
     s->resolver->advance(access, def_.dt * s->every);
     timing.seconds += now_seconds() - t;
     ++timing.runs;
+    if (stage_hook_) stage_hook_(s->instance);
   }
   current_stage_ = nullptr;
   time_ += def_.dt;
@@ -420,6 +421,7 @@ void World::derive_phase() {
     ++timing.runs;
     s->updated_once = true;
     ++s->output_version;
+    if (stage_hook_) stage_hook_(s->instance);
   }
   current_stage_ = nullptr;
 }
@@ -436,6 +438,7 @@ void World::interact_phase() {
     s->interaction->apply(WorldView(*this, s->scope));
     timing.seconds += now_seconds() - t;
     ++timing.runs;
+    if (stage_hook_) stage_hook_(s->instance);
   }
   current_stage_ = nullptr;
 }

@@ -242,6 +242,12 @@ class World {
   /// State outside the world that its snapshots carry (state_owner.hpp): the
   /// mods' state tables. Owners are asked in the order they were added.
   void add_state_owner(StateOwner owner) { state_owners_.push_back(std::move(owner)); }
+  /// Called after each stage that ran in a step (advance, derive, interact),
+  /// with its instance name: replays hash the world there to name the stage
+  /// after which a run first differs (runtime/replay.hpp). One hook; an empty
+  /// function removes it.
+  using StageHook = std::function<void(const std::string& stage)>;
+  void set_stage_hook(StageHook hook) { stage_hook_ = std::move(hook); }
 
   // --- stages -----------------------------------------------------------------
   /// Stages are named after their plugin, with "@area" for a stage of an area
@@ -363,6 +369,7 @@ class World {
   std::vector<Event> published_;
   std::vector<Observer> observers_;
   std::vector<StateOwner> state_owners_;
+  StageHook stage_hook_;
   Profile profile_;
 };
 

@@ -25,6 +25,8 @@
 #include "resolvers/sound/sound_resolver.hpp"
 #include "resolvers/sound/wav_writer.hpp"
 #include "runtime/energy_ledger.hpp"
+#include "runtime/replay.hpp"
+#include "runtime/save_file.hpp"
 #include "runtime/state_hash.hpp"
 
 namespace alloy::app {
@@ -46,9 +48,12 @@ struct RunOptions {
   bool profile = false;
   bool quiet = false;
   bool watch = false;
-  bool hash = false;             ///< print the state hash after the run
-  bool energy = false;           ///< keep the energy ledger and print its balance
-  std::uint64_t hash_every = 0;  ///< and every N steps (0: only at the end)
+  bool hash = false;                    ///< print the state hash after the run
+  bool energy = false;                  ///< keep the energy ledger and print its balance
+  std::uint64_t hash_every = 0;         ///< and every N steps (0: only at the end)
+  std::string save;                     ///< --save FILE: the world at the end of the run
+  std::vector<std::string> save_every;  ///< --save-every T DIR: {T, DIR}
+  std::string record;                   ///< --record FILE: a recording for `alloy replay`
 };
 
 constexpr double kDefaultSeconds = 5.0;  // when neither the scene nor the user says
@@ -306,6 +311,80 @@ void print_hash(const World& world, std::ostream& out) {
       << "\n";
 }
 
+/// The mods a scene loaded, with the versions their manifests give (the
+/// scene's own mod first, if the scene is a mod folder).
+std::vector<SaveMeta::Mod> scene_mods(const lua::LoadedScene& scene, const lua::LoadOptions& load,
+                                      const std::string& path) {
+  std::vector<SaveMeta::Mod> mods;
+  lua::LuaHost host;
+  std::error_code ec;
+  auto add = [&](const std::filesystem::path& folder) {
+    const lua::Manifest m = lua::read_manifest(host, folder);
+    for (const auto& x : mods)
+      if (x.name == m.name) return;
+    mods.push_back({m.name, m.version});
+  };
+  if (std::filesystem::is_directory(path, ec)) add(path);
+  if (scene.mods)
+    for (const std::string& name : scene.mods->loaded())
+      for (const auto& dir : load.mod_paths)
+        if (std::filesystem::exists(dir / name / "mod.lua", ec)) {
+          add(dir / name);
+          break;
+        }
+  return mods;
+}
+
+/// The meta block of a save or recording of `scene`, loaded from `path`.
+SaveMeta save_meta(const lua::LoadedScene& scene, const lua::LoadOptions& load,
+                   const std::string& path) {
+  SaveMeta meta = describe_world(*scene.world);
+  std::error_code ec;
+  const auto abs = std::filesystem::absolute(path, ec);
+  meta.scene = ec ? path : abs.lexically_normal().string();
+  meta.scene_name = scene.name;
+  meta.mods = scene_mods(scene, load, path);
+  return meta;
+}
+
+/// A save file read back, with the scene it names loaded and the world put
+/// in the saved state (InputError for a save that does not fit it).
+struct Continued {
+  SaveData save;
+  std::string scene_path;
+};
+Continued load_save_into(const std::string& file, lua::LoadedScene& scene, PluginRegistry& registry,
+                         const lua::LoadOptions& load, std::ostream& err, bool restore = true) {
+  Continued c{read_save_file(file), {}};
+  c.scene_path = c.save.meta.scene;
+  std::error_code ec;
+  if (!std::filesystem::exists(c.scene_path, ec))
+    throw InputError(file + ": the save's scene '" + c.scene_path + "' is not found");
+  try {
+    scene = lua::load_scene(c.scene_path, registry, load);
+  } catch (const InputError& e) {
+    throw InputError(file + ": its scene does not load: " + e.what());
+  }
+  std::vector<std::string> notes;
+  check_save_fits(c.save, file, *scene.world, scene_mods(scene, load, c.scene_path), &notes);
+  for (const auto& n : notes) err << "note: " << file << ": " << n << "\n";
+  if (restore) {
+    try {
+      scene.world->restore(c.save.snapshot);
+    } catch (const InputError& e) {
+      throw InputError(file + ": " + e.what());
+    }
+  }
+  return c;
+}
+
+/// --save-every T DIR: the file of the save at the world's step.
+std::string periodic_save_path(const std::string& dir, const World& world) {
+  char name[64];
+  std::snprintf(name, sizeof name, "step-%08llu.alloysave", (unsigned long long)world.step_count());
+  return (std::filesystem::path(dir) / name).string();
+}
+
 int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   PluginRegistry registry;
   register_native_plugins(registry);
@@ -313,10 +392,47 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   ModLog mod_log(opt.quiet ? nullptr : &narrator, err);
   lua::LoadOptions load = load_options();
   load.mod_log = [&](const std::string& mod, const std::string& line) { mod_log.write(mod, line); };
-  lua::LoadedScene scene = lua::load_scene(opt.scene, registry, load);
+  // `alloy run FILE` of a save: the scene it names, rebuilt, then restored.
+  const bool continuing = is_save_file(opt.scene);
+  lua::LoadedScene scene;
+  std::string scene_path = opt.scene;
+  if (continuing) {
+    if (opt.dt) throw InputError("--dt: a saved world keeps the time step it was saved with");
+    Continued c = load_save_into(opt.scene, scene, registry, load, err);
+    if (c.save.meta.kind != "save")
+      throw InputError(opt.scene + ": is a recording: replay it with `alloy replay`");
+    scene_path = c.scene_path;
+  } else {
+    scene = lua::load_scene(opt.scene, registry, load);
+  }
   World& world = *scene.world;
   warn_if_empty(world, opt.scene, err);
   if (opt.dt) world.set_dt(*opt.dt);
+  double save_period = 0;
+  if (!opt.save_every.empty()) {
+    try {
+      std::size_t used = 0;
+      save_period = std::stod(opt.save_every[0], &used);
+      if (used != opt.save_every[0].size()) throw std::invalid_argument("");
+    } catch (const std::logic_error&) {
+      save_period = 0;
+    }
+    if (!(save_period > 0) || !std::isfinite(save_period))
+      throw InputError("--save-every '" + opt.save_every[0] +
+                       "': T must be a positive number of seconds");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(opt.save_every[1], ec))
+      throw InputError("--save-every: no folder '" + opt.save_every[1] + "'");
+  }
+  for (const std::string& path : {opt.save, opt.record}) {
+    if (path.empty()) continue;
+    const auto dir = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+      throw InputError("cannot write '" + path + "': no folder '" + dir.string() + "'");
+    if (std::filesystem::is_directory(path, ec))
+      throw InputError("cannot write '" + path + "': it is a folder");
+  }
 
   std::uint64_t steps;
   if (opt.steps) {
@@ -339,7 +455,25 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   std::vector<std::string> specs = scene.report;
   specs.insert(specs.end(), opt.reports.begin(), opt.reports.end());
   for (const std::string& spec : specs) reports.push_back(parse_report(world, spec));
-  for (Report& r : reports) r.next = r.every;
+  // The first report after the time the world starts at (0, or a save's).
+  for (Report& r : reports)
+    r.next = (std::floor((world.time() + 0.5 * world.dt()) / r.every) + 1) * r.every;
+  // What saves and recordings say of the scene they come from.
+  std::optional<SaveMeta> meta;
+  if (!opt.save.empty() || !opt.save_every.empty() || !opt.record.empty())
+    meta = save_meta(scene, load, scene_path);
+  std::unique_ptr<Recorder> recorder;
+  if (!opt.record.empty()) recorder = std::make_unique<Recorder>(world, *meta);
+  auto save_now = [&](const std::string& path) {
+    SaveData data;
+    data.meta = *meta;
+    data.snapshot = world.snapshot();
+    write_save_file(path, data);
+  };
+  double next_save =
+      save_period > 0
+          ? (std::floor((world.time() + 0.5 * world.dt()) / save_period) + 1) * save_period
+          : 0;
   if (!opt.audio.empty()) check_audio_path(opt.audio);
   std::unique_ptr<TraceWriter> trace;
   if (!opt.trace.empty())
@@ -382,6 +516,11 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
           r.next += r.every;
         }
       if (opt.hash_every && world.step_count() % opt.hash_every == 0) print_hash(world, out);
+      if (recorder) recorder->after_step();
+      if (save_period > 0 && world.time() + 0.5 * world.dt() >= next_save) {
+        save_now(periodic_save_path(opt.save_every[1], world));
+        next_save += save_period;
+      }
       if (watch && !watch->between_steps(world)) break;
     }
     if (ledger) energy_table = ledger->table();
@@ -391,6 +530,8 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     throw lua::locate(scene, e);
   }
   const double wall = now_seconds() - wall0;
+  if (!opt.save.empty()) save_now(opt.save);
+  if (recorder) recorder->write(opt.record);
   if ((opt.hash || opt.hash_every) && !(opt.hash_every && world.step_count() % opt.hash_every == 0))
     print_hash(world, out);
   if (trace) trace->close();
@@ -464,7 +605,84 @@ int check_runtime(const std::filesystem::path& folder, const lua::LoadOptions& o
   return kExitOk;
 }
 
+/// `alloy check FILE` of a save or a recording: the file reads back whole
+/// (checksum, every section), its scene loads, its mods and property types
+/// fit, and the world restores from it. Nothing is written.
+int check_save(const std::string& path, std::ostream& out, std::ostream& err) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions options = load_options();
+  CheckLog log(err);
+  options.mod_log = [&](const std::string& mod, const std::string& line) { log.write(mod, line); };
+  lua::LoadedScene scene;
+  const Continued c = load_save_into(path, scene, registry, options, err);
+  const Snapshot& s = c.save.snapshot;
+  std::size_t alive = 0;
+  for (auto a : s.objects.alive) alive += a != 0;
+  char line[200];
+  std::snprintf(line, sizeof line, ": ok (%s of '%s' at step %llu, t = %.6g s, %zu objects",
+                c.save.meta.kind.c_str(), c.save.meta.scene_name.c_str(),
+                (unsigned long long)s.step, s.time, alive);
+  out << path << line;
+  if (c.save.meta.kind == "replay")
+    out << ", " << c.save.hashes.size() << " recorded steps, " << c.save.inputs.size() << " inputs";
+  out << ", format " << kSaveFormat << ")\n";
+  return kExitOk;
+}
+
+/// `alloy replay FILE`: runs a recording again headless; exit 0 if every
+/// step's hash is the recorded one, 1 if not (the message names where).
+int replay_file(const std::string& path, std::ostream& out, std::ostream& err) {
+  SaveData data = read_save_file(path);
+  if (data.meta.kind != "replay")
+    throw InputError(path + ": is a save, not a recording: continue it with `alloy run " + path +
+                     "`");
+  lua::LoadOptions options = load_options();
+  options.mod_log = [&](const std::string& mod, const std::string& line) {
+    err << "[" << mod << "] " << line << "\n";
+  };
+  std::error_code ec;
+  if (!std::filesystem::exists(data.meta.scene, ec))
+    throw InputError(path + ": the recording's scene '" + data.meta.scene + "' is not found");
+  // One world at a time; the world goes before its mods and its registry.
+  std::optional<lua::LoadedScene> scene;
+  std::unique_ptr<PluginRegistry> registry;
+  auto rebuild = [&]() -> World& {
+    scene.reset();
+    registry = std::make_unique<PluginRegistry>();
+    register_native_plugins(*registry);
+    scene.emplace(lua::load_scene(data.meta.scene, *registry, options));
+    std::vector<std::string> notes;
+    check_save_fits(data, path, *scene->world, scene_mods(*scene, options, data.meta.scene),
+                    &notes);
+    for (const auto& n : notes) err << "note: " << path << ": " << n << "\n";
+    return *scene->world;
+  };
+  ReplayOptions ro;
+  ro.reload = [&](World&, const std::string& mod) {
+    if (!scene->mods || !scene->mods->has(mod))
+      throw InputError(path + ": the recording reloads mod '" + mod + "', which is not loaded");
+    scene->mods->reload(mod);
+  };
+  const double wall0 = now_seconds();
+  ReplayResult r;
+  try {
+    r = replay(data, rebuild, ro);
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  const double wall = now_seconds() - wall0;
+  out << path << ": " << r.message() << "\n";
+  char line[160];
+  std::snprintf(line, sizeof line, "replayed %llu steps in %.3f s\n",
+                (unsigned long long)(r.identical ? r.steps : r.steps + 1), wall);
+  out << line;
+  scene.reset();
+  return r.identical ? kExitOk : kExitFailure;
+}
+
 int check(const std::string& path, std::ostream& out, std::ostream& err) {
+  if (is_save_file(path)) return check_save(path, out, err);
   lua::LoadOptions options = load_options();
   CheckLog log(err);
   options.mod_log = [&](const std::string& mod, const std::string& line) { log.write(mod, line); };
@@ -531,7 +749,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 
   RunOptions ro;
   CLI::App* run_cmd = app.add_subcommand("run", "Run a scene headless and narrate what happens");
-  run_cmd->add_option("scene", ro.scene, "Scene file (.lua) or mod folder")->required();
+  run_cmd
+      ->add_option("scene", ro.scene,
+                   "Scene file (.lua), mod folder, or a save file to continue (alloy run --save)")
+      ->required();
   auto* steps_opt = run_cmd->add_option("--steps", ro.steps, "Number of steps to run");
   run_cmd->add_option("--seconds", ro.seconds, "Simulated seconds to run")
       ->excludes(steps_opt)
@@ -565,6 +786,17 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->add_option("--hash-every", ro.hash_every,
                    "Print the state hash every N steps, and after the run")
       ->check(CLI::PositiveNumber);
+  run_cmd->add_option("--save", ro.save,
+                      "Save the world at the end of the run (continue it with `alloy run FILE`)");
+  run_cmd
+      ->add_option("--save-every", ro.save_every,
+                   "Save the world every T simulated seconds into folder DIR "
+                   "(DIR/step-NNNNNNNN.alloysave)")
+      ->expected(2)
+      ->type_name("T DIR");
+  run_cmd->add_option("--record", ro.record,
+                      "Record the run (initial world, inputs, a state hash every step) for "
+                      "`alloy replay`");
   run_cmd->add_flag("--watch", ro.watch,
                     "Run in real time and reload mods whose files change (until Ctrl-C without "
                     "--steps/--seconds)");
@@ -572,7 +804,13 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   std::string check_path;
   CLI::App* check_cmd =
       app.add_subcommand("check", "Load and validate a scene or a mod without running it");
-  check_cmd->add_option("path", check_path, "Scene file or mod folder")->required();
+  check_cmd->add_option("path", check_path, "Scene file, mod folder, save file or recording")
+      ->required();
+
+  std::string replay_path;
+  CLI::App* replay_cmd = app.add_subcommand(
+      "replay", "Run a recording (alloy run --record) again and say where it differs, if it does");
+  replay_cmd->add_option("file", replay_path, "Recording file")->required();
 
   CLI::App* plugins_cmd = app.add_subcommand("plugins", "List the native plugins");
 
@@ -592,6 +830,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   try {
     if (run_cmd->parsed()) return run(ro, out, err);
     if (check_cmd->parsed()) return check(check_path, out, err);
+    if (replay_cmd->parsed()) return replay_file(replay_path, out, err);
     if (plugins_cmd->parsed()) return list_plugins(out);
     if (view_cmd->parsed()) return viewer::run_view(vo, out, err);
   } catch (const InputError& e) {

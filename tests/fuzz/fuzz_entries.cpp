@@ -1,12 +1,14 @@
 #include "tests/fuzz/fuzz_entries.hpp"
 
 #include <unistd.h>
+#include <xxhash.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -17,6 +19,8 @@
 #include "lua/mod_runtime.hpp"
 #include "lua/scene_loader.hpp"
 #include "resolvers/plugins.hpp"
+#include "runtime/save_file.hpp"
+#include "runtime/world.hpp"
 #include "tests/fuzz/fuzz_support.hpp"
 
 namespace alloy::fuzz {
@@ -194,6 +198,50 @@ void mod_api(const std::uint8_t* data, std::size_t size) {
       poll(loaded.mods.get());
     }
   });
+}
+
+void save(const std::uint8_t* data, std::size_t size) {
+  std::string bytes(reinterpret_cast<const char*>(data), size);
+  // Seal: what the writer would have written as checksum for these bytes
+  // (pack_save's definition), so that damage inside sections is parsed.
+  if (bytes.size() >= 48 && bytes.compare(0, 8, "ALLOYSAV") == 0) {
+    try {
+      SaveContainer c = unpack_save(bytes, "fuzz");
+      (void)c;
+    } catch (const InputError&) {
+      // Recompute the checksum field in place; the sizes stay the fuzzer's.
+      std::uint64_t meta = 0, stored = 0;
+      std::memcpy(&meta, bytes.data() + 16, 8);
+      std::memcpy(&stored, bytes.data() + 24, 8);
+      if (meta <= bytes.size() && stored <= bytes.size() && 48 + meta + stored == bytes.size()) {
+        const std::string covered = bytes.substr(0, 40) + bytes.substr(48);
+        const std::uint64_t h = XXH3_64bits(covered.data(), covered.size());
+        std::memcpy(bytes.data() + 40, &h, 8);
+      }
+    }
+  }
+  SaveData d;
+  try {
+    d = decode_save(bytes, "fuzz");
+  } catch (const InputError&) {
+    return;  // refused: fine
+  }
+  // One space world for every input: restore replaces everything in it.
+  static PluginRegistry registry;
+  static std::unique_ptr<lua::LoadedScene> space;
+  if (!space) {
+    register_native_plugins(registry);
+    lua::LoadOptions o = load_options();
+    o.mod_paths.push_back(fs::path(ALLOY_SOURCE_DIR) / "mods");  // space uses the kit; loaded once
+    space = std::make_unique<lua::LoadedScene>(
+        lua::load_scene(fs::path(ALLOY_SOURCE_DIR) / "mods" / "space", registry, o));
+  }
+  try {
+    check_save_fits(d, "fuzz", *space->world, {{"space", "0.1.0"}}, nullptr);
+    space->world->restore(d.snapshot);
+    for (int i = 0; i < 3; ++i) space->world->step();
+  } catch (const InputError&) {
+  }
 }
 
 }  // namespace alloy::fuzz

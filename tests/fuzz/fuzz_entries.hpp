@@ -35,6 +35,12 @@ void mod_api(const std::uint8_t* data, std::size_t size);
 /// it, run without end or need a display are skipped (see cli_arguments_allowed).
 void cli(const std::uint8_t* data, std::size_t size);
 
+/// A save file's bytes (runtime/save_file.hpp): read back, and if it reads,
+/// fitted to and restored into the space scene. The checksum of an input
+/// that starts with the save magic is sealed again first, so that the
+/// fuzzer reaches the section parsers instead of stopping at the checksum.
+void save(const std::uint8_t* data, std::size_t size);
+
 /// The Lua program mod_api runs for these bytes (for reading a finding).
 std::string mod_api_program(const std::uint8_t* data, std::size_t size);
 

@@ -2,7 +2,7 @@
 // same entry functions the libFuzzer binaries call, in the ordinary build: an
 // input that once crashed alloy is a regression test that needs no clang.
 //
-// Folders, per target (scene, mod, mod_api, cli):
+// Folders, per target (scene, mod, mod_api, cli, save):
 //   tests/fuzz/corpus/<target>/       seeds: what a fuzzing run starts from,
 //                                     with the source folders tests/fuzz/seed_dirs names
 //   tests/fuzz/regressions/<target>/  inputs that crashed, hung or leaked, now fixed
@@ -30,7 +30,8 @@ struct Target {
 const Target kTargets[] = {{"scene", alloy::fuzz::scene},
                            {"mod", alloy::fuzz::mod},
                            {"mod_api", alloy::fuzz::mod_api},
-                           {"cli", alloy::fuzz::cli}};
+                           {"cli", alloy::fuzz::cli},
+                           {"save", alloy::fuzz::save}};
 
 const fs::path kSource = ALLOY_SOURCE_DIR;
 
