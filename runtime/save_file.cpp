@@ -400,12 +400,14 @@ const SectionCodec kSnapshotSections[] = {
     {"STEP",
      [](Out& o, const Snapshot& s) {
        o.put(s.step), o.put(s.time), o.put(s.dt), o.put<std::uint8_t>(s.started);
+       o.put<std::uint8_t>(s.resync);
      },
      [](In& in, Decoding& d) {
        d.s.step = in.get<std::uint64_t>();
        d.s.time = in.get<double>();
        d.s.dt = in.get<double>();
        d.s.started = in.get<std::uint8_t>() != 0;
+       d.s.resync = in.get<std::uint8_t>() != 0;
        if (!std::isfinite(d.s.time) || !(d.s.dt > 0) || !std::isfinite(d.s.dt))
          in.fail("the time or the step is not a finite number");
      }},
@@ -522,6 +524,28 @@ const SectionCodec kSnapshotSections[] = {
          const std::string b = in.str();
          st.bytes.resize(b.size());
          std::memcpy(st.bytes.data(), b.data(), b.size());
+       }
+     }},
+    {"MSTA",
+     [](Out& o, const Snapshot& s) {
+       o.put<std::uint64_t>(s.mod_states.size());
+       for (const auto& m : s.mod_states) {
+         o.str(m.mod);
+         o.str(m.version);
+         o.put<std::uint64_t>(m.bytes.size());
+         o.bytes.append(reinterpret_cast<const char*>(m.bytes.data()), m.bytes.size());
+       }
+     },
+     [](In& in, Decoding& d) {
+       // The state bytes are checked by the mod's runtime when the world is
+       // restored (lua/state_codec.hpp), before anything changes.
+       d.s.mod_states.resize(std::size_t(in.count(24, "mod states")));
+       for (auto& m : d.s.mod_states) {
+         m.mod = in.str();
+         m.version = in.str();
+         const std::string b = in.str();
+         m.bytes.resize(b.size());
+         std::memcpy(m.bytes.data(), b.data(), b.size());
        }
      }},
     {"INPT",

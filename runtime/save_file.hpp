@@ -15,7 +15,7 @@
 //     sections PROG (program, its version, what the file is), SCEN (the
 //     scene), PROP (every property type: name, kind, enum values), PLUG
 //     (the plugins registered: name, kind), MODS (the mods: name, version)
-//   body: sections STEP, OBJS, COLS, FRZN, AREA, STGS, SSTA, INPT, SWAP (one
+//   body: sections STEP, OBJS, COLS, FRZN, AREA, STGS, SSTA, MSTA, INPT, SWAP (one
 //     per part of a Snapshot), then a replay's RLOG and RHSH, then END.
 //
 // A section is a 4-character tag, its size (u64) and its bytes. Sections
