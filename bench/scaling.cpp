@@ -5,6 +5,11 @@
 // and the tree's error against the direct sum at every n.
 //
 //   build/bench/alloy_bench_scaling [--quick] [--out DIR] [--docs FILE] [--no-progress]
+//                                   [--electricity] [--collisions]
+//
+// --electricity / --collisions run only those rows (and their goals), print
+// the table and write nothing: for working on one stage without the hour of
+// the whole sweep.
 //
 // Scenes (each built through the world's editing API, only the plugins it
 // needs allowed, so that a stage's time is its own):
@@ -19,6 +24,9 @@
 //             same world), rigid_body_from_magnetism
 //   ladder    a battery feeding a ladder of n/2 series resistors and n/2 coil
 //             rungs, wired: electricity with dense LU, and with sparse LU
+//   mesh      n resistors and coils (one in four a coil) joining random
+//             neighbouring junctions of a square grid of n/2 junctions, fed by
+//             one battery: a random planar mesh with many loops (sparse LU)
 //   voices    n parts ringing at once (struck once, T60 30 s): sound
 //
 // Timing: each stage's time is World::profile()'s (wall clock) over the timed
@@ -148,6 +156,35 @@ void build_ladder(World& w, int n) {
     rail = r;
     rail_terminal = 1;
   }
+}
+
+/// A random mesh: junctions on a square grid (n/2 of them), each of the n
+/// elements (a coil one time in four, else a resistor) joining a random
+/// junction to a random one of its grid neighbours, plus a battery across
+/// two corners. Fixed seed: the same mesh every run.
+void build_mesh(World& w, int n) {
+  std::mt19937_64 rng(7);
+  const int side = std::max(2, int(std::ceil(std::sqrt(std::max(1, n / 2)))));
+  std::vector<ObjectId> junction(std::size_t(side) * side);
+  for (std::size_t j = 0; j < junction.size(); ++j) {
+    junction[j] = w.create();
+    w.set(junction[j], "conductive", true);
+  }
+  std::uniform_int_distribution<int> pick(0, side * side - 1), dir(0, 3);
+  for (int i = 0; i < n; ++i) {
+    const int a = pick(rng), d = dir(rng);
+    int x = a % side + (d == 0) - (d == 1), y = a / side + (d == 2) - (d == 3);
+    x = std::clamp(x, 0, side - 1), y = std::clamp(y, 0, side - 1);
+    const int b = y * side + x == a ? (a + 1) % (side * side) : y * side + x;
+    const bool coil = i % 4 == 0;
+    const ObjectId e = part(w, (coil ? "l" : "r") + std::to_string(i), coil ? "coil" : "resistor",
+                            coil ? 0.05 : 1.0 + (i % 7));
+    wire(w, junction[a], 0, e, 0);
+    wire(w, e, 1, junction[b], 0);
+  }
+  const ObjectId battery = part(w, "battery", "emf", 6.0);
+  wire(w, battery, 0, junction.front(), 0);
+  wire(w, battery, 1, junction.back(), 0);
 }
 
 void build_voices(World& w, int n) {
@@ -300,7 +337,13 @@ double packed_error(int nx, int ny, int nz, double theta) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options opt = Options::parse(argc, argv, "alloy_bench_scaling");
+  Options opt =
+      Options::parse(argc, argv, "alloy_bench_scaling", {"--electricity", "--collisions"});
+  // A filter runs only the rows it names and writes nothing.
+  const bool only_electricity = opt.flag("--electricity"),
+             only_collisions = opt.flag("--collisions");
+  const bool filtered = only_electricity || only_collisions;
+  if (filtered) opt.docs.clear();
   const std::vector<int> ns = opt.quick ? std::vector<int>{10, 30, 100, 300}
                                         : std::vector<int>{10, 30, 100, 300, 1000, 3000, 10000};
   const double budget = opt.quick ? 0.02 : 0.3;
@@ -353,6 +396,14 @@ int main(int argc, char** argv) {
          .max_n = std::string(method) == "dense" ? 1000 : 1 << 30});
   }
   {
+    WorldDef d = def_with({"electricity"});
+    d.settings["electricity"].set("dense_limit", std::int64_t(0));
+    scene_list.push_back({.name = "mesh",
+                          .def = d,
+                          .build = build_mesh,
+                          .lines = {line("electricity (random mesh)", "electricity", "n log n")}});
+  }
+  {
     WorldDef d = def_with({"sound"});
     d.settings["sound"].set("max_voices", std::int64_t(100000));
     scene_list.push_back({.name = "voices",
@@ -372,7 +423,14 @@ int main(int argc, char** argv) {
 
   // 1. The scenes, stage by stage.
   std::vector<std::string> notes;
+  auto wanted = [&](const Scene& sc) {
+    if (!filtered) return true;
+    const bool electric = sc.name.starts_with("ladder") || sc.name == "mesh";
+    const bool colliding = sc.name == "free" || sc.name == "resting";
+    return (only_electricity && electric) || (only_collisions && colliding);
+  };
   for (const Scene& sc : scene_list) {
+    if (!wanted(sc)) continue;
     for (int n : ns) {
       progress.tick();
       if (n > sc.max_n) {
@@ -410,7 +468,7 @@ int main(int argc, char** argv) {
   //    with the direct sum.
   std::vector<MagneticPoint> mag;
   const double theta = magnetism::kDefaultTheta;
-  for (int n : ns) {
+  for (int n : filtered ? std::vector<int>{} : ns) {
     progress.tick();
     WorldDef d =
         def_with({"rigid_body", "magnetism", "magnetic_forces", "rigid_body_from_magnetism"});
@@ -474,10 +532,10 @@ int main(int argc, char** argv) {
     }
   }
   double packed = NAN;
-  if (!opt.quick) packed = packed_error(25, 20, 20, theta);
+  if (!opt.quick && !filtered) packed = packed_error(25, 20, 20, theta);
 
   // 3. Output.
-  {
+  if (!filtered) {
     Csv csv(opt.file("scaling.csv"),
             {"stage", "expected", "n", "seconds_per_step", "fitted_slope_upper_half"});
     for (const Line& l : lines) {
@@ -486,7 +544,7 @@ int main(int argc, char** argv) {
         csv.row({l.label, l.expected, Csv::cell(l.n[i]), Csv::cell(l.seconds[i]), Csv::cell(s)});
     }
   }
-  {
+  if (!filtered) {
     Csv csv(opt.file("magnetic_crossover.csv"),
             {"magnets", "direct_seconds_per_step", "tree_seconds_per_step", "theta",
              "rms_relative_force_error", "rms_relative_torque_error"});
@@ -494,7 +552,7 @@ int main(int argc, char** argv) {
       csv.row({Csv::cell(p.n), p.direct_skipped ? "" : Csv::cell(p.direct), Csv::cell(p.tree),
                Csv::cell(theta), Csv::cell(p.error), Csv::cell(p.torque_error)});
   }
-  {
+  if (!filtered) {
     Plot plot{.title = "Time per step against the number of objects",
               .x_label = "objects n",
               .y_label = "CPU time per step (s)"};
@@ -503,7 +561,7 @@ int main(int argc, char** argv) {
           {.name = l.label, .x = l.n, .y = l.seconds, .dashed = l.expected == "quadratic"});
     write_svg(plot, opt.file("scaling.svg"));
   }
-  {
+  if (!filtered) {
     Plot plot{.title = "magnetic_forces: direct sum against Barnes-Hut tree",
               .x_label = "magnets n",
               .y_label = "CPU time per step of magnetic_forces (s)"};
@@ -533,6 +591,7 @@ int main(int argc, char** argv) {
     header.push_back("measured class");
     Table table(header);
     for (const Line& l : lines) {
+      if (filtered && l.n.empty()) continue;
       std::vector<std::string> row = {l.label, l.expected};
       for (int n : ns) {
         const auto it = std::find(l.n.begin(), l.n.end(), double(n));
