@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "bench/common/bench_common.hpp"
+#include "resolvers/electricity/electricity.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 #include "resolvers/plugins.hpp"
@@ -334,6 +335,66 @@ double packed_error(int nx, int ny, int nz, double theta) {
                       forces({.method = Summation::Direct}));
 }
 
+// --- the circuits: the previous sparse method against the current one -------------------
+
+struct SolverPoint {
+  std::string scene;
+  int n = 0;
+  std::size_t unknowns = 0;
+  // ms: first factor() (analysis + numeric), factor() of the same topology
+  // with new impedances, one solve.
+  double factor[2] = {}, refactor[2] = {}, solve[2] = {};
+  double max_difference = 0;  // largest |potential| difference between the methods, V
+};
+
+/// The network the electricity resolver built for the scene, factorised and
+/// solved by the supernodal LU (index 0, before issue 16) and by the reduced
+/// L D L^T (index 1), all sparse.
+SolverPoint compare_solvers(const std::string& scene, void (*build)(World&, int), int n,
+                            double budget) {
+  WorldDef d = def_with({"electricity"});
+  d.settings["electricity"].set("dense_limit", std::int64_t(0));
+  scenes::Sim sim(d);
+  World& w = *sim;
+  build(w, n);
+  w.start();
+  w.run(1);
+  const electricity::Network net =
+      dynamic_cast<electricity::ElectricityResolver&>(*w.stage("electricity")).network();
+  electricity::Network changed = net;  // same topology, every impedance 10 % higher
+  for (auto& b : changed.branches) b.z *= 1.1;
+  SolverPoint p{.scene = scene, .n = n};
+  std::vector<double> e(net.branches.size(), 0.0);
+  for (std::size_t k = 0; k < e.size(); ++k) e[k] = 1.0 + 0.001 * double(k % 17);
+  std::vector<double> potential[2], current(net.branches.size());
+  const electricity::SparseMethod methods[2] = {electricity::SparseMethod::Lu,
+                                                electricity::SparseMethod::Cholesky};
+  for (int m = 0; m < 2; ++m) {
+    electricity::MnaSolver s(0, methods[m]);
+    p.factor[m] = 1e3 * cpu_time([&] { s.factor(net); });
+    int reps = 0;
+    const double c0 = cpu_seconds();
+    do {
+      s.factor(reps % 2 ? net : changed);
+      ++reps;
+    } while (cpu_seconds() - c0 < budget / 4 && reps < 50);
+    p.refactor[m] = 1e3 * (cpu_seconds() - c0) / reps;
+    if (reps % 2) s.factor(net);
+    potential[m].assign(net.node_count, 0.0);
+    reps = 0;
+    const double c1 = cpu_seconds();
+    do {
+      s.solve(e, potential[m], current);
+      ++reps;
+    } while (cpu_seconds() - c1 < budget / 4 && reps < 1000);
+    p.solve[m] = 1e3 * (cpu_seconds() - c1) / reps;
+    for (std::size_t c = 0; c < s.component_count(); ++c) p.unknowns += m ? 0 : s.unknowns(c);
+  }
+  for (std::size_t v = 0; v < net.node_count; ++v)
+    p.max_difference = std::max(p.max_difference, std::abs(potential[0][v] - potential[1][v]));
+  return p;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -534,6 +595,14 @@ int main(int argc, char** argv) {
   double packed = NAN;
   if (!opt.quick && !filtered) packed = packed_error(25, 20, 20, theta);
 
+  // 2b. The circuits' sparse solvers, previous against current, on the same networks.
+  std::vector<SolverPoint> solver_points;
+  if (!only_collisions)
+    for (int n : opt.quick ? std::vector<int>{100, 300} : std::vector<int>{1000, 10000}) {
+      solver_points.push_back(compare_solvers("ladder", build_ladder, n, budget));
+      solver_points.push_back(compare_solvers("mesh", build_mesh, n, budget));
+    }
+
   // 3. Output.
   if (!filtered) {
     Csv csv(opt.file("scaling.csv"),
@@ -607,6 +676,30 @@ int main(int argc, char** argv) {
     for (const Line& l : lines)
       for (const std::string& s : l.skipped) skipped += "- " + l.label + ", " + s + "\n";
     if (!skipped.empty()) md += "\nNot measured:\n\n" + skipped;
+  }
+  if (!solver_points.empty()) {
+    Table table({"network", "n", "unknowns (MNA)", "analyse + factor: LU / LDL^T",
+                 "refactor: LU / LDL^T", "solve: LU / LDL^T", "max |dV| (V)"});
+    auto ratio = [](const double(&v)[2]) {
+      return fmt(v[0]) + " / " + fmt(v[1]) + " (" + fmt(v[0] / v[1], 2) + "x)";
+    };
+    for (const SolverPoint& p : solver_points)
+      table.row({p.scene, std::to_string(p.n), std::to_string(p.unknowns), ratio(p.factor),
+                 ratio(p.refactor), ratio(p.solve), fmt(p.max_difference)});
+    md +=
+        "\nCircuits, the sparse solver alone on the resolver's network (ms; LU: supernodal LU "
+        "with COLAMD on the MNA matrix, the method before issue 16; LDL^T: the reduced "
+        "Laplacian with AMD, symbolic analysis reused; refactor: same topology, new "
+        "impedances; in brackets LU / LDL^T):\n\n" +
+        table.str();
+    // Goal of issue 16 item 3: a 10,000-element ladder at most 1 ms a step.
+    for (const Line& l : lines)
+      if (l.label == "electricity (sparse LU)")
+        for (std::size_t i = 0; i < l.n.size(); ++i)
+          if (l.n[i] == 10000)
+            md += "\nGoal: electricity, ladder of 10,000 elements at most 1 ms a step: " +
+                  fmt(1e3 * l.seconds[i]) + " ms, " + (l.seconds[i] <= 1e-3 ? "pass" : "miss") +
+                  ".\n";
   }
   {
     Table table({"magnets", "direct ms/step", "tree ms/step", "direct / tree",

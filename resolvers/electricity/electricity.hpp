@@ -182,6 +182,8 @@ class ElectricityResolver final : public Resolver {
   /// same matrix does not factorise).
   std::uint64_t network_builds() const { return network_builds_; }
   const MnaSolver& solver() const { return solver_; }
+  /// The network last factorised (for the scaling benchmark).
+  const Network& network() const { return network_; }
   const ElectricityConfig& config() const { return config_; }
 
  private:
