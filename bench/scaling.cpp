@@ -23,7 +23,8 @@
 //             collisions): magnetism, magnetic_forces (tree, then direct, on the
 //             same world), rigid_body_from_magnetism
 //   ladder    a battery feeding a ladder of n/2 series resistors and n/2 coil
-//             rungs, wired: electricity with dense LU, and with sparse LU
+//             rungs, wired: electricity with dense LU, and with the sparse
+//             L D L^T of the reduced Laplacian (resolvers/electricity/mna.hpp)
 //   mesh      n resistors and coils (one in four a coil) joining random
 //             neighbouring junctions of a square grid of n/2 junctions, fed by
 //             one battery: a random planar mesh with many loops (sparse LU)
@@ -450,8 +451,9 @@ int main(int argc, char** argv) {
         {.name = std::string("ladder ") + method,
          .def = d,
          .build = build_ladder,
-         .lines = {line(std::string("electricity (") + method + " LU)", "electricity",
-                        std::string(method) == "dense" ? "quadratic" : "linear")},
+         .lines = {line(std::string(method) == "dense" ? "electricity (dense LU)"
+                                                       : "electricity (sparse LDL^T)",
+                        "electricity", std::string(method) == "dense" ? "quadratic" : "linear")},
          .warmup = 2,
          // Dense LU of 2n unknowns: n = 3000 would take minutes to factorise.
          .max_n = std::string(method) == "dense" ? 1000 : 1 << 30});
@@ -694,7 +696,7 @@ int main(int argc, char** argv) {
         table.str();
     // Goal of issue 16 item 3: a 10,000-element ladder at most 1 ms a step.
     for (const Line& l : lines)
-      if (l.label == "electricity (sparse LU)")
+      if (l.label == "electricity (sparse LDL^T)")
         for (std::size_t i = 0; i < l.n.size(); ++i)
           if (l.n[i] == 10000)
             md += "\nGoal: electricity, ladder of 10,000 elements at most 1 ms a step: " +
