@@ -51,6 +51,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -283,7 +284,9 @@ class ElectricityResolver final : public Resolver {
   std::vector<double> battery_emf_;       // the emfs of the last advance, V
   std::vector<bool> element_closed_;      // per part: on a closed loop (two-terminal parts)
   std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
-  std::map<ObjectId, bool> reported_closed_;  // what the last events said, per element
+  // What the last events said, per element. Hashed: write_outputs looks up
+  // every part each step, and a tree made that n log n.
+  std::unordered_map<ObjectId, bool> reported_closed_;
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
 
   // Per-solve results.
