@@ -5,6 +5,11 @@
 // and the tree's error against the direct sum at every n.
 //
 //   build/bench/alloy_bench_scaling [--quick] [--out DIR] [--docs FILE] [--no-progress]
+//                                   [--electricity] [--collisions]
+//
+// --electricity / --collisions run only those rows (and their goals), print
+// the table and write nothing: for working on one stage without the hour of
+// the whole sweep.
 //
 // Scenes (each built through the world's editing API, only the plugins it
 // needs allowed, so that a stage's time is its own):
@@ -18,7 +23,11 @@
 //             collisions): magnetism, magnetic_forces (tree, then direct, on the
 //             same world), rigid_body_from_magnetism
 //   ladder    a battery feeding a ladder of n/2 series resistors and n/2 coil
-//             rungs, wired: electricity with dense LU, and with sparse LU
+//             rungs, wired: electricity with dense LU, and with the sparse
+//             L D L^T of the reduced Laplacian (resolvers/electricity/mna.hpp)
+//   mesh      n resistors and coils (one in four a coil) joining random
+//             neighbouring junctions of a square grid of n/2 junctions, fed by
+//             one battery: a random planar mesh with many loops (sparse LU)
 //   voices    n parts ringing at once (struck once, T60 30 s): sound
 //
 // Timing: each stage's time is World::profile()'s (wall clock) over the timed
@@ -38,6 +47,7 @@
 #include <vector>
 
 #include "bench/common/bench_common.hpp"
+#include "resolvers/electricity/electricity.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 #include "resolvers/plugins.hpp"
@@ -148,6 +158,35 @@ void build_ladder(World& w, int n) {
     rail = r;
     rail_terminal = 1;
   }
+}
+
+/// A random mesh: junctions on a square grid (n/2 of them), each of the n
+/// elements (a coil one time in four, else a resistor) joining a random
+/// junction to a random one of its grid neighbours, plus a battery across
+/// two corners. Fixed seed: the same mesh every run.
+void build_mesh(World& w, int n) {
+  std::mt19937_64 rng(7);
+  const int side = std::max(2, int(std::ceil(std::sqrt(std::max(1, n / 2)))));
+  std::vector<ObjectId> junction(std::size_t(side) * side);
+  for (std::size_t j = 0; j < junction.size(); ++j) {
+    junction[j] = w.create();
+    w.set(junction[j], "conductive", true);
+  }
+  std::uniform_int_distribution<int> pick(0, side * side - 1), dir(0, 3);
+  for (int i = 0; i < n; ++i) {
+    const int a = pick(rng), d = dir(rng);
+    int x = a % side + (d == 0) - (d == 1), y = a / side + (d == 2) - (d == 3);
+    x = std::clamp(x, 0, side - 1), y = std::clamp(y, 0, side - 1);
+    const int b = y * side + x == a ? (a + 1) % (side * side) : y * side + x;
+    const bool coil = i % 4 == 0;
+    const ObjectId e = part(w, (coil ? "l" : "r") + std::to_string(i), coil ? "coil" : "resistor",
+                            coil ? 0.05 : 1.0 + (i % 7));
+    wire(w, junction[a], 0, e, 0);
+    wire(w, e, 1, junction[b], 0);
+  }
+  const ObjectId battery = part(w, "battery", "emf", 6.0);
+  wire(w, battery, 0, junction.front(), 0);
+  wire(w, battery, 1, junction.back(), 0);
 }
 
 void build_voices(World& w, int n) {
@@ -297,10 +336,76 @@ double packed_error(int nx, int ny, int nz, double theta) {
                       forces({.method = Summation::Direct}));
 }
 
+// --- the circuits: the previous sparse method against the current one -------------------
+
+struct SolverPoint {
+  std::string scene;
+  int n = 0;
+  std::size_t unknowns = 0;
+  // ms: first factor() (analysis + numeric), factor() of the same topology
+  // with new impedances, one solve.
+  double factor[2] = {}, refactor[2] = {}, solve[2] = {};
+  double max_difference = 0;  // largest |potential| difference between the methods, V
+};
+
+/// The network the electricity resolver built for the scene, factorised and
+/// solved by the supernodal LU (index 0, before issue 16) and by the reduced
+/// L D L^T (index 1), all sparse.
+SolverPoint compare_solvers(const std::string& scene, void (*build)(World&, int), int n,
+                            double budget) {
+  WorldDef d = def_with({"electricity"});
+  d.settings["electricity"].set("dense_limit", std::int64_t(0));
+  scenes::Sim sim(d);
+  World& w = *sim;
+  build(w, n);
+  w.start();
+  w.run(1);
+  const electricity::Network net =
+      dynamic_cast<electricity::ElectricityResolver&>(*w.stage("electricity")).network();
+  electricity::Network changed = net;  // same topology, every impedance 10 % higher
+  for (auto& b : changed.branches) b.z *= 1.1;
+  SolverPoint p{.scene = scene, .n = n};
+  std::vector<double> e(net.branches.size(), 0.0);
+  for (std::size_t k = 0; k < e.size(); ++k) e[k] = 1.0 + 0.001 * double(k % 17);
+  std::vector<double> potential[2], current(net.branches.size());
+  const electricity::SparseMethod methods[2] = {electricity::SparseMethod::Lu,
+                                                electricity::SparseMethod::Cholesky};
+  for (int m = 0; m < 2; ++m) {
+    electricity::MnaSolver s(0, methods[m]);
+    p.factor[m] = 1e3 * cpu_time([&] { s.factor(net); });
+    int reps = 0;
+    const double c0 = cpu_seconds();
+    do {
+      s.factor(reps % 2 ? net : changed);
+      ++reps;
+    } while (cpu_seconds() - c0 < budget / 4 && reps < 50);
+    p.refactor[m] = 1e3 * (cpu_seconds() - c0) / reps;
+    if (reps % 2) s.factor(net);
+    potential[m].assign(net.node_count, 0.0);
+    reps = 0;
+    const double c1 = cpu_seconds();
+    do {
+      s.solve(e, potential[m], current);
+      ++reps;
+    } while (cpu_seconds() - c1 < budget / 4 && reps < 1000);
+    p.solve[m] = 1e3 * (cpu_seconds() - c1) / reps;
+    for (std::size_t c = 0; c < s.component_count(); ++c) p.unknowns += m ? 0 : s.unknowns(c);
+  }
+  for (std::size_t v = 0; v < net.node_count; ++v)
+    p.max_difference = std::max(p.max_difference, std::abs(potential[0][v] - potential[1][v]));
+  return p;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options opt = Options::parse(argc, argv, "alloy_bench_scaling");
+  Options opt =
+      Options::parse(argc, argv, "alloy_bench_scaling", {"--electricity", "--collisions"});
+  // A filter runs only the rows it names and writes nothing.
+  const bool only_electricity = opt.flag("--electricity"),
+             only_collisions = opt.flag("--collisions");
+  const bool filtered = only_electricity || only_collisions;
+  if (filtered) opt.docs.clear();
   const std::vector<int> ns = opt.quick ? std::vector<int>{10, 30, 100, 300}
                                         : std::vector<int>{10, 30, 100, 300, 1000, 3000, 10000};
   const double budget = opt.quick ? 0.02 : 0.3;
@@ -346,11 +451,20 @@ int main(int argc, char** argv) {
         {.name = std::string("ladder ") + method,
          .def = d,
          .build = build_ladder,
-         .lines = {line(std::string("electricity (") + method + " LU)", "electricity",
-                        std::string(method) == "dense" ? "quadratic" : "linear")},
+         .lines = {line(std::string(method) == "dense" ? "electricity (dense LU)"
+                                                       : "electricity (sparse LDL^T)",
+                        "electricity", std::string(method) == "dense" ? "quadratic" : "linear")},
          .warmup = 2,
          // Dense LU of 2n unknowns: n = 3000 would take minutes to factorise.
          .max_n = std::string(method) == "dense" ? 1000 : 1 << 30});
+  }
+  {
+    WorldDef d = def_with({"electricity"});
+    d.settings["electricity"].set("dense_limit", std::int64_t(0));
+    scene_list.push_back({.name = "mesh",
+                          .def = d,
+                          .build = build_mesh,
+                          .lines = {line("electricity (random mesh)", "electricity", "n log n")}});
   }
   {
     WorldDef d = def_with({"sound"});
@@ -372,7 +486,14 @@ int main(int argc, char** argv) {
 
   // 1. The scenes, stage by stage.
   std::vector<std::string> notes;
+  auto wanted = [&](const Scene& sc) {
+    if (!filtered) return true;
+    const bool electric = sc.name.starts_with("ladder") || sc.name == "mesh";
+    const bool colliding = sc.name == "free" || sc.name == "resting";
+    return (only_electricity && electric) || (only_collisions && colliding);
+  };
   for (const Scene& sc : scene_list) {
+    if (!wanted(sc)) continue;
     for (int n : ns) {
       progress.tick();
       if (n > sc.max_n) {
@@ -410,7 +531,7 @@ int main(int argc, char** argv) {
   //    with the direct sum.
   std::vector<MagneticPoint> mag;
   const double theta = magnetism::kDefaultTheta;
-  for (int n : ns) {
+  for (int n : filtered ? std::vector<int>{} : ns) {
     progress.tick();
     WorldDef d =
         def_with({"rigid_body", "magnetism", "magnetic_forces", "rigid_body_from_magnetism"});
@@ -474,10 +595,18 @@ int main(int argc, char** argv) {
     }
   }
   double packed = NAN;
-  if (!opt.quick) packed = packed_error(25, 20, 20, theta);
+  if (!opt.quick && !filtered) packed = packed_error(25, 20, 20, theta);
+
+  // 2b. The circuits' sparse solvers, previous against current, on the same networks.
+  std::vector<SolverPoint> solver_points;
+  if (!only_collisions)
+    for (int n : opt.quick ? std::vector<int>{100, 300} : std::vector<int>{1000, 10000}) {
+      solver_points.push_back(compare_solvers("ladder", build_ladder, n, budget));
+      solver_points.push_back(compare_solvers("mesh", build_mesh, n, budget));
+    }
 
   // 3. Output.
-  {
+  if (!filtered) {
     Csv csv(opt.file("scaling.csv"),
             {"stage", "expected", "n", "seconds_per_step", "fitted_slope_upper_half"});
     for (const Line& l : lines) {
@@ -486,7 +615,7 @@ int main(int argc, char** argv) {
         csv.row({l.label, l.expected, Csv::cell(l.n[i]), Csv::cell(l.seconds[i]), Csv::cell(s)});
     }
   }
-  {
+  if (!filtered) {
     Csv csv(opt.file("magnetic_crossover.csv"),
             {"magnets", "direct_seconds_per_step", "tree_seconds_per_step", "theta",
              "rms_relative_force_error", "rms_relative_torque_error"});
@@ -494,7 +623,7 @@ int main(int argc, char** argv) {
       csv.row({Csv::cell(p.n), p.direct_skipped ? "" : Csv::cell(p.direct), Csv::cell(p.tree),
                Csv::cell(theta), Csv::cell(p.error), Csv::cell(p.torque_error)});
   }
-  {
+  if (!filtered) {
     Plot plot{.title = "Time per step against the number of objects",
               .x_label = "objects n",
               .y_label = "CPU time per step (s)"};
@@ -503,7 +632,7 @@ int main(int argc, char** argv) {
           {.name = l.label, .x = l.n, .y = l.seconds, .dashed = l.expected == "quadratic"});
     write_svg(plot, opt.file("scaling.svg"));
   }
-  {
+  if (!filtered) {
     Plot plot{.title = "magnetic_forces: direct sum against Barnes-Hut tree",
               .x_label = "magnets n",
               .y_label = "CPU time per step of magnetic_forces (s)"};
@@ -533,6 +662,7 @@ int main(int argc, char** argv) {
     header.push_back("measured class");
     Table table(header);
     for (const Line& l : lines) {
+      if (filtered && l.n.empty()) continue;
       std::vector<std::string> row = {l.label, l.expected};
       for (int n : ns) {
         const auto it = std::find(l.n.begin(), l.n.end(), double(n));
@@ -548,6 +678,30 @@ int main(int argc, char** argv) {
     for (const Line& l : lines)
       for (const std::string& s : l.skipped) skipped += "- " + l.label + ", " + s + "\n";
     if (!skipped.empty()) md += "\nNot measured:\n\n" + skipped;
+  }
+  if (!solver_points.empty()) {
+    Table table({"network", "n", "unknowns (MNA)", "analyse + factor: LU / LDL^T",
+                 "refactor: LU / LDL^T", "solve: LU / LDL^T", "max |dV| (V)"});
+    auto ratio = [](const double(&v)[2]) {
+      return fmt(v[0]) + " / " + fmt(v[1]) + " (" + fmt(v[0] / v[1], 2) + "x)";
+    };
+    for (const SolverPoint& p : solver_points)
+      table.row({p.scene, std::to_string(p.n), std::to_string(p.unknowns), ratio(p.factor),
+                 ratio(p.refactor), ratio(p.solve), fmt(p.max_difference)});
+    md +=
+        "\nCircuits, the sparse solver alone on the resolver's network (ms; LU: supernodal LU "
+        "with COLAMD on the MNA matrix, the method before issue 16; LDL^T: the reduced "
+        "Laplacian with AMD, symbolic analysis reused; refactor: same topology, new "
+        "impedances; in brackets LU / LDL^T):\n\n" +
+        table.str();
+    // Goal of issue 16 item 3: a 10,000-element ladder at most 1 ms a step.
+    for (const Line& l : lines)
+      if (l.label == "electricity (sparse LDL^T)")
+        for (std::size_t i = 0; i < l.n.size(); ++i)
+          if (l.n[i] == 10000)
+            md += "\nGoal: electricity, ladder of 10,000 elements at most 1 ms a step: " +
+                  fmt(1e3 * l.seconds[i]) + " ms, " + (l.seconds[i] <= 1e-3 ? "pass" : "miss") +
+                  ".\n";
   }
   {
     Table table({"magnets", "direct ms/step", "tree ms/step", "direct / tree",

@@ -889,6 +889,10 @@ bool ElectricityResolver::save_state(StateWriter& out) const {
   out.put_vector(contacts);
   std::vector<SavedClosed> closed;
   for (const auto& [id, on] : reported_closed_) closed.push_back({id, on ? 1u : 0u});
+  // reported_closed_ is a hash map: its order depends on its history, and
+  // equal states must save equal bytes (they are hashed), so sort by id.
+  std::sort(closed.begin(), closed.end(),
+            [](const SavedClosed& a, const SavedClosed& b) { return a.id < b.id; });
   out.put_vector(closed);
   // Restored and not advanced yet: the history is still the saved one.
   const SavedHistory now{guard_, network_, batteries_, battery_emf_, coils_, capacitors_};

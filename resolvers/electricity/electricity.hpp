@@ -53,6 +53,7 @@
 #include <memory>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -216,6 +217,8 @@ class ElectricityResolver final : public Resolver {
   /// same matrix does not factorise).
   std::uint64_t network_builds() const { return network_builds_; }
   const MnaSolver& solver() const { return solver_; }
+  /// The network last factorised (for the scaling benchmark).
+  const Network& network() const { return network_; }
   const ElectricityConfig& config() const { return config_; }
 
  private:
@@ -332,7 +335,9 @@ class ElectricityResolver final : public Resolver {
   std::vector<double> battery_emf_;       // the emfs of the last advance, V
   std::vector<bool> element_closed_;      // per part: on a closed loop (two-terminal parts)
   std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
-  std::map<ObjectId, bool> reported_closed_;  // what the last events said, per element
+  // What the last events said, per element. Hashed: write_outputs looks up
+  // every part each step, and a tree made that n log n.
+  std::unordered_map<ObjectId, bool> reported_closed_;
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
 
   // Per-solve results.

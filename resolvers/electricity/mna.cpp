@@ -1,6 +1,7 @@
 #include "resolvers/electricity/mna.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 #include <cmath>
 #include <numeric>
@@ -31,6 +32,10 @@ constexpr std::int32_t kGround = -1;
 
 }  // namespace
 
+using SparseMatrix = Eigen::SparseMatrix<double>;
+using SupernodalLu = Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>>;
+using ReducedLdlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
+
 struct MnaSolver::Component {
   std::vector<std::uint32_t> nodes;     // ascending
   std::vector<std::uint32_t> branches;  // indices into Network::branches, in network order
@@ -39,13 +44,17 @@ struct MnaSolver::Component {
   bool dense = true;
   bool factored = false;
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu;
-  // SparseLU is neither copyable nor movable; keep it behind a pointer.
-  std::unique_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>
-      sparse_lu;
+  // Neither sparse factorisation is copyable nor movable; keep them behind pointers.
+  std::unique_ptr<SupernodalLu> sparse_lu;
+  // Kept across factor() calls while the topology stays: it holds the AMD
+  // ordering and the elimination tree, so a new impedance costs only the
+  // numeric factorisation.
+  std::unique_ptr<ReducedLdlt> ldlt;
   mutable Eigen::VectorXd rhs, x;  // work buffers, sized once
 };
 
-MnaSolver::MnaSolver(std::size_t dense_limit) : dense_limit_(dense_limit) {}
+MnaSolver::MnaSolver(std::size_t dense_limit, SparseMethod sparse)
+    : dense_limit_(dense_limit), sparse_method_(sparse) {}
 MnaSolver::~MnaSolver() = default;
 MnaSolver::MnaSolver(MnaSolver&&) noexcept = default;
 MnaSolver& MnaSolver::operator=(MnaSolver&&) noexcept = default;
@@ -63,21 +72,20 @@ bool MnaSolver::dense(std::size_t c) const {
   return components_.at(c).dense;
 }
 
-void MnaSolver::factor(const Network& net) {
-  const std::uint32_t n = net.node_count;
-  auto check = [&](std::uint32_t a, std::uint32_t b, double v, const char* what, std::size_t i) {
-    if (a >= n || b >= n)
-      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
-                                  " joins a node that does not exist");
-    if (!(v > 0) || !std::isfinite(v))
-      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
-                                  " must be positive and finite, got " + std::to_string(v));
-  };
-  for (std::size_t i = 0; i < net.conductances.size(); ++i)
-    check(net.conductances[i].a, net.conductances[i].b, net.conductances[i].g, "conductance", i);
-  for (std::size_t i = 0; i < net.branches.size(); ++i)
-    check(net.branches[i].a, net.branches[i].b, net.branches[i].z, "branch impedance", i);
+bool MnaSolver::same_topology(const Network& net) const {
+  if (topology_.size() != 1 + net.conductances.size() + net.branches.size() ||
+      topology_[0] != std::pair{net.node_count, std::uint32_t(net.conductances.size())})
+    return false;
+  std::size_t i = 1;
+  for (const Conductance& c : net.conductances)
+    if (topology_[i++] != std::pair{c.a, c.b}) return false;
+  for (const TheveninBranch& b : net.branches)
+    if (topology_[i++] != std::pair{b.a, b.b}) return false;
+  return true;
+}
 
+void MnaSolver::partition(const Network& net) {
+  const std::uint32_t n = net.node_count;
   // Connected components over every element: conductances and branches alike.
   DisjointSets sets(n);
   for (const auto& c : net.conductances) sets.unite(c.a, c.b);
@@ -99,17 +107,24 @@ void MnaSolver::factor(const Network& net) {
   for (std::uint32_t k = 0; k < net.branches.size(); ++k)
     components_[component_of_node_[net.branches[k].a]].branches.push_back(k);
 
+  // Conductances grouped by component (a counting sort: stable, linear).
+  conductances_start_.assign(components_.size() + 1, 0);
+  for (const Conductance& g : net.conductances) ++conductances_start_[component_of_node_[g.a] + 1];
+  for (std::size_t c = 0; c < components_.size(); ++c)
+    conductances_start_[c + 1] += conductances_start_[c];
+  conductances_of_.resize(net.conductances.size());
+  {
+    std::vector<std::uint32_t> fill(conductances_start_.begin(), conductances_start_.end() - 1);
+    for (std::uint32_t i = 0; i < net.conductances.size(); ++i)
+      conductances_of_[fill[component_of_node_[net.conductances[i].a]]++] = i;
+  }
+
   // Local numbering: node v of a component -> row, ground -> kGround; branch
   // k -> row after the component's nodes. One array per network, filled per
   // component (components are disjoint, so entries never clash).
-  std::vector<std::int32_t> node_row(n, kGround);
-  std::vector<std::int32_t> branch_row(net.branches.size(), kGround);
-  std::vector<std::vector<std::uint32_t>> conductances_of(components_.size());
-  for (std::uint32_t i = 0; i < net.conductances.size(); ++i)
-    conductances_of[component_of_node_[net.conductances[i].a]].push_back(i);
-
-  for (std::size_t ci = 0; ci < components_.size(); ++ci) {
-    Component& comp = components_[ci];
+  node_row_.assign(n, kGround);
+  branch_row_.assign(net.branches.size(), kGround);
+  for (Component& comp : components_) {
     // The ground: node a of the first branch. The resolver lists batteries
     // first, terminal 0 (negative) as a, so potentials read as the voltmeter
     // of a kit user whose black lead is on the first battery's minus.
@@ -117,51 +132,125 @@ void MnaSolver::factor(const Network& net) {
         comp.branches.empty() ? comp.nodes.front() : net.branches[comp.branches.front()].a;
     std::int32_t row = 0;
     for (std::uint32_t v : comp.nodes)
-      if (v != comp.ground) node_row[v] = row++;
-    for (std::uint32_t k : comp.branches) branch_row[k] = row++;
+      if (v != comp.ground) node_row_[v] = row++;
+    for (std::uint32_t k : comp.branches) branch_row_[k] = row++;
     comp.unknowns = std::size_t(row);
     comp.dense = comp.unknowns <= dense_limit_;
+  }
+
+  topology_.clear();
+  topology_.reserve(1 + net.conductances.size() + net.branches.size());
+  topology_.emplace_back(n, std::uint32_t(net.conductances.size()));
+  for (const Conductance& c : net.conductances) topology_.emplace_back(c.a, c.b);
+  for (const TheveninBranch& b : net.branches) topology_.emplace_back(b.a, b.b);
+}
+
+void MnaSolver::factor(const Network& net) {
+  const std::uint32_t n = net.node_count;
+  auto check = [&](std::uint32_t a, std::uint32_t b, double v, const char* what, std::size_t i) {
+    if (a >= n || b >= n)
+      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
+                                  " joins a node that does not exist");
+    if (!(v > 0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string(what) + " " + std::to_string(i) +
+                                  " must be positive and finite, got " + std::to_string(v));
+  };
+  for (std::size_t i = 0; i < net.conductances.size(); ++i)
+    check(net.conductances[i].a, net.conductances[i].b, net.conductances[i].g, "conductance", i);
+  for (std::size_t i = 0; i < net.branches.size(); ++i)
+    check(net.branches[i].a, net.branches[i].b, net.branches[i].z, "branch impedance", i);
+
+  if (!same_topology(net)) partition(net);
+  branch_z_.resize(net.branches.size());
+  for (std::size_t k = 0; k < net.branches.size(); ++k) branch_z_[k] = net.branches[k].z;
+
+  try {
+    factor_components(net);
+  } catch (...) {
+    // A failed factor() leaves nothing to reuse (the next one starts afresh)
+    // and nothing to solve (solve() then refuses every size).
+    topology_.clear();
+    components_.clear();
+    node_count_ = 0, branch_count_ = 0;
+    throw;
+  }
+}
+
+void MnaSolver::factor_components(const Network& net) {
+  std::vector<Eigen::Triplet<double>> t;
+  for (std::size_t ci = 0; ci < components_.size(); ++ci) {
+    Component& comp = components_[ci];
     comp.factored = false;
     if (comp.branches.empty()) continue;  // no source, no current: nothing to factorise
-
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(4 * conductances_of[ci].size() + 5 * comp.branches.size());
+    const std::span<const std::uint32_t> conductances(
+        conductances_of_.data() + conductances_start_[ci],
+        conductances_start_[ci + 1] - conductances_start_[ci]);
+    t.clear();
     auto add = [&](std::int32_t r, std::int32_t c, double v) {
       if (r != kGround && c != kGround) t.emplace_back(r, c, v);
     };
-    for (std::uint32_t i : conductances_of[ci]) {
-      const Conductance& g = net.conductances[i];
-      if (g.a == g.b) continue;  // a conductance from a node to itself carries nothing
-      const std::int32_t ra = node_row[g.a], rb = node_row[g.b];
-      add(ra, ra, g.g), add(rb, rb, g.g), add(ra, rb, -g.g), add(rb, ra, -g.g);
-    }
-    for (std::uint32_t k : comp.branches) {
-      const TheveninBranch& br = net.branches[k];
-      const std::int32_t ra = node_row[br.a], rb = node_row[br.b], rk = branch_row[k];
-      add(ra, rk, 1.0), add(rb, rk, -1.0);  // I leaves a, enters b
-      add(rk, ra, 1.0), add(rk, rb, -1.0), add(rk, rk, -br.z);
-    }
-    Eigen::SparseMatrix<double> a(Eigen::Index(comp.unknowns), Eigen::Index(comp.unknowns));
-    a.setFromTriplets(t.begin(), t.end());  // sums duplicates (parallel elements)
-    if (comp.dense) {
-      comp.dense_lu.compute(Eigen::MatrixXd(a));
+    auto stamp = [&](std::uint32_t a, std::uint32_t b, double g) {
+      const std::int32_t ra = node_row_[a], rb = node_row_[b];
+      add(ra, ra, g), add(rb, rb, g), add(ra, rb, -g), add(rb, ra, -g);
+    };
+    const bool reduced = !comp.dense && sparse_method_ == SparseMethod::Cholesky;
+    if (reduced) {
+      // The Laplacian of the component with every branch a conductance 1/z;
+      // the ground's row and column are left out.
+      t.reserve(4 * (conductances.size() + comp.branches.size()));
+      for (std::uint32_t i : conductances)
+        if (net.conductances[i].a != net.conductances[i].b)
+          stamp(net.conductances[i].a, net.conductances[i].b, net.conductances[i].g);
+      for (std::uint32_t k : comp.branches)
+        if (net.branches[k].a != net.branches[k].b)
+          stamp(net.branches[k].a, net.branches[k].b, 1.0 / net.branches[k].z);
+      const Eigen::Index m = Eigen::Index(comp.nodes.size() - 1);
+      comp.rhs.setZero(m);
+      comp.x.setZero(m);
+      if (m > 0) {
+        SparseMatrix a(m, m);
+        a.setFromTriplets(t.begin(), t.end());  // sums duplicates (parallel elements)
+        if (!comp.ldlt) {
+          comp.ldlt = std::make_unique<ReducedLdlt>();
+          comp.ldlt->analyzePattern(a);
+          ++symbolic_analyses_;
+        }
+        comp.ldlt->factorize(a);
+        if (comp.ldlt->info() != Eigen::Success)
+          throw std::runtime_error("electric network component " + std::to_string(ci) +
+                                   " is singular");
+      }
     } else {
-      a.makeCompressed();
-      comp.sparse_lu = std::make_unique<
-          Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>();
-      comp.sparse_lu->analyzePattern(a);
-      comp.sparse_lu->factorize(a);
-      if (comp.sparse_lu->info() != Eigen::Success)
-        throw std::runtime_error("electric network component " + std::to_string(ci) +
-                                 " is singular: " + comp.sparse_lu->lastErrorMessage());
+      t.reserve(4 * conductances.size() + 5 * comp.branches.size());
+      for (std::uint32_t i : conductances)
+        if (net.conductances[i].a != net.conductances[i].b)  // a self-loop carries nothing
+          stamp(net.conductances[i].a, net.conductances[i].b, net.conductances[i].g);
+      for (std::uint32_t k : comp.branches) {
+        const TheveninBranch& br = net.branches[k];
+        const std::int32_t ra = node_row_[br.a], rb = node_row_[br.b], rk = branch_row_[k];
+        add(ra, rk, 1.0), add(rb, rk, -1.0);  // I leaves a, enters b
+        add(rk, ra, 1.0), add(rk, rb, -1.0), add(rk, rk, -br.z);
+      }
+      SparseMatrix a(Eigen::Index(comp.unknowns), Eigen::Index(comp.unknowns));
+      a.setFromTriplets(t.begin(), t.end());  // sums duplicates (parallel elements)
+      if (comp.dense) {
+        comp.dense_lu.compute(Eigen::MatrixXd(a));
+      } else {
+        a.makeCompressed();
+        comp.sparse_lu = std::make_unique<SupernodalLu>();
+        comp.sparse_lu->analyzePattern(a);
+        ++symbolic_analyses_;
+        comp.sparse_lu->factorize(a);
+        if (comp.sparse_lu->info() != Eigen::Success)
+          throw std::runtime_error("electric network component " + std::to_string(ci) +
+                                   " is singular: " + comp.sparse_lu->lastErrorMessage());
+      }
+      comp.rhs.setZero(Eigen::Index(comp.unknowns));
+      comp.x.setZero(Eigen::Index(comp.unknowns));
     }
-    comp.rhs.setZero(Eigen::Index(comp.unknowns));
-    comp.x.setZero(Eigen::Index(comp.unknowns));
     comp.factored = true;
     ++factorizations_;
   }
-  node_row_ = std::move(node_row);
-  branch_row_ = std::move(branch_row);
 }
 
 void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
@@ -176,6 +265,29 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
     if (!driven) {  // no source anywhere in the component: everything rests at zero
       for (std::uint32_t v : comp.nodes) potential[v] = 0;
       for (std::uint32_t k : comp.branches) current[k] = 0;
+      continue;
+    }
+    if (!comp.dense && sparse_method_ == SparseMethod::Cholesky) {
+      // Reduced form: each branch's source as the current e/z it would drive
+      // through a short, injected at its ends; then I = (V_a - V_b + e) / z.
+      comp.rhs.setZero();
+      for (std::uint32_t k : comp.branches) {
+        const auto [a, b] = branch_ends(k);
+        const std::int32_t ra = node_row_[a], rb = node_row_[b];
+        const double w = e[k] / branch_z_[k];
+        if (ra != kGround) comp.rhs[ra] -= w;
+        if (rb != kGround) comp.rhs[rb] += w;
+      }
+      if (comp.ldlt) comp.x = comp.ldlt->solve(comp.rhs);
+      if (!comp.x.allFinite())
+        throw std::runtime_error("electric network component " + std::to_string(ci) +
+                                 " gave a non-finite solution");
+      for (std::uint32_t v : comp.nodes)
+        potential[v] = v == comp.ground ? 0.0 : comp.x[node_row_[v]];
+      for (std::uint32_t k : comp.branches) {
+        const auto [a, b] = branch_ends(k);
+        current[k] = (potential[a] - potential[b] + e[k]) / branch_z_[k];
+      }
       continue;
     }
     for (std::uint32_t k : comp.branches) comp.rhs[branch_row_[k]] = -e[k];

@@ -21,11 +21,28 @@
 // graph with one node removed, which is positive definite. The MNA matrix
 // itself is symmetric but indefinite (the branch block is -z), hence LU with
 // partial pivoting rather than Cholesky.
+//
+// Large components (more unknowns than the dense limit) are solved in that
+// reduced form: the branch currents are eliminated, leaving the positive
+// definite weighted Laplacian
+//
+//     (G + B Z^-1 B^T) V = -B Z^-1 e,      I = Z^-1 (B^T V + e),
+//
+// factorised as L D L^T (Cholesky without square roots) after an approximate
+// minimum degree (AMD) ordering. The ordering and the elimination tree (the
+// symbolic analysis) depend only on which nodes the elements join, so they
+// are computed when the topology changes and reused when only an impedance
+// does; the numeric factorisation and every solve cost O(nnz(L)), which the
+// ordering keeps linear for chains and ladders and near n log n for planar
+// meshes. (The supernodal LU with COLAMD on the unreduced, indefinite MNA
+// matrix, used before, remains available as SparseMethod::Lu: its ordering
+// does not see the symmetry, and its ladder grew as n^1.7.)
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace alloy::electricity {
@@ -54,13 +71,24 @@ struct Network {
   friend bool operator==(const Network&, const Network&) = default;
 };
 
+/// How components above the dense limit are factorised.
+enum class SparseMethod {
+  /// Branch currents eliminated; L D L^T of the reduced Laplacian with an AMD
+  /// ordering, the symbolic analysis reused while the topology stays (default).
+  Cholesky,
+  /// The unreduced MNA matrix by supernodal LU with COLAMD, analysed afresh at
+  /// every factor() (the method before issue 16; kept as the reference the
+  /// benchmark and the tests compare against).
+  Lu,
+};
+
 /// Factorises each connected component of a network once, then solves it for
 /// any set of branch sources.
 class MnaSolver {
  public:
   /// Components with at most `dense_limit` unknowns use dense LU with partial
-  /// pivoting; larger ones use sparse supernodal LU with a COLAMD ordering.
-  explicit MnaSolver(std::size_t dense_limit = 64);
+  /// pivoting on the MNA matrix; larger ones use `sparse` (see SparseMethod).
+  explicit MnaSolver(std::size_t dense_limit = 64, SparseMethod sparse = SparseMethod::Cholesky);
   ~MnaSolver();
   MnaSolver(MnaSolver&&) noexcept;
   MnaSolver& operator=(MnaSolver&&) noexcept;
@@ -70,6 +98,10 @@ class MnaSolver {
   /// every component that contains a branch (one without cannot carry
   /// current). Throws std::invalid_argument on a non-positive or non-finite
   /// conductance or impedance, or an out-of-range node.
+  /// When the network joins the same nodes by the same elements (in the same
+  /// order) as at the last call, only the values changed: the components, the
+  /// ground and the sparse orderings are kept and only the numeric
+  /// factorisation is redone.
   void factor(const Network& network);
 
   /// Solves for the branch sources `e` (one per branch, V). Writes the node
@@ -94,18 +126,40 @@ class MnaSolver {
   /// Component factorisations since construction (the cost that topology
   /// changes incur; tests assert it moves only when it should).
   std::uint64_t factorizations() const { return factorizations_; }
+  /// Symbolic analyses (ordering, elimination tree) of sparse components since
+  /// construction: with SparseMethod::Cholesky they move only when the
+  /// topology changes.
+  std::uint64_t symbolic_analyses() const { return symbolic_analyses_; }
   std::size_t dense_limit() const { return dense_limit_; }
+  SparseMethod sparse_method() const { return sparse_method_; }
 
  private:
   struct Component;
+  /// The (a, b) pairs of the last network, conductances then branches: equal
+  /// pairs mean the same topology.
+  bool same_topology(const Network& network) const;
+  void partition(const Network& network);
+  void factor_components(const Network& network);
+  /// Nodes (a, b) of branch k of the factored network.
+  std::pair<std::uint32_t, std::uint32_t> branch_ends(std::size_t k) const {
+    return topology_[1 + topology_[0].second + k];
+  }
+
   std::size_t dense_limit_;
+  SparseMethod sparse_method_;
   std::uint32_t node_count_ = 0;
   std::size_t branch_count_ = 0;
   std::vector<std::uint32_t> component_of_node_;
   std::vector<Component> components_;
-  std::vector<std::int32_t> node_row_;    // row of each node in its component, -1: ground
-  std::vector<std::int32_t> branch_row_;  // row of each branch's current in its component
+  std::vector<std::int32_t> node_row_;             // row of each node in its component, -1: ground
+  std::vector<std::int32_t> branch_row_;           // row of each branch's current in its component
+  std::vector<std::uint32_t> conductances_of_;     // conductance indices grouped by component
+  std::vector<std::uint32_t> conductances_start_;  // component c: [start[c], start[c + 1])
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> topology_;
+  std::vector<double>
+      branch_z_;  // impedance of each branch, Ohm (the reduced form's solve needs it)
   std::uint64_t factorizations_ = 0;
+  std::uint64_t symbolic_analyses_ = 0;
 };
 
 /// For each edge (a, b) of an undirected multigraph on `node_count` nodes,

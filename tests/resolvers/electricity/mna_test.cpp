@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -122,6 +123,85 @@ TEST(MnaSolver, DenseAndSparseLuAgree) {
   for (std::size_t i = 0; i < a.v.size(); ++i) EXPECT_NEAR(a.v[i], b.v[i], 1e-11);
   for (std::size_t k = 0; k < a.i.size(); ++k) EXPECT_NEAR(a.i[k], b.i[k], 1e-11);
   EXPECT_GT(std::abs(a.i[0]), 0.01);  // a real answer, not two zeros
+}
+
+/// A random network: a few components, parallel elements, self-loops, nodes
+/// reached only through a branch, a component with no branch, impedances over
+/// six decades.
+Network random_network(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<std::uint32_t> node(0, 199);
+  std::uniform_real_distribution<double> decade(-3, 3);
+  Network n;
+  n.node_count = 220;  // nodes 200..219 stay isolated
+  for (int i = 0; i < 500; ++i) {
+    const std::uint32_t a = node(rng), b = i % 50 == 0 ? a : (a + 1 + node(rng) % 9) % 200;
+    n.conductances.push_back({a, b, std::pow(10.0, decade(rng))});
+  }
+  for (int k = 0; k < 40; ++k) {
+    const std::uint32_t a = node(rng), b = k == 7 ? a : node(rng);
+    n.branches.push_back({a, b, std::pow(10.0, decade(rng))});
+  }
+  n.branches.push_back({n.branches[3].a, n.branches[3].b, 0.5});  // parallel to branch 3
+  n.branches.push_back({200, 201, 2.0});                          // a battery alone: open circuit
+  n.branches.push_back({202, 203, 1.0});  // a source in series with a resistor, looped
+  n.conductances.push_back({202, 203, 4.0});
+  return n;
+}
+
+TEST(MnaSolver, ReducedLdltAgreesWithDenseAndSparseLuOnRandomNetworks) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const Network n = random_network(seed);
+    MnaSolver dense(100000), lu(0, SparseMethod::Lu), ldlt(0, SparseMethod::Cholesky);
+    dense.factor(n), lu.factor(n), ldlt.factor(n);
+    ASSERT_FALSE(ldlt.dense(0));
+    std::vector<double> e(n.branches.size());
+    for (std::size_t k = 0; k < e.size(); ++k) e[k] = std::sin(double(k + seed)) * 10;
+    const Solution a = solve(dense, n, e), b = solve(lu, n, e), c = solve(ldlt, n, e);
+    double scale_v = 0, scale_i = 0;
+    for (double v : a.v) scale_v = std::max(scale_v, std::abs(v));
+    for (double i : a.i) scale_i = std::max(scale_i, std::abs(i));
+    ASSERT_GT(scale_i, 0.1);
+    for (std::size_t v = 0; v < a.v.size(); ++v) {
+      EXPECT_NEAR(c.v[v], a.v[v], 1e-9 * scale_v) << "seed " << seed << " node " << v;
+      EXPECT_NEAR(b.v[v], a.v[v], 1e-9 * scale_v) << "seed " << seed << " node " << v;
+    }
+    for (std::size_t k = 0; k < a.i.size(); ++k)
+      EXPECT_NEAR(c.i[k], a.i[k], 1e-9 * scale_i) << "seed " << seed << " branch " << k;
+    // The open battery: no current, its emf across it; the looped one: e / (z + R).
+    const std::size_t open = n.branches.size() - 2, looped = n.branches.size() - 1;
+    EXPECT_EQ(c.i[open], 0.0);
+    EXPECT_NEAR(c.v[201] - c.v[200], e[open], 1e-12);
+    EXPECT_NEAR(c.i[looped], e[looped] / (1.0 + 0.25), 1e-12);
+  }
+}
+
+TEST(MnaSolver, SymbolicAnalysisIsKeptWhileTheTopologyStays) {
+  Network n = random_network(11);
+  MnaSolver s(0);
+  s.factor(n);
+  const std::uint64_t analysed = s.symbolic_analyses(), factored = s.factorizations();
+  ASSERT_GT(analysed, 0u);
+  // New values on the same topology: numeric factorisation only, and the
+  // answer of a solver that starts afresh.
+  for (auto& g : n.conductances) g.g *= 1.5;
+  for (auto& b : n.branches) b.z *= 0.7;
+  s.factor(n);
+  EXPECT_EQ(s.symbolic_analyses(), analysed);
+  EXPECT_GT(s.factorizations(), factored);
+  MnaSolver fresh(0);
+  fresh.factor(n);
+  const std::vector<double> e(n.branches.size(), 3.0);
+  const Solution a = solve(s, n, e), b = solve(fresh, n, e);
+  for (std::size_t v = 0; v < a.v.size(); ++v) EXPECT_NEAR(a.v[v], b.v[v], 1e-12);
+  for (std::size_t k = 0; k < a.i.size(); ++k) EXPECT_NEAR(a.i[k], b.i[k], 1e-12);
+  // A changed topology (an element moved to other nodes) is analysed again.
+  n.conductances[5].b = (n.conductances[5].b + 3) % 200;
+  s.factor(n);
+  EXPECT_GT(s.symbolic_analyses(), analysed);
+  fresh.factor(n);
+  const Solution c = solve(s, n, e), d = solve(fresh, n, e);
+  for (std::size_t v = 0; v < c.v.size(); ++v) EXPECT_NEAR(c.v[v], d.v[v], 1e-12);
 }
 
 TEST(MnaSolver, ParallelElementsAndSelfLoopsAreStampedCorrectly) {
