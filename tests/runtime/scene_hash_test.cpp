@@ -349,6 +349,21 @@ TEST(SceneRestore, DoorbellRingsOnAcrossARestore) {
         << "sample " << i << " after the restore at step " << at.step;
 }
 
+// A delta taken right after a create() (the viewer adding a part) restores:
+// every column covers the new slot (create() grows the columns without
+// moving their change counters, so a shared one would be a slot short).
+TEST(SceneRestore, ADeltaAfterACreateRestores) {
+  Scene scene("doorbell");
+  World& w = scene.world();
+  w.run(5);
+  const Snapshot base = w.snapshot();
+  w.create("newcomer");
+  const Snapshot delta = w.snapshot(&base);
+  for (const Snapshot::Column& c : delta.columns)
+    EXPECT_EQ(c.values->presence().size(), delta.objects.generations.size()) << c.property;
+  EXPECT_NO_THROW(w.restore(delta));
+}
+
 // A sound resolver's saved state that does not add up is refused, naming it.
 TEST(SceneRestore, DamagedSoundStateIsRefused) {
   Scene scene("doorbell");

@@ -386,23 +386,5 @@ TEST(Snapshot, ADeltaSharesTheColumnsThatDidNotChange) {
   EXPECT_EQ(other.world->snapshot(&base).size(&base).shared_columns, 0u);
 }
 
-TEST(Snapshot, ADeltaTakenAfterACreateCoversTheNewSlot) {
-  // create() grows every column by a slot without moving its change
-  // counters: a column shared with the base would cover one slot too few.
-  Toy t;
-  World& w = *t.world;
-  w.run(2);
-  const Snapshot base = w.snapshot();
-  w.create("newcomer");
-  const Snapshot delta = w.snapshot(&base);
-  for (const Snapshot::Column& c : delta.columns)
-    EXPECT_EQ(c.values->presence().size(), delta.objects.generations.size()) << c.property;
-  EXPECT_NO_THROW(w.restore(delta));
-  // And it continues as the run that was not interrupted.
-  const HashRun expected = hashes(w, 5);
-  w.restore(delta);
-  EXPECT_SAME_RUN(hashes(w, 5), expected);
-}
-
 }  // namespace
 }  // namespace alloy
