@@ -999,7 +999,9 @@ Snapshot World::snapshot(const Snapshot* base) const {
                          c->membership_version()};
     if (const Snapshot::Column* b = delta ? base->column(name) : nullptr;
         b && b->kind == col.kind && b->version == col.version &&
-        b->membership_version == col.membership_version)
+        b->membership_version == col.membership_version &&
+        // create() grows a column by a slot without moving its counters
+        b->values->presence().size() == c->presence().size())
       col.values = b->values;  // unchanged since the base: shared
     else
       col.values = c->clone();
@@ -1021,6 +1023,19 @@ Snapshot World::snapshot(const Snapshot* base) const {
   for (const StateOwner& o : state_owners_)
     if (o.save) o.save(s);
   return s;
+}
+
+void World::sync() {
+  if (!started_) return;  // start() builds everything from the properties
+  synced_ = false;
+  sync_structure();
+  // Then build everything afresh, as a restore of this moment would: the
+  // snapshot taken now and the world that goes on are one and the same. The
+  // events not yet published (a swap's) and the last step's stay: restore
+  // drops them, as they belong to the run that took the snapshot.
+  std::vector<Event> pending = std::move(pending_), published = std::move(published_);
+  restore(snapshot());
+  pending_ = std::move(pending), published_ = std::move(published);
 }
 
 void World::restore(const Snapshot& s) {

@@ -237,6 +237,17 @@ class World {
   /// a damaged object table); and, after, if the stages it names are not the
   /// ones the restored world instantiates or one refuses its state.
   void restore(const Snapshot& snapshot);
+  /// Brings the stage set up to date after edits between steps (objects
+  /// created or destroyed, memberships changed, a swap, a freeze): the stages
+  /// the objects now need are instantiated, every stage is built afresh from
+  /// the properties and given its own state back, as restore() does. Changes
+  /// no property bit. Afterwards snapshot() comes back bit for bit (restoring
+  /// it gives the same later steps as going on), which it does not always do
+  /// right after an edit: the next step() would rebuild the resolvers in
+  /// place, and a rebuild in place is not neutral (a rigid body grown part by
+  /// part steps a few bits apart from one built at once). Does nothing before
+  /// the world has started. The viewer calls it after each edit it records.
+  void sync();
   /// What each active stage saves of itself (Stage::save_state), in run order.
   std::vector<Snapshot::StageState> stage_states() const;
   /// State outside the world that its snapshots carry (state_owner.hpp): the

@@ -7,25 +7,19 @@ const std::string kNothing;
 }
 
 void History::sync(World& world) {
-  // World has no public "sync the structure now"; plugin_changed does exactly
-  // that once it has removed the stages of the plugin named, and a name no
-  // plugin can have (plugin names never hold a space) removes nothing.
-  // (A World::sync() would say it better: see the report of issue 17.)
-  world.plugin_changed(" viewer: sync ");
-  // And the stages built afresh from the properties, as loading a saved file
+  // The stages built afresh from the properties, as loading a saved file
   // builds them: a rigid body grown part by part while the player builds
   // steps a few bits apart from one built at once, and the file the player
-  // saves must run as the board did.
-  world.restore(world.snapshot());
+  // saves must run as the board did. World::sync() does both: the stage set
+  // brought up to date, then every stage rebuilt as a restore would.
+  world.sync();
 }
 
 void History::record(World& world, std::string what) {
   sync(world);
   ++changes_;
-  // Whole snapshots, not deltas: a delta taken after an edit that added an
-  // object shares the base's untouched columns, which cover one slot too few,
-  // and World::restore refuses it ("its column 'acoustic' does not cover its
-  // 2 slots"). A kit board's snapshot is a few kilobytes.
+  // Whole snapshots, not deltas: a kit board's snapshot is a few kilobytes.
+  // (Deltas taken after a create() are restorable since session 13.)
   undo_.push_back({world.snapshot(), std::move(what)});
   if (undo_.size() > kDepth) undo_.pop_front();
   redo_.clear();

@@ -76,4 +76,33 @@ void ModalSynth::render(std::span<float> out) {
   std::erase_if(voices_, [](const Voice& v) { return v.size() == 0; });
 }
 
+std::vector<double> ModalSynth::voices_state() const {
+  std::vector<double> out;
+  for (const Voice& v : voices_) {
+    out.push_back(double(v.size()));
+    for (std::size_t k = 0; k < v.size(); ++k)
+      out.insert(out.end(), {v.re[k], v.im[k], v.cr[k], v.ci[k]});
+  }
+  return out;
+}
+
+bool ModalSynth::set_voices_state(const std::vector<double>& state) {
+  std::vector<Voice> voices;
+  for (std::size_t at = 0; at < state.size();) {
+    const double n = state[at++];
+    // A voice has at least one mode (empty ones are dropped as they fall
+    // silent) and its modes must be there.
+    if (!(n >= 1) || n != std::floor(n) || n > double(state.size() - at) / 4) return false;
+    Voice v;
+    for (std::size_t k = 0; k < std::size_t(n); ++k, at += 4) {
+      v.re.push_back(state[at]), v.im.push_back(state[at + 1]);
+      v.cr.push_back(state[at + 2]), v.ci.push_back(state[at + 3]);
+    }
+    voices.push_back(std::move(v));
+  }
+  if (voices.size() > settings_.max_voices) return false;
+  voices_ = std::move(voices);
+  return true;
+}
+
 }  // namespace alloy::sound

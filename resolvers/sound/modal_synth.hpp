@@ -51,6 +51,12 @@ class ModalSynth {
   void render(std::span<float> out);
 
   std::size_t voice_count() const { return voices_.size(); }
+  /// The voices in flight as numbers, for a snapshot: per voice its mode
+  /// count, then each mode's state (re, im) and rotation (cr, ci), exact bits.
+  std::vector<double> voices_state() const;
+  /// Puts back what voices_state() gave. Returns false (and changes nothing)
+  /// if the numbers do not describe voices (a damaged snapshot).
+  bool set_voices_state(const std::vector<double>& state);
   const Settings& settings() const { return settings_; }
 
  private:

@@ -214,6 +214,48 @@ std::vector<float> SoundResolver::take_samples() {
   return out;
 }
 
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+}
+
+bool SoundResolver::save_state(StateWriter& out) const {
+  // The voices ring on across the restore, and the clock keeps rounding the
+  // running total: a fresh clock would round each step's share anew and give
+  // a sample more or less here and there. The start time and the count keep
+  // samples_produced() and start_time() those of the uninterrupted run (the
+  // buffer itself is output, not state: after a restore it holds what was
+  // produced since). The strikes queued are not saved: a restore primes the
+  // interactions, which queue them again (sound_from_collisions does not
+  // save its pending impacts yet: docs/saves.md).
+  out.put(kStateVersion);
+  out.put(start_time_);
+  out.put(elapsed_);
+  out.put(produced_);
+  out.put_vector(synth_.voices_state());
+  return true;
+}
+
+void SoundResolver::restore_state(StateReader& in) {
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  const double start = in.get<double>(), elapsed = in.get<double>();
+  const auto produced = in.get<std::uint64_t>();
+  const std::vector<double> voices = in.get_vector<double>();
+  if (!std::isfinite(start) || !std::isfinite(elapsed) || elapsed < 0 ||
+      produced != std::uint64_t(std::llround(elapsed * settings_.sample_rate)))
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' has a sample clock that does not add up (" + std::to_string(produced) +
+                     " samples in " + std::to_string(elapsed) + " s)");
+  if (!synth_.set_voices_state(voices))
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' holds voices that are damaged or more than " +
+                     std::to_string(synth_.settings().max_voices) + " (its max_voices)");
+  start_time_ = start, elapsed_ = elapsed, produced_ = produced;
+}
+
 void register_sound_resolver(PluginRegistry& registry) {
   registry.add({
       .info = {.name = "sound",

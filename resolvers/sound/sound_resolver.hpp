@@ -75,6 +75,9 @@ class SoundResolver : public Resolver {
   // --- Resolver ---------------------------------------------------------------
   void build(ResolverAccess& access) override {}
   void advance(ResolverAccess& access, double dt) override;
+  /// Saves the voices in flight and the sample clock (docs/saves.md).
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   // --- for apps: what the run sounded like ------------------------------------
   /// Mono samples since the resolver started (or since the last take_samples),
