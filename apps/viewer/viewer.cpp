@@ -1526,7 +1526,7 @@ void Viewer::panel_help() {
       {"J", "glue tool: where two parts overlap or touch"},
       {"T", "string tool: a part, then another part or the board"},
       {"P", "pin the part under the mouse to the board"},
-      {"Delete", "remove the selected part, joint or wire"},
+      {"Delete", "remove the selected part or joint (a wire: with its part)"},
       {"Ctrl+Z / Ctrl+Y", "undo / redo"},
       {"Ctrl+N / O / S", "new board / open / save (Shift: save as)"},
       {"Ctrl+R", "reset to the file"},
