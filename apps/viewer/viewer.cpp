@@ -638,6 +638,7 @@ void Viewer::step_world() {
   contact_impulses_ = contacts ? contacts->demand_impulses() : rigid::ImpulseDemand{};
   try {
     w->step();
+    sample_plot();
     failing_steps_ = 0;
     step_error_.clear();
   } catch (const InputError& e) {
@@ -1016,6 +1017,18 @@ void Viewer::on_release(Vec2 at, Uint8 button) {
     const EditResult r = editor_.drop();
     if (!moved) history_.forget_last();
     note(r.message, !r.ok);
+    // A click on a switch that did not move it throws it, as a hand would:
+    // an edit of its own, so that Ctrl+Z closes it again.
+    World* w = world();
+    if (!moved && w && selected_ && w->store().alive(selected_))
+      if (const auto closed = w->value<bool>(selected_, "switch_closed")) {
+        const ObjectId sw = selected_;
+        const EditResult t = edit("switch " + w->describe(sw), [&] {
+          w->set(sw, "switch_closed", !*closed);
+          return EditResult{true, w->describe(sw) + (*closed ? " opened" : " closed")};
+        });
+        note(t.message, !t.ok);
+      }
   }
 }
 
@@ -1125,6 +1138,28 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
       break;
     case SDLK_ESCAPE:
       set_tool(Tool::Hand);
+      help_ = false;
+      break;
+    case SDLK_a:
+      // A meter probe on the part under the mouse (again: taken off). It
+      // reads what the part carries: current, and the voltage across it.
+      if (target && w && !ctrl) {
+        const auto it = std::find(probes_.begin(), probes_.end(), target);
+        if (it != probes_.end())
+          probes_.erase(it);
+        else if (w->value<double>(target, "current"))
+          probes_.push_back(target);
+        else
+          note(w->describe(target) + " carries no current: a meter probe reads nothing there",
+               true);
+      }
+      break;
+    case SDLK_F1:
+    case SDLK_QUESTION:
+      help_ = !help_;
+      break;
+    case SDLK_SLASH:  // '?' on a US keyboard
+      if (mod & KMOD_SHIFT) help_ = !help_;
       break;
     default:
       break;
@@ -1282,6 +1317,22 @@ void Viewer::draw(bool capture, Image* image) {
       dl->AddLine({s.x, s.y}, {mouse_x_, mouse_y_}, colour::kWireIdle, 2.5f);
     }
     draw_tool_feedback(dl, *w);
+    draw_scale_bar(dl);
+    // Meter probes: a reading in a box beside each probed part.
+    const std::vector<std::string> readings = probe_readings();
+    for (std::size_t k = 0; k < probes_.size(); ++k) {
+      const auto p = read_part(*w, probes_[k]);
+      if (!p) continue;
+      const ScreenPoint s = camera_.to_screen(p->centre);
+      const ImVec2 at{s.x + 12, s.y - 34};
+      const ImVec2 ts = ImGui::CalcTextSize(readings[k].c_str());
+      dl->AddRectFilled({at.x - 3, at.y - 2}, {at.x + ts.x + 3, at.y + ts.y + 2},
+                        colour::rgb(255, 255, 235), 3);
+      dl->AddRect({at.x - 3, at.y - 2}, {at.x + ts.x + 3, at.y + ts.y + 2}, colour::rgb(40, 40, 40),
+                  3);
+      dl->AddLine({s.x, s.y}, {at.x - 3, at.y + ts.y + 2}, colour::rgb(40, 40, 40), 1);
+      dl->AddText(at, colour::rgb(20, 20, 20), readings[k].c_str());
+    }
     if (tool_ == Tool::Place && placing_ >= 0 && mouse_x_ >= 0 && !over_panel(mouse_x_, mouse_y_)) {
       const char* label = palette_entries()[std::size_t(placing_)].label.c_str();
       dl->AddCircle({mouse_x_, mouse_y_}, 10, colour::kSelected, 20, 2);
@@ -1293,6 +1344,8 @@ void Viewer::draw(bool capture, Image* image) {
 
   next_panels_.clear();
   if (opt_.panels) draw_panels();
+  if (help_) panel_help();
+  panel_plot();
   panel_error();
   file_popups();
   panel_messages();
@@ -1360,6 +1413,147 @@ void Viewer::draw_tool_feedback(ImDrawList* dl, World& w) {
   }
 }
 
+bool Viewer::plot(ObjectId part, const std::string& property, double seconds) {
+  World* w = world();
+  if (!w || !part || !w->store().alive(part) || !w->value<double>(part, property) || seconds <= 0)
+    return false;
+  plot_part_ = part;
+  plot_property_ = property;
+  plot_seconds_ = seconds;
+  plot_samples_.clear();
+  return true;
+}
+
+void Viewer::sample_plot() {
+  World* w = world();
+  if (!plot_part_ || !w) return;
+  if (!w->store().alive(plot_part_)) {
+    plot_part_ = {};
+    return;
+  }
+  plot_samples_.push_back(float(w->value<double>(plot_part_, plot_property_).value_or(0)));
+  const std::size_t keep = std::max<std::size_t>(2, std::size_t(plot_seconds_ / w->dt() + 0.5));
+  if (plot_samples_.size() > keep)
+    plot_samples_.erase(plot_samples_.begin(),
+                        plot_samples_.begin() + std::ptrdiff_t(plot_samples_.size() - keep));
+}
+
+void Viewer::panel_plot() {
+  World* w = world();
+  if (!plot_part_ || !w || !w->store().alive(plot_part_)) return;
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos({size.x / 2, size.y - 10}, ImGuiCond_Always, {0.5f, 1});
+  ImGui::SetNextWindowSize({420, 0});
+  bool open = true;
+  const std::string title = "Plot: " + w->describe(plot_part_) + " " + plot_property_ + "###plot";
+  ImGui::Begin(title.c_str(), &open, ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoResize);
+  remember_panel();
+  float lo = 0, hi = 0;
+  for (const float v : plot_samples_) lo = std::min(lo, v), hi = std::max(hi, v);
+  const std::string now =
+      plot_samples_.empty() ? "" : std::to_string(plot_samples_.back()).substr(0, 10);
+  ImGui::Text("last %.1f s: %.4g .. %.4g", plot_seconds_, double(lo), double(hi));
+  ImGui::PlotLines("##values", plot_samples_.data(), int(plot_samples_.size()), 0, now.c_str(), lo,
+                   hi > lo ? hi : lo + 1, {400, 90});
+  ImGui::End();
+  if (!open) plot_part_ = {};
+}
+
+std::vector<std::string> Viewer::probe_readings() {
+  std::vector<std::string> out;
+  World* w = world();
+  if (!w) return out;
+  std::erase_if(probes_, [&](ObjectId id) { return !w->store().alive(id); });
+  for (const ObjectId id : probes_) {
+    char buf[160];
+    const double i = w->value<double>(id, "current").value_or(0);
+    // A battery's voltage is its emf less what its own resistance takes; a
+    // resistive part's is I R (Ohm's law, as the electricity resolver solves it).
+    std::optional<double> v;
+    if (const auto emf = w->value<double>(id, "emf"))
+      v = *emf - std::abs(i) * w->value<double>(id, "internal_resistance").value_or(0);
+    else if (const auto r = w->value<double>(id, "resistance"))
+      v = std::abs(i) * *r;
+    if (v)
+      std::snprintf(buf, sizeof buf, "%s: %.4g A, %.4g V", w->describe(id).c_str(), std::abs(i),
+                    *v);
+    else
+      std::snprintf(buf, sizeof buf, "%s: %.4g A", w->describe(id).c_str(), std::abs(i));
+    out.push_back(buf);
+  }
+  return out;
+}
+
+void Viewer::draw_scale_bar(ImDrawList* dl) {
+  // The longest of 1, 2 or 5 times a power of ten that fits in 120 pixels:
+  // a length a reader can take in at a glance.
+  const double most = 120 / camera_.scale;
+  double len = std::pow(10.0, std::floor(std::log10(most)));
+  if (5 * len <= most)
+    len *= 5;
+  else if (2 * len <= most)
+    len *= 2;
+  const float px = float(len * camera_.scale);
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  const float x0 = size.x - px - 24, y = size.y - 20;
+  dl->AddLine({x0, y}, {x0 + px, y}, colour::kLabel, 2);
+  dl->AddLine({x0, y - 5}, {x0, y + 5}, colour::kLabel, 2);
+  dl->AddLine({x0 + px, y - 5}, {x0 + px, y + 5}, colour::kLabel, 2);
+  char label[32];
+  if (len >= 1)
+    std::snprintf(label, sizeof label, "%g m", len);
+  else if (len >= 0.01)
+    std::snprintf(label, sizeof label, "%g cm", len * 100);
+  else
+    std::snprintf(label, sizeof label, "%g mm", len * 1000);
+  dl->AddText({x0 + px / 2 - 12, y - 18}, colour::kLabel, label);
+}
+
+void Viewer::panel_help() {
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos({size.x / 2, size.y / 2}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowBgAlpha(0.95f);
+  ImGui::Begin("Help (F1 or ? to close)", &help_,
+               ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_AlwaysAutoResize);
+  remember_panel();
+  static const char* const rows[][2] = {
+      {"Space", "run / pause"},
+      {"N or .", "one step"},
+      {"drag a part", "move it (Q / E or the wheel turn it)"},
+      {"click a switch", "open or close it"},
+      {"W", "wire tool: a part's end, then another part's end"},
+      {"H", "hinge tool: where two parts overlap"},
+      {"J", "glue tool: where two parts overlap or touch"},
+      {"T", "string tool: a part, then another part or the board"},
+      {"P", "pin the part under the mouse to the board"},
+      {"Delete", "remove the selected part or joint (a wire: with its part)"},
+      {"Ctrl+Z / Ctrl+Y", "undo / redo"},
+      {"Ctrl+N / O / S", "new board / open / save (Shift: save as)"},
+      {"Ctrl+R", "reset to the file"},
+      {"+ / - or the wheel", "zoom"},
+      {"A", "a meter probe on the part under the mouse (again: off)"},
+      {"F1 or ?", "this help"},
+      {"L", "labels on / off"},
+      {"G", "force arrows on / off"},
+      {"M", "sound on / off"},
+      {"F", "fit the view to the scene"},
+      {"middle drag, drag the board", "pan"},
+      {"right click", "a part's menu"},
+      {"Escape", "back to the hand; closes this help"},
+  };
+  if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_RowBg)) {
+    for (const auto& r : rows) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextColored(ImVec4(0.1f, 0.3f, 0.7f, 1), "%s", r[0]);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r[1]);
+    }
+    ImGui::EndTable();
+  }
+  ImGui::End();
+}
+
 void Viewer::draw_panels() {
   panel_toolbar();
   panel_palette();
@@ -1377,6 +1571,9 @@ void Viewer::panel_toolbar() {
   if (scene_) {
     ImGui::TextColored(ImVec4(0.25f, 0.1f, 0.5f, 1), "%s", scene_->name.c_str());
     if (w) ImGui::Text("t = %.3f s   step %llu", w->time(), (unsigned long long)w->step_count());
+    // Frames drawn per second, as ImGui averages them (headless: the fixed
+    // frame time the tests use).
+    ImGui::TextDisabled("%.0f fps", double(ImGui::GetIO().Framerate));
   } else {
     ImGui::TextColored(ImVec4(0.8f, 0.1f, 0.1f, 1), "scene not loaded");
   }
@@ -1629,6 +1826,25 @@ void Viewer::panel_inspector() {
     bool pinned = part->pinned;
     if (ImGui::Checkbox("pinned to the board (P)", &pinned))
       note(edit("pin " + w->describe(id), [&] { return editor_.set_pinned(id, pinned); }).message);
+  }
+  {
+    // A plot of any number this part has: pick it, then "plot".
+    static int pick = 0;
+    std::vector<std::string> numbers;
+    for (PropertyId p = 0; p < w->properties().size(); ++p)
+      if (w->store().has(id, p) && std::holds_alternative<double>(w->store().get(id, p)))
+        numbers.push_back(w->properties().def(p).name);
+    if (!numbers.empty()) {
+      pick = std::clamp(pick, 0, int(numbers.size()) - 1);
+      ImGui::SetNextItemWidth(150);
+      if (ImGui::BeginCombo("##plotprop", numbers[std::size_t(pick)].c_str())) {
+        for (int k = 0; k < int(numbers.size()); ++k)
+          if (ImGui::Selectable(numbers[std::size_t(k)].c_str(), k == pick)) pick = k;
+        ImGui::EndCombo();
+      }
+      ImGui::SameLine();
+      if (ImGui::Button("plot")) plot(id, numbers[std::size_t(pick)]);
+    }
   }
   if (part) {
     if (ImGui::Button("turn +15"))

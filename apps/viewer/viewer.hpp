@@ -91,6 +91,17 @@ class Viewer {
 
   bool paused() const { return paused_; }
   void set_paused(bool p) { paused_ = p; }
+  /// The help overlay (F1 or ?): the tools and keys, over the board.
+  bool help_shown() const { return help_; }
+  /// Meter probes (key A on a part): each draws its live reading beside its
+  /// part. The readings as drawn, one per probe ("battery: 0.487 A").
+  std::vector<std::string> probe_readings();
+  const std::vector<ObjectId>& probes() const { return probes_; }
+  /// Plots a number property of a part over time: one sample after each
+  /// step, the last `seconds` of them kept. False if the part has no such
+  /// number. plot_samples() are the samples, oldest first.
+  bool plot(ObjectId part, const std::string& property, double seconds = 5);
+  const std::vector<float>& plot_samples() const { return plot_samples_; }
   void step_once() { single_steps_ += 1; }
   void set_time_scale(double s);
   double time_scale() const { return time_scale_; }
@@ -151,6 +162,8 @@ class Viewer {
   void poll_mods();
   void draw(bool capture, Image* image);
   void draw_panels();
+  void panel_help();
+  void draw_scale_bar(ImDrawList* dl);
   void panel_toolbar();
   void panel_palette();
   void panel_inspector();
@@ -181,6 +194,14 @@ class Viewer {
   bool fitted_ = false;
   AudioOut audio_;
   bool muted_ = false;
+  std::vector<ObjectId> probes_;
+  ObjectId plot_part_;               ///< the part plotted (none: no plot)
+  std::string plot_property_;        ///< the number property plotted
+  double plot_seconds_ = 5;          ///< the rolling window, s
+  std::vector<float> plot_samples_;  ///< one per step, oldest first
+  void sample_plot();
+  void panel_plot();   ///< parts with a meter probe on them (key A)
+  bool help_ = false;  ///< the help overlay is open (F1 or ?)
   bool audio_failed_ = false;
 
   // Running.

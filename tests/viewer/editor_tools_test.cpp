@@ -390,3 +390,146 @@ TEST(ViewerEditor, SaveOfAnUntitledBoardAsksForANameAndOpenLoadsIt) {
 
 }  // namespace
 }  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// The circuit of docs/kit.md, built by tests/viewer/scripts/circuit.script
+/// from palette parts alone: a battery, a switch and a lamp in one loop.
+std::unique_ptr<Viewer> palette_circuit() {
+  auto v = std::make_unique<Viewer>(test::headless(""));
+  const std::string script = read_text(test::source("tests/viewer/scripts/circuit.script"));
+  EXPECT_FALSE(script.empty());
+  v->add_script(parse_script(script, "circuit.script"));
+  for (int i = 0; i < 31; ++i) v->frame();
+  return v;
+}
+
+TEST(ViewerCircuit, APaletteLampOnAPaletteBatteryLightsAndAClickOnTheSwitchPutsItOut) {
+  auto v = palette_circuit();
+  World& w = *v->world();
+  const ObjectId lamp = w.find("lamp"), sw = w.find("switch"), bat = w.find("battery");
+  ASSERT_TRUE(lamp && sw && bat) << all_messages(*v);
+  for (int i = 0; i < 20; ++i) v->step_once();
+  v->frame();
+  // 6 V over the 12 ohm filament (wires, switch and the battery's own
+  // resistance take a little): about 0.5 A and 3 W, a few tens of lumens.
+  const double i_lamp = std::abs(w.value<double>(lamp, "current").value_or(0));
+  EXPECT_GT(i_lamp, 0.4) << all_messages(*v);
+  EXPECT_LT(i_lamp, 0.51);
+  EXPECT_GT(w.value<double>(lamp, "luminous_flux").value_or(0), 10.0);
+  // A click (press and release without moving) on the switch opens it.
+  const Vec2 at = test::position_of(w, "switch");
+  std::ostringstream s;
+  s << "1 press " << at.x << " " << at.y << "\n2 release " << at.x << " " << at.y << "\n";
+  v->add_script(parse_script(s.str(), "click"));
+  for (int i = 0; i < 4; ++i) v->frame();
+  EXPECT_FALSE(w.value<bool>(sw, "switch_closed").value_or(true)) << all_messages(*v);
+  for (int i = 0; i < 20; ++i) v->step_once();
+  EXPECT_LT(std::abs(w.value<double>(lamp, "current").value_or(1)), 1e-6);
+  EXPECT_LT(w.value<double>(lamp, "luminous_flux").value_or(1), 1e-3);
+  // The click is an edit: undone, the switch is closed again.
+  EXPECT_EQ(v->history().undo_what(), "switch switch");
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(ViewerHelp, F1AndQuestionMarkToggleTheHelpOverlayAndEscapeClosesIt) {
+  auto v = new_board();
+  EXPECT_FALSE(v->help_shown());
+  key(*v, SDLK_F1);
+  EXPECT_TRUE(v->help_shown());
+  key(*v, SDLK_F1);
+  EXPECT_FALSE(v->help_shown());
+  key(*v, SDLK_SLASH, KMOD_LSHIFT);  // '?'
+  EXPECT_TRUE(v->help_shown());
+  key(*v, SDLK_SLASH);  // '/' alone is not '?'
+  EXPECT_TRUE(v->help_shown());
+  key(*v, SDLK_ESCAPE);
+  EXPECT_FALSE(v->help_shown());
+  // Drawn, it is a panel: a click on it does not reach the board.
+  key(*v, SDLK_F1);
+  v->frame();  // an auto-sized window takes its size in its second frame
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  EXPECT_TRUE(v->over_panel(size.x / 2, size.y / 2));
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(ViewerCircuit, AMeterProbeOnThePaletteBatteryReadsVOverRWithinOnePercent) {
+  auto v = palette_circuit();
+  World& w = *v->world();
+  for (int i = 0; i < 20; ++i) v->step_once();
+  // A on the battery under the mouse puts a probe on it.
+  v->push_mouse(SDL_MOUSEMOTION, test::position_of(w, "battery"));
+  key(*v, SDLK_a);
+  ASSERT_EQ(v->probes().size(), 1u) << all_messages(*v);
+  const std::vector<std::string> r = v->probe_readings();
+  ASSERT_EQ(r.size(), 1u);
+  double amps = 0, volts = 0;
+  ASSERT_EQ(std::sscanf(r[0].c_str(), "battery: %lf A, %lf V", &amps, &volts), 2) << r[0];
+  // V / R over the loop: the emf over the battery's own resistance, the
+  // switch, the lamp and the three wires, in series.
+  double ohms = w.value<double>(w.find("battery"), "internal_resistance").value_or(0);
+  for (const char* n : {"switch", "lamp", "wire", "wire_2", "wire_3"}) {
+    ASSERT_TRUE(bool(w.find(n))) << n;
+    ohms += w.value<double>(w.find(n), "resistance").value_or(0);
+  }
+  const double emf = w.value<double>(w.find("battery"), "emf").value_or(0);
+  EXPECT_NEAR(amps, emf / ohms, 0.01 * emf / ohms) << r[0];
+  // Its terminal voltage: the emf less what its own resistance takes.
+  const double r_in = w.value<double>(w.find("battery"), "internal_resistance").value_or(0);
+  EXPECT_NEAR(volts, emf - amps * r_in, 0.01 * emf) << r[0];
+  // A again takes it off; a part with no current takes none.
+  key(*v, SDLK_a);
+  EXPECT_TRUE(v->probes().empty());
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+namespace alloy::viewer {
+namespace {
+
+TEST(ViewerPlot, APlotKeepsTheLastSecondsOfAPropertyOneSampleAStepEqualToItsValues) {
+  auto v = palette_circuit();
+  v->set_paused(true);
+  World& w = *v->world();
+  const ObjectId lamp = w.find("lamp");
+  EXPECT_FALSE(v->plot(lamp, "no_such_number"));
+  EXPECT_FALSE(v->plot(lamp, "name"));  // not a number
+  const double window = 0.05;
+  const std::size_t n = std::size_t(std::lround(window / w.dt()));
+  ASSERT_TRUE(v->plot(lamp, "current", window));
+  std::vector<float> seen;
+  for (int i = 0; i < int(n) + 15; ++i) {
+    if (i == int(n) + 5) w.set(w.find("switch"), "switch_closed", false);  // the values change
+    v->step_once();
+    v->frame();
+    seen.push_back(float(w.value<double>(lamp, "current").value_or(0)));
+  }
+  const std::vector<float>& got = v->plot_samples();
+  ASSERT_EQ(got.size(), n);
+  const std::vector<float> last(seen.end() - std::ptrdiff_t(n), seen.end());
+  EXPECT_EQ(got, last);
+  EXPECT_GT(std::abs(got.front()), 0.4f);  // the window holds the lit lamp and the dark one
+  EXPECT_EQ(got.back(), 0.0f);
+}
+
+}  // namespace
+}  // namespace alloy::viewer
