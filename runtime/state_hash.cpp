@@ -154,6 +154,16 @@ StateHash hash_state(const Snapshot& s) {
   }
   h.stages = digest(b);
 
+  // The mods' state tables: a desync in a mod's state alone is a desync.
+  for (const auto& m : s.mod_states) {
+    b.clear();
+    put_string(b, m.mod);
+    put_string(b, m.version);
+    put(b, std::uint64_t(m.bytes.size()));
+    b.append(reinterpret_cast<const char*>(m.bytes.data()), m.bytes.size());
+    h.mod_states.emplace_back(m.mod, digest(b));
+  }
+
   b.clear();
   b += "alloy-state-1";
   put(b, h.objects);
@@ -163,6 +173,16 @@ StateHash hash_state(const Snapshot& s) {
   for (const auto& [name, hash] : h.columns) {
     put_string(b, name);
     put(b, hash);
+  }
+  // Only when a mod saved a state, so that a world without mod state keeps
+  // the hash it had before mod states were hashed.
+  if (!h.mod_states.empty()) {
+    b += "mods";
+    put(b, std::uint64_t(h.mod_states.size()));
+    for (const auto& [mod, hash] : h.mod_states) {
+      put_string(b, mod);
+      put(b, hash);
+    }
   }
   h.world = digest(b);
   return h;
@@ -222,6 +242,18 @@ std::vector<std::string> hash_differences(const StateHash& a, const StateHash& b
         out.push_back("state of stage '" + stage + "' only in the second"), named = true;
     if (!named) out.push_back("stages (stage set, areas, frozen objects)");
   }
+  for (const auto& [mod, hash] : a.mod_states) {
+    auto it = std::find_if(b.mod_states.begin(), b.mod_states.end(),
+                           [&](const auto& x) { return x.first == mod; });
+    if (it == b.mod_states.end())
+      out.push_back("state of mod '" + mod + "' only in the first");
+    else if (it->second != hash)
+      out.push_back("state of mod '" + mod + "'");
+  }
+  for (const auto& [mod, hash] : b.mod_states)
+    if (std::none_of(a.mod_states.begin(), a.mod_states.end(),
+                     [&](const auto& x) { return x.first == mod; }))
+      out.push_back("state of mod '" + mod + "' only in the second");
   if (out.empty()) out.push_back("world (the combined hash only)");
   return out;
 }

@@ -27,13 +27,19 @@
 //             `use` map in key order; the frozen object ids; the area of
 //             each slot (i32); the stage states: count, then each one's
 //             stage name and bytes (u64 length, bytes).
+//   mod       per mod state of the snapshot (Snapshot::mod_states, in its
+//             order): the mod's name, its version, the state's byte count
+//             (u64) and bytes (lua/state_codec's encoding).
 //   world     the tag "alloy-state-1", the objects, schedule and stages
 //             hashes (u64 each), then the number of hashed columns (u64) and
-//             for each, in property-name order (byte-wise), its name and hash.
+//             for each, in property-name order (byte-wise), its name and hash;
+//             then, only if at least one mod saved a state, the tag "mods",
+//             the number of mod states (u64) and for each its name and hash
+//             (so a world without mod state hashes as it did before).
 //
 // Not hashed: events already published, observers, profile timings, column
 // change counters, the registry's definitions (units, docs, bounds), plugin
-// settings and the mods' Lua state (not in a snapshot yet, docs/saves.md).
+// settings and whatever of a mod's Lua state is outside its `state` table.
 #pragma once
 
 #include <cstdint>
@@ -57,6 +63,8 @@ struct StateHash {
   std::vector<std::pair<std::string, std::uint64_t>> columns;
   /// Per stage that saved a state, in run order (also inside `stages`).
   std::vector<std::pair<std::string, std::uint64_t>> stage_states;
+  /// Per mod that saved a state, in the snapshot's order (also inside `world`).
+  std::vector<std::pair<std::string, std::uint64_t>> mod_states;
 };
 
 StateHash hash_state(const Snapshot& snapshot);
@@ -68,8 +76,8 @@ StateHash hash_state(const World& world);
 std::uint64_t hash_object(const World& world, ObjectId id);
 /// What differs between two hashes, one line each: "column 'position'",
 /// "objects (ids, generations, names, free list)", "schedule (step, time,
-/// pending inputs)", "stages (...)", "state of stage 'x'", "column 'y' only
-/// in the first". Empty if the world hashes are equal.
+/// pending inputs)", "stages (...)", "state of stage 'x'", "state of mod 'm'",
+/// "column 'y' only in the first". Empty if the world hashes are equal.
 std::vector<std::string> hash_differences(const StateHash& a, const StateHash& b);
 /// 16 lower-case hex digits.
 std::string hex(std::uint64_t hash);

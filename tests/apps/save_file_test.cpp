@@ -168,14 +168,12 @@ TEST(SaveFile, DoorbellFullSaveIsUnder50KBAndCompressed) {
   EXPECT_LT(bytes.size(), c.body.size());
 }
 
-// Restore is exact today only for scenes whose stages keep all their state in
-// properties (docs/saves.md, "Which scenes come back bit for bit"): the rigid
-// body's contacts, electricity's coil currents and sound's voices are being
-// saved on another branch. Enable these once SceneRestore.* passes for them.
-TEST(SaveFile, DISABLED_DoorbellContinuesBitForBit_NeedsExactRestoreOfResolvers) {
+// The doorbell and the motor through a file: the rigid body's contacts and
+// the coil currents travel in SSTA, the restore's resync flag in STEP.
+TEST(SaveFile, DoorbellContinuesBitForBit) {
   expect_continue_identical("doorbell", 120, 300);
 }
-TEST(SaveFile, DISABLED_MotorContinuesBitForBit_NeedsExactRestoreOfResolvers) {
+TEST(SaveFile, MotorContinuesBitForBit) {
   expect_continue_identical("motor", 120, 300);
 }
 
@@ -359,7 +357,7 @@ TEST(HostileSave, TruncatedAtEachSection) {
   Valid v;
   const SaveContainer c = unpack_save(v.bytes, "test");
   const auto body = sections(c.body);
-  ASSERT_EQ(body.size(), 10u);  // STEP OBJS COLS FRZN AREA STGS SSTA INPT SWAP END
+  ASSERT_EQ(body.size(), 11u);  // STEP OBJS COLS FRZN AREA STGS SSTA MSTA INPT SWAP END
   // The file cut short anywhere: the header's sizes say so.
   for (std::size_t cut : {std::size_t(47), std::size_t(48 + 10), v.bytes.size() - 9}) {
     try {
