@@ -523,7 +523,7 @@ const SectionCodec kSnapshotSections[] = {
          st.stage = in.str();
          const std::string b = in.str();
          st.bytes.resize(b.size());
-         std::memcpy(st.bytes.data(), b.data(), b.size());
+         if (!b.empty()) std::memcpy(st.bytes.data(), b.data(), b.size());
        }
      }},
     {"MSTA",
@@ -545,7 +545,7 @@ const SectionCodec kSnapshotSections[] = {
          m.version = in.str();
          const std::string b = in.str();
          m.bytes.resize(b.size());
-         std::memcpy(m.bytes.data(), b.data(), b.size());
+         if (!b.empty()) std::memcpy(m.bytes.data(), b.data(), b.size());
        }
      }},
     {"INPT",

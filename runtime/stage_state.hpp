@@ -80,7 +80,9 @@ class StateReader {
     if (n > (bytes_.size() - at_) / sizeof(T))
       fail("a count of " + std::to_string(n) + " is past the end");
     std::vector<T> v(static_cast<std::size_t>(n));
-    std::memcpy(v.data(), bytes_.data() + at_, std::size_t(n) * sizeof(T));
+    // An empty vector's data() may be null, and memcpy from or to null is
+    // undefined even for 0 bytes (UBSan reports it).
+    if (n > 0) std::memcpy(v.data(), bytes_.data() + at_, std::size_t(n) * sizeof(T));
     at_ += std::size_t(n) * sizeof(T);
     return v;
   }
