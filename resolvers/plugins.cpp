@@ -22,7 +22,8 @@ std::vector<PropertyDef> concat(std::initializer_list<std::vector<PropertyDef>> 
   for (const auto& l : lists) out.insert(out.end(), l.begin(), l.end());
   return out;
 }
-std::vector<PropertyDef> pick(const std::vector<PropertyDef>& defs, std::initializer_list<const char*> names) {
+std::vector<PropertyDef> pick(const std::vector<PropertyDef>& defs,
+                              std::initializer_list<const char*> names) {
   std::vector<PropertyDef> out;
   for (const char* n : names)
     for (const auto& d : defs)
@@ -37,10 +38,11 @@ PluginDef rigid_body_plugin() {
   PluginDef def;
   def.info = {.name = "rigid_body",
               .kind = StageKind::Resolver,
-              .reads = {"shape", "size", "radius", "length", "density", "static", "pinned", "planar",
-                        "linear_damping", "angular_damping", "joint", "body_a", "body_b",
+              .reads = {"shape", "size", "radius", "length", "density", "static", "pinned",
+                        "planar", "linear_damping", "angular_damping", "joint", "body_a", "body_b",
                         "joint_friction", "limit_low", "limit_high"},
-              .writes = {"position", "orientation", "velocity", "angular_velocity", "mass", "anchor", "axis"},
+              .writes = {"position", "orientation", "velocity", "angular_velocity", "mass",
+                         "anchor", "axis"},
               .needs = {"mass", "density"},
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
   def.properties = concat({body_properties(), joint_properties()});
@@ -55,8 +57,8 @@ PluginDef collisions_plugin() {
   PluginDef def;
   def.info = {.name = "collisions",
               .kind = StageKind::Derived,
-              .reads = {"position", "orientation", "velocity", "angular_velocity", "shape", "size", "radius",
-                        "length", "static", "joint", "body_a", "body_b"},
+              .reads = {"position", "orientation", "velocity", "angular_velocity", "shape", "size",
+                        "radius", "length", "static", "joint", "body_a", "body_b"},
               .resolvers = {"rigid_body"},
               .doc = "contact pairs that began, continue and ended, with points and impulses"};
   def.properties = concat({body_properties(), joint_properties()});
@@ -73,20 +75,22 @@ PluginDef collisions_plugin() {
 
 PluginDef rigid_body_from_collisions_plugin() {
   PluginDef def;
-  def.info = {.name = "rigid_body_from_collisions",
-              .kind = StageKind::Interaction,
-              .reads = {"friction", "restitution"},
-              .derived = {"collisions"},
-              .target = "rigid_body",
-              .doc = "contact joints for touching pairs (friction sqrt(mu_a mu_b), restitution max)"};
+  def.info = {
+      .name = "rigid_body_from_collisions",
+      .kind = StageKind::Interaction,
+      .reads = {"friction", "restitution"},
+      .derived = {"collisions"},
+      .target = "rigid_body",
+      .doc = "contact joints for touching pairs (friction sqrt(mu_a mu_b), restitution max)"};
   def.properties = material_properties();
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     ctx.settings().check_known("rigid_body_from_collisions", {"bounce_velocity"});
     const double bounce = ctx.settings().number("bounce_velocity", 0.1);
     if (!(bounce >= 0))
-      throw InputError(ctx.settings().where, "rigid_body_from_collisions: bounce_velocity must be >= 0");
-    return std::make_unique<RigidBodyFromCollisions>(ctx.target<RigidBodyResolver>(),
-                                                     ctx.dependency<CollisionSet>("collisions"), bounce);
+      throw InputError(ctx.settings().where,
+                       "rigid_body_from_collisions: bounce_velocity must be >= 0");
+    return std::make_unique<RigidBodyFromCollisions>(
+        ctx.target<RigidBodyResolver>(), ctx.dependency<CollisionSet>("collisions"), bounce);
   };
   return def;
 }
@@ -119,7 +123,8 @@ PluginDef uniform_gravity_plugin() {
               .needs = {"mass", "density"},
               .provides = "gravity",
               .doc = "uniform gravitational acceleration g (setting g, default {0,-9.81,0})"};
-  def.properties = concat({{gravity_property()}, pick(rigid::body_properties(), {"mass", "density", "static"})});
+  def.properties =
+      concat({{gravity_property()}, pick(rigid::body_properties(), {"mass", "density", "static"})});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     ctx.settings().check_known("gravity.uniform", {"g"});
     const Vec3 g = ctx.settings().vec3("g", {0, -9.81, 0});
@@ -137,10 +142,13 @@ PluginDef nbody_gravity_plugin() {
               .writes = {"gravity"},
               .needs = {"mass", "density"},
               .provides = "gravity",
-              .doc = "Newtonian gravity of every mass on the bodies in scope (settings G, default SI; softening, m; "
-                     "sources = \"world\" or \"area\")"};
+              .doc =
+                  "Newtonian gravity of every mass on the bodies in scope (settings G, default SI; "
+                  "softening, m; "
+                  "sources = \"world\" or \"area\")"};
   def.properties =
-      concat({{gravity_property()}, pick(rigid::body_properties(), {"position", "mass", "density", "static"})});
+      concat({{gravity_property()},
+              pick(rigid::body_properties(), {"position", "mass", "density", "static"})});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     const PluginSettings& s = ctx.settings();
     s.check_known("gravity.nbody", {"G", "softening", "sources"});
@@ -148,9 +156,12 @@ PluginDef nbody_gravity_plugin() {
     const double eps = s.number("softening", 0.0);
     const std::string sources = s.string("sources", "world");
     if (sources != "world" && sources != "area")
-      throw InputError(s.where, "gravity.nbody: sources must be \"world\" (every mass attracts) or \"area\" "
-                                "(only the masses in the area), got \"" + sources + "\"");
-    if (!(G >= 0) || !std::isfinite(G)) throw InputError(s.where, "gravity.nbody: G must be a finite number >= 0");
+      throw InputError(s.where,
+                       "gravity.nbody: sources must be \"world\" (every mass attracts) or \"area\" "
+                       "(only the masses in the area), got \"" +
+                           sources + "\"");
+    if (!(G >= 0) || !std::isfinite(G))
+      throw InputError(s.where, "gravity.nbody: G must be a finite number >= 0");
     if (!(eps >= 0) || !std::isfinite(eps))
       throw InputError(s.where, "gravity.nbody: softening must be a finite number of metres >= 0");
     return std::make_unique<NBodyGravity>(G, eps, sources == "area");

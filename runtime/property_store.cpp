@@ -11,21 +11,30 @@ namespace {
 template <class Fn>
 decltype(auto) dispatch(PropertyKind kind, Fn&& fn) {
   switch (kind) {
-    case PropertyKind::Number: return fn(std::type_identity<double>{});
-    case PropertyKind::Integer: return fn(std::type_identity<std::int64_t>{});
-    case PropertyKind::Bool: return fn(std::type_identity<std::uint8_t>{});
-    case PropertyKind::Vec3: return fn(std::type_identity<Vec3>{});
-    case PropertyKind::Quat: return fn(std::type_identity<Quat>{});
-    case PropertyKind::String: return fn(std::type_identity<std::string>{});
-    case PropertyKind::Ref: return fn(std::type_identity<ObjectId>{});
-    case PropertyKind::RefList: return fn(std::type_identity<RefList>{});
-    case PropertyKind::Enum: return fn(std::type_identity<EnumValue>{});
+    case PropertyKind::Number:
+      return fn(std::type_identity<double>{});
+    case PropertyKind::Integer:
+      return fn(std::type_identity<std::int64_t>{});
+    case PropertyKind::Bool:
+      return fn(std::type_identity<std::uint8_t>{});
+    case PropertyKind::Vec3:
+      return fn(std::type_identity<Vec3>{});
+    case PropertyKind::Quat:
+      return fn(std::type_identity<Quat>{});
+    case PropertyKind::String:
+      return fn(std::type_identity<std::string>{});
+    case PropertyKind::Ref:
+      return fn(std::type_identity<ObjectId>{});
+    case PropertyKind::RefList:
+      return fn(std::type_identity<RefList>{});
+    case PropertyKind::Enum:
+      return fn(std::type_identity<EnumValue>{});
   }
   return fn(std::type_identity<double>{});
 }
 
 std::string value_kind_name(const PropertyValue& v) {
-  static constexpr const char* names[] = {"number", "integer", "bool", "vec3", "quat",
+  static constexpr const char* names[] = {"number", "integer", "bool",    "vec3", "quat",
                                           "string", "ref",     "reflist", "enum"};
   return names[v.index()];
 }
@@ -45,7 +54,8 @@ std::string num(double v) {
 
 std::string text(const PropertyValue& v) {
   if (const double* d = std::get_if<double>(&v)) return num(*d);
-  if (const Vec3* p = std::get_if<Vec3>(&v)) return "{" + num(p->x) + ", " + num(p->y) + ", " + num(p->z) + "}";
+  if (const Vec3* p = std::get_if<Vec3>(&v))
+    return "{" + num(p->x) + ", " + num(p->y) + ", " + num(p->z) + "}";
   if (const Quat* q = std::get_if<Quat>(&v))
     return "{" + num(q->w) + ", " + num(q->x) + ", " + num(q->y) + ", " + num(q->z) + "}";
   return value_kind_name(v);
@@ -53,7 +63,9 @@ std::string text(const PropertyValue& v) {
 
 /// The owner's bounds (PropertyDef::min, max, nonzero), in words a scene author reads.
 void check_bounds(const PropertyDef& def, const PropertyValue& value, const ErrorLocation& where) {
-  auto fail = [&](const std::string& what) { throw InputError(where, "'" + def.name + "' " + what); };
+  auto fail = [&](const std::string& what) {
+    throw InputError(where, "'" + def.name + "' " + what);
+  };
   auto in_bounds = [&](double x) {
     if (def.min && (def.min_exclusive ? !(x > *def.min) : !(x >= *def.min))) return false;
     return !(def.max && x > *def.max);
@@ -75,18 +87,24 @@ void check_bounds(const PropertyDef& def, const PropertyValue& value, const Erro
   auto below = [&](double x) { return def.min && !(def.max && x > *def.max); };
   if (def.min || def.max) {
     double x = 0;
-    if (const double* d = std::get_if<double>(&value)) x = *d;
-    else if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) x = double(*i);
+    if (const double* d = std::get_if<double>(&value))
+      x = *d;
+    else if (const std::int64_t* i = std::get_if<std::int64_t>(&value))
+      x = double(*i);
     if (const Vec3* p = std::get_if<Vec3>(&value)) {
       for (double c : {p->x, p->y, p->z})
         if (!in_bounds(c)) fail(bounds(below(c)) + " in every direction, got " + text(value));
-    } else if ((std::holds_alternative<double>(value) || std::holds_alternative<std::int64_t>(value)) && !in_bounds(x)) {
+    } else if ((std::holds_alternative<double>(value) ||
+                std::holds_alternative<std::int64_t>(value)) &&
+               !in_bounds(x)) {
       fail(bounds(below(x)) + ", got " + num(x));
     }
   }
   if (def.nonzero) {
-    if (const Vec3* p = std::get_if<Vec3>(&value); p && *p == Vec3{}) fail("must not be the zero vector");
-    if (const Quat* q = std::get_if<Quat>(&value); q && q->w == 0 && q->x == 0 && q->y == 0 && q->z == 0)
+    if (const Vec3* p = std::get_if<Vec3>(&value); p && *p == Vec3{})
+      fail("must not be the zero vector");
+    if (const Quat* q = std::get_if<Quat>(&value);
+        q && q->w == 0 && q->x == 0 && q->y == 0 && q->z == 0)
       fail("must not be the zero quaternion");
   }
 }
@@ -137,7 +155,8 @@ void PropertyStore::destroy(ObjectId id) {
 
 void PropertyStore::not_alive(ObjectId id) const {
   if (id.is_null()) throw AccessError("null object id");
-  if (id.index >= generations_.size()) throw AccessError("object #" + std::to_string(id.index) + " never existed");
+  if (id.index >= generations_.size())
+    throw AccessError("object #" + std::to_string(id.index) + " never existed");
   throw AccessError("object #" + std::to_string(id.index) + " (generation " +
                     std::to_string(id.generation) + ") was destroyed");
 }
@@ -152,7 +171,8 @@ void PropertyStore::set_name(ObjectId id, const std::string& name) {
   if (name == names_[id.index]) return;
   if (!name.empty()) {
     if (auto it = by_name_.find(name); it != by_name_.end())
-      throw InputError(ErrorLocation{"", 0, name}, "duplicate name: another object is already called '" + name + "'");
+      throw InputError(ErrorLocation{"", 0, name},
+                       "duplicate name: another object is already called '" + name + "'");
   }
   if (!names_[id.index].empty()) by_name_.erase(names_[id.index]);
   names_[id.index] = name;
@@ -183,7 +203,8 @@ ColumnBase& PropertyStore::make_column(PropertyId id) const {
   return *c;
 }
 
-PropertyValue PropertyStore::checked(ObjectId id, PropertyId prop, const PropertyValue& value) const {
+PropertyValue PropertyStore::checked(ObjectId id, PropertyId prop,
+                                     const PropertyValue& value) const {
   check_alive(id);
   const PropertyDef& def = registry_.def(prop);
   const ErrorLocation where{"", 0, describe(id)};
@@ -194,22 +215,26 @@ PropertyValue PropertyStore::checked(ObjectId id, PropertyId prop, const Propert
       if (!e) {
         std::string allowed;
         for (const auto& v : def.enum_values) allowed += (allowed.empty() ? "" : ", ") + v;
-        throw InputError(where, "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")");
+        throw InputError(where,
+                         "'" + def.name + "' has no value '" + *s + "' (one of: " + allowed + ")");
       }
       return PropertyValue(*e);
     }
   }
   if (def.kind == PropertyKind::Integer) {
     // A whole double from a script is an integer; anything else is a type error.
-    if (const double* d = std::get_if<double>(&value); d && std::floor(*d) == *d && std::isfinite(*d))
+    if (const double* d = std::get_if<double>(&value);
+        d && std::floor(*d) == *d && std::isfinite(*d))
       return PropertyValue(std::int64_t(*d));
   }
   if (def.kind == PropertyKind::Number)
-    if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) return checked(id, prop, PropertyValue(double(*i)));
+    if (const std::int64_t* i = std::get_if<std::int64_t>(&value))
+      return checked(id, prop, PropertyValue(double(*i)));
   if (value_kind_name(value) != to_string(def.kind))
     throw InputError(where, "'" + def.name + "' expects " + std::string(to_string(def.kind)) +
                                 ", got " + value_kind_name(value));
-  if (!finite_value(value)) throw InputError(where, "'" + def.name + "' must be a finite number, got " + text(value));
+  if (!finite_value(value))
+    throw InputError(where, "'" + def.name + "' must be a finite number, got " + text(value));
   check_bounds(def, value, where);
   if (const ObjectId* ref = std::get_if<ObjectId>(&value); ref && !ref->is_null() && !alive(*ref))
     throw InputError(where, "'" + def.name + "' refers to an object that does not exist");

@@ -3,7 +3,9 @@
 namespace alloy::gravity {
 
 PropertyDef gravity_property() {
-  return {.name = "gravity", .kind = PropertyKind::Vec3, .unit = "m/s^2",
+  return {.name = "gravity",
+          .kind = PropertyKind::Vec3,
+          .unit = "m/s^2",
           .doc = "gravitational acceleration at the body (written by a gravity resolver)"};
 }
 
@@ -30,7 +32,9 @@ void UniformGravity::write(ResolverAccess& access) {
   static_seen_ = is_static.version();
 }
 
-void UniformGravity::build(ResolverAccess& access) { write(access); }
+void UniformGravity::build(ResolverAccess& access) {
+  write(access);
+}
 
 void UniformGravity::advance(ResolverAccess& access, double) {
   // Membership changes come through build(); only a value edit of `static`

@@ -40,7 +40,8 @@ class UniformGravity final : public Resolver {
   void write(ResolverAccess& access);
 
   Vec3 g_;
-  PropertyId mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty, gravity_ = kNoProperty;
+  PropertyId mass_ = kNoProperty, density_ = kNoProperty, static_ = kNoProperty,
+             gravity_ = kNoProperty;
   std::uint64_t static_seen_ = ~std::uint64_t(0);
   double reported_potential_ = 0;  // J, at the last report
   bool reported_ = false;

@@ -43,9 +43,9 @@ namespace alloy::magnetism {
 
 /// One magnetic part, as the derived set publishes it.
 struct MagneticBody {
-  ObjectId id;                   ///< the object
-  Vec3 force;                    ///< total magnetic force on it, N (world)
-  Vec3 torque;                   ///< about its position (centre of mass), N*m (world)
+  ObjectId id;  ///< the object
+  Vec3 force;   ///< total magnetic force on it, N (world)
+  Vec3 torque;  ///< about its position (centre of mass), N*m (world)
   /// With `rates`: d force / dt and d torque / dt as every part moves on with
   /// its present velocity and angular velocity (pole strengths held), N/s and
   /// N*m/s; zero without.

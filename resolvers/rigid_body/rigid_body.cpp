@@ -82,10 +82,16 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   s.check_known("rigid_body", keys());
   RigidBodyConfig c;
   const std::string solver = s.string("solver", "quick");
-  if (solver == "quick") c.solver = Solver::Quick;
-  else if (solver == "step") c.solver = Solver::Step;
-  else throw InputError(s.where, "rigid_body: solver must be \"quick\" or \"step\", got \"" + solver + "\"");
-  auto bad = [&](const char* what) { throw InputError(s.where, std::string("rigid_body: ") + what); };
+  if (solver == "quick")
+    c.solver = Solver::Quick;
+  else if (solver == "step")
+    c.solver = Solver::Step;
+  else
+    throw InputError(s.where,
+                     "rigid_body: solver must be \"quick\" or \"step\", got \"" + solver + "\"");
+  auto bad = [&](const char* what) {
+    throw InputError(s.where, std::string("rigid_body: ") + what);
+  };
   c.iterations = int(s.integer("iterations", c.iterations));
   if (c.iterations < 1 || c.iterations > 10000) bad("iterations must be between 1 and 10000");
   c.sor = s.number("sor", c.sor);
@@ -112,9 +118,12 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   c.substeps = int(s.integer("substeps", c.substeps));
   if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be between 1 and 1000");
   const std::string contacts = s.string("substep_contacts", "kept");
-  if (contacts == "kept") c.substep_contacts = RigidBodyConfig::SubstepContacts::Kept;
-  else if (contacts == "found") c.substep_contacts = RigidBodyConfig::SubstepContacts::Found;
-  else bad("substep_contacts must be \"kept\" or \"found\"");
+  if (contacts == "kept")
+    c.substep_contacts = RigidBodyConfig::SubstepContacts::Kept;
+  else if (contacts == "found")
+    c.substep_contacts = RigidBodyConfig::SubstepContacts::Found;
+  else
+    bad("substep_contacts must be \"kept\" or \"found\"");
   c.auto_disable = s.boolean("auto_disable", c.auto_disable);
   c.joint_projection = s.boolean("joint_projection", c.joint_projection);
   c.ccd = s.boolean("ccd", c.ccd);
@@ -123,7 +132,8 @@ RigidBodyConfig RigidBodyConfig::from(const PluginSettings& s) {
   c.auto_disable_angular = s.number("auto_disable_angular", c.auto_disable_angular);
   if (!(c.auto_disable_angular >= 0)) bad("auto_disable_angular must be >= 0 rad/s");
   c.auto_disable_steps = int(s.integer("auto_disable_steps", c.auto_disable_steps));
-  if (c.auto_disable_steps < 1 || c.auto_disable_steps > 100000) bad("auto_disable_steps must be between 1 and 100000");
+  if (c.auto_disable_steps < 1 || c.auto_disable_steps > 100000)
+    bad("auto_disable_steps must be between 1 and 100000");
   return c;
 }
 
@@ -137,8 +147,8 @@ struct RigidBodyResolver::Impl {
   struct Part {
     ObjectId id;
     std::uint32_t body = 0;
-    Vec3 offset;         ///< the part's centre of mass in the body frame
-    Quat rot;            ///< the part's orientation relative to the body frame
+    Vec3 offset;           ///< the part's centre of mass in the body frame
+    Quat rot;              ///< the part's orientation relative to the body frame
     bool identity = true;  ///< a body of one part: the part's frame is the body's
     // Values last written, to tell our own writes from edits made between steps.
     Vec3 pos, vel, angvel;
@@ -149,8 +159,8 @@ struct RigidBodyResolver::Impl {
     std::uint32_t first_part = 0, part_count = 0;
     bool kinematic = false;  ///< pinned, or glued to the play area or a static part
     bool planar = false;
-    bool moved = false;      ///< a kinematic body teleported by an edit: write its parts
-    bool jointed = false;    ///< held by a hinge: its collisions are ODE's (restitution_pass)
+    bool moved = false;    ///< a kinematic body teleported by an edit: write its parts
+    bool jointed = false;  ///< held by a hinge: its collisions are ODE's (restitution_pass)
     double linear_damping = 0, angular_damping = 0;  ///< 1/s
     double mass = 0;
     // auto_disable: the load queued this step, and the load it had when it
@@ -161,7 +171,8 @@ struct RigidBodyResolver::Impl {
   struct Hinge {
     ObjectId id;
     dJointID joint = nullptr;
-    bool to_world = false;  ///< body 2 is the play area: the anchor side to report is ODE's anchor 2
+    bool to_world =
+        false;  ///< body 2 is the play area: the anchor side to report is ODE's anchor 2
   };
   /// A contact pair turned into joints in this advance.
   struct PairRecord {
@@ -171,9 +182,9 @@ struct RigidBodyResolver::Impl {
   };
 
   struct Ids {
-    PropertyId position, orientation, velocity, angular_velocity, mass, density, shape, size, radius,
-        length, static_, pinned, planar, linear_damping, angular_damping, joint, body_a, body_b, anchor,
-        axis, joint_friction, limit_low, limit_high;
+    PropertyId position, orientation, velocity, angular_velocity, mass, density, shape, size,
+        radius, length, static_, pinned, planar, linear_damping, angular_damping, joint, body_a,
+        body_b, anchor, axis, joint_friction, limit_low, limit_high;
   };
 
   explicit Impl(const RigidBodyConfig& c) : config(c) { ensure_ode(); }
@@ -197,7 +208,8 @@ struct RigidBodyResolver::Impl {
       dWorldSetAutoDisableSteps(world, config.auto_disable_steps);
       dWorldSetAutoDisableTime(world, 0);
       // Average the speeds over the window: one slow step in a bounce is not rest.
-      dWorldSetAutoDisableAverageSamplesCount(world, unsigned(std::min(config.auto_disable_steps, 10)));
+      dWorldSetAutoDisableAverageSamplesCount(world,
+                                              unsigned(std::min(config.auto_disable_steps, 10)));
     }
     contact_group = dJointGroupCreate(0);
   }
@@ -225,18 +237,34 @@ struct RigidBodyResolver::Impl {
 
   void resolve_ids(const WorldView& v) {
     if (have_ids) return;
-    id = {v.property("position"), v.property("orientation"), v.property("velocity"),
-          v.property("angular_velocity"), v.property("mass"), v.property("density"),
-          v.property("shape"), v.property("size"), v.property("radius"), v.property("length"),
-          v.property("static"), v.property("pinned"), v.property("planar"),
-          v.property("linear_damping"), v.property("angular_damping"), v.property("joint"),
-          v.property("body_a"), v.property("body_b"), v.property("anchor"), v.property("axis"),
-          v.property("joint_friction"), v.property("limit_low"), v.property("limit_high")};
+    id = {v.property("position"),
+          v.property("orientation"),
+          v.property("velocity"),
+          v.property("angular_velocity"),
+          v.property("mass"),
+          v.property("density"),
+          v.property("shape"),
+          v.property("size"),
+          v.property("radius"),
+          v.property("length"),
+          v.property("static"),
+          v.property("pinned"),
+          v.property("planar"),
+          v.property("linear_damping"),
+          v.property("angular_damping"),
+          v.property("joint"),
+          v.property("body_a"),
+          v.property("body_b"),
+          v.property("anchor"),
+          v.property("axis"),
+          v.property("joint_friction"),
+          v.property("limit_low"),
+          v.property("limit_high")};
     // Columns whose edit means "the bodies are different now": rebuild.
-    for (PropertyId p : {id.mass, id.density, id.shape, id.size, id.radius, id.length, id.static_,
-                         id.pinned, id.planar, id.linear_damping, id.angular_damping, id.joint,
-                         id.body_a, id.body_b, id.anchor, id.axis, id.joint_friction, id.limit_low,
-                         id.limit_high})
+    for (PropertyId p :
+         {id.mass, id.density, id.shape, id.size, id.radius, id.length, id.static_, id.pinned,
+          id.planar, id.linear_damping, id.angular_damping, id.joint, id.body_a, id.body_b,
+          id.anchor, id.axis, id.joint_friction, id.limit_low, id.limit_high})
       defining.push_back(&v.store().column(p));
     pose_columns = {&v.store().column(id.position), &v.store().column(id.orientation),
                     &v.store().column(id.velocity), &v.store().column(id.angular_velocity)};
@@ -306,7 +334,7 @@ struct RigidBodyResolver::Impl {
   JointProjection projection;
   std::vector<dJointFeedback> feedback;
   std::vector<Vec3> feedback_force;  ///< per contact point: force 1 summed over the substeps
-  std::vector<double> depth;           ///< per queued contact point: depth at the current substep
+  std::vector<double> depth;         ///< per queued contact point: depth at the current substep
   std::vector<PairRecord> records;
   // substep_contacts = found: a geom per part that was in a queued pair (in
   // no space), by slot; made when first needed, destroyed with the world.
@@ -456,13 +484,15 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     const double r = radius.value_or(s, 0), len = length.value_or(s, 0);
     switch (sh) {
       case Shape::Box:
-        if (!(sz.x > 0 && sz.y > 0 && sz.z > 0)) throw InputError(where, "a box needs a size with every extent > 0");
+        if (!(sz.x > 0 && sz.y > 0 && sz.z > 0))
+          throw InputError(where, "a box needs a size with every extent > 0");
         break;
       case Shape::Sphere:
         if (!(r > 0)) throw InputError(where, "a sphere needs a radius > 0");
         break;
       case Shape::Capsule:
-        if (!(r > 0) || !(len >= 0)) throw InputError(where, "a capsule needs a radius > 0 and a length >= 0");
+        if (!(r > 0) || !(len >= 0))
+          throw InputError(where, "a capsule needs a radius > 0 and a length >= 0");
         break;
       case Shape::Cylinder:
         if (!(r > 0) || !(len > 0))
@@ -481,9 +511,15 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     }
     dMass local;
     switch (sh) {
-      case Shape::Box: dMassSetBoxTotal(&local, m, sz.x, sz.y, sz.z); break;
-      case Shape::Sphere: dMassSetSphereTotal(&local, m, r); break;
-      case Shape::Capsule: dMassSetCapsuleTotal(&local, m, 1 /* along x */, r, len); break;
+      case Shape::Box:
+        dMassSetBoxTotal(&local, m, sz.x, sz.y, sz.z);
+        break;
+      case Shape::Sphere:
+        dMassSetSphereTotal(&local, m, r);
+        break;
+      case Shape::Capsule:
+        dMassSetCapsuleTotal(&local, m, 1 /* along x */, r, len);
+        break;
       case Shape::Cylinder: {  // along z; cylinder_inertia's formulas
         const Vec3 i = cylinder_inertia(m, r, len);
         dMassSetParameters(&local, m, 0, 0, 0, i.x, i.y, i.z, 0, 0, 0);
@@ -492,7 +528,8 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     }
     if (refuse_part(access, s, m, local)) continue;
     cand_of_slot[s] = std::int32_t(cand.size());
-    cand.push_back({s, m, local, position.value_or(s, {}), normalized(orientation.value_or(s, Quat{}))});
+    cand.push_back(
+        {s, m, local, position.value_or(s, {}), normalized(orientation.value_or(s, Quat{}))});
   }
 
   // 2. Joints: fixed joints unite parts into assemblies; hinges are made below.
@@ -526,8 +563,10 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     std::int32_t a = ref(body_a, "body_a"), b = ref(body_b, "body_b");
     if (a == kGone || b == kGone || (a == kWorld && b == kWorld)) continue;
     if (JointType(joint[s].index) == JointType::Fixed) {
-      if (a >= 0 && b >= 0) parent[find(a)] = find(b);
-      else glued_to_world[a >= 0 ? a : b] = 1;
+      if (a >= 0 && b >= 0)
+        parent[find(a)] = find(b);
+      else
+        glued_to_world[a >= 0 ? a : b] = 1;
     } else {
       pending.push_back({s, a, b});
     }
@@ -650,7 +689,8 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     return projected[b];
   };
   for (const PendingHinge& h : pending) {
-    const std::int32_t ba = h.a >= 0 ? body_of_cand[h.a] : -1, bb = h.b >= 0 ? body_of_cand[h.b] : -1;
+    const std::int32_t ba = h.a >= 0 ? body_of_cand[h.a] : -1,
+                       bb = h.b >= 0 ? body_of_cand[h.b] : -1;
     if (ba == bb) continue;  // both in one assembly: already rigid
     const ObjectId jid = store.id_at(h.slot);
     const ErrorLocation where{"", 0, store.describe(jid)};
@@ -746,8 +786,10 @@ void RigidBodyResolver::Impl::write_hinges(ResolverAccess& access) {
   for (const Hinge& h : hinges) {
     dVector3 p, a;
     // A pivot in the play area stays where the play area holds it.
-    if (h.to_world) dJointGetHingeAnchor2(h.joint, p);
-    else dJointGetHingeAnchor(h.joint, p);
+    if (h.to_world)
+      dJointGetHingeAnchor2(h.joint, p);
+    else
+      dJointGetHingeAnchor(h.joint, p);
     dJointGetHingeAxis(h.joint, a);
     anchor.set(h.id.index, to_vec3(p));
     axis.set(h.id.index, to_vec3(a));
@@ -871,12 +913,16 @@ RigidBodyResolver::RigidBodyResolver(const World& world, RigidBodyConfig config)
 
 RigidBodyResolver::~RigidBodyResolver() = default;
 
-std::size_t RigidBodyResolver::body_count() const { return impl_->bodies.size(); }
-std::size_t RigidBodyResolver::joint_count() const { return impl_->hinges.size(); }
+std::size_t RigidBodyResolver::body_count() const {
+  return impl_->bodies.size();
+}
+std::size_t RigidBodyResolver::joint_count() const {
+  return impl_->hinges.size();
+}
 std::size_t RigidBodyResolver::awake_count() const {
-  return std::size_t(std::count_if(impl_->bodies.begin(), impl_->bodies.end(), [](const Impl::Body& b) {
-    return !b.kinematic && dBodyIsEnabled(b.id);
-  }));
+  return std::size_t(
+      std::count_if(impl_->bodies.begin(), impl_->bodies.end(),
+                    [](const Impl::Body& b) { return !b.kinematic && dBodyIsEnabled(b.id); }));
 }
 
 void RigidBodyResolver::build(ResolverAccess& access) {
@@ -1127,11 +1173,15 @@ void RigidBodyResolver::queue(ObjectId part, Vec3 value, Vec3 point, Load kind) 
   forces_.push_back({part.index, part.generation, value, point, kind});
 }
 
-void RigidBodyResolver::add_force(ObjectId part, Vec3 force) { queue(part, force, {}, Load::Force); }
+void RigidBodyResolver::add_force(ObjectId part, Vec3 force) {
+  queue(part, force, {}, Load::Force);
+}
 void RigidBodyResolver::add_force(ObjectId part, Vec3 force, Vec3 point) {
   queue(part, force, point, Load::ForceAtPoint);
 }
-void RigidBodyResolver::add_torque(ObjectId part, Vec3 torque) { queue(part, torque, {}, Load::Torque); }
+void RigidBodyResolver::add_torque(ObjectId part, Vec3 torque) {
+  queue(part, torque, {}, Load::Torque);
+}
 
 std::span<RigidBodyResolver::LoadCommand> RigidBodyResolver::open_loads(std::size_t n) {
   if (open_ == ~std::size_t(0)) {
@@ -1155,7 +1205,8 @@ void RigidBodyResolver::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 fo
   rated_loads_.push_back({part.index, part.generation, force, torque, force_rate, torque_rate});
 }
 
-void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const ContactPoint> points) {
+void RigidBodyResolver::add_contact(const ContactCommand& pair,
+                                    std::span<const ContactPoint> points) {
   ContactCommand c = pair;
   c.first = std::uint32_t(contact_points_.size());
   c.count = std::uint32_t(points.size());
@@ -1163,7 +1214,8 @@ void RigidBodyResolver::add_contact(const ContactCommand& pair, std::span<const 
   contacts_.push_back(c);
 }
 
-void RigidBodyResolver::add_contacts(std::span<const ContactCommand> pairs, std::span<const ContactPoint> points) {
+void RigidBodyResolver::add_contacts(std::span<const ContactCommand> pairs,
+                                     std::span<const ContactPoint> points) {
   const auto base = std::uint32_t(contact_points_.size());
   contact_points_.insert(contact_points_.end(), points.begin(), points.end());
   contacts_.reserve(contacts_.size() + pairs.size());
@@ -1184,9 +1236,12 @@ void RigidBodyResolver::apply_displacements() {
   for (const auto& [part, d] : displacements_) {
     const std::int32_t b = m.body_of(part);
     if (b < 0 || m.bodies[b].kinematic) continue;
-    auto it = std::find_if(moves.begin(), moves.end(), [&](const auto& mv) { return mv.first == b; });
-    if (it == moves.end()) moves.emplace_back(b, d);
-    else if (length(d) > length(it->second)) it->second = d;
+    auto it =
+        std::find_if(moves.begin(), moves.end(), [&](const auto& mv) { return mv.first == b; });
+    if (it == moves.end())
+      moves.emplace_back(b, d);
+    else if (length(d) > length(it->second))
+      it->second = d;
   }
   for (const auto& [b, d] : moves) {
     const dBodyID id = m.bodies[b].id;
@@ -1217,7 +1272,9 @@ void RigidBodyResolver::apply_loads() {
       case Load::ForceAtPoint:
         dBodyAddForceAtPos(b.id, c.value.x, c.value.y, c.value.z, c.point.x, c.point.y, c.point.z);
         break;
-      case Load::Torque: dBodyAddTorque(b.id, c.value.x, c.value.y, c.value.z); break;
+      case Load::Torque:
+        dBodyAddTorque(b.id, c.value.x, c.value.y, c.value.z);
+        break;
     }
   }
 }
@@ -1255,13 +1312,16 @@ void RigidBodyResolver::wake_on_load_change() {
     switch (c.kind) {
       case Load::Force:
         b.load_force += c.value;
-        if (!p->identity) b.load_torque += cross(rotate(to_quat(dBodyGetQuaternion(b.id)), p->offset), c.value);
+        if (!p->identity)
+          b.load_torque += cross(rotate(to_quat(dBodyGetQuaternion(b.id)), p->offset), c.value);
         break;
       case Load::ForceAtPoint:
         b.load_force += c.value;
         b.load_torque += cross(c.point - x, c.value);
         break;
-      case Load::Torque: b.load_torque += c.value; break;
+      case Load::Torque:
+        b.load_torque += c.value;
+        break;
     }
   }
   for (const RatedLoad& c : rated_loads_) {  // their value at the window's start
@@ -1270,7 +1330,8 @@ void RigidBodyResolver::wake_on_load_change() {
     Impl::Body& b = m.bodies[p->body];
     b.load_force += c.force;
     b.load_torque += c.torque;
-    if (!p->identity) b.load_torque += cross(rotate(to_quat(dBodyGetQuaternion(b.id)), p->offset), c.force);
+    if (!p->identity)
+      b.load_torque += cross(rotate(to_quat(dBodyGetQuaternion(b.id)), p->offset), c.force);
   }
   for (Impl::Body& b : m.bodies) {
     if (b.kinematic) continue;
@@ -1282,7 +1343,8 @@ void RigidBodyResolver::wake_on_load_change() {
     // The load it slept under (its weight, a magnet's pull) holds it still;
     // a different one (the magnet switched on, gravity turned) must move it.
     // Tolerances: 0.1 % of that load, or an acceleration of 1 mm/s^2.
-    const double df = length(b.load_force - b.awake_force), dtq = length(b.load_torque - b.awake_torque);
+    const double df = length(b.load_force - b.awake_force),
+                 dtq = length(b.load_torque - b.awake_torque);
     if (df > 1e-3 * length(b.awake_force) + 1e-3 * b.mass ||
         dtq > 1e-3 * length(b.awake_torque) + 1e-4 * b.mass) {
       dBodySetForce(b.id, 0, 0, 0);
@@ -1320,7 +1382,8 @@ void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback)
     const ContactCommand& c = contacts_[ci];
     const std::int32_t ba = m.body_of(c.a), bb = m.body_of(c.b);
     if (ba == bb) continue;  // one assembly, or two parts that are not bodies
-    const bool fixed_a = ba < 0 || m.bodies[ba].kinematic, fixed_b = bb < 0 || m.bodies[bb].kinematic;
+    const bool fixed_a = ba < 0 || m.bodies[ba].kinematic,
+               fixed_b = bb < 0 || m.bodies[bb].kinematic;
     if (fixed_a && fixed_b) continue;
     // Two sleeping bodies (or one on a static part) need no joint: ODE would
     // skip their island anyway, and without the joints a settled pile
@@ -1362,12 +1425,14 @@ void RigidBodyResolver::add_contact_joints(double h, bool record, bool feedback)
       contact.surface.motionN = 0;
       if (depth < shallow) {
         // The approach speed matters only to a point that may bounce.
-        if (restitution <= 0 || approach_speed(b1, b2, p.position, sign * p.normal) <= bounce_velocity) {
+        if (restitution <= 0 ||
+            approach_speed(b1, b2, p.position, sign * p.normal) <= bounce_velocity) {
           contact.surface.mode = mode | dContactMotionN;
           contact.surface.motionN = -(layer - depth) / h;
         }
       }
-      contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y, contact.geom.pos[2] = p.position.z;
+      contact.geom.pos[0] = p.position.x, contact.geom.pos[1] = p.position.y,
+      contact.geom.pos[2] = p.position.z;
       contact.geom.normal[0] = sign * p.normal.x, contact.geom.normal[1] = sign * p.normal.y,
       contact.geom.normal[2] = sign * p.normal.z;
       contact.geom.depth = depth;
@@ -1670,7 +1735,8 @@ void RigidBodyResolver::find_substep_contacts(ResolverAccess& access) {
   const auto size = access.column<Vec3>(m.id.size);
   const auto radius = access.column<double>(m.id.radius);
   const auto length = access.column<double>(m.id.length);
-  if (m.geom_of_slot.size() < store.slot_count()) m.geom_of_slot.resize(store.slot_count(), nullptr);
+  if (m.geom_of_slot.size() < store.slot_count())
+    m.geom_of_slot.resize(store.slot_count(), nullptr);
   m.collide_buffer.resize(std::size_t(config_.max_contacts));
   auto place = [&](ObjectId o) -> dGeomID {
     const std::uint32_t s = o.index;
@@ -1684,8 +1750,12 @@ void RigidBodyResolver::find_substep_contacts(ResolverAccess& access) {
           g = dCreateBox(nullptr, e.x, e.y, e.z);
           break;
         }
-        case Shape::Sphere: g = dCreateSphere(nullptr, radius.value_or(s, 0)); break;
-        case Shape::Capsule: g = dCreateCapsule(nullptr, radius.value_or(s, 0), length.value_or(s, 0)); break;
+        case Shape::Sphere:
+          g = dCreateSphere(nullptr, radius.value_or(s, 0));
+          break;
+        case Shape::Capsule:
+          g = dCreateCapsule(nullptr, radius.value_or(s, 0), length.value_or(s, 0));
+          break;
         case Shape::Cylinder:
           g = dCreateCylinder(nullptr, radius.value_or(s, 0), length.value_or(s, 0));
           break;
@@ -1740,8 +1810,8 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
     m.damped.clear();
     for (const auto& b : m.bodies)
       if (!b.kinematic && (b.linear_damping > 0 || b.angular_damping > 0))
-        m.damped.push_back({b.id, damping_factor(b.linear_damping, h),
-                            damping_factor(b.angular_damping, h)});
+        m.damped.push_back(
+            {b.id, damping_factor(b.linear_damping, h), damping_factor(b.angular_damping, h)});
     m.damping_dt = h;
   }
   if (config_.auto_disable) wake_on_load_change();
@@ -1780,8 +1850,10 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
     if (found && sub > 0) {
       find_substep_contacts(access);
       m.depth.resize(contact_points_.size());
-      for (std::size_t k = 0; k < contact_points_.size(); ++k) m.depth[k] = contact_points_[k].depth;
-      if (feedback) m.feedback.resize(std::max(m.feedback.size(), contact_points_.size()));  // no joints left
+      for (std::size_t k = 0; k < contact_points_.size(); ++k)
+        m.depth[k] = contact_points_[k].depth;
+      if (feedback)
+        m.feedback.resize(std::max(m.feedback.size(), contact_points_.size()));  // no joints left
       m.records.clear();
     }
     const double ke0 = books_on_ ? kinetic_energy() : 0.0;
@@ -1817,13 +1889,14 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
     // QuickStep shuffles constraints with ODE's global random generator;
     // seeding it from the step number makes every world's step a function of
     // its own state (two worlds, or two runs, stay bit-identical).
-    dRandSetSeed(static_cast<unsigned long>((access.step() * std::uint64_t(n) + std::uint64_t(sub)) *
-                                                2654435761u +
-                                            1));
+    dRandSetSeed(static_cast<unsigned long>(
+        (access.step() * std::uint64_t(n) + std::uint64_t(sub)) * 2654435761u + 1));
     m.begin_rotation();
     m.projection.begin_step();
-    if (config_.solver == RigidBodyConfig::Solver::Quick) dWorldQuickStep(m.world, h);
-    else dWorldStep(m.world, h);
+    if (config_.solver == RigidBodyConfig::Solver::Quick)
+      dWorldQuickStep(m.world, h);
+    else
+      dWorldStep(m.world, h);
     m.conserve_rotation(h);
     m.fix_planar();
     m.projection.project(h, dWorldGetERP(m.world));
@@ -1888,9 +1961,9 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
     impulses_.push_back(
         {c.a, c.b, (r.swapped ? -1.0 : 1.0) * f * h + pass, std::max(0.0, fn * h + pass_n)});
   }
-  if (!std::is_sorted(impulses_.begin(), impulses_.end(), [](const PairImpulse& x, const PairImpulse& y) {
-        return pair_less(x.a, x.b, y.a, y.b);
-      }))
+  if (!std::is_sorted(
+          impulses_.begin(), impulses_.end(),
+          [](const PairImpulse& x, const PairImpulse& y) { return pair_less(x.a, x.b, y.a, y.b); }))
     std::sort(impulses_.begin(), impulses_.end(), [](const PairImpulse& x, const PairImpulse& y) {
       return pair_less(x.a, x.b, y.a, y.b);
     });

@@ -150,11 +150,11 @@ struct RigidBodyConfig {
 /// One contact pair queued by an interaction: points [first, first + count) of
 /// the queue's point list, and the combined surface of the pair.
 struct ContactCommand {
-  ObjectId a, b;                ///< the two parts, a < b; either may be immovable
+  ObjectId a, b;  ///< the two parts, a < b; either may be immovable
   std::uint32_t first = 0, count = 0;
-  double friction = 0.5;        ///< Coulomb mu of the pair
-  double restitution = 0;       ///< of the pair, 0..1
-  double bounce_velocity = 0.1; ///< approach speeds below this do not bounce, m/s
+  double friction = 0.5;         ///< Coulomb mu of the pair
+  double restitution = 0;        ///< of the pair, 0..1
+  double bounce_velocity = 0.1;  ///< approach speeds below this do not bounce, m/s
 };
 
 class RigidBodyResolver final : public Resolver {
@@ -314,8 +314,10 @@ class RigidBodyResolver final : public Resolver {
   class LoadQueue {
    public:
     void push_back(const LoadCommand& c) {
-      if (n_ == v_.size()) v_.push_back(c);
-      else v_[n_] = c;
+      if (n_ == v_.size())
+        v_.push_back(c);
+      else
+        v_[n_] = c;
       ++n_;
     }
     const LoadCommand* begin() const { return v_.data(); }

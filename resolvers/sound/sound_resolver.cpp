@@ -96,8 +96,12 @@ std::vector<PropertyDef> sound_properties() {
       number("youngs_modulus", "Pa", "stiffness of the material, e.g. steel 2.0e11, wood 1.0e10",
              0.0),
       // The rigid body registers `density` too: the definition must be the same.
-      {.name = "density", .kind = PropertyKind::Number, .unit = "kg/m^3",
-       .doc = "density; when given, mass = density * volume of the shape", .min = 0.0, .min_exclusive = true},
+      {.name = "density",
+       .kind = PropertyKind::Number,
+       .unit = "kg/m^3",
+       .doc = "density; when given, mass = density * volume of the shape",
+       .min = 0.0,
+       .min_exclusive = true},
   };
 }
 
