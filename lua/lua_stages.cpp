@@ -8,7 +8,7 @@
 
 #include "lua/lua_bridge.hpp"
 #include "lua/native_bindings.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 
 namespace alloy::lua {
 
@@ -160,7 +160,7 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
   for (const auto& d : decl.info.derived) {
     if (native_derived_readable(d)) {
       if (d == "collisions") {
-        collisions_ = &ctx.dependency<rigid::CollisionSet>(d);
+        collisions_ = &ctx.dependency<ContactSet>(d);
         impulses_ = collisions_->demand_impulses();
       }
       continue;
@@ -843,8 +843,8 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
       return 0;
     }
     list.clear();
-    const rigid::CollisionSet& c = *st->collisions_;
-    auto add = [&](std::span<const rigid::ContactPair> pairs, bool began) {
+    const ContactSet& c = *st->collisions_;
+    auto add = [&](std::span<const ContactPair> pairs, bool began) {
       for (const auto& pair : pairs) {
         abi::Contact out{};
         out.a = pair.a.index;

@@ -29,13 +29,9 @@
 
 #include "lua/mod_state.hpp"
 #include "lua/stage_abi.hpp"
-#include "resolvers/rigid_body/contact.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/plugin_registry.hpp"
 #include "runtime/world.hpp"
-
-namespace alloy::rigid {
-class CollisionSet;
-}
 
 namespace alloy::lua {
 
@@ -190,9 +186,9 @@ class LuaStage {
   BulkStore bulk_store_[kMaxBulk];
   int bulk_used_ = 0;
   // The collisions derived set, if declared.
-  const rigid::CollisionSet* collisions_ = nullptr;
+  const ContactSet* collisions_ = nullptr;
   // Contacts reach Lua with their impulses, which a stage may read: declared.
-  rigid::ImpulseDemand impulses_;
+  ImpulseDemand impulses_;
   // The call's lists of contacts (began, ongoing, ended, touching), each made
   // at most once per call (bit k of contacts_made_), so that a list stays
   // where it is while the stage iterates over it and asks for another.

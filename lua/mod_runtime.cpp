@@ -9,7 +9,7 @@
 #include "lua/lua_bridge.hpp"
 #include "lua/lua_stages.hpp"
 #include "lua/native_bindings.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 
 namespace alloy::lua {
 
@@ -314,8 +314,8 @@ void ModRuntime::hold_impulses() {
       wanted && world_->has_stage("collisions") ? world_->stage("collisions") : nullptr;
   if (stage == impulses_from_) return;
   impulses_from_ = stage;
-  const auto* set = dynamic_cast<const rigid::CollisionSet*>(stage);
-  impulses_ = set ? set->demand_impulses() : rigid::ImpulseDemand{};
+  const auto* set = dynamic_cast<const ContactSet*>(stage);
+  impulses_ = set ? set->demand_impulses() : ImpulseDemand{};
 }
 
 void ModRuntime::attach(World& world) {

@@ -39,7 +39,7 @@
 #include <vector>
 
 #include "lua/mod_state.hpp"
-#include "resolvers/rigid_body/contact.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::lua {
@@ -181,7 +181,7 @@ class ModRuntime {
   ModRuntimeOptions options_;
   std::vector<std::unique_ptr<Loaded>> mods_;
   World* world_ = nullptr;
-  rigid::ImpulseDemand impulses_;
+  ImpulseDemand impulses_;
   const Stage* impulses_from_ = nullptr;  // the collisions stage impulses_ was asked of
   std::uint64_t impulses_checked_ = ~std::uint64_t(0);  // the step hold_impulses last looked at
   std::shared_ptr<ModRuntime*> self_;                   // the world's observer holds a weak_ptr

@@ -6,7 +6,7 @@
 #include <type_traits>
 
 #include "lua/stage_abi.hpp"
-#include "resolvers/rigid_body/rigid_body.hpp"
+#include "resolvers/rigid_body/engine.hpp"
 
 namespace alloy::lua {
 
@@ -20,9 +20,9 @@ const std::vector<FunctionDecl> kRigidBody = {
 
 // The prelude writes the rigid body's load records in place as
 // abi::LoadRecord: the same bytes. The id packs slot and generation in that
-// order (little-endian); the kinds follow RigidBodyResolver::Load.
-using LoadCommand = rigid::RigidBodyResolver::LoadCommand;
-using Load = rigid::RigidBodyResolver::Load;
+// order (little-endian); the kinds follow RigidBodyEngine::Load.
+using LoadCommand = rigid::RigidBodyEngine::LoadCommand;
+using Load = rigid::RigidBodyEngine::Load;
 static_assert(sizeof(LoadCommand) == sizeof(abi::LoadRecord) &&
               offsetof(LoadCommand, slot) == 0 && offsetof(LoadCommand, generation) == 4 &&
               offsetof(LoadCommand, value) == offsetof(abi::LoadRecord, vx) &&
@@ -33,7 +33,7 @@ static_assert(std::endian::native == std::endian::little);
 
 class RigidBodyTarget final : public NativeTarget {
  public:
-  explicit RigidBodyTarget(rigid::RigidBodyResolver& rigid) : rigid_(rigid) {}
+  explicit RigidBodyTarget(rigid::RigidBodyEngine& rigid) : rigid_(rigid) {}
   void* open_records(std::size_t n) override {
     open_ = rigid_.open_loads(n);
     return open_.data();
@@ -137,7 +137,7 @@ class RigidBodyTarget final : public NativeTarget {
   }
 
  private:
-  rigid::RigidBodyResolver& rigid_;
+  rigid::RigidBodyEngine& rigid_;
   std::span<LoadCommand> open_;  // the room of the current call
 };
 
@@ -150,7 +150,7 @@ const std::vector<FunctionDecl>* native_functions(std::string_view resolver) {
 
 std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx) {
   if (ctx.info().target == "rigid_body")
-    return std::make_unique<RigidBodyTarget>(ctx.target<rigid::RigidBodyResolver>());
+    return std::make_unique<RigidBodyTarget>(ctx.target<rigid::RigidBodyEngine>());
   throw InputError("Lua interactions cannot queue on the native resolver '" + ctx.info().target +
                    "' (Lua can reach: rigid_body)");
 }

@@ -105,7 +105,7 @@ PluginDef rigid_body_from_gravity_plugin() {
   def.properties = concat({{gravity::gravity_property()}, pick(body_properties(), {"mass"})});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     ctx.settings().check_known("rigid_body_from_gravity", {});
-    return std::make_unique<RigidBodyFromGravity>(ctx.target<RigidBodyResolver>());
+    return std::make_unique<RigidBodyFromGravity>(ctx.target<RigidBodyEngine>());
   };
   return def;
 }

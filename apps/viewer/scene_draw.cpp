@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "resolvers/magnetism/magnetic_forces.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 
 namespace alloy::viewer {
 
@@ -458,11 +458,11 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   }
 
   if (opt.contact_forces) {
-    if (auto* contacts = dynamic_cast<rigid::CollisionSet*>(world.stage("collisions"))) {
+    if (auto* contacts = dynamic_cast<ContactSet*>(world.stage("collisions"))) {
       const double dt = world.dt();
-      for (const std::span<const rigid::ContactPair> list :
+      for (const std::span<const ContactPair> list :
            {contacts->began(), contacts->ongoing()}) {
-        for (const rigid::ContactPair& pair : list) {
+        for (const ContactPair& pair : list) {
           const auto points = contacts->points(pair);
           if (points.empty()) continue;
           Vec2 at{};

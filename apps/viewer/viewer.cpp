@@ -15,7 +15,7 @@
 #include "apps/viewer/scene_writer.hpp"
 #include "lua/mod_runtime.hpp"
 #include "resolvers/plugins.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 
 namespace alloy::viewer {
@@ -633,9 +633,9 @@ void Viewer::step_world() {
   World* w = world();
   // Taken again each step: the collisions stage may have been replaced.
   const auto* contacts = draw_options_.contact_forces
-                             ? dynamic_cast<const rigid::CollisionSet*>(w->stage("collisions"))
+                             ? dynamic_cast<const ContactSet*>(w->stage("collisions"))
                              : nullptr;
-  contact_impulses_ = contacts ? contacts->demand_impulses() : rigid::ImpulseDemand{};
+  contact_impulses_ = contacts ? contacts->demand_impulses() : ImpulseDemand{};
   try {
     w->step();
     sample_plot();

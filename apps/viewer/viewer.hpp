@@ -40,7 +40,7 @@
 #include "apps/viewer/scene_draw.hpp"
 #include "apps/viewer/viewer_options.hpp"
 #include "lua/scene_loader.hpp"
-#include "resolvers/rigid_body/contact.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::viewer {
@@ -283,7 +283,7 @@ class Viewer {
   DrawOptions draw_options_;
   // Contact forces are drawn from the rigid body's impulses, which it
   // computes only for readers: held while they are shown.
-  rigid::ImpulseDemand contact_impulses_;
+  ImpulseDemand contact_impulses_;
   std::vector<std::string> palette_problems_;  // per entry: "" or why it cannot be made
 };
 

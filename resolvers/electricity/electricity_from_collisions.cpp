@@ -5,7 +5,7 @@
 namespace alloy::electricity {
 
 ElectricityFromCollisions::ElectricityFromCollisions(ElectricityResolver& target,
-                                                     const rigid::CollisionSet& contacts)
+                                                     const ContactSet& contacts)
     : target_(target), contacts_(contacts) {}
 
 int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orientation, Vec3 point) {
@@ -37,19 +37,19 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
 
   // The touching pairs of two conductive parts, in (a, b) order: began and
   // ongoing are each sorted, so merge them.
-  std::vector<const rigid::ContactPair*> touching;
+  std::vector<const ContactPair*> touching;
   const auto began = contacts_.began(), ongoing = contacts_.ongoing();
   touching.reserve(began.size() + ongoing.size());
   std::size_t i = 0, j = 0;
   while (i < began.size() || j < ongoing.size()) {
     const bool take_began =
         j == ongoing.size() ||
-        (i < began.size() && rigid::pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b));
-    const rigid::ContactPair& p = take_began ? began[i++] : ongoing[j++];
+        (i < began.size() && pair_less(began[i].a, began[i].b, ongoing[j].a, ongoing[j].b));
+    const ContactPair& p = take_began ? began[i++] : ongoing[j++];
     if (conducts(p.a) && conducts(p.b)) touching.push_back(&p);
   }
 
-  auto terminal = [&](ObjectId part, const rigid::ContactPair& pair) {
+  auto terminal = [&](ObjectId part, const ContactPair& pair) {
     const auto points = contacts_.points(pair);
     if (points.empty() || !position.has(part.index)) return 0;
     Vec3 mean{};
@@ -62,7 +62,7 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
   std::vector<std::pair<ObjectId, ObjectId>> now;
   now.reserve(touching.size());
   std::size_t k = 0;
-  for (const rigid::ContactPair* p : touching) {
+  for (const ContactPair* p : touching) {
     const std::pair<ObjectId, ObjectId> key{p->a, p->b};
     for (; k < connected_.size() && connected_[k] < key; ++k)
       target_.disconnect(connected_[k].first, connected_[k].second);
@@ -88,7 +88,7 @@ void register_electricity_plugins(PluginRegistry& registry) {
       .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
         ctx.settings().check_known(kFromCollisionsName, {});
         return std::make_unique<ElectricityFromCollisions>(
-            ctx.target<ElectricityResolver>(), ctx.dependency<rigid::CollisionSet>("collisions"));
+            ctx.target<ElectricityResolver>(), ctx.dependency<ContactSet>("collisions"));
       },
   });
 }

@@ -27,13 +27,13 @@
 #include <vector>
 
 #include "resolvers/electricity/electricity.hpp"
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 
 namespace alloy::electricity {
 
 class ElectricityFromCollisions final : public Interaction {
  public:
-  ElectricityFromCollisions(ElectricityResolver& target, const rigid::CollisionSet& contacts);
+  ElectricityFromCollisions(ElectricityResolver& target, const ContactSet& contacts);
   void apply(const WorldView& world) override;
   /// The pairs connected before the last apply: a restore primes the
   /// interactions again, and this apply must then queue what the last one
@@ -47,7 +47,7 @@ class ElectricityFromCollisions final : public Interaction {
 
  private:
   ElectricityResolver& target_;
-  const rigid::CollisionSet& contacts_;
+  const ContactSet& contacts_;
   std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
   std::vector<std::pair<ObjectId, ObjectId>> before_;     // connected_ before the last apply
   PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};

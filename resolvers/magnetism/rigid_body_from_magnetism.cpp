@@ -1,7 +1,7 @@
 #include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
 
 #include "resolvers/magnetism/magnet_parts.hpp"
-#include "resolvers/rigid_body/rigid_body.hpp"
+#include "resolvers/rigid_body/engine.hpp"
 
 namespace alloy::magnetism {
 
@@ -33,7 +33,7 @@ void register_rigid_body_from_magnetism(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             return std::make_unique<RigidBodyFromMagnetism>(
-                ctx.target<rigid::RigidBodyResolver>(),
+                ctx.target<rigid::RigidBodyEngine>(),
                 ctx.dependency<MagneticForces>(MagneticForces::kName));
           },
   });

@@ -20,7 +20,7 @@
 #include "runtime/stage.hpp"
 
 namespace alloy::rigid {
-class RigidBodyResolver;
+class RigidBodyEngine;
 }
 
 namespace alloy::magnetism {
@@ -30,12 +30,12 @@ class RigidBodyFromMagnetism : public Interaction {
   /// Plugin name.
   static constexpr const char* kName = "rigid_body_from_magnetism";
 
-  RigidBodyFromMagnetism(rigid::RigidBodyResolver& target, const MagneticForces& forces)
+  RigidBodyFromMagnetism(rigid::RigidBodyEngine& target, const MagneticForces& forces)
       : target_(target), forces_(forces) {}
   void apply(const WorldView& world) override;
 
  private:
-  rigid::RigidBodyResolver& target_;
+  rigid::RigidBodyEngine& target_;
   const MagneticForces& forces_;
 };
 

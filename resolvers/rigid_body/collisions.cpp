@@ -358,8 +358,6 @@ struct CollisionSet::Impl {
   std::vector<std::uint32_t> out_of_range;
   /// Inside dSpaceCollide or dSpaceCollide2: an error thrown now leaves the space locked.
   bool colliding = false;
-  /// The points of the previous update: they stand again if this one fails.
-  std::vector<ContactPoint> previous_points;
 
   void recheck(std::uint32_t s, Geom& g) {
     const auto it = std::lower_bound(out_of_range.begin(), out_of_range.end(), s);
@@ -544,28 +542,6 @@ void CollisionSet::on_structure_changed(const WorldView&) {
   impl_->joints_dirty = true;
 }
 
-const ContactPair* CollisionSet::find(ObjectId a, ObjectId b) const {
-  if (b < a) std::swap(a, b);
-  ContactPair key;
-  key.a = a, key.b = b;
-  auto it = std::lower_bound(current_.begin(), current_.end(), key, by_pair);
-  return it != current_.end() && it->a == a && it->b == b ? &*it : nullptr;
-}
-
-std::span<const ContactPair> CollisionSet::ongoing() const {
-  if (!ongoing_made_) {
-    // current_ without began_ (both sorted by pair, began_ a subsequence of it).
-    ongoing_.clear();
-    std::size_t b = 0;
-    for (const ContactPair& p : current_) {
-      if (b < began_.size() && began_[b].a == p.a && began_[b].b == p.b) ++b;
-      else ongoing_.push_back(p);
-    }
-    ongoing_made_ = true;
-  }
-  return ongoing_;
-}
-
 void CollisionSet::update(const WorldView& world) {
   ensure_ode();
   Impl& m = *impl_;
@@ -574,10 +550,7 @@ void CollisionSet::update(const WorldView& world) {
   m.candidates.clear();
 
   // Narrow phase into current_, then sort: ODE's pair order is not ours to rely on.
-  std::swap(previous_, current_);
-  current_.clear();
-  std::swap(points_, m.previous_points);
-  points_.clear();
+  begin_update();
   try {
     if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
       m.rebuild_geoms(world);
@@ -603,82 +576,12 @@ void CollisionSet::update(const WorldView& world) {
     // Bad input (InputError from a shape) or the host's own failure: the set
     // stays as the last update left it, and a space this left locked goes.
     if (m.colliding) m.abandon_geoms();
-    std::swap(previous_, current_);
-    std::swap(points_, m.previous_points);
+    abandon_update();
     throw;
   }
   m.sort_pairs(current_);
 
-  // The rigid body's impulses are for the pairs it was given, i.e. those that
-  // touched at the previous update: merge them in by pair. Empty when nobody
-  // demanded them.
-  const std::uint64_t step = world.step();
-  if (rigid_.impulses_computed() && !impulses_known_) impulses_since_ = step;
-  impulses_known_ = rigid_.impulses_computed();
-  const auto impulses = rigid_.impulses();
-  // A merge cursor over the impulses, for one ascending pass over pairs.
-  auto impulse_cursor = [&] {
-    return [&, k = std::size_t(0)](ContactPair& p) mutable {
-      while (k < impulses.size() && pair_less(impulses[k].a, impulses[k].b, p.a, p.b)) ++k;
-      if (k < impulses.size() && impulses[k].a == p.a && impulses[k].b == p.b) {
-        p.impulse = impulses[k].impulse;
-        p.normal_impulse = impulses[k].normal_impulse;
-        p.total_impulse += p.normal_impulse;
-      }
-    };
-  };
-  auto take_impulse = impulse_cursor();
-
-  // began / ongoing / ended by a merge of two sorted lists (ongoing pairs stay
-  // in current_ only: ongoing() picks them out when asked).
-  began_.clear(), ended_.clear();
-  ongoing_.clear(), ongoing_made_ = false;
-  std::size_t i = 0, j = 0;
-  while (i < current_.size() || j < previous_.size()) {
-    const bool take_new = j == previous_.size() ||
-                          (i < current_.size() && !by_pair(previous_[j], current_[i]));
-    const bool take_old = i == current_.size() ||
-                          (j < previous_.size() && !by_pair(current_[i], previous_[j]));
-    if (take_new && take_old) {  // the same pair: ongoing
-      ContactPair& p = current_[i++];
-      p.began_step = previous_[j].began_step;
-      p.total_impulse = previous_[j++].total_impulse;
-      take_impulse(p);
-    } else if (take_new) {
-      ContactPair& p = current_[i++];
-      p.began_step = step;
-      take_impulse(p);
-      began_.push_back(p);
-    } else {
-      ContactPair p = previous_[j++];
-      p.first = p.count = 0;
-      p.impulse = {};
-      p.normal_impulse = 0;
-      ended_.push_back(p);
-    }
-  }
-  // Impulses of ended pairs (their last push apart), in a second ordered pass.
-  auto take_ended = impulse_cursor();
-  for (ContactPair& p : ended_) take_ended(p);
-
-  for (const ContactPair& p : began_) {
-    Event e;
-    e.type = "contact_began";
-    e.a = p.a, e.b = p.b;
-    e.values = {{"speed", p.normal_speed}, {"depth", p.depth}};
-    world.emit(std::move(e));
-  }
-  for (const ContactPair& p : ended_) {
-    Event e;
-    e.type = "contact_ended";
-    e.a = p.a, e.b = p.b;
-    // No impulse rather than a wrong one when it was not computed throughout.
-    const double duration = double(step - p.began_step) * world.dt();
-    if (total_known(p)) e.values = {{"impulse", p.total_impulse}, {"duration", duration}};
-    else e.values = {{"duration", duration}};
-    world.emit(std::move(e));
-  }
-  step_ = step;
+  publish(world, rigid_.impulses(), rigid_.impulses_computed());
 }
 
 void CollisionSet::engine_failed(const WorldView& world, const std::string& what) {
@@ -689,10 +592,9 @@ void CollisionSet::engine_failed(const WorldView& world, const std::string& what
   // index are left out of collisions until they are back in range.
   Impl& m = *impl_;
   const std::vector<std::uint32_t> culprits = m.abandon_geoms();
-  std::swap(previous_, current_);
-  std::swap(points_, m.previous_points);
-  began_.clear(), ended_.clear(), sweeps_.clear();
-  ongoing_.clear(), ongoing_made_ = false;
+  abandon_update();
+  clear_changes();
+  sweeps_.clear();
   step_ = world.step();
   Event e{.type = "engine_error", .text = "collisions: " + what};
   const PropertyStore& store = world.store();

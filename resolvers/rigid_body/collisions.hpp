@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "resolvers/rigid_body/contact.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -67,25 +68,7 @@ struct Sweep {
   Vec3 displacement;  ///< from its current position to the touching one, m
 };
 
-/// Two parts in contact (or, in ended(), no longer in contact).
-struct ContactPair {
-  ObjectId a, b;  ///< a < b
-  /// Points [first, first + count) of CollisionSet::points(); count is 0 for ended pairs.
-  std::uint32_t first = 0, count = 0;
-  /// Approach speed along the normal, m/s: > 0 when the parts close in. The
-  /// largest over the pair's points; at `began`, the impact speed.
-  double normal_speed = 0;
-  double depth = 0;  ///< deepest penetration, m
-  /// Impulse the rigid body applied to this pair in its last advance (on a,
-  /// N*s). This and the next two are 0 unless CollisionSet::impulses_known().
-  Vec3 impulse;
-  double normal_impulse = 0;  ///< its normal part, N*s
-  /// Normal impulse summed over every advance since the pair began, N*s.
-  double total_impulse = 0;
-  std::uint64_t began_step = 0;  ///< world step at which the pair began
-};
-
-class CollisionSet final : public DerivedSet {
+class CollisionSet final : public ContactSet {
  public:
   /// always_impulses: demand impulses for the set's whole life (the scene's
   /// setting `impulses = true`), whether or not a stage reads them.
@@ -95,51 +78,18 @@ class CollisionSet final : public DerivedSet {
   void update(const WorldView& world) override;
   void on_structure_changed(const WorldView& world) override;
 
-  std::span<const ContactPair> began() const { return began_; }
-  std::span<const ContactPair> ongoing() const;
-  /// began and ongoing together, sorted by (a, b): every pair that touches now.
-  std::span<const ContactPair> touching() const { return current_; }
-  std::span<const ContactPair> ended() const { return ended_; }
-  /// The contact points of began and ongoing pairs.
-  std::span<const ContactPoint> points() const { return points_; }
-  std::span<const ContactPoint> points(const ContactPair& p) const {
-    return std::span<const ContactPoint>(points_).subspan(p.first, p.count);
-  }
-  /// The world step of the last update: began() and ended() are about that
-  /// step (the set is skipped, and keeps its lists, while nothing moves).
-  std::uint64_t step() const { return step_; }
   /// Parts that tunnelled in the last step, in ObjectId order (see the header).
   std::span<const Sweep> sweeps() const { return sweeps_; }
-  /// Whether a and b touch (in either order), and the pair if so.
-  const ContactPair* find(ObjectId a, ObjectId b) const;
-
   /// Declares that the caller reads the pairs' impulses (see the header):
   /// they are computed from the rigid body's next advance on while it is held.
-  ImpulseDemand demand_impulses() const;
-  /// Whether the pairs of the last update carry the impulses the rigid body
-  /// applied (some stage demanded them); if not, the impulse fields are 0.
-  bool impulses_known() const { return impulses_known_; }
-  /// Whether the pair's total_impulse covers every advance since it began
-  /// (impulses were computed for all of them).
-  bool total_known(const ContactPair& p) const { return impulses_known_ && p.began_step + 1 >= impulses_since_; }
+  ImpulseDemand demand_impulses() const override;
 
  private:
   struct Impl;
   const RigidBodyResolver& rigid_;
   std::unique_ptr<Impl> impl_;
-  std::vector<ContactPair> began_, ended_;
-  std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; scratch for the merge
-  // ongoing() is made from current_ when first asked for after an update: the
-  // rigid body's feed reads touching(), and a pile's pairs are nearly all
-  // ongoing (1,000 boxes: about 1,000 pairs a step, 2 of them new).
-  mutable std::vector<ContactPair> ongoing_;
-  mutable bool ongoing_made_ = false;
-  std::vector<ContactPoint> points_;
   std::vector<Sweep> sweeps_;
-  std::uint64_t step_ = 0;
   ImpulseDemand always_;
-  bool impulses_known_ = false;
-  std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
 
   void sweep(const WorldView& world);
   /// ODE failed inside the update (see collisions.cpp): reported, not fatal.

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "resolvers/rigid_body/contact.hpp"
+#include "resolvers/rigid_body/engine.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -157,7 +158,7 @@ struct ContactCommand {
   double bounce_velocity = 0.1;  ///< approach speeds below this do not bounce, m/s
 };
 
-class RigidBodyResolver final : public Resolver {
+class RigidBodyResolver final : public RigidBodyEngine {
  public:
   RigidBodyResolver(const World& world, RigidBodyConfig config);
   ~RigidBodyResolver() override;
@@ -179,24 +180,24 @@ class RigidBodyResolver final : public Resolver {
 
   // --- interaction functions: queued, performed in the next advance -------------
   /// Force at the part's centre of mass, N. A stale id throws AccessError.
-  void add_force(ObjectId part, Vec3 force);
+  void add_force(ObjectId part, Vec3 force) override;
   /// Force applied at a world point, N (adds the torque about the centre of mass).
-  void add_force(ObjectId part, Vec3 force, Vec3 point);
+  void add_force(ObjectId part, Vec3 force, Vec3 point) override;
   /// Fast path for loops over a column's members (no liveness check: the slot
   /// comes from a live member list in the same phase).
-  void add_force(std::uint32_t slot, Vec3 force) {
+  void add_force(std::uint32_t slot, Vec3 force) override {
     load_sources_.note(forces_.size(), world_.running_stage());
     forces_.push_back({slot, store_.id_at(slot).generation, force, {}, Load::Force});
   }
   /// Torque, N*m, world frame.
-  void add_torque(ObjectId part, Vec3 torque);
+  void add_torque(ObjectId part, Vec3 torque) override;
   /// A force at the part's centre of mass and a torque (world frame) with
   /// their rates of change, N/s and N*m/s (a derived set's d/dt along the
   /// present motion). Substep s of the window (s = 0 .. substeps - 1) applies
   /// value + rate * s * dt / substeps: a first-order hold, so that a load
   /// that depends on the pose follows the parts as they move within the
   /// window; with one substep it is exactly the value.
-  void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate);
+  void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate) override;
   /// A contact pair with its points; the resolver makes ODE contact joints of
   /// them for one advance. Pairs within one assembly or of two immovable parts
   /// are ignored.
@@ -210,16 +211,7 @@ class RigidBodyResolver final : public Resolver {
   void displace(ObjectId part, Vec3 displacement);
 
   // --- in-place queueing, for bindings that write load records themselves ------
-  /// A queued load as the queue holds it (add_force, add_force at a point,
-  /// add_torque). The Lua stages' prelude writes these in place (its FFI
-  /// declaration mirrors this layout; lua/stage_abi.hpp asserts it).
-  enum class Load : std::uint8_t { Force, ForceAtPoint, Torque };
-  struct LoadCommand {
-    std::uint32_t slot;
-    std::uint32_t generation;  // 0: unchecked (slot fast path)
-    Vec3 value, point;
-    Load kind;
-  };
+  // (Load and LoadCommand: engine.hpp.)
   /// Room for `n` records after those queued when the room was first opened,
   /// to be filled by the caller: not cleared (the queue reuses its storage from
   /// step to step), so every record needs its slot, generation, value and
@@ -227,8 +219,8 @@ class RigidBodyResolver final : public Resolver {
   /// again for more keeps the records written so far, though the span moves.
   /// The generation of each record must be its object's, as add_force(ObjectId)
   /// would take it. close_loads(used) keeps the first `used` of them.
-  std::span<LoadCommand> open_loads(std::size_t n);
-  void close_loads(std::size_t used);
+  std::span<LoadCommand> open_loads(std::size_t n) override;
+  void close_loads(std::size_t used) override;
 
   // --- published state ------------------------------------------------------------
   /// Impulses of the last advance, one per contact pair it resolved, sorted by
@@ -236,18 +228,18 @@ class RigidBodyResolver final : public Resolver {
   std::span<const PairImpulse> impulses() const { return impulses_; }
   /// Declares that the caller reads impulses: from the next advance on, and
   /// while the returned demand (or any other) is held, advances compute them.
-  ImpulseDemand demand_impulses() const { return ImpulseDemand(impulse_demand_); }
+  ImpulseDemand demand_impulses() const override { return ImpulseDemand(impulse_demand_); }
   /// Whether the last advance computed impulses (some demand was held).
   bool impulses_computed() const { return impulses_computed_; }
   const RigidBodyConfig& config() const { return config_; }
 
   // --- introspection (tests, profiling) --------------------------------------------
   /// ODE bodies: one per assembly of parts glued by fixed joints.
-  std::size_t body_count() const;
+  std::size_t body_count() const override;
   /// ODE joints made from joint objects (fixed joints merge bodies and make none).
-  std::size_t joint_count() const;
+  std::size_t joint_count() const override;
   /// Bodies being simulated: not kinematic, and not asleep (auto_disable).
-  std::size_t awake_count() const;
+  std::size_t awake_count() const override;
   /// Full rebuilds so far (build() and rebuilds after a defining edit).
   std::uint64_t rebuild_count() const { return rebuilds_; }
   /// Errors raised inside ODE so far (OdeError), each reported as an

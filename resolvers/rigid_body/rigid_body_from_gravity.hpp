@@ -3,17 +3,18 @@
 // gravity resolver acts where the body is) and a mass, queued every step.
 #pragma once
 
-#include "resolvers/rigid_body/rigid_body.hpp"
+#include "resolvers/rigid_body/engine.hpp"
+#include "runtime/world.hpp"
 
 namespace alloy::rigid {
 
 class RigidBodyFromGravity final : public Interaction {
  public:
-  explicit RigidBodyFromGravity(RigidBodyResolver& target) : target_(target) {}
+  explicit RigidBodyFromGravity(RigidBodyEngine& target) : target_(target) {}
   void apply(const WorldView& world) override;
 
  private:
-  RigidBodyResolver& target_;
+  RigidBodyEngine& target_;
   PropertyId gravity_ = kNoProperty, mass_ = kNoProperty;
 };
 

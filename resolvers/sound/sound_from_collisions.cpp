@@ -10,11 +10,11 @@ void SoundFromCollisions::apply(const WorldView& world) {
   for (const Impact& impact : pending_) {
     const Key& k = impact.key;
     double impulse = 0;
-    if (const rigid::ContactPair* p = collisions_.find(k.a, k.b);
+    if (const ContactPair* p = collisions_.find(k.a, k.b);
         p && p->began_step == k.began_step) {
       impulse = p->total_impulse;
     } else {
-      for (const rigid::ContactPair& e : collisions_.ended())
+      for (const ContactPair& e : collisions_.ended())
         if (e.a == k.a && e.b == k.b && e.began_step == k.began_step) impulse = e.total_impulse;
     }
     strike(world, impact, impulse);
@@ -23,14 +23,14 @@ void SoundFromCollisions::apply(const WorldView& world) {
 
   // 2. Forget pairs that no longer touch: they may begin again, and ring again.
   std::erase_if(seen_, [&](const Key& k) {
-    const rigid::ContactPair* p = collisions_.find(k.a, k.b);
+    const ContactPair* p = collisions_.find(k.a, k.b);
     return !p || p->began_step != k.began_step;
   });
 
   // 3. New impacts (began is sorted by pair, so pending_ is in a fixed order).
   const auto acoustic = acoustic_.column<EnumValue>(world);
   const double min_speed = sound_.settings().min_speed;
-  for (const rigid::ContactPair& p : collisions_.began()) {
+  for (const ContactPair& p : collisions_.began()) {
     const Key k{p.a, p.b, p.began_step};
     auto at = std::lower_bound(seen_.begin(), seen_.end(), k);
     if (at != seen_.end() && *at == k) continue;  // already handled (the set was skipped)
@@ -60,7 +60,7 @@ void register_sound_from_collisions(PluginRegistry& registry) {
                .doc = "parts that hit each other ring, as hard as the rigid body's impulse says"},
       .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
         return std::make_unique<SoundFromCollisions>(
-            ctx.target<SoundResolver>(), ctx.dependency<rigid::CollisionSet>("collisions"));
+            ctx.target<SoundResolver>(), ctx.dependency<ContactSet>("collisions"));
       },
   });
 }

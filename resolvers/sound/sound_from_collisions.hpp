@@ -22,7 +22,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "resolvers/rigid_body/collisions.hpp"
+#include "runtime/contact_set.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
 #include "runtime/property_ref.hpp"
 
@@ -30,7 +30,7 @@ namespace alloy::sound {
 
 class SoundFromCollisions final : public Interaction {
  public:
-  SoundFromCollisions(SoundResolver& sound, const rigid::CollisionSet& collisions)
+  SoundFromCollisions(SoundResolver& sound, const ContactSet& collisions)
       : sound_(sound), collisions_(collisions), impulses_(collisions.demand_impulses()) {}
 
   void apply(const WorldView& world) override;
@@ -54,8 +54,8 @@ class SoundFromCollisions final : public Interaction {
   PropertyRef acoustic_{"acoustic"};
 
   SoundResolver& sound_;
-  const rigid::CollisionSet& collisions_;
-  rigid::ImpulseDemand impulses_;  // strikes are as hard as the impulse: declared to the rigid body
+  const ContactSet& collisions_;
+  ImpulseDemand impulses_;  // strikes are as hard as the impulse: declared to the rigid body
   std::vector<Impact> pending_;  // began at the last apply, struck at this one
   std::vector<Key> seen_;        // began pairs already handled, sorted; pruned when they end
 };

@@ -1,0 +1,166 @@
+// Contacts as every reader sees them, whichever engine finds them: the
+// `collisions` derived set's published lists (paper 3.3). The ODE rigid body's
+// CollisionSet (resolvers/rigid_body/collisions.hpp) and any other engine's
+// contact provider derive from ContactSet and fill the same lists, so that
+// electricity, sound, Lua mods and the viewer read contacts without naming an
+// engine.
+//
+// An update's lists, each sorted by (a, b):
+//   began    pairs that touch now and did not at the last update
+//   ongoing  pairs that touched then and still do
+//   ended    pairs that touched then and do not now
+// with contact points, normals, depths, the approach speed, and the impulse
+// the rigid body applied to the pair in its last advance (while some reader
+// demands impulses: see ImpulseDemand).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "runtime/math.hpp"
+#include "runtime/object_id.hpp"
+#include "runtime/stage.hpp"
+
+namespace alloy {
+
+class WorldView;
+
+/// One point of contact between two parts a and b (a < b by ObjectId).
+struct ContactPoint {
+  Vec3 position;  ///< world frame, m
+  /// Unit normal pointing from b towards a: moving a along +normal by `depth`
+  /// separates the parts (ODE's convention with a as body 1).
+  Vec3 normal;
+  double depth = 0;  ///< penetration, m (>= 0)
+};
+
+/// The impulse the rigid body applied to a pair of parts over its last advance.
+struct PairImpulse {
+  ObjectId a, b;  ///< a < b
+  /// Total contact impulse on a (normal and friction), N*s; b got -impulse.
+  Vec3 impulse;
+  double normal_impulse = 0;  ///< its normal part, N*s (>= 0)
+};
+
+/// Two parts in contact (or, in ended(), no longer in contact).
+struct ContactPair {
+  ObjectId a, b;  ///< a < b
+  /// Points [first, first + count) of ContactSet::points(); count is 0 for ended pairs.
+  std::uint32_t first = 0, count = 0;
+  /// Approach speed along the normal, m/s: > 0 when the parts close in. The
+  /// largest over the pair's points; at `began`, the impact speed.
+  double normal_speed = 0;
+  double depth = 0;  ///< deepest penetration, m
+  /// Impulse the rigid body applied to this pair in its last advance (on a,
+  /// N*s). This and the next two are 0 unless ContactSet::impulses_known().
+  Vec3 impulse;
+  double normal_impulse = 0;  ///< its normal part, N*s
+  /// Normal impulse summed over every advance since the pair began, N*s.
+  double total_impulse = 0;
+  std::uint64_t began_step = 0;  ///< world step at which the pair began
+};
+
+/// A stage's declaration that it reads contact impulses (ContactPair::impulse,
+/// normal_impulse, total_impulse, the impulse of contact_ended). The rigid
+/// body computes them (ODE's joint feedback on every contact joint, about 2 %
+/// of a pile's step) only while at least one demand is held: a scene pays
+/// nothing for impulses nobody reads. Hold it for as long as the stage reads
+/// them (a member); it may outlive the rigid body it was taken from.
+class ImpulseDemand {
+ public:
+  ImpulseDemand() = default;
+  explicit ImpulseDemand(std::shared_ptr<std::size_t> count) : count_(std::move(count)) {
+    if (count_) ++*count_;
+  }
+  ImpulseDemand(ImpulseDemand&& o) noexcept = default;
+  ImpulseDemand& operator=(ImpulseDemand&& o) noexcept {
+    if (this != &o) release(), count_ = std::move(o.count_);
+    return *this;
+  }
+  ImpulseDemand(const ImpulseDemand&) = delete;
+  ImpulseDemand& operator=(const ImpulseDemand&) = delete;
+  ~ImpulseDemand() { release(); }
+  /// Whether this holds a demand (a default-constructed one does not).
+  explicit operator bool() const { return bool(count_); }
+
+ private:
+  void release() {
+    if (count_) --*count_, count_.reset();
+  }
+  std::shared_ptr<std::size_t> count_;
+};
+
+/// Orders pairs by (a, b): the deterministic order of every contact list.
+constexpr bool pair_less(ObjectId a1, ObjectId b1, ObjectId a2, ObjectId b2) {
+  return a1 < a2 || (a1 == a2 && b1 < b2);
+}
+
+/// The contact lists of one update (see the header). An engine's provider
+/// fills them in its update(): it swaps current_ into previous_ (begin_update),
+/// finds the pairs touching now into current_ and their points into points_,
+/// sorts current_ by (a, b), and calls publish(), which merges the two sorted
+/// lists into began / ongoing / ended, carries each ongoing pair's began_step and
+/// total impulse, merges in the impulses of the last advance, and emits
+/// contact_began and contact_ended.
+class ContactSet : public DerivedSet {
+ public:
+  std::span<const ContactPair> began() const { return began_; }
+  std::span<const ContactPair> ongoing() const;
+  /// began and ongoing together, sorted by (a, b): every pair that touches now.
+  std::span<const ContactPair> touching() const { return current_; }
+  std::span<const ContactPair> ended() const { return ended_; }
+  /// The contact points of began and ongoing pairs.
+  std::span<const ContactPoint> points() const { return points_; }
+  std::span<const ContactPoint> points(const ContactPair& p) const {
+    return std::span<const ContactPoint>(points_).subspan(p.first, p.count);
+  }
+  /// The world step of the last update: began() and ended() are about that
+  /// step (the set is skipped, and keeps its lists, while nothing moves).
+  std::uint64_t step() const { return step_; }
+  /// Whether a and b touch (in either order), and the pair if so.
+  const ContactPair* find(ObjectId a, ObjectId b) const;
+
+  /// Declares that the caller reads the pairs' impulses: they are computed
+  /// from the rigid body's next advance on while it is held.
+  virtual ImpulseDemand demand_impulses() const = 0;
+  /// Whether the pairs of the last update carry the impulses the rigid body
+  /// applied (some stage demanded them); if not, the impulse fields are 0.
+  bool impulses_known() const { return impulses_known_; }
+  /// Whether the pair's total_impulse covers every advance since it began
+  /// (impulses were computed for all of them).
+  bool total_known(const ContactPair& p) const {
+    return impulses_known_ && p.began_step + 1 >= impulses_since_;
+  }
+
+ protected:
+  /// Starts an update: the present pairs become the previous ones, and the
+  /// present lists are emptied for the provider to fill.
+  void begin_update();
+  /// Undoes begin_update() (an update that failed keeps the last lists).
+  void abandon_update();
+  /// Ends an update whose pairs are in current_ (sorted by (a, b)) and points
+  /// in points_: see the class comment. `impulses` are the rigid body's of
+  /// its last advance, sorted by (a, b), for the pairs it was given;
+  /// `computed` says whether it computed any.
+  void publish(const WorldView& world, std::span<const PairImpulse> impulses, bool computed);
+  /// Clears began, ended and the lazily made ongoing list (an update that
+  /// keeps the last pairs but reports no change).
+  void clear_changes();
+
+  std::vector<ContactPair> began_, ended_;
+  std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; the last update's
+  std::vector<ContactPoint> points_, previous_points_;
+  // ongoing() is made from current_ when first asked for after an update: a
+  // pile's pairs are nearly all ongoing (1,000 boxes: about 1,000 pairs a
+  // step, 2 of them new), and most readers read touching().
+  mutable std::vector<ContactPair> ongoing_;
+  mutable bool ongoing_made_ = false;
+  std::uint64_t step_ = 0;
+  bool impulses_known_ = false;
+  std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
+};
+
+}  // namespace alloy
