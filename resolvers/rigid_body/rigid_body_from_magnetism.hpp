@@ -3,9 +3,8 @@
 // part are queued on the rigid body, which applies them in its next advance,
 // "similar to the gravity force ... until the electromagnet is turned off".
 //
-// By the naming rule it belongs in resolvers/rigid_body/ (the folder of the
-// resolver it feeds); it lives here for now so that the rigid body's files stay
-// their author's. Moving it is a file move plus one CMake line.
+// It lives in resolvers/rigid_body/, the folder of the resolver it feeds (by the
+// naming rule); it keeps the magnetism namespace of the set it reads.
 //
 // Contract:
 //   reads    the magnetic_forces derived set (no property)
