@@ -2,35 +2,30 @@
 // by whoever makes a PluginRegistry (the Lua host, the apps, tests, benchmarks).
 #pragma once
 
+#include "resolvers/gravity/gravity_plugins.hpp"
+#include "resolvers/rigid_body/rigid_body_plugins.hpp"
 #include "runtime/plugin_registry.hpp"
 
 namespace alloy {
 
-/// Registers, in this order (the order stages run in when nothing else decides):
-///   rigid_body                  resolver (ODE)        needs mass or density
-///   collisions                  derived set (ODE collision detection)
-///   rigid_body_from_collisions  interaction -> rigid_body
-///   gravity.uniform             resolver              needs mass or density
-///   rigid_body_from_gravity     interaction -> rigid_body
+/// Registers each physics folder's plugins with its register_<physics>_plugins,
+/// in the order of resolvers/CMakeLists.txt's list (the order stages run in
+/// when nothing else decides; an interaction registers with the later of the
+/// two physics it joins):
+///   rigid_body, collisions, rigid_body_from_collisions
+///                                      (resolvers/rigid_body/; need mass or density)
+///   gravity.uniform, gravity.nbody, rigid_body_from_gravity
+///                                      (resolvers/gravity/; need mass or density)
 ///   electricity, electricity_from_collisions
-///                               (resolvers/electricity/; need emf or inductance)
-///   magnetism, magnetic_forces, magnetism_from_electricity, rigid_body_from_magnetism
-///                               (resolvers/magnetism/; need magnet, or current)
-///   sound, sound_from_collisions
-///                               (resolvers/sound/; need acoustic)
+///                                      (resolvers/electricity/; need emf or inductance)
+///   magnetism, magnetic_forces, magnetism_from_electricity,
+///   rigid_body_from_magnetism, electricity_from_magnetism
+///                                      (resolvers/magnetism/; need magnet, or current)
+///   sound, sound_from_collisions       (resolvers/sound/; need acoustic)
 ///   light, illuminance, light_from_electricity, electricity_from_light
-///                               (resolvers/light/; need luminous_efficacy or light_receiver)
+///                                      (resolvers/light/; need luminous_efficacy or
+///                                      light_receiver)
 /// and the property types they define.
 void register_native_plugins(PluginRegistry& registry);
-
-namespace rigid {
-PluginDef rigid_body_plugin();
-PluginDef collisions_plugin();
-PluginDef rigid_body_from_collisions_plugin();
-PluginDef rigid_body_from_gravity_plugin();
-}  // namespace rigid
-namespace gravity {
-PluginDef uniform_gravity_plugin();
-}  // namespace gravity
 
 }  // namespace alloy

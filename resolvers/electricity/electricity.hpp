@@ -369,8 +369,8 @@ class ElectricityResolver final : public Resolver {
 
 /// Registers the `electricity` resolver and its property types only (for
 /// tools and tests that run circuits without the rigid body). The full set,
-/// with electricity_from_collisions, is register_electricity_plugins in
-/// electricity_from_collisions.hpp.
+/// with the interactions that feed electricity, is register_electricity_plugins
+/// in electricity_plugins.hpp.
 void register_electricity_resolver(PluginRegistry& registry);
 
 }  // namespace alloy::electricity

@@ -76,8 +76,7 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
   connected_ = std::move(now);
 }
 
-void register_electricity_plugins(PluginRegistry& registry) {
-  register_electricity_resolver(registry);
+void register_electricity_from_collisions(PluginRegistry& registry) {
   registry.add({
       .info = {.name = kFromCollisionsName,
                .kind = StageKind::Interaction,

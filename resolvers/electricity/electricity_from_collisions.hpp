@@ -53,9 +53,9 @@ class ElectricityFromCollisions final : public Interaction {
   PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};
 };
 
-/// Registers the `electricity` resolver and the `electricity_from_collisions`
-/// interaction with their property types. Needs the rigid body's plugins
-/// (the `collisions` set) registered for the interaction to be instantiated.
-void register_electricity_plugins(PluginRegistry& registry);
+/// Registers the `electricity_from_collisions` interaction (register_electricity_plugins
+/// does). Needs the rigid body's plugins (the `collisions` set) registered for the
+/// interaction to be instantiated.
+void register_electricity_from_collisions(PluginRegistry& registry);
 
 }  // namespace alloy::electricity

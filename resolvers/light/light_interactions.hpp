@@ -13,9 +13,9 @@
 // own circuit is a loop through two physics, each leg a step late (the
 // paper's one-step delay), which settles where the two laws agree.
 //
-// They live here, beside the light resolver, as electricity_from_magnetism
-// lives beside magnetism: they are compiled into alloy_resolvers, which links
-// both physics.
+// Both live here, beside the light resolver (electricity_from_light would
+// belong to resolvers/electricity/ by the naming rule; it shares this file with
+// its twin). They are built with light's plugins, which link electricity.
 #pragma once
 
 #include "resolvers/light/illuminance.hpp"
@@ -64,10 +64,5 @@ class ElectricityFromLight final : public Interaction {
   PropertyRef dark_{prop::kDarkResistance}, e0_{prop::kDarkIlluminance}, gamma_{prop::kPhotoGamma},
       lit_{prop::kLitResistance};
 };
-
-/// Registers, in this order, with their property types: light (resolver),
-/// illuminance (derived set), light_from_electricity (-> light),
-/// electricity_from_light (-> electricity). After the electricity plugins.
-void register_light_plugins(PluginRegistry& registry);
 
 }  // namespace alloy::light

@@ -2,10 +2,12 @@
 
 #include <cmath>
 
+#include "resolvers/electricity/electricity_from_magnetism.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/magnetism_from_electricity.hpp"
 #include "resolvers/magnetism/magnetism_resolver.hpp"
+#include "resolvers/rigid_body/rigid_body_from_magnetism.hpp"
 
 namespace alloy::magnetism {
 
@@ -23,7 +25,7 @@ std::vector<std::string> with_shape(std::vector<std::string> names) {
 }
 }  // namespace
 
-void register_magnetism_plugins(PluginRegistry& registry) {
+void register_magnetism_resolver(PluginRegistry& registry) {
   ensure_geometry_properties(registry.properties());
 
   registry.add({
@@ -94,6 +96,14 @@ void register_magnetism_plugins(PluginRegistry& registry) {
             return std::make_unique<MagnetismFromElectricity>(ctx.target<MagnetismResolver>());
           },
   });
+}
+
+void register_magnetism_plugins(PluginRegistry& registry) {
+  register_magnetism_resolver(registry);
+  // The interactions that join magnetism to the physics registered before it;
+  // they live in the folders of the resolvers they feed.
+  register_rigid_body_from_magnetism(registry);
+  register_electricity_from_magnetism(registry);
 }
 
 }  // namespace alloy::magnetism

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace alloy::rigid {
 
@@ -13,7 +15,12 @@ PropertyDef number(const char* name, const char* unit, const char* doc) {
   return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc};
 }
 PropertyDef positive(const char* name, const char* unit, const char* doc) {
-  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = 0.0, .min_exclusive = true};
+  return {.name = name,
+          .kind = PropertyKind::Number,
+          .unit = unit,
+          .doc = doc,
+          .min = 0.0,
+          .min_exclusive = true};
 }
 PropertyDef non_negative(const char* name, const char* unit, const char* doc) {
   return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = 0.0};
@@ -76,6 +83,12 @@ std::vector<PropertyDef> body_properties() {
   };
 }
 
+PropertyDef body_property(std::string_view name) {
+  for (PropertyDef& d : body_properties())
+    if (d.name == name) return std::move(d);
+  throw std::logic_error("no body property '" + std::string(name) + "'");
+}
+
 std::vector<PropertyDef> joint_properties() {
   return {
       {.name = "joint",
@@ -103,8 +116,11 @@ std::vector<PropertyDef> joint_properties() {
 std::vector<PropertyDef> material_properties() {
   return {
       non_negative("friction", "", "Coulomb friction coefficient (default 0.5)"),
-      {.name = "restitution", .kind = PropertyKind::Number, .doc = "coefficient of restitution, 0..1 (default 0)",
-       .min = 0.0, .max = 1.0},
+      {.name = "restitution",
+       .kind = PropertyKind::Number,
+       .doc = "coefficient of restitution, 0..1 (default 0)",
+       .min = 0.0,
+       .max = 1.0},
   };
 }
 
@@ -131,7 +147,8 @@ void check_object(const World& w, ObjectId id) {
       if (carries(w, body, "joint"))
         throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' is a joint");
       if (!carries(w, body, "shape"))
-        throw InputError("a joint can only hold bodies, and '" + w.describe(body) + "' has no shape");
+        throw InputError("a joint can only hold bodies, and '" + w.describe(body) +
+                         "' has no shape");
     }
     auto lo = w.value<double>(id, "limit_low");
     auto hi = w.value<double>(id, "limit_high");
@@ -143,7 +160,8 @@ void check_object(const World& w, ObjectId id) {
   if (!shape) return;
   switch (Shape(shape->index)) {
     case Shape::Box:
-      if (!carries(w, id, "size")) throw InputError("a box needs a 'size' (full extents {x, y, z})");
+      if (!carries(w, id, "size"))
+        throw InputError("a box needs a 'size' (full extents {x, y, z})");
       break;
     case Shape::Sphere:
       if (!carries(w, id, "radius")) throw InputError("a sphere needs a 'radius'");
@@ -158,16 +176,21 @@ void check_object(const World& w, ObjectId id) {
             "a cylinder needs a 'radius' and a 'length' (its thickness along the part's z)");
       break;
   }
-  if (!w.value<bool>(id, "static").value_or(false) && !carries(w, id, "mass") && !carries(w, id, "density"))
-    throw InputError("a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
+  if (!w.value<bool>(id, "static").value_or(false) && !carries(w, id, "mass") &&
+      !carries(w, id, "density"))
+    throw InputError(
+        "a moving body needs a 'mass' (or 'density'); give one, or make it static = true");
 }
 
 double shape_volume(Shape shape, Vec3 size, double radius, double length) {
   constexpr double pi = std::numbers::pi;
   switch (shape) {
-    case Shape::Box: return size.x * size.y * size.z;
-    case Shape::Sphere: return 4.0 / 3.0 * pi * radius * radius * radius;
-    case Shape::Capsule: return pi * radius * radius * length + 4.0 / 3.0 * pi * radius * radius * radius;
+    case Shape::Box:
+      return size.x * size.y * size.z;
+    case Shape::Sphere:
+      return 4.0 / 3.0 * pi * radius * radius * radius;
+    case Shape::Capsule:
+      return pi * radius * radius * length + 4.0 / 3.0 * pi * radius * radius * radius;
     case Shape::Cylinder:
       return pi * radius * radius * length;
   }

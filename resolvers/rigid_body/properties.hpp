@@ -2,6 +2,7 @@
 // contract with the Lua kit and the viewer: keep them exactly.
 #pragma once
 
+#include <string_view>
 #include <vector>
 
 #include "runtime/property_types.hpp"
@@ -48,6 +49,9 @@ inline constexpr double max_dimension = extent;
 
 /// Body properties: pose, velocity, mass and shape (see the doc line of each).
 std::vector<PropertyDef> body_properties();
+/// The one body property called `name` (for plugins that read a few of them,
+/// such as gravity's); std::logic_error if there is none.
+PropertyDef body_property(std::string_view name);
 /// Joint objects: joint, body_a, body_b, anchor, axis, joint_friction, limits.
 std::vector<PropertyDef> joint_properties();
 /// Contact materials: friction, restitution.

@@ -1,4 +1,4 @@
-// The motor's back-EMF (resolvers/magnetism/electricity_from_magnetism.hpp):
+// The motor's back-EMF (resolvers/electricity/electricity_from_magnetism.hpp):
 // in the scene as built, the EMF its spokes induce in the powered coil
 // opposes the current (Lenz), and the power the coils' fields put into the
 // rotor is the power the back-EMF takes out of the circuits (the coupling's
@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "resolvers/electricity/electricity.hpp"
-#include "resolvers/magnetism/electricity_from_magnetism.hpp"
+#include "resolvers/electricity/electricity_from_magnetism.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "tests/motor/motor_support.hpp"
 

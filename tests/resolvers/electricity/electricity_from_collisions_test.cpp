@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "resolvers/electricity/electricity_plugins.hpp"
 #include "resolvers/plugins.hpp"
 
 namespace alloy::electricity {

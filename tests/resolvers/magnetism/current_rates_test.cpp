@@ -24,7 +24,7 @@ struct Circuit {
   /// `force_rates`: magnetic_forces publishes its rates too.
   explicit Circuit(bool rates, double dt = 1.0 / 240, bool force_rates = false) {
     electricity::register_electricity_resolver(registry);
-    register_magnetism_plugins(registry);
+    register_magnetism_resolver(registry);
     WorldDef def;
     def.dt = dt;
     if (force_rates) def.settings["magnetic_forces"].set("rates", true);
@@ -58,7 +58,9 @@ struct Circuit {
 
 constexpr double kTau = 0.06 / 6.0, kInf = 6.0 / 6.0;  // L / R_total, s; V / R_total, A
 
-double analytic(double t) { return kInf * -std::expm1(-t / kTau); }
+double analytic(double t) {
+  return kInf * -std::expm1(-t / kTau);
+}
 
 TEST(CurrentRates, TheCoilPublishesItsRateOnlyWithTheSetting) {
   Circuit off(false);

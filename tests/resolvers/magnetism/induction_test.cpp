@@ -12,7 +12,7 @@
 
 #include "magnet_scene.hpp"
 #include "resolvers/electricity/electricity.hpp"
-#include "resolvers/magnetism/electricity_from_magnetism.hpp"
+#include "resolvers/electricity/electricity_from_magnetism.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
 namespace alloy::magnetism {

@@ -21,7 +21,7 @@ class MagnetismFromElectricityTest : public ::testing::Test {
  protected:
   void SetUp() override {
     electricity::register_electricity_resolver(registry);
-    register_magnetism_plugins(registry);
+    register_magnetism_resolver(registry);
   }
   /// A 6 V battery wired to a 60 mH, 5.9 Ohm coil of 200 turns; tau = 10 ms.
   /// `reversed` wires the battery's + to the coil's terminal 1 instead of 0.

@@ -36,7 +36,7 @@ class MagnetismTest : public ::testing::Test {
  protected:
   void SetUp() override {
     register_current_source(registry);
-    register_magnetism_plugins(registry);
+    register_magnetism_resolver(registry);
   }
   WorldDef softening(double eps) {
     WorldDef def;

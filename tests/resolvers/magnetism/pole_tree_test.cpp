@@ -241,7 +241,7 @@ class MagneticForcesMethod : public ::testing::Test {
  protected:
   void SetUp() override {
     register_current_source(registry);
-    register_magnetism_plugins(registry);
+    register_magnetism_resolver(registry);
   }
   WorldDef with(const char* method, double theta = kDefaultTheta) {
     WorldDef def;

@@ -1,9 +1,9 @@
-// Tests for resolvers/magnetism/rigid_body_from_magnetism.hpp with every native
+// Tests for resolvers/rigid_body/rigid_body_from_magnetism.hpp with every native
 // plugin: a soft-iron striker on a planar body is pulled toward an energised
 // coil (the doorbell's frames 101-102, paper 4.1.3), the pull starts two steps
 // after the current (electricity -> magnetism -> rigid body), and it stops
 // when the current drops. Gravity is off so that only magnetism moves it.
-#include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
+#include "resolvers/rigid_body/rigid_body_from_magnetism.hpp"
 
 #include <gtest/gtest.h>
 

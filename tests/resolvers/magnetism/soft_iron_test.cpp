@@ -35,7 +35,7 @@ class SoftIronTest : public ::testing::Test {
  protected:
   void SetUp() override {
     register_current_source(registry);
-    register_magnetism_plugins(registry);
+    register_magnetism_resolver(registry);
   }
   WorldDef unsoftened() {
     WorldDef def;

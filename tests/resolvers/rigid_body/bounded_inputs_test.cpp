@@ -1,5 +1,5 @@
 // Physically bounded inputs of the rigid body (resolvers/rigid_body: limits::
-// in properties.hpp, the "bounds" section of rigid_body.cpp, ode_support's
+// in properties.hpp, rigid_body_bounds.cpp, ode_support's
 // error routing). Finite but absurd loads, masses and poses used to abort the
 // process inside ODE; each is now refused at the boundary: an edit by the
 // property registry (InputError naming the object and the value), a load or

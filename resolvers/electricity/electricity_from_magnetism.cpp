@@ -1,4 +1,4 @@
-#include "resolvers/magnetism/electricity_from_magnetism.hpp"
+#include "resolvers/electricity/electricity_from_magnetism.hpp"
 
 #include <cmath>
 

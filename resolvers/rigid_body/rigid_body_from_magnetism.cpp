@@ -1,4 +1,4 @@
-#include "resolvers/magnetism/rigid_body_from_magnetism.hpp"
+#include "resolvers/rigid_body/rigid_body_from_magnetism.hpp"
 
 #include "resolvers/magnetism/magnet_parts.hpp"
 #include "resolvers/rigid_body/engine.hpp"

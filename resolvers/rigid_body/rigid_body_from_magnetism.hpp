@@ -3,9 +3,9 @@
 // part are queued on the rigid body, which applies them in its next advance,
 // "similar to the gravity force ... until the electromagnet is turned off".
 //
-// By the naming rule it belongs in resolvers/rigid_body/ (the folder of the
-// resolver it feeds); it lives here for now so that the rigid body's files stay
-// their author's. Moving it is a file move plus one CMake line.
+// It lives in resolvers/rigid_body/, the folder of the resolver it feeds, and is
+// registered by register_magnetism_plugins (the later of the two physics it
+// joins); it keeps the magnetism namespace of the set it reads.
 //
 // Contract:
 //   reads    the magnetic_forces derived set (no property)
@@ -39,8 +39,8 @@ class RigidBodyFromMagnetism : public Interaction {
   const MagneticForces& forces_;
 };
 
-/// Registers rigid_body_from_magnetism (after register_magnetism_plugins, which
-/// registers the magnetic_forces set it reads).
+/// Registers rigid_body_from_magnetism (register_magnetism_plugins does, after
+/// the magnetic_forces set it reads).
 void register_rigid_body_from_magnetism(PluginRegistry& registry);
 
 }  // namespace alloy::magnetism
