@@ -600,7 +600,6 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
         cross = std::exp(std::log(rows[i - 1].n) +
                          ra / (ra - rb) * (std::log(rows[i].n) - std::log(rows[i - 1].n)));
     }
-    if (!rows.empty() && rows[0].tree < rows[0].direct) cross = rows[0].n;
     if (!quick) {
       const auto sweep = packed_sweep(25, 20, 20);
       Table p({"theta", "RMS relative force error", "ms"});
