@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "magnet_scene.hpp"
 #include "resolvers/common/multipole_tree.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 
 namespace alloy::magnetism {
@@ -289,6 +291,38 @@ TEST_F(MagneticForcesMethod, BadSettingsAreRefused) {
   EXPECT_THROW(forces(with("fmm")), InputError);
   EXPECT_THROW(forces(with("tree", 1.0)), InputError);
   EXPECT_THROW(forces(with("tree", 0.0)), InputError);
+  for (double bad : {0.0, 1e-6, 0.5, -1e-3, std::nan("")}) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("tolerance", bad);
+    EXPECT_THROW(forces(def), InputError) << bad;
+  }
+}
+
+TEST_F(MagneticForcesMethod, ToleranceSetsThetaAndReuseIsASetting) {
+  auto stage_of = [&](double tolerance, bool reuse) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("method", std::string("tree"));
+    def.settings[MagneticForces::kName].set("tolerance", tolerance);
+    def.settings[MagneticForces::kName].set("reuse_tree", reuse);
+    auto w = std::make_unique<World>(registry, std::move(def));
+    add_permanent(*w, "a", {0, 0, 0}, 0, 100);
+    add_permanent(*w, "b", {0.2, 0, 0}, 0, 100);
+    w->start();
+    return forces_of(*w).summation();
+  };
+  const SummationOptions fine = stage_of(1e-4, false), coarse = stage_of(1e-2, true);
+  EXPECT_DOUBLE_EQ(fine.theta, theta_for_tolerance(1e-4));
+  EXPECT_DOUBLE_EQ(coarse.theta, theta_for_tolerance(1e-2));
+  EXPECT_LT(fine.theta, coarse.theta);
+  EXPECT_FALSE(fine.reuse);
+  EXPECT_TRUE(coarse.reuse);
+  // With the tolerance, the tree's error on the set's magnets stays within it.
+  for (double tol : {1e-2, 1e-4}) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("method", std::string("tree"));
+    def.settings[MagneticForces::kName].set("tolerance", tol);
+    EXPECT_LT(rms_relative(forces(def), forces(with("direct"))), tol) << tol;
+  }
 }
 
 }  // namespace
