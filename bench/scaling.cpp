@@ -5,11 +5,13 @@
 // and the tree's error against the direct sum at every n.
 //
 //   build/bench/alloy_bench_scaling [--quick] [--out DIR] [--docs FILE] [--no-progress]
-//                                   [--electricity] [--collisions]
+//                                   [--electricity] [--collisions] [--magnets] [--gravity]
 //
-// --electricity / --collisions run only those rows (and their goals), print
-// the table and write nothing: for working on one stage without the hour of
-// the whole sweep.
+// --electricity / --collisions / --magnets / --gravity run only those rows
+// (and their goals), print the table and write nothing: for working on one
+// stage without the hour of the whole sweep. --magnets and --gravity also
+// print issue 16's kernel comparison (previous method against current, same
+// run, same machine) with the goals as pass or miss.
 //
 // Scenes (each built through the world's editing API, only the plugins it
 // needs allowed, so that a stage's time is its own):
@@ -37,17 +39,22 @@
 // per step (from the last two points' growth) exceeds 20 s is skipped and the
 // table says so.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "bench/common/bench_common.hpp"
+#include "resolvers/common/direct_kernel.hpp"
+#include "resolvers/common/multipole_tree.hpp"
 #include "resolvers/electricity/electricity.hpp"
+#include "resolvers/gravity/nbody_gravity.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 #include "resolvers/plugins.hpp"
@@ -396,15 +403,268 @@ SolverPoint compare_solvers(const std::string& scene, void (*build)(World&, int)
   return p;
 }
 
+// --- issue 16, parts 1 and 2: magnetic forces and gravity.nbody, previous against current ---
+// On the summation alone (no world): the previous methods (the per-magnet tree
+// walk at theta 0.25 with leaves of 8; the scalar pair loop; gravity's direct
+// sum) against the current ones (the blocked tree with SIMD near field at the
+// default tolerance; the SIMD direct kernel; gravity on the tree), timed in
+// CPU seconds in one run, with the error against the direct sum at every n.
+
+/// CPU seconds per call of f: repeated until `budget` of CPU, at least once.
+template <class F>
+double cpu_per_call(F&& f, double budget) {
+  const double c0 = cpu_seconds();
+  int reps = 0;
+  do {
+    f();
+    ++reps;
+  } while (cpu_seconds() - c0 < budget && reps < 1000);
+  return (cpu_seconds() - c0) / reps;
+}
+
+std::vector<magnetism::Pole> random_poles(int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double side = 0.15 * std::cbrt(double(n));
+  std::vector<magnetism::Pole> poles;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
+    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
+    const double sz = std::sqrt(1 - z * z);
+    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
+    const auto p = magnetism::bar_poles(c, {sz * std::cos(phi), sz * std::sin(phi), z}, 0.085);
+    poles.push_back({p.north, q, std::uint32_t(i)});
+    poles.push_back({p.south, -q, std::uint32_t(i)});
+  }
+  return poles;
+}
+
+std::vector<magnetism::Pole> packed_poles(int nx, int ny, int nz) {
+  std::vector<magnetism::Pole> poles;
+  std::uint32_t b = 0;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j)
+      for (int k = 0; k < nz; ++k, ++b) {
+        const auto p = magnetism::bar_poles({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085);
+        poles.push_back({p.north, 100, b});
+        poles.push_back({p.south, -100, b});
+      }
+  return poles;
+}
+
+std::vector<multipole::Source> as_sources(const std::vector<magnetism::Pole>& poles) {
+  std::vector<multipole::Source> s;
+  for (const auto& p : poles) s.push_back({p.position, p.strength, p.body});
+  return s;
+}
+
+/// The previous direct sum: each pair once, scalar (pole_model.cpp's loop,
+/// which still serves fewer than kSimdDirectPoles poles).
+void previous_direct(const std::vector<magnetism::Pole>& poles, double eps, std::vector<Vec3>& f) {
+  for (std::size_t i = 0; i < poles.size(); ++i)
+    for (std::size_t j = i + 1; j < poles.size(); ++j) {
+      if (poles[j].body == poles[i].body) continue;
+      const Vec3 fij = magnetism::pole_pair_force(poles[i].strength, poles[i].position,
+                                                  poles[j].strength, poles[j].position, eps);
+      f[j] += fij;
+      f[i] -= fij;
+    }
+}
+
+/// Net force on each magnet from its poles' forces (or kernel sums x strength).
+std::vector<Vec3> magnet_forces(const std::vector<magnetism::Pole>& poles,
+                                const std::vector<Vec3>& pole_force) {
+  std::vector<Vec3> f(poles.size() / 2);
+  for (std::size_t i = 0; i < poles.size(); ++i) f[poles[i].body] += pole_force[i];
+  return f;
+}
+
+struct KernelRow {
+  int n = 0;
+  double prev_tree = 0, tree = 0, prev_direct = NAN, direct = 0;
+  double prev_error = 0, error = 0;
+};
+
+/// Previous and current tree, previous and current direct sum, on n random magnets.
+KernelRow magnet_kernels(int n, double budget) {
+  using namespace alloy::magnetism;
+  constexpr double eps = 0.005;
+  const auto poles = random_poles(n, 1);
+  const auto sources = as_sources(poles);
+  KernelRow r{.n = n};
+  std::vector<Vec3> exact(poles.size()), f(poles.size()), k(poles.size());
+  r.direct = cpu_per_call(
+      [&] {
+        std::fill(exact.begin(), exact.end(), Vec3{});
+        accumulate_pole_forces(poles, eps, exact, {.method = Summation::Direct});
+      },
+      budget);
+  // The previous direct sum is quadratic and scalar: once is enough past 3,000.
+  r.prev_direct = cpu_per_call(
+      [&] {
+        std::fill(f.begin(), f.end(), Vec3{});
+        previous_direct(poles, eps, f);
+      },
+      n > 3000 ? 0 : budget);
+  multipole::Tree previous;
+  r.prev_tree = cpu_per_call(
+      [&] {
+        previous.build(sources, eps, {.theta = 0.25, .leaf_size = 8});
+        previous.evaluate_at_sources_per_group(k);
+      },
+      n > 3000 ? 0 : budget);
+  for (std::size_t i = 0; i < poles.size(); ++i) k[i] = k[i] * (kMu0Over4Pi * poles[i].strength);
+  r.prev_error = rms_relative(magnet_forces(poles, k), magnet_forces(poles, exact));
+  multipole::Tree tree;
+  r.tree = cpu_per_call(
+      [&] {
+        std::fill(f.begin(), f.end(), Vec3{});
+        accumulate_pole_forces(poles, eps, f, {.method = Summation::Tree}, &tree);
+      },
+      budget);
+  r.error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
+  return r;
+}
+
+/// (theta, RMS relative force error, ms) of the current tree on a packed block
+/// of aligned bars: the table theta_for_tolerance is read from.
+std::vector<std::array<double, 3>> packed_sweep(int nx, int ny, int nz) {
+  using namespace alloy::magnetism;
+  const auto poles = packed_poles(nx, ny, nz);
+  std::vector<Vec3> exact(poles.size());
+  accumulate_pole_forces(poles, 0.005, exact, {.method = Summation::Direct});
+  std::vector<std::array<double, 3>> out;
+  for (double theta : {0.2, 0.25, 0.3, 0.35, 0.4, 0.5}) {
+    std::vector<Vec3> f(poles.size());
+    const double c0 = cpu_seconds();
+    accumulate_pole_forces(poles, 0.005, f, {.method = Summation::Tree, .theta = theta});
+    const double t = cpu_seconds() - c0;
+    out.push_back({theta, rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact)), t});
+  }
+  return out;
+}
+
+/// gravity.nbody's sum on n bodies: the previous direct sum against the tree,
+/// on the bench scene's grid (1 m apart, 1,000 kg) and on a Gaussian cluster.
+KernelRow gravity_kernels(int n, bool cluster, double budget) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0, std::cbrt(double(n)));
+  const int s = cube_side(n);
+  std::vector<Vec3> x(n);
+  std::vector<double> m(n, 1e3);
+  for (int i = 0; i < n; ++i)
+    x[i] = cluster ? Vec3{g(rng), g(rng), g(rng)}
+                   : Vec3{1.0 * (i % s), 1.0 * (i / s % s), 1.0 * (i / (s * s))};
+  KernelRow r{.n = n};
+  std::vector<Vec3> exact(n), a(n);
+  constexpr double G = gravity::kGravitationalConstant, eps = 0.0;
+  r.prev_direct =
+      cpu_per_call([&] { gravity::accelerations(x, x, m, G, eps, exact); }, n > 3000 ? 0 : budget);
+  multipole::Tree tree;
+  r.tree = cpu_per_call([&] { gravity::tree_accelerations(x, m, G, eps, tree, a); }, budget);
+  r.error = rms_relative(a, exact);
+  return r;
+}
+
+/// Issue 16's goals for parts 1 and 2, previous against current; `stage_ms`:
+/// the magnetic_forces and gravity.nbody stages at 10,000 from the sweep
+/// above (NaN if not measured). Appends to `md`.
+void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnets_ms,
+                     double stage_gravity_ms, std::string& md) {
+  const double budget = quick ? 0.01 : 0.2;
+  auto pm = [](bool ok) { return ok ? std::string("pass") : std::string("miss"); };
+  md += "\nKernels alone (no world), CPU ms per evaluation, SIMD kernel: `" +
+        std::string(multipole::direct_kernel_isa()) + "`.\n";
+  if (magnets) {
+    const std::vector<int> ns =
+        quick ? std::vector<int>{100, 300} : std::vector<int>{100, 300, 500, 1000, 3000, 10000};
+    std::vector<KernelRow> rows;
+    for (int n : ns) rows.push_back(magnet_kernels(n, budget));
+    Table t({"magnets", "previous tree (theta 0.25)", "tree", "ratio", "previous direct",
+             "direct (SIMD)", "ratio", "pairs/s (SIMD)", "RMS error previous", "RMS error"});
+    for (const KernelRow& r : rows) {
+      const double pairs = 4.0 * r.n * r.n;  // ordered pole pairs
+      t.row({std::to_string(r.n), fmt(1e3 * r.prev_tree), fmt(1e3 * r.tree),
+             fmt(r.prev_tree / r.tree, 3) + "x", fmt(1e3 * r.prev_direct), fmt(1e3 * r.direct),
+             fmt(r.prev_direct / r.direct, 3) + "x", fmt(pairs / r.direct, 3), fmt(r.prev_error),
+             fmt(r.error)});
+    }
+    md += "\nmagnetic forces on random magnets (tree at the default tolerance 1e-3, theta " +
+          fmt(magnetism::kDefaultTheta) + ", leaves of 64, blocks of 32 poles):\n\n" + t.str();
+    // Crossover of the current tree with the current direct sum.
+    double cross = NAN;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      const double ra = std::log(rows[i - 1].tree / rows[i - 1].direct),
+                   rb = std::log(rows[i].tree / rows[i].direct);
+      if (ra >= 0 && rb < 0)
+        cross = std::exp(std::log(rows[i - 1].n) +
+                         ra / (ra - rb) * (std::log(rows[i].n) - std::log(rows[i - 1].n)));
+    }
+    if (!quick) {
+      const auto sweep = packed_sweep(25, 20, 20);
+      Table p({"theta", "RMS relative force error", "ms"});
+      for (const auto& [theta, e, ms] : sweep) p.row({fmt(theta), fmt(e), fmt(1e3 * ms)});
+      md += "\nPacked block of 10,000 aligned bars (25 x 20 x 20, touching), current tree:\n\n" +
+            p.str();
+    }
+    const KernelRow& big = rows.back();
+    if (big.n == 10000) {
+      md += "\nGoals (issue 16, part 1), at 10,000 magnets:\n\n";
+      md += "- magnetic_forces stage at most 10 ms a step: " +
+            (std::isfinite(stage_magnets_ms)
+                 ? fmt(stage_magnets_ms) + " ms, " + pm(stage_magnets_ms <= 10)
+                 : std::string("stage not measured")) +
+            "; the summation alone " + fmt(1e3 * big.tree) + " ms (previous tree " +
+            fmt(1e3 * big.prev_tree) + " ms, " + fmt(big.prev_tree / big.tree, 3) + "x), " +
+            pm(1e3 * big.tree <= 10) + ".\n";
+      md += "- RMS relative force error at most 1e-3: " + fmt(big.error) + ", " +
+            pm(big.error <= 1e-3) + " (previous " + fmt(big.prev_error) + ").\n";
+      md += "- crossover with the direct sum at or below 500 magnets: " +
+            (std::isfinite(cross) ? fmt(cross, 2) : std::string("not reached")) + ", " +
+            pm(std::isfinite(cross) && cross <= 500) + ".\n";
+      const double rate = 4.0 * big.n * big.n / big.direct,
+                   prev_rate = 4.0 * big.n * big.n / big.prev_direct;
+      md += "- direct kernel at least 8e8 pair interactions a second: " + fmt(rate, 3) + ", " +
+            pm(rate >= 8e8) + " (previous " + fmt(prev_rate, 3) + ", each pair once).\n";
+    }
+  }
+  if (gravity) {
+    const std::vector<int> ns =
+        quick ? std::vector<int>{100, 300} : std::vector<int>{300, 1000, 3000, 10000};
+    Table t({"bodies", "layout", "previous direct", "tree", "ratio", "RMS rel. error"});
+    KernelRow big;
+    for (int n : ns)
+      for (bool cluster : {false, true}) {
+        const KernelRow r = gravity_kernels(n, cluster, budget);
+        t.row({std::to_string(n), cluster ? "Gaussian cluster" : "grid", fmt(1e3 * r.prev_direct),
+               fmt(1e3 * r.tree), fmt(r.prev_direct / r.tree, 3) + "x", fmt(r.error)});
+        if (n == 10000 && !cluster) big = r;
+      }
+    md += "\ngravity.nbody's sum (theta " + fmt(gravity::kTreeTheta) + ", tree from " +
+          std::to_string(gravity::kTreeFromMasses) + " masses):\n\n" + t.str();
+    if (big.n == 10000)
+      md += "\nGoal (issue 16, part 2): gravity.nbody at 10,000 bodies at most 10 ms a step: " +
+            (std::isfinite(stage_gravity_ms)
+                 ? fmt(stage_gravity_ms) + " ms (stage), " + pm(stage_gravity_ms <= 10)
+                 : std::string("stage not measured")) +
+            "; the sum alone " + fmt(1e3 * big.tree) + " ms against " + fmt(1e3 * big.prev_direct) +
+            " ms before (" + fmt(big.prev_direct / big.tree, 3) + "x), error " + fmt(big.error) +
+            ". The space scene has fewer than " + std::to_string(gravity::kTreeFromMasses) +
+            " masses and keeps the direct sum: its bits, and so its energy drift, are unchanged "
+            "(golden hashes).\n";
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options opt =
-      Options::parse(argc, argv, "alloy_bench_scaling", {"--electricity", "--collisions"});
+  Options opt = Options::parse(argc, argv, "alloy_bench_scaling",
+                               {"--electricity", "--collisions", "--magnets", "--gravity"});
   // A filter runs only the rows it names and writes nothing.
   const bool only_electricity = opt.flag("--electricity"),
              only_collisions = opt.flag("--collisions");
-  const bool filtered = only_electricity || only_collisions;
+  const bool only_magnets = opt.flag("--magnets"), only_gravity = opt.flag("--gravity");
+  const bool filtered = only_electricity || only_collisions || only_magnets || only_gravity;
   if (filtered) opt.docs.clear();
   const std::vector<int> ns = opt.quick ? std::vector<int>{10, 30, 100, 300}
                                         : std::vector<int>{10, 30, 100, 300, 1000, 3000, 10000};
@@ -490,7 +750,8 @@ int main(int argc, char** argv) {
     if (!filtered) return true;
     const bool electric = sc.name.starts_with("ladder") || sc.name == "mesh";
     const bool colliding = sc.name == "free" || sc.name == "resting";
-    return (only_electricity && electric) || (only_collisions && colliding);
+    return (only_electricity && electric) || (only_collisions && colliding) ||
+           (only_gravity && sc.name == "nbody");
   };
   for (const Scene& sc : scene_list) {
     if (!wanted(sc)) continue;
@@ -531,7 +792,7 @@ int main(int argc, char** argv) {
   //    with the direct sum.
   std::vector<MagneticPoint> mag;
   const double theta = magnetism::kDefaultTheta;
-  for (int n : filtered ? std::vector<int>{} : ns) {
+  for (int n : filtered && !only_magnets ? std::vector<int>{} : ns) {
     progress.tick();
     WorldDef d =
         def_with({"rigid_body", "magnetism", "magnetic_forces", "rigid_body_from_magnetism"});
@@ -599,7 +860,7 @@ int main(int argc, char** argv) {
 
   // 2b. The circuits' sparse solvers, previous against current, on the same networks.
   std::vector<SolverPoint> solver_points;
-  if (!only_collisions)
+  if (!only_collisions && !only_magnets && !only_gravity)
     for (int n : opt.quick ? std::vector<int>{100, 300} : std::vector<int>{1000, 10000}) {
       solver_points.push_back(compare_solvers("ladder", build_ladder, n, budget));
       solver_points.push_back(compare_solvers("mesh", build_mesh, n, budget));
@@ -703,7 +964,7 @@ int main(int argc, char** argv) {
                   fmt(1e3 * l.seconds[i]) + " ms, " + (l.seconds[i] <= 1e-3 ? "pass" : "miss") +
                   ".\n";
   }
-  {
+  if (!mag.empty()) {
     Table table({"magnets", "direct ms/step", "tree ms/step", "direct / tree",
                  "RMS rel. force error", "RMS rel. torque error"});
     for (const MagneticPoint& p : mag)
@@ -719,6 +980,18 @@ int main(int argc, char** argv) {
     if (std::isfinite(packed))
       md += "Packed block of 10,000 aligned bars (25 x 20 x 20, touching), theta " + fmt(theta) +
             ": RMS relative force error " + fmt(packed) + ".\n";
+  }
+  // Issue 16, parts 1 and 2: previous against current, and the goals.
+  if (!filtered || only_magnets || only_gravity) {
+    double stage_magnets = NAN, stage_gravity = NAN;
+    for (const MagneticPoint& p : mag)
+      if (p.n == 10000) stage_magnets = 1e3 * p.tree;
+    for (const Line& l : lines)
+      if (l.label == "gravity.nbody")
+        for (std::size_t i = 0; i < l.n.size(); ++i)
+          if (l.n[i] == 10000) stage_gravity = 1e3 * l.seconds[i];
+    issue16_kernels(!filtered || only_magnets, !filtered || only_gravity, opt.quick, stage_magnets,
+                    stage_gravity, md);
   }
   std::printf("%s", md.c_str());
   if (!opt.quick && !opt.docs.empty()) splice(opt.docs, "scaling", md);

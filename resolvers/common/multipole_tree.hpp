@@ -20,8 +20,12 @@
 // (b/r)^(p+1) as for masses; p = 3 gives theta^3 where gravity's usual
 // monopole + quadrupole gives theta^3 too (docs/magnetism.md, "Summation").
 // Sources are grouped (a magnet's two poles): a target excludes one group, as
-// a part never acts on itself. The tree is plain data built by one thread in a
-// fixed order, so the same input gives bit-identical output.
+// a part never acts on itself.
+// At the sources themselves (evaluate_at_sources) the targets go in blocks of
+// whole groups that share one walk; each block's near field is one SIMD direct
+// sum (direct_kernel.hpp) and its far cells are expanded at all its targets in
+// one vectorised loop (issue 16; docs/performance.md "Magnetic forces"). The tree is plain data
+// built by one thread in a fixed order, so the same input gives bit-identical output.
 //
 // Shared by magnetism (magnetic_forces) and gravity.nbody; no world, no
 // properties. docs/magnetism.md argues the choice and gives the measured error.
@@ -46,8 +50,22 @@ struct Source {
 struct TreeOptions {
   /// Opening angle, in (0, 1): smaller is more accurate and slower.
   double theta = 0.5;
-  /// Largest number of sources in a leaf.
-  std::uint32_t leaf_size = 8;
+  /// Largest number of sources in a leaf. 64: the near field runs on the SIMD
+  /// kernel, so large leaves (fewer, nearer cells) are cheaper than deep trees
+  /// (bench/scaling.cpp --magnets; docs/performance.md).
+  std::uint32_t leaf_size = 64;
+  /// evaluate_at_sources: targets (whole groups, neighbours in tree order)
+  /// that share one walk of the tree and one interaction list; a group larger
+  /// than this is a block of its own.
+  std::uint32_t block = 32;
+  /// build() keeps the cells of the previous build and only recomputes their
+  /// moments and radii (a refit) when the sources are the same ones (count,
+  /// groups, signs) and no cell's radius grew past 1.5 times its radius at
+  /// the last full build. The radii are always current, so the opening
+  /// criterion, and the error it bounds, hold either way; only the cells'
+  /// shapes age. The result then depends on the history of the tree, not
+  /// only on the sources: off unless asked for.
+  bool reuse = false;
 };
 
 /// The softened kernel K(r), 1/m^2 along r; zero at r = 0 when eps = 0.
@@ -61,17 +79,32 @@ inline Vec3 kernel(Vec3 r, double eps2) {
 Vec3 direct_sum(std::span<const Source> sources, double softening, Vec3 x,
                 std::uint32_t exclude = kNoGroup);
 
+/// The same at every source (its own group left out), all pairs, with the
+/// SIMD kernel of direct_kernel.hpp: out[i] for sources[i]. O(N^2), exact to
+/// rounding; a source at another's very position contributes nothing.
+void direct_at_sources(std::span<const Source> sources, double softening, std::span<Vec3> out);
+
 class Tree {
  public:
-  /// Builds the tree over `sources` (copied).
+  /// Builds the tree over `sources` (copied); with options.reuse, refits the
+  /// previous one when it can (see TreeOptions::reuse).
   void build(std::span<const Source> sources, double softening, TreeOptions options = {});
+  /// Whether the last build() was a refit of the cells before it.
+  bool refitted() const { return refitted_; }
 
   /// sum_j q_j K(x - p_j) over sources not in group `exclude` and not at x itself.
   Vec3 evaluate(Vec3 x, std::uint32_t exclude = kNoGroup) const;
 
   /// The same at every source, excluding its own group: out[i] for sources[i]
-  /// as given to build(). Visits the targets in tree order (cache-friendly).
+  /// as given to build(). Targets go in blocks of whole groups, neighbours in
+  /// tree order: one walk per block collects the cells far enough from the
+  /// block's bounding sphere to be used whole and the leaves that are not,
+  /// then every target sums the cells' expansions and, with the SIMD kernel
+  /// of direct_kernel.hpp, the leaves' sources.
   void evaluate_at_sources(std::span<Vec3> out) const;
+  /// The previous method (before issue 16), for the bench's comparison: one
+  /// walk per group, cells and pairs one target at a time, no SIMD.
+  void evaluate_at_sources_per_group(std::span<Vec3> out) const;
 
   std::size_t size() const { return sources_.size(); }
   std::size_t cells() const { return nodes_.size(); }
@@ -97,10 +130,14 @@ class Tree {
     bool leaf = true;
     bool empty = true;  ///< every strength is zero
   };
+  bool try_refit(std::span<const Source> sources);
+  void finish_build();
   std::int32_t make_node(Vec3 box_centre, double half, std::uint32_t begin, std::uint32_t end,
                          int depth);
   void moments(Node& n) const;
   Vec3 cell_field(const Node& n, Vec3 x) const;
+  static void add_cell_field(const Node& n, const double* x, const double* y, const double* z,
+                             std::size_t m, double eps2, double* fx, double* fy, double* fz);
   /// Sums at the targets `x` (the members of group `exclude`, or one point),
   /// skipping that group and the source at tree position `self`.
   void walk(std::span<const Vec3> x, std::uint32_t exclude, std::uint32_t self,
@@ -112,6 +149,12 @@ class Tree {
   std::vector<std::uint32_t> order_;  ///< tree position -> index given to build()
   std::vector<std::uint32_t> group_start_, group_members_;  ///< CSR: group -> tree positions
   std::vector<Node> nodes_;
+  std::vector<double> built_b2_;  ///< each cell's b_max^2 at the last full build
+  /// The sources in tree order as arrays, for the SIMD near field; groups as
+  /// doubles (-1: none).
+  std::vector<double> sx_, sy_, sz_, sq_, sg_;
+  std::uint32_t block_ = 32;
+  bool refitted_ = false;
   std::vector<std::uint32_t> scratch_;
   mutable std::vector<std::int32_t> stack_;
   mutable std::uint64_t cell_interactions_ = 0, direct_interactions_ = 0;

@@ -5,8 +5,8 @@
 
 namespace alloy::gravity {
 
-void accelerations(std::span<const Vec3> at, std::span<const Vec3> source, std::span<const double> mass,
-                   double G, double softening, std::span<Vec3> out) {
+void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
+                   std::span<const double> mass, double G, double softening, std::span<Vec3> out) {
   const double eps2 = softening * softening;
   const std::size_t ns = source.size();
   for (std::size_t i = 0; i < at.size(); ++i) {
@@ -15,11 +15,23 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source, std::
     for (std::size_t j = 0; j < ns; ++j) {
       const Vec3 d = source[j] - x;
       const double s2 = dot(d, d) + eps2;
-      if (d == Vec3{} || !(s2 > 0)) continue;  // itself, or a coincident point: no direction to pull in
+      if (d == Vec3{} || !(s2 > 0))
+        continue;  // itself, or a coincident point: no direction to pull in
       a += (G * mass[j] / (s2 * std::sqrt(s2))) * d;
     }
     out[i] = a;
   }
+}
+
+void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
+                        double softening, multipole::Tree& tree, std::span<Vec3> out,
+                        double theta) {
+  std::vector<multipole::Source> sources(source.size());
+  for (std::size_t i = 0; i < source.size(); ++i) sources[i] = {source[i], mass[i]};
+  tree.build(sources, softening, {.theta = theta});
+  tree.evaluate_at_sources(out);
+  // The tree sums m K(x - p), which points away from the masses.
+  for (Vec3& a : out) a = a * -G;
 }
 
 void NBodyGravity::resolve_ids(const WorldView& v) {
@@ -30,10 +42,16 @@ void NBodyGravity::resolve_ids(const WorldView& v) {
 
 NBodyGravity::Counters NBodyGravity::counters(const WorldView& v) const {
   const PropertyStore& store = v.store();
-  const ColumnBase &x = store.column(position_), &m = store.column(mass_), &d = store.column(density_),
-                   &s = store.column(static_);
-  return {x.version(), x.membership_version(), m.version(), m.membership_version(), d.membership_version(),
-          s.version(), s.membership_version(), v.scope() ? v.scope()->version() : 0};
+  const ColumnBase &x = store.column(position_), &m = store.column(mass_),
+                   &d = store.column(density_), &s = store.column(static_);
+  return {x.version(),
+          x.membership_version(),
+          m.version(),
+          m.membership_version(),
+          d.membership_version(),
+          s.version(),
+          s.membership_version(),
+          v.scope() ? v.scope()->version() : 0};
 }
 
 void NBodyGravity::compute(ResolverAccess& access) {
@@ -52,7 +70,8 @@ void NBodyGravity::compute(ResolverAccess& access) {
   // Member lists are refreshed between phases, so a mass the rigid body has
   // just written from density (in the same build round) is in the density
   // list only; has() is always current.
-  auto masses = [&](const ColumnView<double>& m, const ColumnView<double>& d, std::vector<std::uint32_t>& out) {
+  auto masses = [&](const ColumnView<double>& m, const ColumnView<double>& d,
+                    std::vector<std::uint32_t>& out) {
     out.clear();
     std::set_union(m.members().begin(), m.members().end(), d.members().begin(), d.members().end(),
                    std::back_inserter(out));
@@ -67,16 +86,35 @@ void NBodyGravity::compute(ResolverAccess& access) {
     if (!mass.has(s) || is_static.value_or(s, 0)) gravity.set(s, Vec3{});
 
   if (!targets_.empty()) {
-    if (area_sources_) masses(mass, density, masses_);
-    else masses(all_mass, all_density, masses_);
+    if (area_sources_)
+      masses(mass, density, masses_);
+    else
+      masses(all_mass, all_density, masses_);
     source_x_.resize(masses_.size()), source_m_.resize(masses_.size());
     for (std::size_t i = 0; i < masses_.size(); ++i) {
       source_x_[i] = all_position.value_or(masses_[i], {});  // the rigid body's default too
       source_m_[i] = all_mass[masses_[i]];
     }
     target_x_.resize(targets_.size()), a_.resize(targets_.size());
-    for (std::size_t i = 0; i < targets_.size(); ++i) target_x_[i] = position.value_or(targets_[i], {});
-    accelerations(target_x_, source_x_, source_m_, G_, softening_, a_);
+    for (std::size_t i = 0; i < targets_.size(); ++i)
+      target_x_[i] = position.value_or(targets_[i], {});
+    if (masses_.size() >= kTreeFromMasses) {
+      // Every target is a source (a non-static mass in scope): sum at the
+      // sources with the tree and pick the targets' values out.
+      source_a_.resize(masses_.size());
+      tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_);
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < targets_.size(); ++i) {
+        while (k < masses_.size() && masses_[k] < targets_[i]) ++k;
+        if (k < masses_.size() && masses_[k] == targets_[i])
+          a_[i] = source_a_[k];
+        else  // not among the sources (cannot happen with the lists above): sum it directly
+          accelerations(std::span(&target_x_[i], 1), source_x_, source_m_, G_, softening_,
+                        std::span(&a_[i], 1));
+      }
+    } else {
+      accelerations(target_x_, source_x_, source_m_, G_, softening_, a_);
+    }
     ++evaluations_;
     for (std::size_t i = 0; i < targets_.size(); ++i) gravity.set(targets_[i], a_[i]);
   }

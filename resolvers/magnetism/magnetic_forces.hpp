@@ -10,7 +10,16 @@
 //   settings  softening (m, default 0.005): the Plummer length eps of the pole force law
 //             method ("auto" | "direct" | "tree", default "auto"): how pole pairs are
 //             summed; auto is direct below kTreeCrossoverPoles poles (pole_model.hpp)
-//             theta (default 0.5, in (0, 1)): the tree's opening angle
+//             tolerance (default 1e-3, in [1e-5, 0.1]): the RMS relative error of
+//             the parts' forces the tree may make; sets theta through
+//             theta_for_tolerance (measured on the worst configuration we know,
+//             a packed block of aligned bars)
+//             theta (in (0, 1)): the tree's opening angle, set directly (overrides
+//             tolerance)
+//             reuse_tree (default false): refit the last step's tree when the
+//             parts moved little (multipole::TreeOptions::reuse); faster, but
+//             the bits then depend on the tree's history, so a restored save
+//             is no longer bit-identical to an uninterrupted run
 //             rates (default false): also publish each part's force and torque
 //             rates, d/dt along the parts' present motion (velocity,
 //             angular_velocity), for a first-order hold over the rigid body's
@@ -40,6 +49,14 @@
 #include "runtime/world.hpp"
 
 namespace alloy::magnetism {
+
+/// The tree's opening angle for an RMS relative force error of at most
+/// `tolerance` (clamped to [1e-5, 0.1]): the largest theta whose error on a
+/// packed block of 10,000 aligned bars (bench/scaling.cpp --magnets, the worst
+/// of the configurations measured: near forces cancel there) is within it;
+/// random configurations are 10 to 50 times more accurate at the same theta.
+double theta_for_tolerance(double tolerance);
+inline constexpr double kDefaultTolerance = 1e-3;
 
 /// One magnetic part, as the derived set publishes it.
 struct MagneticBody {

@@ -59,7 +59,8 @@ void register_magnetism_resolver(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
-            s.check_known(MagneticForces::kName, {"softening", "method", "theta", "rates"});
+            s.check_known(MagneticForces::kName,
+                          {"softening", "method", "theta", "tolerance", "reuse_tree", "rates"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
@@ -74,9 +75,15 @@ void register_magnetism_resolver(PluginRegistry& registry) {
                                "magnetic_forces: 'method' must be \"auto\", \"direct\" "
                                "or \"tree\", not \"" +
                                    method + "\"");
-            sum.theta = s.number("theta", kDefaultTheta);
+            const double tolerance = s.number("tolerance", kDefaultTolerance);
+            if (!(tolerance >= 1e-5 && tolerance <= 0.1))
+              throw InputError(s.where,
+                               "magnetic_forces: 'tolerance' must be a relative error in "
+                               "[1e-5, 0.1]");
+            sum.theta = s.number("theta", theta_for_tolerance(tolerance));
             if (!(sum.theta > 0 && sum.theta < 1))
               throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
+            sum.reuse = s.boolean("reuse_tree", false);
             return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false));
           },
   });

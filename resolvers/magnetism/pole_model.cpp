@@ -22,9 +22,15 @@ void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::
   if (options.use_tree(n)) {
     multipole::Tree local;
     multipole::Tree& tree = workspace ? *workspace : local;
-    tree.build(tree_sources(poles), softening, {.theta = options.theta});
+    tree.build(tree_sources(poles), softening, {.theta = options.theta, .reuse = options.reuse});
     std::vector<Vec3> k(n);
     tree.evaluate_at_sources(k);
+    for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);
+    return;
+  }
+  if (n >= kSimdDirectPoles) {
+    std::vector<Vec3> k(n);
+    multipole::direct_at_sources(tree_sources(poles), softening, k);
     for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);
     return;
   }

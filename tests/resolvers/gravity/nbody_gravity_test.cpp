@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "tests/scenes/rigid_scenes.hpp"
 
@@ -14,7 +15,9 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 gravity(Sim& s, ObjectId o) { return std::get<Vec3>(s->get(o, "gravity")); }
+Vec3 gravity(Sim& s, ObjectId o) {
+  return std::get<Vec3>(s->get(o, "gravity"));
+}
 
 WorldDef nbody_world(double G, double softening = 0) {
   WorldDef def;
@@ -44,9 +47,64 @@ TEST(NBodyAccelerations, DirectSumWithoutSelfPullAndCoincidentPointsExertNothing
   EXPECT_EQ(a[0], a[3]);
   // Points that are not sources: the field of the sources there.
   std::vector<Vec3> probe(1);
-  gravity::accelerations(std::vector<Vec3>{{0, 10, 0}}, std::vector<Vec3>{{0, 0, 0}}, std::vector<double>{4},
-                         2.0, 0, probe);
+  gravity::accelerations(std::vector<Vec3>{{0, 10, 0}}, std::vector<Vec3>{{0, 0, 0}},
+                         std::vector<double>{4}, 2.0, 0, probe);
   EXPECT_EQ(probe[0], (Vec3{0, -2.0 * 4 / 100, 0}));
+}
+
+double rms_relative(const std::vector<Vec3>& approx, const std::vector<Vec3>& exact) {
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    num += dot(approx[i] - exact[i], approx[i] - exact[i]);
+    den += dot(exact[i], exact[i]);
+  }
+  return std::sqrt(num / den);
+}
+
+TEST(NBodyAccelerations, TreeAgreesWithTheDirectSumOnAGridAndAClusterAndCoincidentBodies) {
+  // Issue 16: from kTreeFromMasses masses the resolver sums with the tree.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g(0, 3.0);
+  std::uniform_real_distribution<double> u(1, 100);
+  for (int layout = 0; layout < 2; ++layout) {
+    std::vector<Vec3> x;
+    std::vector<double> m;
+    for (int i = 0; i < 1500; ++i) {
+      x.push_back(layout == 0 ? Vec3{double(i % 12), double(i / 12 % 12), double(i / 144)}
+                              : Vec3{g(rng), g(rng), g(rng)});
+      m.push_back(u(rng));
+    }
+    x[7] = x[8];  // two bodies on one spot: they pull each other with nothing (eps = 0)
+    std::vector<Vec3> exact(x.size()), approx(x.size());
+    gravity::accelerations(x, x, m, 1.0, 0.0, exact);
+    multipole::Tree tree;
+    gravity::tree_accelerations(x, m, 1.0, 0.0, tree, approx);
+    const double e = rms_relative(approx, exact);
+    std::printf("%s of 1,500: RMS relative error %.2e\n", layout ? "cluster" : "grid", e);
+    EXPECT_LT(e, 1e-3);
+    for (const Vec3& a : approx) EXPECT_TRUE(is_finite(a));
+  }
+}
+
+TEST(NBodyGravity, ManyBodiesUseTheTreeAndAgreeWithTheDirectSum) {
+  const double G = 6.67430e-11;
+  Sim s(nbody_world(G, 0.01));
+  std::vector<ObjectId> ids;
+  std::vector<Vec3> x;
+  std::vector<double> m;
+  const int n = int(gravity::kTreeFromMasses) + 100;
+  for (int i = 0; i < n; ++i) {
+    x.push_back({1.0 * (i % 9), 1.0 * (i / 9 % 9), 1.0 * (i / 81)});
+    m.push_back(1000.0 + i);
+    ids.push_back(add_sphere(*s, x.back(), 0.1, m.back()));
+  }
+  s->start();
+  std::vector<Vec3> exact(x.size()), got;
+  gravity::accelerations(x, x, m, G, 0.01, exact);
+  for (ObjectId id : ids) got.push_back(gravity(s, id));
+  const double e = rms_relative(got, exact);
+  EXPECT_LT(e, 1e-3);
+  EXPECT_GT(e, 0);  // the tree's, not the direct sum's (which would be exact)
 }
 
 TEST(NBodyGravity, TwoBodiesFeelNewtonsForceEqualAndOpposite) {
@@ -90,7 +148,10 @@ TEST(NBodyGravity, InAnAreaEveryMassPullsUnlessSourcesAreTheAreas) {
   // computes the rock's gravity, from the sun too unless sources = "area".
   for (const char* sources : {"world", "area"}) {
     WorldDef def;
-    AreaDef box{.name = "box", .center = {0, 10, 0}, .half_extents = {1, 1, 1}, .plugins = {"gravity.nbody"}};
+    AreaDef box{.name = "box",
+                .center = {0, 10, 0},
+                .half_extents = {1, 1, 1},
+                .plugins = {"gravity.nbody"}};
     box.settings["gravity.nbody"].set("G", 1.0);
     box.settings["gravity.nbody"].set("sources", std::string(sources));
     def.areas.push_back(box);
@@ -177,8 +238,9 @@ TEST(NBodyGravity, CircularTwoBodyOrbitKeepsKeplersPeriod) {
     const double period = measured_period(dt, 5, &kepler, &radius_error);
     const double error = std::abs(period - kepler) / kepler;
     const double omega_dt = 2 * kPi / kepler * dt;
-    std::printf("dt 1/%.0f: period %.6f s, Kepler %.6f s, error %.2e; radius within %.2e (omega dt %.2e)\n",
-                1 / dt, period, kepler, error, radius_error, omega_dt);
+    std::printf(
+        "dt 1/%.0f: period %.6f s, Kepler %.6f s, error %.2e; radius within %.2e (omega dt %.2e)\n",
+        1 / dt, period, kepler, error, radius_error, omega_dt);
     EXPECT_LT(error, 2e-5) << "dt 1/" << 1 / dt;
     EXPECT_LT(radius_error, omega_dt) << "dt 1/" << 1 / dt;
     errors[i++] = error;
@@ -187,7 +249,8 @@ TEST(NBodyGravity, CircularTwoBodyOrbitKeepsKeplersPeriod) {
 }
 
 TEST(NBodyGravity, SettingsAreChecked) {
-  for (auto [key, value] : {std::pair{"G", -1.0}, std::pair{"softening", -0.1}, std::pair{"g", 1.0}}) {
+  for (auto [key, value] :
+       {std::pair{"G", -1.0}, std::pair{"softening", -0.1}, std::pair{"g", 1.0}}) {
     WorldDef def;
     def.use = {{"gravity", "gravity.nbody"}};
     def.settings["gravity.nbody"].set(key, value);

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "magnet_scene.hpp"
 #include "resolvers/common/multipole_tree.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
 
 namespace alloy::magnetism {
@@ -171,12 +173,19 @@ TEST(PoleTree, OwnPolesLeftOutEvenInsideACellUsedWhole) {
   for (std::uint32_t i = 0; i < 30; ++i)
     sources.push_back({{10 + u(rng), u(rng), u(rng)}, 4 * u(rng), 1 + i});
   multipole::Tree t;
-  t.build(sources, 0.005, {.theta = 0.5, .leaf_size = 4});
+  t.build(sources, 0.005, {.theta = 0.5, .leaf_size = 4, .block = 2});
   std::vector<Vec3> at(sources.size());
+  // At the sources, a block's sphere holds its groups' poles, so the partner
+  // is never in a cell used whole (summed directly and left out by group).
   t.evaluate_at_sources(at);
   const Vec3 exact = multipole::direct_sum(sources, 0.005, {0, 0, 0}, 0);
   EXPECT_LT(length(at[0] - exact), 1e-6 * length(exact));
-  EXPECT_GT(t.cell_interactions(), 0u);
+  // At one point, the cluster (partner included) is taken whole and the
+  // partner taken out again.
+  const std::uint64_t cells = t.cell_interactions();
+  const Vec3 one = t.evaluate({0, 0, 0}, 0);
+  EXPECT_GT(t.cell_interactions(), cells);
+  EXPECT_LT(length(one - exact), 1e-6 * length(exact));
   // Had the partner been counted, the field would be ~5/100 instead of ~0.4/100.
   const Vec3 with_partner = multipole::direct_sum(sources, 0.005, {0, 0, 0});
   EXPECT_GT(length(with_partner - exact), 10 * length(at[0] - exact));
@@ -282,6 +291,38 @@ TEST_F(MagneticForcesMethod, BadSettingsAreRefused) {
   EXPECT_THROW(forces(with("fmm")), InputError);
   EXPECT_THROW(forces(with("tree", 1.0)), InputError);
   EXPECT_THROW(forces(with("tree", 0.0)), InputError);
+  for (double bad : {0.0, 1e-6, 0.5, -1e-3, std::nan("")}) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("tolerance", bad);
+    EXPECT_THROW(forces(def), InputError) << bad;
+  }
+}
+
+TEST_F(MagneticForcesMethod, ToleranceSetsThetaAndReuseIsASetting) {
+  auto stage_of = [&](double tolerance, bool reuse) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("method", std::string("tree"));
+    def.settings[MagneticForces::kName].set("tolerance", tolerance);
+    def.settings[MagneticForces::kName].set("reuse_tree", reuse);
+    auto w = std::make_unique<World>(registry, std::move(def));
+    add_permanent(*w, "a", {0, 0, 0}, 0, 100);
+    add_permanent(*w, "b", {0.2, 0, 0}, 0, 100);
+    w->start();
+    return forces_of(*w).summation();
+  };
+  const SummationOptions fine = stage_of(1e-4, false), coarse = stage_of(1e-2, true);
+  EXPECT_DOUBLE_EQ(fine.theta, theta_for_tolerance(1e-4));
+  EXPECT_DOUBLE_EQ(coarse.theta, theta_for_tolerance(1e-2));
+  EXPECT_LT(fine.theta, coarse.theta);
+  EXPECT_FALSE(fine.reuse);
+  EXPECT_TRUE(coarse.reuse);
+  // With the tolerance, the tree's error on the set's magnets stays within it.
+  for (double tol : {1e-2, 1e-4}) {
+    WorldDef def;
+    def.settings[MagneticForces::kName].set("method", std::string("tree"));
+    def.settings[MagneticForces::kName].set("tolerance", tol);
+    EXPECT_LT(rms_relative(forces(def), forces(with("direct"))), tol) << tol;
+  }
 }
 
 }  // namespace

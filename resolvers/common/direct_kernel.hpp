@@ -1,0 +1,65 @@
+// The direct sum of the Plummer-softened inverse-square kernel, many targets
+// against many sources, on structure-of-arrays data:
+//
+//   f_i += sum_j q_j K(t_i - p_j),   K(r) = r / (|r|^2 + eps^2)^(3/2)
+//
+// over the sources j whose group differs from the target's (a magnet's own
+// poles do not act on it). A source at the target itself contributes nothing
+// (r = 0 to rounding, i.e. s^2 = eps^2 exactly: the lanes test s^2 > eps^2, which
+// also keeps 1/s^3 finite whatever the softening).
+//
+// This is the inner loop of both the direct summation and the tree's near
+// field, so it is written for SIMD: the sources are swept eight (AVX-512) or
+// four (AVX2) at a time, each lane with its own softened distance. The vector
+// versions are compiled for their instruction sets with function attributes
+// and chosen at run time from what the CPU reports, so a portable Release
+// build (no -march) still runs the wide kernel where the hardware has it.
+// The AVX-512 kernel takes 1/sqrt(s^2) from the hardware's 14-bit estimate and
+// two Newton steps (relative error ~1e-16, as near to the rounded value as
+// sqrt and a division, though not always the same bits); the AVX2 and scalar
+// kernels use sqrt and a division. Results therefore depend, in the last
+// bits, on the CPU: the bundled scenes never reach this kernel (their few
+// poles take the scalar pair loop of pole_model.cpp), so their bits do not.
+#pragma once
+
+#include <cstddef>
+
+namespace alloy::multipole {
+
+/// Sources as separate arrays (x, y, z, strength, group), all of length n.
+/// Groups are doubles so that the lanes compare them with the coordinates'
+/// width; a source in no group carries -1 and a target in none -2.
+struct SoaSources {
+  const double* x = nullptr;
+  const double* y = nullptr;
+  const double* z = nullptr;
+  const double* q = nullptr;
+  const double* g = nullptr;
+  std::size_t n = 0;
+};
+
+/// Targets: positions, groups (as for SoaSources), and the sums they get.
+struct SoaTargets {
+  const double* x = nullptr;
+  const double* y = nullptr;
+  const double* z = nullptr;
+  const double* g = nullptr;
+  double* fx = nullptr;  ///< added to, not overwritten
+  double* fy = nullptr;
+  double* fz = nullptr;
+  std::size_t n = 0;
+};
+
+/// Adds to every target the softened inverse-square sum over the sources not
+/// in its group. `eps2` is the softening length squared.
+void direct_accumulate(const SoaTargets& targets, const SoaSources& sources, double eps2);
+
+/// Which kernel direct_accumulate runs on this CPU: "avx512", "avx2" or "scalar".
+const char* direct_kernel_isa();
+
+/// The same with a named kernel ("avx512", "avx2", "scalar"), for tests that
+/// compare them; false (and nothing added) if this CPU cannot run it.
+bool direct_accumulate_with(const char* isa, const SoaTargets& targets, const SoaSources& sources,
+                            double eps2);
+
+}  // namespace alloy::multipole
