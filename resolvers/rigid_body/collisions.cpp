@@ -540,8 +540,8 @@ struct CollisionSet::Impl {
   /// part covering more than kMaxCellsPerAxis cells along an axis (a floor,
   /// a wall) is kept apart and tested against every part.
   void build_grid() {
-    big.clear(), entries.clear();
-    if (live.empty()) return;
+    big.clear(), entries.clear(), table.clear(), bucket_start.clear();
+    if (live.empty()) return;  // nothing to find (and no stale cells from the last update)
     std::vector<double>& e = extents;
     std::nth_element(e.begin(), e.begin() + std::ptrdiff_t(e.size() / 2), e.end());
     cell = std::max(2 * e[e.size() / 2], 1e-6);
@@ -616,6 +616,7 @@ struct CollisionSet::Impl {
   /// ray_callback: the cells the ray's bounds cover (every part if they cover
   /// many), and the big parts.
   void collide_ray(RayHit& hit) {
+    if (live.empty()) return;
     dReal r[6];
     dGeomGetAABB(ray, r);
     Bounds rb;

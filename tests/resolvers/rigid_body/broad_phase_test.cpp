@@ -258,5 +258,27 @@ TEST(BroadPhase, OrderIsByPairAndTheSameEveryRun) {
   expect_same(second, first);
 }
 
+TEST(BroadPhase, AWorldEmptiedOfPartsFindsNothing) {
+  // The grid of the last update must not outlive its parts.
+  WorldDef def;
+  def.plugins = {"rigid_body", "collisions", "rigid_body_from_collisions"};
+  Sim sim(def);
+  const ObjectId a = add(*sim, {Kind::Box, {0, 0, 0}, {}, {1, 1, 1}});
+  const ObjectId b = add(*sim, {Kind::Box, {0.5, 0, 0}, {}, {1, 1, 1}});
+  std::vector<Event> errors;
+  sim->add_observer([&](const Event& e) {
+    if (e.type == "engine_error") errors.push_back(e);
+  });
+  sim->step();
+  const auto& c = dynamic_cast<const CollisionSet&>(*sim->stage("collisions"));
+  ASSERT_EQ(c.touching().size(), 1u);
+  sim->destroy(a);
+  sim->destroy(b);
+  sim->step();
+  sim->step();
+  EXPECT_TRUE(c.touching().empty());
+  EXPECT_TRUE(errors.empty()) << errors[0].text;
+}
+
 }  // namespace
 }  // namespace alloy::scenes
