@@ -772,8 +772,10 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
 
   // Conductance currents, and the current passing each node: half the sum of
   // |current| over the elements that meet there (what flows in flows out).
-  std::vector<double> through(network_.node_count, 0.0);
-  std::vector<double> g_current(network_.conductances.size());
+  std::vector<double>& through = through_;
+  std::vector<double>& g_current = g_current_;
+  through.assign(network_.node_count, 0.0);
+  g_current.resize(network_.conductances.size());
   for (std::size_t i = 0; i < network_.conductances.size(); ++i) {
     const Conductance& g = network_.conductances[i];
     g_current[i] = conductance_on_loop_[i] ? g.g * (p[g.a] - p[g.b]) : 0.0;
@@ -791,6 +793,10 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     powered.set(slot, std::abs(i) > threshold ? 1 : 0);
   };
   const PropertyStore& store = access.store();
+  if (reported_cache_.size() != parts_.size()) {
+    reported_cache_.assign(parts_.size(), 0);
+    reported_cache_id_.assign(parts_.size(), ObjectId{});
+  }
   for (std::size_t idx = 0; idx < parts_.size(); ++idx) {
     const Part& part = parts_[idx];
     const double v0 = p[part.node[0]], v1 = p[part.node[1]];
@@ -816,9 +822,13 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     }
     // Events when an element joins or leaves a closed loop.
     const ObjectId id = store.id_at(part.slot);
-    bool& reported = reported_closed_[id];
-    if (reported != element_closed_[idx]) {
+    std::uint8_t& cached = reported_cache_[idx];
+    if (cached == 0 || reported_cache_id_[idx] != id)
+      reported_cache_id_[idx] = id, cached = reported_closed_[id] ? 2 : 1;
+    if ((cached == 2) != element_closed_[idx]) {
+      bool& reported = reported_closed_[id];
       reported = element_closed_[idx];
+      cached = reported ? 2 : 1;
       Event ev{.type = reported ? event::kCircuitClosed : event::kCircuitOpened,
                .a = id,
                .values = {{"current", i}}};
@@ -924,6 +934,7 @@ void ElectricityResolver::restore_state(StateReader& in) {
   for (const SavedContact& c : in.get_vector<SavedContact>())
     contacts_[{c.a, c.b}] = Contact{int(c.terminal_a), int(c.terminal_b)};
   reported_closed_.clear();
+  reported_cache_.clear();
   for (const SavedClosed& c : in.get_vector<SavedClosed>()) reported_closed_[c.id] = c.closed != 0;
   auto saved = std::make_unique<SavedHistory>();
   saved->guard = in.get<std::uint8_t>() != 0;

@@ -338,6 +338,13 @@ class ElectricityResolver final : public Resolver {
   // What the last events said, per element. Hashed: write_outputs looks up
   // every part each step, and a tree made that n log n.
   std::unordered_map<ObjectId, bool> reported_closed_;
+  // reported_closed_ per part (parallel to parts_), so that a step looks up
+  // nothing: the id it was read for, and 0 unknown, 1 open, 2 closed. Written
+  // through to the map; cleared when the map is replaced (restore_state).
+  std::vector<ObjectId> reported_cache_id_;
+  std::vector<std::uint8_t> reported_cache_;
+  // write_outputs' scratch, per node and per conductance (kept between steps).
+  std::vector<double> through_, g_current_;
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
 
   // Per-solve results.

@@ -468,6 +468,190 @@ struct CollisionSet::Impl {
     h.t = c.depth, h.slot = s, h.position = to_vec3(c.pos), h.normal = to_vec3(c.normal);
   }
 
+  // --- broad phase ------------------------------------------------------------------
+  // ODE's spaces grow faster than linear on alloy's scenes (measured in
+  // docs/performance.md "Collisions to 100,000 bodies"): the hash space's
+  // cell hash (level*1000 + x*100 + y*10 + z) sends the cells of a dense grid
+  // of parts into the same buckets, and sweep-and-prune's one axis holds a
+  // whole row of a pile. So the pairs come from a uniform grid of our own,
+  // rebuilt every update in O(n): each part's bounds go into the cells they
+  // cover (a hash table sized to the entries, filled by a counting sort), and
+  // two parts are tested in the one cell that holds the low corner of their
+  // bounds' intersection, so no pair is tested twice. The geoms stay in ODE's
+  // hash space, which is used only when a part lies beyond kIndexable (ODE's
+  // collide then reports it as before: see engine_failed).
+  struct Bounds {
+    double lo[3], hi[3];
+    std::int64_t cell[3];  ///< the grid cell of lo
+  };
+  struct Entry {
+    std::int64_t cell[3];
+    std::uint32_t part;  ///< index into live
+    std::uint32_t bucket;
+  };
+  std::vector<std::uint32_t> live;  // slots of the enabled geoms, ascending
+  std::vector<Bounds> live_bounds;  // by index into live
+  std::vector<std::uint32_t> big;   // indices into live of parts too large for the grid
+  std::vector<Entry> entries, table;
+  std::vector<std::uint32_t> bucket_start;
+  std::vector<double> extents;
+  std::vector<std::uint32_t> seen;  // by index into live: the last ray query that saw it
+  std::uint32_t query = 0;
+  double cell = 1;                                     ///< grid spacing, m
+  static constexpr std::int64_t kMaxCellsPerAxis = 4;  ///< larger parts are "big"
+
+  std::int64_t cell_of(double x) const { return std::int64_t(std::floor(x / cell)); }
+  static std::uint64_t cell_hash(const std::int64_t c[3]) {
+    std::uint64_t h = std::uint64_t(c[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= std::uint64_t(c[1]) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
+    h ^= std::uint64_t(c[2]) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    return h ^ (h >> 29);
+  }
+  static bool overlap(const Bounds& a, const Bounds& b) {
+    // Touching bounds overlap, as in ODE's spaces.
+    for (int k = 0; k < 3; ++k)
+      if (a.lo[k] > b.hi[k] || b.lo[k] > a.hi[k]) return false;
+    return true;
+  }
+
+  /// The enabled geoms and their bounds; false if one lies beyond kIndexable
+  /// (or is not finite): then ODE's hash space must collide, and report it.
+  bool gather() {
+    live.clear(), live_bounds.clear(), extents.clear();
+    for (std::uint32_t s : geom_slots) {
+      const dGeomID g = geoms[s].geom;
+      if (!dGeomIsEnabled(g)) continue;
+      dReal b[6];
+      dGeomGetAABB(g, b);
+      for (const dReal v : b)
+        if (!(std::abs(v) < kIndexable)) return false;
+      Bounds& o = live_bounds.emplace_back();
+      for (int k = 0; k < 3; ++k) o.lo[k] = b[2 * k], o.hi[k] = b[2 * k + 1];
+      extents.push_back(std::max({b[1] - b[0], b[3] - b[2], b[5] - b[4]}));
+      live.push_back(s);
+    }
+    return true;
+  }
+
+  /// Builds the grid over the gathered bounds: the spacing is twice the
+  /// median part's largest extent (a typical part covers 1 to 8 cells); a
+  /// part covering more than kMaxCellsPerAxis cells along an axis (a floor,
+  /// a wall) is kept apart and tested against every part.
+  void build_grid() {
+    big.clear(), entries.clear(), table.clear(), bucket_start.clear();
+    if (live.empty()) return;  // nothing to find (and no stale cells from the last update)
+    std::vector<double>& e = extents;
+    std::nth_element(e.begin(), e.begin() + std::ptrdiff_t(e.size() / 2), e.end());
+    cell = std::max(2 * e[e.size() / 2], 1e-6);
+    for (std::uint32_t i = 0; i < live.size(); ++i) {
+      Bounds& b = live_bounds[i];
+      std::int64_t hi[3];
+      bool is_big = false;
+      for (int k = 0; k < 3; ++k) {
+        b.cell[k] = cell_of(b.lo[k]), hi[k] = cell_of(b.hi[k]);
+        is_big = is_big || hi[k] - b.cell[k] >= kMaxCellsPerAxis;
+      }
+      if (is_big) {
+        big.push_back(i);
+        continue;
+      }
+      for (std::int64_t x = b.cell[0]; x <= hi[0]; ++x)
+        for (std::int64_t y = b.cell[1]; y <= hi[1]; ++y)
+          for (std::int64_t z = b.cell[2]; z <= hi[2]; ++z) entries.push_back({{x, y, z}, i, 0});
+    }
+    // A counting sort of the entries by bucket: linear, no comparison sort.
+    std::size_t size = 16;
+    while (size < 2 * entries.size()) size *= 2;
+    bucket_start.assign(size + 1, 0);
+    for (Entry& en : entries) {
+      en.bucket = std::uint32_t(cell_hash(en.cell) & (size - 1));
+      ++bucket_start[en.bucket + 1];
+    }
+    for (std::size_t b = 0; b < size; ++b) bucket_start[b + 1] += bucket_start[b];
+    table.resize(entries.size());
+    std::vector<std::uint32_t>& fill = order_fill;
+    fill.assign(bucket_start.begin(), bucket_start.end() - 1);
+    for (const Entry& en : entries) table[fill[en.bucket]++] = en;
+  }
+  std::vector<std::uint32_t> order_fill;
+
+  /// Whether ODE's category bits let the two collide (static parts meet only movable ones).
+  static bool may_collide(dGeomID a, dGeomID b) {
+    return (dGeomGetCategoryBits(a) & dGeomGetCollideBits(b)) ||
+           (dGeomGetCategoryBits(b) & dGeomGetCollideBits(a));
+  }
+  void test(std::uint32_t i, std::uint32_t j) {
+    if (!overlap(live_bounds[i], live_bounds[j])) return;
+    const dGeomID a = geoms[live[i]].geom, b = geoms[live[j]].geom;
+    if (may_collide(a, b)) near_callback(this, a, b);
+  }
+
+  /// Every pair of enabled geoms whose bounds overlap goes to near_callback once.
+  void collide_grid() {
+    build_grid();
+    for (std::size_t bkt = 0; bkt + 1 < bucket_start.size(); ++bkt) {
+      const std::uint32_t from = bucket_start[bkt], to = bucket_start[bkt + 1];
+      for (std::uint32_t p = from; p < to; ++p)
+        for (std::uint32_t q = p + 1; q < to; ++q) {
+          const Entry &x = table[p], &y = table[q];
+          if (x.cell[0] != y.cell[0] || x.cell[1] != y.cell[1] || x.cell[2] != y.cell[2]) continue;
+          // Tested only in the cell of the low corner of the two bounds'
+          // intersection (which both cover), so once.
+          const Bounds &bx = live_bounds[x.part], &by = live_bounds[y.part];
+          bool home = true;
+          for (int k = 0; k < 3; ++k) home = home && x.cell[k] == std::max(bx.cell[k], by.cell[k]);
+          if (home) test(x.part, y.part);
+        }
+    }
+    for (std::size_t k = 0; k < big.size(); ++k) {
+      for (std::uint32_t i = 0; i < live.size(); ++i)
+        if (i != big[k] && !std::binary_search(big.begin(), big.end(), i)) test(big[k], i);
+      for (std::size_t l = k + 1; l < big.size(); ++l) test(big[k], big[l]);
+    }
+  }
+
+  /// The enabled geoms whose bounds overlap the ray's, in slot order, to
+  /// ray_callback: the cells the ray's bounds cover (every part if they cover
+  /// many), and the big parts.
+  void collide_ray(RayHit& hit) {
+    if (live.empty()) return;
+    dReal r[6];
+    dGeomGetAABB(ray, r);
+    Bounds rb;
+    for (int k = 0; k < 3; ++k) rb.lo[k] = r[2 * k], rb.hi[k] = r[2 * k + 1];
+    std::vector<std::uint32_t>& found = ray_found;
+    found.clear();
+    if (++query == 0) seen.assign(seen.size(), 0), query = 1;
+    seen.resize(live.size(), 0);
+    std::int64_t lo[3], hi[3];
+    double cells = 1;
+    for (int k = 0; k < 3; ++k)
+      lo[k] = cell_of(rb.lo[k]), hi[k] = cell_of(rb.hi[k]), cells *= double(hi[k] - lo[k] + 1);
+    if (cells > double(std::max<std::size_t>(64, live.size()))) {
+      for (std::uint32_t i = 0; i < live.size(); ++i) found.push_back(i);
+    } else {
+      const std::size_t size = bucket_start.size() - 1;
+      for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+        for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+            const std::int64_t c[3] = {x, y, z};
+            const std::size_t bkt = cell_hash(c) & (size - 1);
+            for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p) {
+              const Entry& en = table[p];
+              if (en.cell[0] != x || en.cell[1] != y || en.cell[2] != z) continue;
+              if (seen[en.part] != query) seen[en.part] = query, found.push_back(en.part);
+            }
+          }
+      found.insert(found.end(), big.begin(), big.end());
+      std::sort(found.begin(), found.end());
+    }
+    for (std::uint32_t i : found)
+      if (overlap(rb, live_bounds[i])) ray_callback(&hit, ray, geoms[live[i]].geom);
+  }
+  std::vector<std::uint32_t> ray_found;
+  std::vector<std::uint32_t> swept_at, swept_made_at;  // scratch of sweep()
+  bool grid = false;  ///< this update's pairs came from the grid (else from ODE's space)
+
   bool ccd = true;
   dGeomID ray = nullptr;  // not in the space; made at the first sweep
   std::vector<Candidate> candidates;
@@ -565,9 +749,14 @@ void CollisionSet::update(const WorldView& world) {
     m.angvel = world.column<Vec3>(m.angular_velocity);
     m.pairs = &current_;
     m.points = &points_;
-    m.colliding = true;
-    dSpaceCollide(m.space, &m, &Impl::near_callback);
-    m.colliding = false;
+    m.grid = m.gather();
+    if (m.grid) {
+      m.collide_grid();
+    } else {  // a part beyond the grid's range: ODE's collide reports it (engine_failed)
+      m.colliding = true;
+      dSpaceCollide(m.space, &m, &Impl::near_callback);
+      m.colliding = false;
+    }
     sweep(world);
   } catch (const OdeError& e) {
     engine_failed(world, e.what());
@@ -622,6 +811,15 @@ void CollisionSet::sweep(const WorldView& world) {
   // The overlap a swept part is left with: the rigid body's resting overlap,
   // so that the next narrow phase finds the contact and the solver keeps it.
   const double layer = rigid_.config().surface_layer;
+  // A swept part's discrete pairs (and swept pairs made before it that it
+  // is part of) give way to its swept contact. Removed in one pass after the
+  // loop, not per part: a crowd falling fast sweeps thousands of parts.
+  const std::size_t discrete = current_.size();
+  std::vector<std::uint32_t>& swept_at = m.swept_at;  // by slot: 1 + order of its sweep, 0: none
+  swept_at.resize(m.geoms.size(), 0);
+  std::vector<std::uint32_t>& made_at = m.swept_made_at;  // by swept pair: 1 + order of its sweep
+  made_at.clear();
+  std::uint32_t order = 0;
   for (const Impl::Candidate& cand : m.candidates) {
     const Impl::Geom& g = m.geoms[cand.slot];
     const Vec3 d = g.pos - cand.from;
@@ -633,9 +831,13 @@ void CollisionSet::sweep(const WorldView& world) {
     dGeomRaySet(m.ray, cand.from.x, cand.from.y, cand.from.z, dir.x, dir.y, dir.z);
     dGeomRaySetLength(m.ray, len);
     Impl::RayHit hit{.m = &m, .self = cand.slot, .touching = &previous_};
-    m.colliding = true;
-    dSpaceCollide2(m.ray, reinterpret_cast<dGeomID>(m.space), &hit, &Impl::ray_callback);
-    m.colliding = false;
+    if (m.grid) {
+      m.collide_ray(hit);
+    } else {
+      m.colliding = true;
+      dSpaceCollide2(m.ray, reinterpret_cast<dGeomID>(m.space), &hit, &Impl::ray_callback);
+      m.colliding = false;
+    }
     if (!(hit.t <= len)) continue;  // the centre crossed no surface: the discrete test sees it
 
     // Back along the path to where the part, a sphere of its inscribed radius,
@@ -649,7 +851,7 @@ void CollisionSet::sweep(const WorldView& world) {
     sweeps_.push_back({g.id, centre - g.pos});
 
     // Its discrete pairs were found at the tunnelled pose: the swept contact replaces them.
-    std::erase_if(current_, [&](const ContactPair& p) { return p.a == g.id || p.b == g.id; });
+    swept_at[cand.slot] = ++order;
     const bool self_first = cand.slot < hit.slot;
     ContactPair pair;
     pair.a = m.geoms[self_first ? cand.slot : hit.slot].id;
@@ -663,6 +865,18 @@ void CollisionSet::sweep(const WorldView& world) {
     pair.normal_speed = dot(m.motion(sb).at(p.position) - m.motion(sa).at(p.position), p.normal);
     points_.push_back(p);
     current_.push_back(pair);
+    made_at.push_back(order);
+  }
+  if (order > 0) {
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < current_.size(); ++k) {
+      const ContactPair& p = current_[k];
+      const std::uint32_t made = k < discrete ? 0 : made_at[k - discrete];
+      if (swept_at[p.a.index] > made || swept_at[p.b.index] > made) continue;
+      current_[kept++] = p;
+    }
+    current_.resize(kept);
+    for (const Impl::Candidate& cand : m.candidates) swept_at[cand.slot] = 0;
   }
   std::sort(sweeps_.begin(), sweeps_.end(), [](const Sweep& x, const Sweep& y) { return x.part < y.part; });
 }
