@@ -1,4 +1,4 @@
--- A generator from kit parts: the motor's rotor (mods/motor/layout.lua: eight
+-- A generator from kit parts: the motor's rotor (mods/motor/rotor.lua: eight
 -- 50 x 10 x 10 mm NdFeB spokes, north out and south out in turn, glued to a
 -- wooden hub on a pinned axle) and its two coils (the kit's 500-turn coil,
 -- radial at +22.5 and -22.5 degrees, 8 mm outside the spokes' ends), wired in
@@ -53,29 +53,10 @@ return function(options)
   end
   local tip = o.spoke_inner + o.spoke_length
 
-  -- The rotor, as the motor's: spoke i at -90 + 45 i degrees, south out for even i.
-  local hub_mass = kit.material("wood").density * 4 / 3 * math.pi * o.hub_radius ^ 3
-  local inertia = 2 / 5 * hub_mass * o.hub_radius ^ 2
-  local magnet_density = 7500
-  local counts = { N = 0, S = 0 }
-  for i = 0, 7 do
-    local pole = i % 2 == 1 and "N" or "S"
-    counts[pole] = counts[pole] + 1
-    local name = "spoke_" .. pole .. counts[pole]
-    local r = o.spoke_inner + o.spoke_length / 2
-    local angle = -90 + 45 * i
-    kit.magnet { name = name, at = at(r, angle), angle = rad(angle), length = o.spoke_length,
-                 width = o.spoke_width, north = pole == "N" and "+x" or "-x" }
-    kit.glue { name = name .. "_glue", a = "axle", b = name }
-    local m = magnet_density * o.spoke_length * o.spoke_width * o.spoke_width
-    inertia = inertia + m * ((o.spoke_length ^ 2 + o.spoke_width ^ 2) / 12 + r * r)
-  end
-  -- The crank lies along the hub's face.
+  -- The rotor is the motor's (mods/motor/rotor.lua), with the crank's
+  -- inertia (it lies along the hub's face) in the bearing's drag rate.
   local crank_mass = kit.material("wood").density * o.crank_length * 0.01 * 0.005
-  inertia = inertia + crank_mass * o.crank_length ^ 2 / 12
-  kit.disk { name = "axle", material = "wood", at = C, radius = o.hub_radius,
-             props = { angular_damping = o.bearing_drag / inertia } }
-  kit.pin { name = "bearing", part = "axle", friction = o.axle_friction }
+  local _, inertia = require "motor.rotor" (o, crank_mass * o.crank_length ^ 2 / 12)
   kit.bar { name = "crank", material = "wood", at = C, length = o.crank_length, width = 0.01,
             depth = 0.005, angle = rad(22.5) }
   kit.glue { name = "crank_glue", a = "axle", b = "crank" }

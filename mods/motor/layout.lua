@@ -89,31 +89,10 @@ return function(options)
   end
   local tip = o.spoke_inner + o.spoke_length  -- radius of the spokes' outer ends
 
-  -- The rotor. Spoke i stands at -90 + 45 i degrees (the bottom first, going
-  -- anticlockwise), south out for even i: S1 N1 S2 N2 S3 N3 S4 N4.
-  local hub_mass = kit.material("wood").density * 4 / 3 * math.pi * o.hub_radius ^ 3
-  local inertia = 2 / 5 * hub_mass * o.hub_radius ^ 2
-  local spokes, counts = {}, { N = 0, S = 0 }
-  local magnet_density = 7500  -- sintered NdFeB (kit.magnet's "neodymium")
-  for i = 0, 7 do
-    local pole = i % 2 == 1 and "N" or "S"
-    counts[pole] = counts[pole] + 1
-    local name = "spoke_" .. pole .. counts[pole]
-    local r = o.spoke_inner + o.spoke_length / 2
-    local angle = -90 + 45 * i + o.rotor_angle
-    kit.magnet { name = name, at = at(r, angle), angle = rad(angle), length = o.spoke_length,
-                 width = o.spoke_width, north = pole == "N" and "+x" or "-x",
-                 props = { restitution = o.spoke_restitution } }
-    kit.glue { name = name .. "_glue", a = "axle", b = name }
-    spokes[#spokes + 1] = { name = name, north = pole == "N" }
-    local m = magnet_density * o.spoke_length * o.spoke_width * o.spoke_width
-    inertia = inertia + m * ((o.spoke_length ^ 2 + o.spoke_width ^ 2) / 12 + r * r)
-  end
-  -- The grease's drag on the rotor is b w; the rigid body's angular damping
-  -- is a rate (dw/dt = -c w), so c = b / I of the rotor as built here.
-  kit.disk { name = "axle", material = "wood", at = C, radius = o.hub_radius,
-             props = { angular_damping = o.bearing_drag / inertia } }
-  kit.pin { name = "bearing", part = "axle", friction = o.axle_friction }
+  -- The rotor (mods/motor/rotor.lua): spoke i at -90 + 45 i degrees (the
+  -- bottom first, going anticlockwise), south out for even i: S1 N1 S2 N2
+  -- S3 N3 S4 N4, on a hub pinned by an oiled bearing.
+  local spokes, inertia = require "motor.rotor" (o)
 
   -- The sliding contact, raised and held until it is let go.
   local p = rad(o.contact_angle)

@@ -487,8 +487,14 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
 
   // Induction: the EMF queued for this advance (electricity_from_magnetism)
   // is a source in series with its coil, held over the advance's substeps.
+  // The EMF is queued for the advance's end (the flux rate one step on) and
+  // ramps linearly over the substeps from the one in force at the last
+  // substep's end, so that the trapezoidal rule integrates a piecewise
+  // linear EMF exactly: its integral is the flux's change over the step, to
+  // second order (docs/electricity.md "Induction").
   take_induced_emfs(access);
-  for (std::size_t i = 0; i < nc; ++i) coils_[i].series_emf = induced_emf_[i];
+  emf_start_.resize(nc);
+  for (std::size_t i = 0; i < nc; ++i) emf_start_[i] = coils_[i].series_emf;
   // Mutual inductance: coil i's companion gains sum_j (2 M_ij / h)(I_j' - I_j).
   // The known part goes into its source; the unknown currents are solved by
   // superposition: with T the coupled coils' currents per unit source in each
@@ -581,6 +587,9 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     book_substep(trap, trap > 0 ? h : h / 2);
   };
   for (int step = 0; step < config_.substeps; ++step) {
+    const double along = double(step + 1) / config_.substeps;
+    for (std::size_t i = 0; i < nc; ++i)
+      coils_[i].series_emf = emf_start_[i] + (induced_emf_[i] - emf_start_[i]) * along;
     if (guard_) {
       substep(0.0), substep(0.0);
       guard_ = false;
@@ -637,6 +646,16 @@ void ElectricityResolver::book_substep(double trap, double hs) {
     const double i0 = books_.coil_current0[n];
     books_.switching += v_l * i * hs - 0.5 * c.inductance * (c.current * c.current - i0 * i0);
   }
+  // Coils that share flux store M I_a I_b besides their own 1/2 L I^2: the
+  // mutual parts of their inductive voltages, summed over both coils, give
+  // exactly M d(I_a I_b) over a trapezoidal substep (M held over the
+  // advance), and that plus M dI_a dI_b over a guard half-step. The change
+  // is the store's, not switching.
+  for (const Mutual& m : mutual_) {
+    if (m.a >= nc || m.b >= nc) continue;
+    books_.switching -= m.m * (coils_[m.a].current * coils_[m.b].current -
+                               books_.coil_current0[m.a] * books_.coil_current0[m.b]);
+  }
   for (std::size_t n = 0; n < capacitors_.size(); ++n) {
     const Capacitor& c = capacitors_[n];
     const double i = mean(books_.cap_current0[n], c.current);
@@ -670,6 +689,13 @@ void ElectricityResolver::report_energy(const WorldView&, EnergyReport& out) {
   for (const Coil& c : coils_) fields += 0.5 * c.inductance * c.current * c.current;
   for (const Capacitor& c : capacitors_) charges += c.charge * c.charge / (2 * c.capacitance);
   out.store("coil fields (1/2 L I^2)", fields);
+  if (coils_.size() >= 2) {  // every report while coils could share flux
+    double shared = 0;
+    for (const Mutual& m : mutual_)
+      if (m.a < coils_.size() && m.b < coils_.size())
+        shared += m.m * coils_[m.a].current * coils_[m.b].current;
+    out.store("coils' shared field (M I_a I_b)", shared);
+  }
   out.store("capacitors (q^2 / 2C)", charges);
 }
 

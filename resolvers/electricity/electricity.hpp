@@ -33,9 +33,11 @@
 //         "energy", the J its collapsing field released into the gap) when the
 //         element joins / leaves a closed loop.
 // Induction  set_induced_emf(coil, volts), queued by electricity_from_magnetism
-//         (resolvers/magnetism/): -dPhi/dt in series with the coil for the
-//         next advance (docs/electricity.md "Induction").
-// Rates   with the setting `rates = true`, a coil also publishes
+//         (resolvers/magnetism/): -dPhi/dt in series with the coil, the
+//         value at the end of the next advance; the EMF ramps linearly to it
+//         over the advance's substeps from the value in force at the last
+//         substep (docs/electricity.md "Induction").
+// Rates   with the setting `rates = true` (the default), a coil also publishes
 //         `current_rate`, dI/dt at the end of the advance (A/s), so that
 //         magnetism_from_electricity can pass the current on with its rate
 //         and the coil's magnet follows it between windows instead of a
@@ -134,8 +136,10 @@ struct ElectricityConfig {
   /// larger ones with sparse LU.
   std::int64_t dense_limit = 64;
   /// Publish each coil's `current_rate` (dI/dt at the end of the advance,
-  /// A/s): off by default; see the header.
-  bool rates = false;
+  /// A/s): on by default, since magnetism_from_electricity predicts a coil's
+  /// current with it for the step whose force it makes (the magnet-coil
+  /// coupling's energy balance, docs/magnetism.md); see the header.
+  bool rates = true;
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static ElectricityConfig from(const PluginSettings& settings);
@@ -180,7 +184,7 @@ class ElectricityResolver final : public Resolver {
   /// object that is not (or no longer) a coil, or with a non-finite value,
   /// does nothing.
   void set_induced_emf(ObjectId coil, double emf);
-  /// The induced EMF of coil `coil` in the last advance, V (0 if none).
+  /// The induced EMF of coil `coil` at the end of the last advance, V (0 if none).
   double induced_emf(ObjectId coil) const;
   /// A resistor whose resistance something else decides (a photocell, from
   /// electricity_from_light): over the next advance only, resistor `part`
@@ -256,8 +260,9 @@ class ElectricityResolver final : public Resolver {
     double v_l = 0;
     /// An EMF in series with the coil, V, driving current from terminal 0 to
     /// 1 (a source inside the branch): enters the branch's right-hand side in
-    /// one place, the substep loop of advance(). Set before the loop from the
-    /// induced EMF queued for this advance (set_induced_emf), zero without one.
+    /// one place, the substep loop of advance(). Set at each substep on the
+    /// ramp from its value at the advance's start to the induced EMF queued
+    /// for the advance's end (set_induced_emf), zero without one.
     double series_emf = 0;
     /// 1/2 L I^2 (J) released this advance because the coil lost its last
     /// loop with current flowing (the spark at the opening contact).
@@ -312,7 +317,8 @@ class ElectricityResolver final : public Resolver {
   // to its branch source in the last one (a separate term, kept out of the
   // companion model's own source).
   std::vector<std::pair<ObjectId, double>> induced_queue_;
-  std::vector<double> induced_emf_;  // per coil, V
+  std::vector<double> induced_emf_;  // per coil, V: the value at the advance's end
+  std::vector<double> emf_start_;    // per coil, V: the series EMF at the advance's start (scratch)
   // set_resistance: the commands of the next advance, and the values the
   // network was built with (slot -> Ohm), compared each advance.
   std::vector<std::pair<ObjectId, double>> resistance_queue_;

@@ -36,6 +36,12 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       pole_velocity_[i] = v + cross(w, poles[i].position - centre);
   }
 
+  // The poles at the end of the coming step, moved on with their velocity.
+  const double dt = world.dt();
+  moved_poles_.assign(poles.begin(), poles.end());
+  for (std::size_t i = 0; i < moved_poles_.size(); ++i)
+    moved_poles_[i].position = poles[i].position + pole_velocity_[i] * dt;
+
   std::vector<CoilGeometry> geometry;  // the coils with a usable geometry, for the mutual part
   std::vector<ObjectId> geometry_id;
   for (std::uint32_t slot : c.magnet.members()) {
@@ -53,16 +59,29 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     coil.angular_velocity = spin.value_or(slot, Vec3{});
     const ObjectId id = store.id_at(slot);
     if (const MagneticBody* own = forces_.find(id)) coil.body = std::uint32_t(own - bodies.data());
-    FluxLinkage f;
+    FluxLinkage f, f_end;
     if (is_finite(coil.centre) && is_finite(coil.axis) && is_finite(coil.velocity) &&
         is_finite(coil.angular_velocity) && std::isfinite(coil.linkage)) {
       f = coil_flux(poles, pole_velocity_, forces_.softening(), coil);
+      // The same at the end of the coming step, every part moved on along
+      // its present motion: electricity ramps the EMF over its substeps
+      // from the last step's end value to this one, so the EMF it
+      // integrates is the flux's change over the step, to second order,
+      // while the parts' displacement over that step is the one the
+      // force's work is booked along (docs/magnetism.md "The coupling's
+      // timing").
+      CoilGeometry moved = coil;
+      moved.centre = coil.centre + coil.velocity * dt;
+      moved.axis = coil.axis + cross(coil.angular_velocity, coil.axis) * dt;
+      moved.axis = moved.axis / length(moved.axis);
+      f_end = coil_flux(moved_poles_, pole_velocity_, forces_.softening(), moved);
       if (coil.linkage != 0) geometry.push_back(coil), geometry_id.push_back(id);
     }
     if (!std::isfinite(f.flux) || !std::isfinite(f.rate)) f = {};
+    if (!std::isfinite(f_end.rate)) f_end = f;
     coils_.push_back({id, f});
     // Faraday and Lenz: the EMF opposes the change of the flux that links it.
-    target_.set_induced_emf(id, -f.rate);
+    target_.set_induced_emf(id, -f_end.rate);
   }
 
   // A transformer: every pair of coils shares M (the same model as the flux

@@ -69,6 +69,7 @@ class ElectricityFromMagnetism : public Interaction {
   std::vector<CoilFlux> coils_;
   std::vector<CoilPair> mutuals_;
   std::vector<Vec3> pole_velocity_;
+  std::vector<Pole> moved_poles_;  // the poles one step on (scratch)
   std::optional<MagnetColumns::Ids> ids_;
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};
 };

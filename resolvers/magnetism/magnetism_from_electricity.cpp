@@ -1,5 +1,7 @@
 #include "resolvers/magnetism/magnetism_from_electricity.hpp"
 
+#include <cmath>
+
 #include "resolvers/magnetism/magnet_parts.hpp"
 
 namespace alloy::magnetism {
@@ -20,6 +22,27 @@ void MagnetismFromElectricity::apply(const WorldView& world) {
       }
       return;
     }
+  }
+  // The coupling's timing (docs/magnetism.md): the current read now (the
+  // end of electricity's last advance, t) becomes the coil's pole strength
+  // at the end of magnetism's next advance (t + dt), and the force of that
+  // pole strength is held over the rigid body's step after it, from t + dt
+  // to t + 2 dt, while electricity pays the EMF of that motion with its
+  // mean current over the same step, the current at t + 1.5 dt. When
+  // electricity publishes its currents' rates (its setting `rates`), the
+  // command is that current, predicted along the rate: then the force on
+  // the parts and the EMF's work on the circuit use the same current to
+  // second order, and the energy one side gives is the energy the other
+  // takes. Without rates the force's current is 1.5 steps old.
+  if (const auto id = world.properties().find(prop::kCurrentRate)) {
+    const auto rate = world.column<double>(*id);
+    const double lead = 1.5 * world.dt();
+    for (std::uint32_t slot : magnet.members()) {
+      if (MagnetKind(magnet[slot].index) != MagnetKind::Electromagnet) continue;
+      const double i = current.value_or(slot, 0.0), di = rate.value_or(slot, 0.0);
+      target_.set_coil_current(store.id_at(slot), std::isfinite(di) ? i + lead * di : i);
+    }
+    return;
   }
   // Every step, not only on change: the resolver keeps the last command, but a
   // swapped-in resolver starts with none, and coils are few.

@@ -78,11 +78,13 @@ TEST(CoupledScenes, WithTheRigidBodyEvery4HalvingTheWindowReducesTheMotorSpeedEr
                 m.value, 100 * error);
     // Measured: 0.55, 0.29, 0.13 % (0.44, 0.18, 0.14 % with backward-Euler coils), before
     // induction. Since back-EMF sets the motor's speed (session 13): 0.198, 0.297, 0.041 %,
-    // all below 0.3 %: the error no longer falls at every halving, so the check is that it
-    // stays below 0.5 % and that the finest window is the best.
-    EXPECT_LT(error, 0.005) << "window 1/" << n;
-    if (n == 3840) EXPECT_LT(error, previous) << "window 1/" << n;
-    previous = std::min(previous, error);
+    // not falling at every halving. Since the coupling's timing (session 14: the coil's
+    // current predicted 1.5 windows on, where with the rigid body every 4 its force acts
+    // 1 to 5 windows on): 0.950, 0.445, 0.230 %, halving with the window again (first
+    // order, from the rigid body's 4-window hold).
+    EXPECT_LT(error, 0.01) << "window 1/" << n;
+    EXPECT_LT(error, 0.6 * previous) << "window 1/" << n;
+    previous = error;
   }
 }
 

@@ -24,9 +24,11 @@ constexpr double kRelease = 0.1;  // mods/motor/scene.lua: at(0.1, "slider", { p
 constexpr double kBatteryOffAt =
     5.0;  // mods/motor/battery_off.lua: at(5.0, "battery", { emf = 0 })
 constexpr double kPitch = std::numbers::pi / 4;  // one spoke
-/// The scene's steady speed, rad/s (docs/motor.md: 4.44 at 1/240 s, 4.36 at
-/// 1/480 s, set by the back-EMF), and how far a variant may stray from it.
-constexpr double kSpeed = 4.4, kSpeedTolerance = 0.3;
+/// The scene's steady speed, rad/s (docs/motor.md: 4.19 at 1/240 s, 4.24 at
+/// 1/480 s and 4.26 at 1/960 s since the energy-consistent coupling; 4.44
+/// and 4.36 before, from above: the limit is near 4.28), set by the
+/// back-EMF, and how far a variant may stray from it.
+constexpr double kSpeed = 4.25, kSpeedTolerance = 0.3;
 
 std::string describe(const Steadiness& s) {
   std::ostringstream o;
@@ -117,8 +119,9 @@ TEST(Motor, StartsUpAsThePaperTellsIt) {
 
 TEST(Motor, TurnsAnticlockwiseAtASteadySpeedFromFrame200) {
   const RunResult r = run_motor(kScene, {.seconds = kSteadyTo + 0.1});
-  const Steadiness s = expect_turns_steadily(r, 5, 0.10);
-  // Measured (docs/motor.md): 4.44 rad/s, set by the back-EMF.
+  // 4.19 rad/s over the 7.5 s window is 5.0 turns, 4 of them whole.
+  const Steadiness s = expect_turns_steadily(r, 4, 0.10);
+  // Measured (docs/motor.md): 4.19 rad/s, set by the back-EMF.
   EXPECT_NEAR(s.mean, kSpeed, kSpeedTolerance);
   EXPECT_LT(s.spread(), 0.01);
 }
@@ -151,11 +154,15 @@ TEST(Motor, RemovingTheBatteryStopsIt) {
   // resolvers to see it). While the rotor still turns it induces a current
   // in the coil whose spoke the slider touches (a generator, short-circuited
   // through the battery's 0.5 ohm): it flows against the way the battery
-  // drove it, and brakes the rotor.
+  // drove it, and brakes the rotor. At a hand-over the collapse of one
+  // coil's generated current induces a forward kick in the other through
+  // their mutual inductance (1.04 mA for two steps at 5.07 s since the
+  // energy-consistent coupling, just above the 1 mA powered threshold): 2 mA
+  // is still far below the 4.5 mA the battery drove.
   double generated = 0;
   for (std::size_t i = r.at(kBatteryOffAt + 2 * r.dt); i < r.time.size(); ++i) {
     if (r.spin[i] < 0.1) continue;
-    EXPECT_LT(r.coil_current[i], 1e-3) << "driven forward at " << r.time[i] << " s";
+    EXPECT_LT(r.coil_current[i], 2e-3) << "driven forward at " << r.time[i] << " s";
     generated = std::min(generated, r.coil_current[i]);
   }
   EXPECT_LT(generated, -5e-3) << "the turning rotor drives a current back";

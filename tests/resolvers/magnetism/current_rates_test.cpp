@@ -28,10 +28,10 @@ struct Circuit {
     WorldDef def;
     def.dt = dt;
     if (force_rates) def.settings["magnetic_forces"].set("rates", true);
-    if (rates) {
-      def.settings["electricity"].set("rates", true);
-      def.settings["magnetism"].set("rates", true);
-    }
+    // Electricity publishes its rates by default (for the coupling's timing,
+    // docs/magnetism.md); "without rates" turns them off.
+    def.settings["electricity"].set("rates", rates);
+    if (rates) def.settings["magnetism"].set("rates", true);
     world = std::make_unique<World>(registry, def);
     World& w = *world;
     const ObjectId battery = w.create("battery");
@@ -65,7 +65,7 @@ double analytic(double t) {
 TEST(CurrentRates, TheCoilPublishesItsRateOnlyWithTheSetting) {
   Circuit off(false);
   off.world->run(3);
-  // Without the settings the columns stay empty (the default runs as before).
+  // With the settings off the columns stay empty.
   EXPECT_ANY_THROW(off.world->get(off.coil, electricity::prop::kCurrentRate));
   EXPECT_ANY_THROW(off.world->get(off.coil, prop::kPoleStrengthRate));
 

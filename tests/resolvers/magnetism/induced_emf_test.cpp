@@ -38,7 +38,7 @@ struct Loop {
   double current() { return std::get<double>(world->get(coil, "current")); }
 };
 
-TEST(InducedEmf, DrivesItsCoilsCurrentFromTerminal0To1AndOnlyForOneAdvance) {
+TEST(InducedEmf, DrivesItsCoilsCurrentFromTerminal0To1AndRampsToTheNextCommand) {
   Loop loop;
   for (int n = 0; n < 240; ++n) {  // 1 s: 200 time constants
     loop.circuits().set_induced_emf(loop.coil, 3.0);
@@ -46,16 +46,23 @@ TEST(InducedEmf, DrivesItsCoilsCurrentFromTerminal0To1AndOnlyForOneAdvance) {
   }
   EXPECT_NEAR(loop.current(), 3.0 / 2.0, 1e-9);
   EXPECT_EQ(loop.circuits().induced_emf(loop.coil), 3.0);
-  // No command: no EMF in that advance, the current decays through the loop.
+  // No command: the EMF at that advance's end is 0, and it ramps there
+  // linearly over the four trapezoidal substeps (h = 1/960 s, L = 10 mH,
+  // R = 2 Ohm), from 3 V, where the last advance left it (a ramp of the
+  // series EMF is no discontinuity for the guard). The trapezoidal rule,
+  // step by step from the steady state (v_L = E - R I = 0):
+  // (2L/h)(I' - I) = v_L + E' - R I', v_L' = E' - R I'.
   loop.world->step();
   EXPECT_EQ(loop.circuits().induced_emf(loop.coil), 0.0);
-  // Four trapezoidal substeps of h = 1/960 s with tau = L / R = 5 ms (a
-  // step of the series EMF is no discontinuity for the guard). The first
-  // starts from v_L = 0 (steady state under the old EMF): -R I' = (2L/h)(I' -
-  // I), I' = I / (1 + a) with a = h / 2 tau; the next three have v_L = -R I:
-  // I' = I (1 - a) / (1 + a).
-  const double h = 1.0 / 960, tau = 0.005, a = h / (2 * tau);
-  EXPECT_NEAR(loop.current(), 1.5 / (1 + a) * std::pow((1 - a) / (1 + a), 3), 1e-9);
+  const double h = 1.0 / 960, l = 0.01, r = 2.0;
+  double i = 1.5, v_l = 0;
+  for (int k = 1; k <= 4; ++k) {
+    const double e = 3.0 * (1 - k / 4.0);
+    i = (2 * l / h * i + v_l + e) / (2 * l / h + r);
+    v_l = e - r * i;
+  }
+  EXPECT_NEAR(loop.current(), i, 1e-9);
+  EXPECT_LT(loop.current(), 1.5);
   // The other way round.
   for (int n = 0; n < 240; ++n) {
     loop.circuits().set_induced_emf(loop.coil, -1.0);
