@@ -95,6 +95,15 @@ class CollisionSet final : public DerivedSet {
   void update(const WorldView& world) override;
   void on_structure_changed(const WorldView& world) override;
 
+  /// The set's memory as it was before its last update (the pairs that
+  /// touched then, with their began_step and impulse totals; the swept
+  /// parts' previous positions; the step of that update). A restore primes
+  /// derived sets by updating them once: the restored set repeats its last
+  /// update from that memory, and so publishes what the uninterrupted run's
+  /// set published (began, ended, totals, durations), bit for bit.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
+
   std::span<const ContactPair> began() const { return began_; }
   std::span<const ContactPair> ongoing() const;
   /// began and ongoing together, sorted by (a, b): every pair that touches now.
@@ -121,7 +130,9 @@ class CollisionSet final : public DerivedSet {
   bool impulses_known() const { return impulses_known_; }
   /// Whether the pair's total_impulse covers every advance since it began
   /// (impulses were computed for all of them).
-  bool total_known(const ContactPair& p) const { return impulses_known_ && p.began_step + 1 >= impulses_since_; }
+  bool total_known(const ContactPair& p) const {
+    return impulses_known_ && p.began_step + 1 >= impulses_since_;
+  }
 
  private:
   struct Impl;
@@ -140,6 +151,11 @@ class CollisionSet final : public DerivedSet {
   ImpulseDemand always_;
   bool impulses_known_ = false;
   std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
+  // impulses_known_ and impulses_since_ as they were before the last update
+  // (save_state), and, after a restore, the step the first update repeats.
+  bool prior_known_ = false;
+  std::uint64_t prior_since_ = 0;
+  bool restored_ = false;
 
   void sweep(const WorldView& world);
   /// ODE failed inside the update (see collisions.cpp): reported, not fatal.
