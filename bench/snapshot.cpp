@@ -18,34 +18,21 @@
 #include <memory>
 #include <vector>
 
+#include "bench/snapshot_pile.hpp"
 #include "resolvers/plugins.hpp"
 #include "runtime/packed_delta.hpp"
 #include "runtime/state_hash.hpp"
 #include "runtime/world.hpp"
-#include "tests/scenes/rigid_scenes.hpp"
 
 namespace {
 
 using namespace alloy;
 
-double median_ms(int reps, const std::function<void()>& f) {
-  std::vector<double> t;
-  for (int i = 0; i < reps; ++i) {
-    const auto a = std::chrono::steady_clock::now();
-    f();
-    t.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
-}
+using bench::median_ms;
 
 void row(int boxes, int reps) {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  World w(registry, WorldDef{.dt = 1.0 / 240});
-  scenes::build_pile(w, scenes::pile_layout(boxes));
-  w.run(5);
+  bench::FallingPile pile(boxes);
+  World& w = pile.world;
   const double bodies = double(w.store().object_count());
 
   Snapshot full;

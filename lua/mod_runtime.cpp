@@ -295,8 +295,10 @@ void ModRuntime::commit(Loaded& l, std::unique_ptr<Program> p, bool first) {
   l.plugins = std::move(plugins);
   l.handler_ok.assign(p->handlers.size(), true);
   if (auto previous = mod.set_program(std::move(p))) mod.release(*previous);
-  if (world_)
+  if (world_) {
+    const World::QuietInputs one_input(*world_);  // the reload is the input (its event)
     for (const auto& name : changed) world_->plugin_changed(name);
+  }
 }
 
 void ModRuntime::hold_impulses() {

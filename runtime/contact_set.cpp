@@ -59,7 +59,6 @@ void ContactSet::publish(const WorldView& world, std::span<const PairImpulse> im
   // The rigid body's impulses are for the pairs it was given, i.e. those that
   // touched at the previous update: merge them in by pair. Empty when nobody
   // demanded them.
-  const std::uint64_t step = world.step();
   if (computed && !impulses_known_) impulses_since_ = step;
   impulses_known_ = computed;
   // A merge cursor over the impulses, for one ascending pass over pairs.

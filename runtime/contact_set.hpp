@@ -144,8 +144,11 @@ class ContactSet : public DerivedSet {
   /// Ends an update whose pairs are in current_ (sorted by (a, b)) and points
   /// in points_: see the class comment. `impulses` are the rigid body's of
   /// its last advance, sorted by (a, b), for the pairs it was given;
-  /// `computed` says whether it computed any.
-  void publish(const WorldView& world, std::span<const PairImpulse> impulses, bool computed);
+  /// `computed` says whether it computed any. `step` is the world step the
+  /// update is about (the present one, except when a restored set repeats
+  /// the saved run's last update).
+  void publish(const WorldView& world, std::span<const PairImpulse> impulses, bool computed,
+               std::uint64_t step);
   /// Clears began, ended and the lazily made ongoing list (an update that
   /// keeps the last pairs but reports no change).
   void clear_changes();

@@ -103,7 +103,62 @@ struct Recorder::State {
   std::vector<std::pair<std::string, std::uint64_t>> stages;            // of the step running
   std::map<std::string, std::uint64_t> columns;                         // as of the last step
   std::map<std::uint32_t, std::pair<ObjectId, std::uint64_t>> objects;  // by slot
+
+  /// The recording's clock: the initial step plus the steps recorded. It
+  /// is the world's step count unless an input restored another moment (the
+  /// viewer's undo): inputs are placed by it, so the log stays in order.
+  std::uint64_t clock() const { return data.snapshot.step + data.hashes.size(); }
+
+  void input(World& world, const WorldInput& in);
+  void after_step(World& world);
 };
+
+void Recorder::State::input(World& world, const WorldInput& in) {
+  using K = WorldInput::Kind;
+  if (in.kind == K::Stepped) return after_step(world);
+  ReplayInput r;
+  r.step = clock();
+  r.id = in.id;
+  r.property = in.property;
+  r.value = in.value;
+  switch (in.kind) {
+    case K::Set:
+      r.kind = ReplayInput::Kind::Set;
+      break;
+    case K::Remove:
+      r.kind = ReplayInput::Kind::Remove;
+      break;
+    case K::Create:
+      r.kind = ReplayInput::Kind::Create;
+      r.text = in.name;
+      break;
+    case K::Destroy:
+      r.kind = ReplayInput::Kind::Destroy;
+      break;
+    case K::Unfreeze:
+      r.kind = ReplayInput::Kind::Unfreeze;
+      break;
+    case K::Swap:
+      r.kind = ReplayInput::Kind::Swap;
+      r.area = in.area, r.from = in.from, r.to = in.to;
+      break;
+    case K::PluginChanged:
+      r.kind = ReplayInput::Kind::PluginChanged;
+      r.text = in.name;
+      break;
+    case K::Restore:
+      r.kind = ReplayInput::Kind::Restore;
+      // A copy shares the snapshot's columns (they are immutable): cheap.
+      r.snapshot = std::make_shared<const Snapshot>(*in.snapshot);
+      break;
+    case K::Sync:
+      r.kind = ReplayInput::Kind::Sync;
+      break;
+    case K::Stepped:
+      return;
+  }
+  data.inputs.push_back(std::move(r));
+}
 
 Recorder::Recorder(World& world, SaveMeta meta) : world_(world), state_(std::make_shared<State>()) {
   meta.kind = "replay";
@@ -113,19 +168,22 @@ Recorder::Recorder(World& world, SaveMeta meta) : world_(world), state_(std::mak
   world.set_stage_hook([weak, &world](const std::string& stage) {
     if (auto s = weak.lock()) s->stages.emplace_back(stage, stage_hash(world, stage));
   });
-  // Observers cannot be removed: this one holds the state weakly and goes
-  // quiet once the recorder is gone.
+  // Observers cannot be removed: these hold the state weakly and go quiet
+  // once the recorder is gone.
+  world.add_input_observer([weak, &world](const WorldInput& in) {
+    if (auto s = weak.lock()) s->input(world, in);
+  });
   world.add_observer([weak, &world](const Event& e) {
     auto s = weak.lock();
     if (!s) return;
     ReplayInput r;
-    r.step = e.step > 0 ? e.step - 1 : 0;
+    r.step = s->clock();  // the step being published (or, a reload's, the one before)
     if (e.type == "input" && e.source == "schedule") {
       r.kind = ReplayInput::Kind::Timeline;
       r.id = e.a;
       r.text = e.text;
     } else if (e.type == "resolver_swapped") {
-      // A swap made through Recorder::swap is logged already (as Swap).
+      // A swap from outside is logged already (as Swap).
       for (const auto& in : s->data.inputs)
         if (in.kind == ReplayInput::Kind::Swap && in.step == r.step) return;
       r.kind = ReplayInput::Kind::Swapped;
@@ -147,39 +205,23 @@ Recorder::~Recorder() {
   world_.set_stage_hook({});
 }
 
-void Recorder::set(ObjectId id, std::string_view property, const PropertyValue& value) {
-  world_.set(id, property, value);  // throws before anything is logged
-  ReplayInput r;
-  r.step = world_.step_count();
-  r.kind = ReplayInput::Kind::Set;
-  r.id = id;
-  r.property = std::string(property);
-  r.value = value;
-  state_->data.inputs.push_back(std::move(r));
-}
-
-void Recorder::swap(std::string_view area, std::string_view from, std::string_view to) {
-  world_.swap(area, from, to);
-  ReplayInput r;
-  r.step = world_.step_count();
-  r.kind = ReplayInput::Kind::Swap;
-  r.area = area, r.from = from, r.to = to;
-  state_->data.inputs.push_back(std::move(r));
-}
-
 void Recorder::reloaded(const std::string& mod) {
   ReplayInput r;
-  r.step = world_.step_count();
+  r.step = state_->clock();
   r.kind = ReplayInput::Kind::Reload;
   r.text = mod;
   state_->data.inputs.push_back(std::move(r));
 }
 
-void Recorder::after_step() {
-  State& s = *state_;
+std::size_t Recorder::steps() const {
+  return state_->data.hashes.size();
+}
+
+void Recorder::State::after_step(World& world) {
+  State& s = *this;
   StepHashes h;
-  h.step = world_.step_count();
-  const StateHash sh = hash_state(world_);
+  h.step = world.step_count();
+  const StateHash sh = hash_state(world);
   h.world = sh.world;
   h.stages = std::move(s.stages);
   s.stages.clear();
@@ -194,7 +236,7 @@ void Recorder::after_step() {
     if (!still && v != 0) h.columns.emplace_back(name, 0), v = 0;
   }
   std::map<std::uint32_t, std::pair<ObjectId, std::uint64_t>> now;
-  for (const auto& [id, v] : object_hashes(world_)) {
+  for (const auto& [id, v] : object_hashes(world)) {
     now[id.index] = {id, v};
     const auto it = s.objects.find(id.index);
     if (it == s.objects.end() || it->second != std::pair{id, v}) h.objects.emplace_back(id, v);
@@ -232,10 +274,12 @@ std::string ReplayResult::message() const {
 
 namespace {
 
-/// Applies the log's inputs due before the next step.
-void apply_inputs(World& w, const SaveData& data, std::size_t& next, const ReplayOptions& o) {
+/// Applies the log's inputs due before the next step: those logged at the
+/// recording's clock `clock` (the initial step plus the steps replayed).
+void apply_inputs(World& w, const SaveData& data, std::size_t& next, const ReplayOptions& o,
+                  std::uint64_t clock) {
   const auto& log = data.inputs;
-  while (next < log.size() && log[next].step <= w.step_count()) {
+  while (next < log.size() && log[next].step <= clock) {
     const ReplayInput& r = log[next++];
     switch (r.kind) {
       case ReplayInput::Kind::Set:
@@ -249,6 +293,34 @@ void apply_inputs(World& w, const SaveData& data, std::size_t& next, const Repla
           throw InputError("the recording reloads mod '" + r.text + "' before step " +
                            std::to_string(r.step + 1) + ", and this replay cannot reload mods");
         o.reload(w, r.text);
+        break;
+      case ReplayInput::Kind::Remove:
+        w.remove(r.id, r.property);
+        break;
+      case ReplayInput::Kind::Create:
+        if (const ObjectId made = w.create(r.text); made != r.id)
+          throw InputError("the replay's create before step " + std::to_string(r.step + 1) +
+                           " made object #" + std::to_string(made.index) +
+                           " where the recording made #" + std::to_string(r.id.index) +
+                           ": the object tables have parted");
+        break;
+      case ReplayInput::Kind::Destroy:
+        w.destroy(r.id);
+        break;
+      case ReplayInput::Kind::Unfreeze:
+        w.unfreeze(r.id);
+        break;
+      case ReplayInput::Kind::PluginChanged:
+        w.plugin_changed(r.text);
+        break;
+      case ReplayInput::Kind::Restore:
+        if (!r.snapshot)
+          throw InputError("the recording restores a snapshot before step " +
+                           std::to_string(r.step + 1) + " that it does not hold");
+        w.restore(*r.snapshot);
+        break;
+      case ReplayInput::Kind::Sync:
+        w.sync();
         break;
       case ReplayInput::Kind::Timeline:
       case ReplayInput::Kind::Swapped:
@@ -283,7 +355,7 @@ ReplayResult replay(const SaveData& data, const std::function<World&()>& rebuild
           objects.erase(id.index);
         else
           objects[id.index] = {id, v};
-      apply_inputs(w, data, next, options);
+      apply_inputs(w, data, next, options, data.snapshot.step + i);
       w.step();
       if (w.step_count() != h.step)
         throw InputError("the recording's steps do not follow: step " +
@@ -336,7 +408,7 @@ ReplayResult replay(const SaveData& data, const std::function<World&()>& rebuild
   });
   std::size_t next = 0;
   for (std::size_t i = 0; i <= diverged; ++i) {
-    apply_inputs(w, data, next, options);
+    apply_inputs(w, data, next, options, data.snapshot.step + i);
     hashing = i == diverged;
     w.step();
   }

@@ -30,14 +30,18 @@ std::uint64_t stage_hash(World& world, const std::string& stage);
 std::vector<std::pair<ObjectId, std::uint64_t>> object_hashes(const World& world);
 
 /// Records a world as it runs. Construct it between steps (before the first
-/// step, or later: the recording starts from the world as it is then), call
-/// after_step() after every World::step(), and route every edit from outside
-/// through set() / swap() (the viewer's edits, `alloy run --swap` applied
-/// by hand) so that a replay makes them again. Timeline inputs and scheduled
-/// swaps are in the initial snapshot; the world applies them again by
-/// itself, and the recorder logs them (from the world's events) for the
-/// report. A mod reloaded between steps is logged from its "mod_reloaded"
-/// event, and a replay reloads it from the files it finds then.
+/// step, or later: the recording starts from the world as it is then); from
+/// then on it hears every input from outside through the world's one input
+/// observer (World::add_input_observer: set, remove, create, destroy,
+/// unfreeze, swap, plugin_changed, restore, sync, whoever makes them: the
+/// viewer's tools and its undo, a test, a script) and hashes the world at
+/// the end of every step. Nothing else needs to tell it anything. Timeline
+/// inputs and scheduled swaps are in the initial snapshot; the world applies
+/// them again by itself, and the recorder logs them (from the world's
+/// events) for the report. A mod reloaded between steps is logged from its
+/// "mod_reloaded" event, and a replay reloads it from the files it finds
+/// then. Recording stops when the recorder is destroyed (its observers go
+/// quiet; the world cannot remove them).
 class Recorder {
  public:
   Recorder(World& world, SaveMeta meta);
@@ -45,14 +49,11 @@ class Recorder {
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  /// An edit from outside, between steps: applied to the world and logged.
-  void set(ObjectId id, std::string_view property, const PropertyValue& value);
-  /// A swap between steps: made and logged.
-  void swap(std::string_view area, std::string_view from, std::string_view to);
-  /// A reload of `mod` done between steps by the caller (logged only).
+  /// A reload of `mod` done between steps by the caller (logged only), when
+  /// no "mod_reloaded" event tells it.
   void reloaded(const std::string& mod);
-  /// After each World::step(): hashes the step.
-  void after_step();
+  /// Steps recorded so far.
+  std::size_t steps() const;
   /// What was recorded so far (meta.kind "replay").
   const SaveData& data() const;
   /// Writes it (atomically, in the save format).

@@ -32,6 +32,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -77,7 +78,10 @@ struct SaveMeta {
 SaveMeta describe_world(const World& world);
 
 /// One recorded input of a replay (runtime/replay.hpp), applied between
-/// steps: before the step that makes step_count() equal `step` + 1.
+/// steps: `step` is the recording's clock when it came (the initial
+/// snapshot's step plus the steps recorded before it), which is the world's
+/// step_count() unless an earlier input restored another moment (the
+/// viewer's undo). Inputs are in clock order.
 struct ReplayInput {
   enum class Kind : std::uint8_t {
     Set = 0,       ///< an edit from outside (the viewer): object, property, value; replayed
@@ -85,13 +89,25 @@ struct ReplayInput {
     Reload = 2,    ///< a mod reloaded (hot reload): text = the mod; replayed
     Timeline = 3,  ///< a timeline input the world applied; for the report only
     Swapped = 4,   ///< a scheduled swap the world made (scene or --swap); report only
+    // The rest of World's inputs (WorldInput), all replayed:
+    Remove = 5,         ///< World::remove: object, property
+    Create = 6,         ///< World::create: id = the object made, text = its name
+    Destroy = 7,        ///< World::destroy: object
+    Unfreeze = 8,       ///< World::unfreeze: object
+    PluginChanged = 9,  ///< World::plugin_changed: text = the plugin
+    Restore = 10,       ///< World::restore (the viewer's undo): snapshot
+    Sync = 11,          ///< World::sync
   };
   std::uint64_t step = 0;
   Kind kind = Kind::Set;
-  ObjectId id;                       ///< Set, Timeline
-  std::string property;              ///< Set, Timeline
+  ObjectId id;                       ///< Set, Timeline, Remove, Create, Destroy, Unfreeze
+  std::string property;              ///< Set, Timeline, Remove
   PropertyValue value;               ///< Set, Timeline
-  std::string area, from, to, text;  ///< Swap, Swapped (area, from, to); Reload (text)
+  std::string area, from, to,
+      text;  ///< Swap, Swapped (area, from, to); Reload, Create, PluginChanged (text)
+  /// Restore: the snapshot restored (written in the file as the snapshot's
+  /// sections, in a string of their own).
+  std::shared_ptr<const Snapshot> snapshot;
 };
 
 /// The hashes a recording keeps of each step (runtime/replay.hpp).
@@ -151,7 +167,9 @@ struct WriteHooks {
 /// Writes `bytes` to `path` atomically: a new temporary file in the same
 /// folder ("PATH.tmp.PID"), written, fsync'ed, renamed over `path`, and the
 /// folder fsync'ed. A writer that dies before the rename leaves `path` as it
-/// was (and the temporary file behind). Throws InputError naming the path.
+/// was, and its temporary file behind: the next write to `path` removes the
+/// temporary files of writers of `path` whose process is gone (a live
+/// writer's is left). Throws InputError naming the path.
 void write_file_atomic(const std::string& path, const std::string& bytes,
                        const WriteHooks& hooks = {});
 /// Reads a save file (refusing folders, empty files and files over the

@@ -129,9 +129,31 @@ bool World::frozen_slot(std::uint32_t slot) const {
   return false;
 }
 
+template <class Edit, class Describe>
+auto World::as_input(Edit&& edit, Describe&& describe) {
+  const bool outermost = input_depth_ == 0;
+  ++input_depth_;
+  struct Leave {
+    int& depth;
+    ~Leave() { --depth; }
+  } leave{input_depth_};
+  if constexpr (std::is_void_v<decltype(edit())>) {
+    edit();
+    if (outermost && !input_observers_.empty()) tell(describe());
+  } else {
+    auto result = edit();
+    if (outermost && !input_observers_.empty()) tell(describe(result));
+    return result;
+  }
+}
+
 void World::unfreeze(ObjectId id) {
-  store_.check_alive(id);
-  if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+  as_input(
+      [&] {
+        store_.check_alive(id);
+        if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+      },
+      [&] { return WorldInput{.kind = WorldInput::Kind::Unfreeze, .id = id}; });
 }
 
 // --- World -------------------------------------------------------------------
@@ -169,30 +191,53 @@ void World::set_dt(double dt) {
 }
 
 ObjectId World::create(const std::string& name) {
-  const ObjectId id = store_.create();
-  if (!name.empty()) {
-    try {
-      store_.set(id, properties().id("name"), PropertyValue(name));
-    } catch (...) {
-      store_.destroy(id);
-      throw;
-    }
-  }
-  return id;
+  return as_input(
+      [&] {
+        const ObjectId id = store_.create();
+        if (!name.empty()) {
+          try {
+            store_.set(id, properties().id("name"), PropertyValue(name));
+          } catch (...) {
+            store_.destroy(id);
+            throw;
+          }
+        }
+        return id;
+      },
+      [&](ObjectId id) {
+        return WorldInput{.kind = WorldInput::Kind::Create, .id = id, .name = name};
+      });
 }
 
 void World::destroy(ObjectId id) {
-  store_.destroy(id);
-  if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+  as_input(
+      [&] {
+        store_.destroy(id);
+        if (std::erase(frozen_, id) > 0) frozen_changed_ = true;
+      },
+      [&] { return WorldInput{.kind = WorldInput::Kind::Destroy, .id = id}; });
 }
 
 void World::set(ObjectId id, std::string_view property, const PropertyValue& value) {
   set(id, properties().id(property), value);
 }
 void World::set(ObjectId id, PropertyId property, const PropertyValue& value) {
-  store_.set(id, property, value);
+  as_input([&] { store_.set(id, property, value); },
+           [&] {
+             // As the store keeps it (an integer given for a number is a number).
+             return WorldInput{.kind = WorldInput::Kind::Set,
+                               .id = id,
+                               .property = properties().def(property).name,
+                               .value = store_.get(id, property)};
+           });
 }
-void World::remove(ObjectId id, std::string_view property) { store_.remove(id, properties().id(property)); }
+void World::remove(ObjectId id, std::string_view property) {
+  as_input([&] { store_.remove(id, properties().id(property)); },
+           [&] {
+             return WorldInput{
+                 .kind = WorldInput::Kind::Remove, .id = id, .property = std::string(property)};
+           });
+}
 void World::check(ObjectId id) const {
   store_.check_alive(id);
   for (const auto& name : plugins_.order()) {
@@ -244,7 +289,14 @@ void World::apply_inputs() {
   while (!swaps_.empty() && swaps_.front().time <= time_ + 0.5 * def_.dt) {
     ScheduledSwap sw = std::move(swaps_.front());
     swaps_.erase(swaps_.begin());
-    swap(sw.area, sw.from, sw.to);
+    ++input_depth_;  // the world's own input (the snapshot holds it): not told
+    try {
+      swap(sw.area, sw.from, sw.to);
+    } catch (...) {
+      --input_depth_;
+      throw;
+    }
+    --input_depth_;
   }
   // Half a step of tolerance: an input at t = 1 s is applied before the step
   // that starts at 1 s, whatever the rounding of the accumulated time.
@@ -341,6 +393,7 @@ void World::step() {
   profile_.phases.interact += t4 - t3;
   profile_.phases.publish += t5 - t4;
   ++profile_.steps;
+  if (!input_observers_.empty()) tell(WorldInput{.kind = WorldInput::Kind::Stepped});
 }
 
 bool World::due(const Slot& s) const { return step_ % std::uint64_t(s.every) == 0; }
@@ -813,6 +866,16 @@ void World::remove_with_dependents(Slot* root) {
 }
 
 void World::swap(std::string_view area, std::string_view from, std::string_view to) {
+  as_input([&] { swap_now(area, from, to); },
+           [&] {
+             return WorldInput{.kind = WorldInput::Kind::Swap,
+                               .area = std::string(area),
+                               .from = std::string(from),
+                               .to = std::string(to)};
+           });
+}
+
+void World::swap_now(std::string_view area, std::string_view from, std::string_view to) {
   const PluginDef* f = plugins_.find(from);
   const PluginDef* t = plugins_.find(to);
   if (!f) throw InputError("swap: unknown plugin '" + std::string(from) + "'");
@@ -852,6 +915,14 @@ void World::swap(std::string_view area, std::string_view from, std::string_view 
 }
 
 std::vector<std::string> World::plugin_changed(std::string_view plugin) {
+  return as_input([&] { return plugin_changed_now(plugin); },
+                  [&](const std::vector<std::string>&) {
+                    return WorldInput{.kind = WorldInput::Kind::PluginChanged,
+                                      .name = std::string(plugin)};
+                  });
+}
+
+std::vector<std::string> World::plugin_changed_now(std::string_view plugin) {
   std::vector<std::string> before = active_stages();
   for (;;) {
     auto it = std::find_if(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == plugin; });
@@ -1026,6 +1097,10 @@ Snapshot World::snapshot(const Snapshot* base) const {
 }
 
 void World::sync() {
+  as_input([&] { sync_now(); }, [] { return WorldInput{.kind = WorldInput::Kind::Sync}; });
+}
+
+void World::sync_now() {
   if (!started_) return;  // start() builds everything from the properties
   synced_ = false;
   sync_structure();
@@ -1039,6 +1114,11 @@ void World::sync() {
 }
 
 void World::restore(const Snapshot& s) {
+  as_input([&] { restore_now(s); },
+           [&] { return WorldInput{.kind = WorldInput::Kind::Restore, .snapshot = &s}; });
+}
+
+void World::restore_now(const Snapshot& s) {
   // Everything that can be checked before the world changes is checked first:
   // a snapshot that does not fit leaves the world as it was.
   auto refuse = [](const std::string& what) {

@@ -52,6 +52,35 @@ struct AreaDef {
   bool contains(Vec3 p) const;
 };
 
+/// An edit made to the world from outside, between steps, as the world
+/// tells its input observers (World::add_input_observer) once it has been
+/// made: the one place a recorder (runtime/replay.hpp) learns every input,
+/// whoever made it (the viewer's tools, its undo, a test, a script).
+/// Edits the world makes itself are not told: timeline inputs and scheduled
+/// swaps (a snapshot holds them), and an edit made inside another (the
+/// restore inside sync(), the swaps of a scene's timeline).
+struct WorldInput {
+  enum class Kind : std::uint8_t {
+    Set,            ///< id, property, value (World::set)
+    Remove,         ///< id, property (World::remove)
+    Create,         ///< id (the one made), name (World::create)
+    Destroy,        ///< id (World::destroy)
+    Unfreeze,       ///< id (World::unfreeze)
+    Swap,           ///< area, from, to (World::swap)
+    PluginChanged,  ///< name: the plugin (World::plugin_changed)
+    Restore,        ///< snapshot (World::restore)
+    Sync,           ///< nothing (World::sync)
+    Stepped,        ///< not an input: a step() has ended (for per-step hashes)
+  };
+  Kind kind = Kind::Set;
+  ObjectId id;                         ///< Set, Remove, Create, Destroy, Unfreeze
+  std::string property;                ///< Set, Remove
+  PropertyValue value;                 ///< Set (as the store keeps it)
+  std::string name;                    ///< Create: the object's name; PluginChanged: the plugin
+  std::string area, from, to;          ///< Swap
+  const Snapshot* snapshot = nullptr;  ///< Restore: valid during the call only
+};
+
 /// Definition of a world, with defaults (Box2D's b2DefaultWorldDef idea).
 struct WorldDef {
   double dt = 1.0 / 240.0;  ///< fixed step, s
@@ -179,6 +208,27 @@ class World {
   void add_observer(Observer observer) { observers_.push_back(std::move(observer)); }
   const Profile& profile() const { return profile_; }
   WorldView view() const { return WorldView(*this); }
+  /// Every edit from outside (WorldInput), after it is made, and the end of
+  /// every step. An edit that throws is not told. Observers cannot be
+  /// removed: one that outlives its owner holds it weakly (Recorder does).
+  using InputObserver = std::function<void(const WorldInput&)>;
+  void add_input_observer(InputObserver observer) {
+    input_observers_.push_back(std::move(observer));
+  }
+  /// While one is alive, the world's edits are parts of one larger input that
+  /// its maker tells in its own way, and are not told one by one: a mod's
+  /// reload (lua::ModRuntime), which a recording logs from its "mod_reloaded"
+  /// event and a replay makes again by reloading the mod.
+  class QuietInputs {
+   public:
+    explicit QuietInputs(World& w) : world_(w) { ++world_.input_depth_; }
+    ~QuietInputs() { --world_.input_depth_; }
+    QuietInputs(const QuietInputs&) = delete;
+    QuietInputs& operator=(const QuietInputs&) = delete;
+
+   private:
+    World& world_;
+  };
 
   // --- frozen objects ------------------------------------------------------------
   // A resolver that writes a non-finite value (NaN, +-Inf) into a property is
@@ -310,6 +360,11 @@ class World {
     std::vector<std::uint32_t> left;  // slots that left at the last assignment
   };
   void apply_inputs();
+  // The edits themselves, without telling the input observers.
+  void swap_now(std::string_view area, std::string_view from, std::string_view to);
+  std::vector<std::string> plugin_changed_now(std::string_view plugin);
+  void sync_now();
+  void restore_now(const Snapshot& s);
   struct Outside {
     std::vector<int> areas;  // excluded
     Scope scope;
@@ -379,6 +434,15 @@ class World {
   mutable std::vector<Event> pending_;
   std::vector<Event> published_;
   std::vector<Observer> observers_;
+  std::vector<InputObserver> input_observers_;
+  int input_depth_ = 0;  // edits under way: only the outermost is told
+  /// Runs `edit` as one input: told to the input observers (made by
+  /// `describe` after the edit) if it is the outermost and did not throw.
+  template <class Edit, class Describe>
+  auto as_input(Edit&& edit, Describe&& describe);
+  void tell(const WorldInput& in) {
+    for (const auto& o : input_observers_) o(in);
+  }
   std::vector<StateOwner> state_owners_;
   StageHook stage_hook_;
   Profile profile_;

@@ -19,6 +19,7 @@
 #include "apps/viewer/view_command.hpp"
 #include "lua/lua_host.hpp"
 #include "lua/mod_loader.hpp"
+#include "lua/save_meta.hpp"
 #include "lua/scene_loader.hpp"
 #include "lua/watch_loop.hpp"
 #include "resolvers/plugins.hpp"
@@ -32,6 +33,9 @@
 namespace alloy::app {
 
 namespace {
+
+using lua::save_meta;
+using lua::scene_mods;
 
 struct RunOptions {
   std::string scene;
@@ -311,42 +315,6 @@ void print_hash(const World& world, std::ostream& out) {
       << "\n";
 }
 
-/// The mods a scene loaded, with the versions their manifests give (the
-/// scene's own mod first, if the scene is a mod folder).
-std::vector<SaveMeta::Mod> scene_mods(const lua::LoadedScene& scene, const lua::LoadOptions& load,
-                                      const std::string& path) {
-  std::vector<SaveMeta::Mod> mods;
-  lua::LuaHost host;
-  std::error_code ec;
-  auto add = [&](const std::filesystem::path& folder) {
-    const lua::Manifest m = lua::read_manifest(host, folder);
-    for (const auto& x : mods)
-      if (x.name == m.name) return;
-    mods.push_back({m.name, m.version});
-  };
-  if (std::filesystem::is_directory(path, ec)) add(path);
-  if (scene.mods)
-    for (const std::string& name : scene.mods->loaded())
-      for (const auto& dir : load.mod_paths)
-        if (std::filesystem::exists(dir / name / "mod.lua", ec)) {
-          add(dir / name);
-          break;
-        }
-  return mods;
-}
-
-/// The meta block of a save or recording of `scene`, loaded from `path`.
-SaveMeta save_meta(const lua::LoadedScene& scene, const lua::LoadOptions& load,
-                   const std::string& path) {
-  SaveMeta meta = describe_world(*scene.world);
-  std::error_code ec;
-  const auto abs = std::filesystem::absolute(path, ec);
-  meta.scene = ec ? path : abs.lexically_normal().string();
-  meta.scene_name = scene.name;
-  meta.mods = scene_mods(scene, load, path);
-  return meta;
-}
-
 /// A save file read back, with the scene it names loaded and the world put
 /// in the saved state (InputError for a save that does not fit it).
 struct Continued {
@@ -463,6 +431,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   if (!opt.save.empty() || !opt.save_every.empty() || !opt.record.empty())
     meta = save_meta(scene, load, scene_path);
   std::unique_ptr<Recorder> recorder;
+  // It hears every step and every input from the world itself.
   if (!opt.record.empty()) recorder = std::make_unique<Recorder>(world, *meta);
   auto save_now = [&](const std::string& path) {
     SaveData data;
@@ -516,7 +485,6 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
           r.next += r.every;
         }
       if (opt.hash_every && world.step_count() % opt.hash_every == 0) print_hash(world, out);
-      if (recorder) recorder->after_step();
       if (save_period > 0 && world.time() + 0.5 * world.dt() >= next_save) {
         save_now(periodic_save_path(opt.save_every[1], world));
         next_save += save_period;

@@ -22,6 +22,9 @@ CLI::App* add_view_command(CLI::App& app, ViewerOptions& o) {
       "--script", o.script,
       "Input script: mouse and key events at frames (see apps/viewer/input_script.hpp)");
   cmd->add_option("--save", o.save, "Save the scene as a Lua file when the run ends");
+  cmd->add_option("--record", o.record,
+                  "Record the run (every edit, undo and step) into FILE when it ends; "
+                  "check it with `alloy replay FILE`");
   cmd->add_option("--time-scale", o.time_scale, "Simulated seconds per second of the clock")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--paused", o.paused, "Start paused");

@@ -14,6 +14,7 @@
 
 #include "apps/viewer/scene_writer.hpp"
 #include "lua/mod_runtime.hpp"
+#include "lua/save_meta.hpp"
 #include "resolvers/plugins.hpp"
 #include "runtime/contact_set.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
@@ -124,6 +125,7 @@ Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
 }
 
 Viewer::~Viewer() {
+  recorder_.reset();  // it holds the world
   scene_.reset();
   if (imgui_ready_) {
     ImGui::SetCurrentContext(imgui_);
@@ -223,6 +225,7 @@ void Viewer::load() {
     return;
   }
   load_error_.clear();
+  finish_recording();  // a recording is of one world
   editor_.attach(nullptr);
   scene_.reset();  // the old world and its mods go before their registry
   registry_ = std::move(fresh_registry);
@@ -230,6 +233,11 @@ void Viewer::load() {
   if (scene_->mods) scene_->mods->watch();  // a mod saved on disk is reloaded while the world runs
   World& w = *scene_->world;
   editor_.attach(&w);
+  if (!opt_.record.empty() && !recorded_) {
+    recorded_ = true;
+    recorder_ =
+        std::make_unique<Recorder>(w, lua::save_meta(*scene_, opt_.load, opt_.scene.string()));
+  }
   selected_ = hovered_ = wire_start_ = {};
   event_counts_.clear();
   event_log_.clear();
@@ -479,6 +487,19 @@ std::size_t Viewer::event_count(const std::string& type) const {
   return 0;
 }
 
+bool Viewer::finish_recording() {
+  if (!recorder_) return true;
+  const std::unique_ptr<Recorder> r = std::move(recorder_);
+  try {
+    r->write(opt_.record);
+    note("recorded " + std::to_string(r->steps()) + " steps to " + opt_.record);
+    return true;
+  } catch (const std::exception& e) {
+    note(std::string("the recording was not written: ") + e.what(), true);
+    return false;
+  }
+}
+
 void Viewer::set_time_scale(double s) {
   time_scale_ = std::clamp(s, 1.0 / 64, 64.0);
 }
@@ -506,6 +527,7 @@ int Viewer::run(std::ostream& out, std::ostream& err) {
     }
   }
   if (!opt_.save.empty() && !save(opt_.save)) code = 1;
+  if (!finish_recording()) code = 1;
   flush_messages();
   if (!load_error_.empty()) {
     err << "error: " << load_error_ << "\n";
@@ -1008,6 +1030,12 @@ void Viewer::on_release(Vec2 at, Uint8 button) {
   if (resizing_) {
     on_drag(at);
     resizing_ = {};
+    // The resize is done: the world made whole as after every edit (the
+    // frame syncs after an edit is recorded, which for a resize was at the
+    // press, before the part changed). Without it the rigid body rebuilds in
+    // place at the next step, which a redo of this resize (a restore of the
+    // synced world) does not repeat.
+    if (World* w = world()) History::sync(*w);
     return;
   }
   if (editor_.carrying()) {

@@ -41,6 +41,7 @@
 #include "apps/viewer/viewer_options.hpp"
 #include "lua/scene_loader.hpp"
 #include "runtime/contact_set.hpp"
+#include "runtime/replay.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::viewer {
@@ -186,6 +187,11 @@ class Viewer {
   ImGuiContext* imgui_ = nullptr;
   std::unique_ptr<PluginRegistry> registry_;  // the scene's (its mods register here)
   std::unique_ptr<lua::LoadedScene> scene_;   // declared after: destroyed first
+  /// --record: hears the world's every input and step (World's input
+  /// observer); goes before the world it records.
+  std::unique_ptr<Recorder> recorder_;
+  bool recorded_ = false;   ///< a recording was started (only the first scene is recorded)
+  bool finish_recording();  ///< writes it and stops; false if the file could not be written
   std::string load_error_;
   std::filesystem::file_time_type scene_mtime_{};
   double last_watch_ = -1;

@@ -19,6 +19,10 @@ struct ViewerOptions {
   std::string screenshot;  ///< PNG of the last frame, written when the run ends
   std::string script;      ///< input script (input_script.hpp)
   std::string save;        ///< scene file written when the run ends
+  /// Recording of the run (runtime/replay.hpp: every edit, undo and step of
+  /// the scene loaded at start), written when the run ends or another scene
+  /// is loaded; `alloy replay FILE` checks it.
+  std::string record;
   double time_scale = 1;
   bool paused = false;
   bool audio = true;

@@ -731,7 +731,13 @@ void CollisionSet::update(const WorldView& world) {
   Impl& m = *impl_;
   m.resolve_ids(world);
   m.ccd = rigid_.config().ccd;
+  // After a restore this update repeats the last one of the run that saved
+  // (restore_state): at its step, with the parts it swept.
+  const bool repeat = std::exchange(restored_, false);
+  std::vector<Impl::Candidate> restored_candidates;
+  if (repeat) std::swap(restored_candidates, m.candidates);
   m.candidates.clear();
+  prior_known_ = impulses_known_, prior_since_ = impulses_since_;
 
   // Narrow phase into current_, then sort: ODE's pair order is not ours to rely on.
   begin_update();
@@ -745,6 +751,12 @@ void CollisionSet::update(const WorldView& world) {
       m.joints_dirty = false;
     }
     m.place(world);
+    // Fresh geoms have no previous positions: the swept parts are the saved run's.
+    // (A slot without a geom can only come from damaged bytes: left out.)
+    if (repeat)
+      for (const Impl::Candidate& c : restored_candidates)
+        if (c.slot < m.geoms.size() && m.geoms[c.slot].geom && m.geoms[c.slot].movable)
+          m.candidates.push_back(c);
     m.vel = world.column<Vec3>(m.velocity);
     m.angvel = world.column<Vec3>(m.angular_velocity);
     m.pairs = &current_;
@@ -770,7 +782,9 @@ void CollisionSet::update(const WorldView& world) {
   }
   m.sort_pairs(current_);
 
-  publish(world, rigid_.impulses(), rigid_.impulses_computed());
+  // A repeated update is of the step the saved run's last update was (the
+  // set may have been skipped since, while nothing it reads changed).
+  publish(world, rigid_.impulses(), rigid_.impulses_computed(), repeat ? step_ : world.step());
 }
 
 void CollisionSet::engine_failed(const WorldView& world, const std::string& what) {
@@ -879,6 +893,108 @@ void CollisionSet::sweep(const WorldView& world) {
     for (const Impl::Candidate& cand : m.candidates) swept_at[cand.slot] = 0;
   }
   std::sort(sweeps_.begin(), sweeps_.end(), [](const Sweep& x, const Sweep& y) { return x.part < y.part; });
+}
+
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+//
+// The set keeps between updates the pairs that touch (with the step each
+// began and its impulse total), whether impulses were known, and each part's
+// previous position (for sweeps). A restored set is primed by one update, as
+// every derived set is: so it saves its memory as it was *before* its last
+// update, and that priming update repeats the last one: the same pairs begin
+// and end, with the same began_step, totals and durations. Its events are not
+// published again (the world drops the priming's events).
+//
+// The bytes: a version, the step of the last update, the impulse flags before
+// it, the pairs that touched before it (a, b, began_step, total_impulse; the
+// speed and depth too of those that ended at it, which the ended pairs carry),
+// and the parts it swept with their previous positions. About 32 bytes a
+// touching pair.
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+struct SavedPair {
+  ObjectId a, b;
+  std::uint64_t began_step;
+  double total_impulse;
+};
+struct SavedEnd {
+  ObjectId a, b;
+  double normal_speed, depth;
+};
+struct SavedCandidate {
+  std::uint64_t slot;  // 64 bits: no padding, whose bytes would be arbitrary
+  Vec3 from;
+};
+}  // namespace
+
+bool CollisionSet::save_state(StateWriter& out) const {
+  out.put(kStateVersion);
+  out.put(step_);
+  out.put(std::uint8_t(prior_known_));
+  out.put(prior_since_);
+  std::vector<SavedPair> pairs;
+  pairs.reserve(previous_.size());
+  for (const ContactPair& p : previous_) pairs.push_back({p.a, p.b, p.began_step, p.total_impulse});
+  out.put_vector(pairs);
+  std::vector<SavedEnd> ends;
+  for (const ContactPair& p : ended_) ends.push_back({p.a, p.b, p.normal_speed, p.depth});
+  out.put_vector(ends);
+  std::vector<SavedCandidate> candidates;
+  for (const Impl::Candidate& c : impl_->candidates) candidates.push_back({c.slot, c.from});
+  out.put_vector(candidates);
+  return true;
+}
+
+void CollisionSet::restore_state(StateReader& in) {
+  auto damaged = [&](const std::string& what) {
+    throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
+  };
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  const auto step = in.get<std::uint64_t>();
+  const auto known = in.get<std::uint8_t>();
+  const auto since = in.get<std::uint64_t>();
+  const auto pairs = in.get_vector<SavedPair>();
+  const auto ends = in.get_vector<SavedEnd>();
+  const auto candidates = in.get_vector<SavedCandidate>();
+  if (known > 1) damaged("an impulse flag of " + std::to_string(known));
+  // The merge needs the pairs sorted and distinct; each must have begun by then.
+  std::vector<ContactPair> prior;
+  prior.reserve(pairs.size());
+  for (const SavedPair& s : pairs) {
+    ContactPair p;
+    p.a = s.a, p.b = s.b, p.began_step = s.began_step, p.total_impulse = s.total_impulse;
+    if (!(p.a < p.b) || p.began_step > step || (!prior.empty() && !by_pair(prior.back(), p)))
+      damaged("its touching pairs are out of order or began after step " + std::to_string(step));
+    prior.push_back(p);
+  }
+  for (const SavedEnd& e : ends) {
+    ContactPair key;
+    key.a = e.a, key.b = e.b;
+    auto it = std::lower_bound(prior.begin(), prior.end(), key, by_pair);
+    if (it == prior.end() || it->a != e.a || it->b != e.b)
+      damaged("a pair ended that did not touch");
+    it->normal_speed = e.normal_speed, it->depth = e.depth;
+  }
+  // Slots are checked against the geoms at the update (they are not built yet).
+  std::vector<Impl::Candidate> swept;
+  for (const SavedCandidate& c : candidates) {
+    if (!std::isfinite(c.from.x) || !std::isfinite(c.from.y) || !std::isfinite(c.from.z))
+      damaged("a swept part's previous position is not finite");
+    swept.push_back({std::uint32_t(std::min<std::uint64_t>(c.slot, ObjectId::kNoIndex)), c.from});
+  }
+  // update() swaps current_ into previous_ first: the prior pairs go there.
+  current_ = std::move(prior);
+  points_.clear();
+  began_.clear(), ended_.clear(), sweeps_.clear();
+  ongoing_.clear(), ongoing_made_ = false;
+  impl_->candidates = std::move(swept);
+  impulses_known_ = known != 0;
+  impulses_since_ = since;
+  step_ = step;
+  restored_ = true;
 }
 
 }  // namespace alloy::rigid

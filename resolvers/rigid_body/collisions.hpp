@@ -78,6 +78,15 @@ class CollisionSet final : public ContactSet {
   void update(const WorldView& world) override;
   void on_structure_changed(const WorldView& world) override;
 
+  /// The set's memory as it was before its last update (the pairs that
+  /// touched then, with their began_step and impulse totals; the swept
+  /// parts' previous positions; the step of that update). A restore primes
+  /// derived sets by updating them once: the restored set repeats its last
+  /// update from that memory, and so publishes what the uninterrupted run's
+  /// set published (began, ended, totals, durations), bit for bit.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
+
   /// Parts that tunnelled in the last step, in ObjectId order (see the header).
   std::span<const Sweep> sweeps() const { return sweeps_; }
   /// Declares that the caller reads the pairs' impulses (see the header):
@@ -90,6 +99,11 @@ class CollisionSet final : public ContactSet {
   std::unique_ptr<Impl> impl_;
   std::vector<Sweep> sweeps_;
   ImpulseDemand always_;
+  // impulses_known_ and impulses_since_ as they were before the last update
+  // (save_state), and, after a restore, the step the first update repeats.
+  bool prior_known_ = false;
+  std::uint64_t prior_since_ = 0;
+  bool restored_ = false;
 
   void sweep(const WorldView& world);
   /// ODE failed inside the update (see collisions.cpp): reported, not fatal.

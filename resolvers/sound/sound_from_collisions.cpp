@@ -1,10 +1,13 @@
 #include "resolvers/sound/sound_from_collisions.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 namespace alloy::sound {
 
 void SoundFromCollisions::apply(const WorldView& world) {
+  pending_before_ = pending_, seen_before_ = seen_;  // a few pairs: the copy is cheap
   // 1. Impacts that began at the last apply: the rigid body has resolved them
   //    since, and the collisions set carries the impulse it applied.
   for (const Impact& impact : pending_) {
@@ -48,6 +51,38 @@ void SoundFromCollisions::strike(const WorldView& world, const Impact& impact, d
     sound_.strike({.part = a, .other = b, .normal_speed = impact.normal_speed, .impulse = impulse});
   if (acoustic.has(b))
     sound_.strike({.part = b, .other = a, .normal_speed = impact.normal_speed, .impulse = impulse});
+}
+
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+}
+
+bool SoundFromCollisions::save_state(StateWriter& out) const {
+  out.put(kStateVersion);
+  out.put_vector(pending_before_);
+  out.put_vector(seen_before_);
+  return true;
+}
+
+void SoundFromCollisions::restore_state(StateReader& in) {
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  auto pending = in.get_vector<Impact>();
+  auto seen = in.get_vector<Key>();
+  // seen_ is searched by binary search: it must be sorted and distinct.
+  for (std::size_t i = 1; i < seen.size(); ++i)
+    if (!(seen[i - 1] < seen[i]))
+      throw InputError("the saved state of stage '" + in.stage() +
+                       "' is damaged: its handled pairs are out of order");
+  for (const Impact& p : pending)
+    if (!(p.normal_speed >= 0) || !std::isfinite(p.normal_speed))
+      throw InputError("the saved state of stage '" + in.stage() +
+                       "' is damaged: an impact speed of " + std::to_string(p.normal_speed));
+  pending_ = pending_before_ = std::move(pending);
+  seen_ = seen_before_ = std::move(seen);
 }
 
 void register_sound_from_collisions(PluginRegistry& registry) {

@@ -35,6 +35,13 @@ class SoundFromCollisions final : public Interaction {
 
   void apply(const WorldView& world) override;
 
+  /// The impacts waiting and the pairs already handled, as they were before
+  /// the last apply: a restore primes interactions by applying them once, and
+  /// that apply repeats the last one (the same strikes queued, the same
+  /// impacts left waiting), as the collisions set repeats its last update.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
+
   /// Impacts waiting for their impulse (for tests).
   std::size_t pending() const { return pending_.size(); }
 
@@ -58,6 +65,8 @@ class SoundFromCollisions final : public Interaction {
   ImpulseDemand impulses_;  // strikes are as hard as the impulse: declared to the rigid body
   std::vector<Impact> pending_;  // began at the last apply, struck at this one
   std::vector<Key> seen_;        // began pairs already handled, sorted; pruned when they end
+  std::vector<Impact> pending_before_;  // pending_ and seen_ before the last apply (save_state)
+  std::vector<Key> seen_before_;
 };
 
 /// Registers `sound_from_collisions` (needs the `sound` resolver and the

@@ -231,8 +231,8 @@ bool SoundResolver::save_state(StateWriter& out) const {
   // samples_produced() and start_time() those of the uninterrupted run (the
   // buffer itself is output, not state: after a restore it holds what was
   // produced since). The strikes queued are not saved: a restore primes the
-  // interactions, which queue them again (sound_from_collisions does not
-  // save its pending impacts yet: docs/saves.md).
+  // interactions, which queue them again (sound_from_collisions saves its
+  // pending impacts as they were before its last apply, for that).
   out.put(kStateVersion);
   out.put(start_time_);
   out.put(elapsed_);

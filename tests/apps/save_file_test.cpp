@@ -565,22 +565,28 @@ TEST(SaveFile, AWriterKilledMidWriteLeavesThePreviousFile) {
   const fs::path tmp = path + ".tmp." + std::to_string(child);
   ASSERT_TRUE(fs::exists(tmp)) << "the killed writer wrote no temporary file?";
   EXPECT_EQ(fs::file_size(tmp), 4096u);
-  // The next write goes through.
+  // The next write to the path goes through and removes the dead writer's
+  // temporary file (its process is gone); a live writer's file stays.
+  const fs::path live = path + ".tmp." + std::to_string(::getppid());
+  std::ofstream(live) << "a writer still at work";
+  const fs::path other = (dir / "other.alloysave.tmp.").string() + std::to_string(child);
+  std::ofstream(other) << "another file's";
   write_save_file(path, big);
   EXPECT_EQ(read_save_file(path).snapshot.stage_states.back().bytes.size(), noise.size());
+  EXPECT_FALSE(fs::exists(tmp)) << "the killed writer's temporary file is still there";
+  EXPECT_TRUE(fs::exists(live)) << "a live process's temporary file was removed";
+  EXPECT_TRUE(fs::exists(other)) << "another save's temporary file was removed";
 }
 
 // --- replays -------------------------------------------------------------------------
 
 /// Records `steps` steps of space in-process.
-SaveData record_space(std::uint64_t steps,
-                      const std::function<void(Recorder&, World&)>& between = {}) {
+SaveData record_space(std::uint64_t steps, const std::function<void(World&)>& between = {}) {
   Scene s("space");
   Recorder rec(s.world(), meta_of(s, "space"));
   for (std::uint64_t i = 0; i < steps; ++i) {
-    if (between) between(rec, s.world());
+    if (between) between(s.world());
     s.world().step();
-    rec.after_step();
   }
   return decode_save(encode_save(rec.data()), "recording");
 }
@@ -648,8 +654,8 @@ TEST(Replay, APerturbationAfterALaterStageIsNamed) {
 }
 
 TEST(Replay, EditsFromOutsideAreReplayed) {
-  const SaveData rec = record_space(30, [](Recorder& r, World& w) {
-    if (w.step_count() == 10) r.set(w.find("probe"), "velocity", Vec3{0.5, 0, 0});
+  const SaveData rec = record_space(30, [](World& w) {
+    if (w.step_count() == 10) w.set(w.find("probe"), "velocity", Vec3{0.5, 0, 0});
   });
   ASSERT_EQ(rec.inputs.size(), 1u);
   EXPECT_EQ(rec.inputs[0].step, 10u);
@@ -662,6 +668,95 @@ TEST(Replay, EditsFromOutsideAreReplayed) {
   ASSERT_FALSE(r.identical);
   EXPECT_EQ(r.step, 11u);
   EXPECT_NE(r.message().find("probe"), std::string::npos) << r.message();
+}
+
+// Every kind of input the world tells its observer, made straight on the
+// world (as the viewer makes them), with no call to the recorder: a box
+// created and shaped, a property removed, an object destroyed, an undo (a
+// restore of an earlier snapshot, which sends the step count back), a sync
+// and a swap. The replay, read back from the file's bytes, is identical; the
+// log holds each kind.
+SaveData record_an_edit_session() {
+  // By the count of steps recorded, not the world's step count, which the
+  // undo sends back.
+  Snapshot undo;  // the world as it was before the box
+  return record_space(60, [&undo, k = 0](World& w) mutable {
+    switch (k++) {
+      case 5: {
+        undo = w.snapshot();
+        const ObjectId box = w.create("box");
+        w.set(box, "shape",
+              w.properties().enum_value(*w.properties().find("shape"), "box").value());
+        w.set(box, "size", Vec3{0.1, 0.1, 0.1});
+        w.set(box, "position", Vec3{0.3, 6.4, 0});
+        w.set(box, "mass", 0.5);
+        w.sync();
+        break;
+      }
+      case 12:
+        w.remove(w.find("probe"), "restitution");
+        break;
+      case 20:
+        w.destroy(w.find("box"));
+        break;
+      case 25:
+        w.restore(undo);  // back to step 5: the step count goes back too
+        break;
+      case 30:
+        w.swap("orbit", "gravity.nbody", "gravity.uniform");
+        break;
+      default:
+        break;
+    }
+  });
+}
+
+TEST(Replay, EveryKindOfInputFromOutsideIsHeardAndReplayed) {
+  const SaveData rec = record_an_edit_session();
+  std::set<ReplayInput::Kind> kinds;
+  for (const auto& in : rec.inputs) kinds.insert(in.kind);
+  for (const auto k : {ReplayInput::Kind::Create, ReplayInput::Kind::Set, ReplayInput::Kind::Sync,
+                       ReplayInput::Kind::Remove, ReplayInput::Kind::Destroy,
+                       ReplayInput::Kind::Restore, ReplayInput::Kind::Swap})
+    EXPECT_TRUE(kinds.contains(k)) << "no input of kind " << int(k) << " was logged";
+  ASSERT_EQ(rec.hashes.size(), 60u);
+  // The undo at step 25 sent the world back to step 5: 60 steps end at 40.
+  EXPECT_EQ(rec.hashes.back().step, 40u);
+  Rebuild rebuild;
+  const ReplayResult r = replay(rec, std::ref(rebuild));
+  EXPECT_TRUE(r.identical) << r.message();
+  EXPECT_EQ(r.message(), "identical through step 40");
+}
+
+// The same session with the box's mass changed after the rigid body's
+// advance of its 9th step: the replay names the step, the stage and the
+// property, and the box.
+TEST(Replay, ADivergenceInAnEditSessionIsNamed) {
+  const SaveData rec = record_an_edit_session();
+  Rebuild rebuild;
+  ReplayOptions o;
+  o.tamper = [](World& w, std::uint64_t step, const std::string& stage) {
+    if (step == 9 && stage == "rigid_body") w.set(w.find("box"), "mass", 0.25);
+  };
+  const ReplayResult r = replay(rec, std::ref(rebuild), o);
+  ASSERT_FALSE(r.identical);
+  EXPECT_EQ(r.step, 9u);
+  EXPECT_EQ(r.stage, "rigid_body");
+  EXPECT_NE(std::find(r.properties.begin(), r.properties.end(), "mass"), r.properties.end())
+      << r.message();
+  EXPECT_NE(r.message().find("box"), std::string::npos) << r.message();
+  // Without the logged restore the replay cannot follow the recording past
+  // the undo: it says so, naming the steps, rather than comparing others.
+  SaveData without = rec;
+  std::erase_if(without.inputs,
+                [](const ReplayInput& in) { return in.kind == ReplayInput::Kind::Restore; });
+  try {
+    const ReplayResult w = replay(without, std::ref(rebuild));
+    FAIL() << "a replay without the undo went through: " << w.message();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("step 26 ran where it has step 6"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(ReplayCli, RecordThenReplay) {
