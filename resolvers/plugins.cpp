@@ -12,6 +12,7 @@
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
 #include "resolvers/rigid_body/rigid_body_from_gravity.hpp"
+#include "resolvers/rigid_body/rigid_body_from_springs.hpp"
 #include "resolvers/sound/sound_plugins.hpp"
 
 namespace alloy {
@@ -178,6 +179,7 @@ void register_native_plugins(PluginRegistry& registry) {
   registry.add(gravity::uniform_gravity_plugin());
   registry.add(gravity::nbody_gravity_plugin());
   registry.add(rigid::rigid_body_from_gravity_plugin());
+  rigid::register_rigid_body_from_springs(registry);
   electricity::register_electricity_plugins(registry);
   magnetism::register_magnetism_plugins(registry);
   magnetism::register_rigid_body_from_magnetism(registry);
