@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <set>
+
+#include "runtime/error.hpp"
 
 namespace alloy::viewer {
 
@@ -333,7 +336,8 @@ EditResult Editor::remove(ObjectId part) {
         if (const RefList* l = std::get_if<RefList>(&v))
           refers = std::find(l->begin(), l->end(), part) != l->end();
         if (!refers) continue;
-        if (has(o, "joint") || has(o, "wire_from") || has(o, "wire_to")) {
+        if (has(o, "joint") || has(o, "wire_from") || has(o, "wire_to") ||
+            has(o, "spring_stiffness")) {
           doomed.push_back(o);
           break;
         }
@@ -356,7 +360,7 @@ EditResult Editor::remove(ObjectId part) {
     return EditResult{true, "removed " + name +
                                 (doomed.empty() ? ""
                                                 : " and " + std::to_string(doomed.size()) +
-                                                      " joint(s) or wire(s)")};
+                                                      " joint(s), spring(s) or wire(s)")};
   });
 }
 
@@ -407,6 +411,68 @@ ObjectId Editor::pick_joint(Vec2 point, double margin) const {
     if (d <= best_d) best = j, best_d = d;
   }
   return best;
+}
+
+ObjectId Editor::pick_spring(Vec2 point, double margin) const {
+  if (!world_) return {};
+  const auto k = world_->properties().find("spring_stiffness");
+  if (!k) return {};
+  ObjectId best;
+  double best_d = margin;
+  for (const ObjectId sp : carriers(world_->store(), *k))
+    if (const auto ends = spring_ends(*world_, sp)) {
+      // The middle 80 %: its ends lie on its parts, and a click there means the part.
+      const Vec2 d = ends->b - ends->a;
+      const Vec2 a = ends->a + d * 0.1, b = ends->b - d * 0.1;
+      const double dist = segment_distance(point, a, b);
+      if (dist <= best_d) best = sp, best_d = dist;
+    }
+  return best;
+}
+
+EditResult Editor::spring_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, ObjectId* made) {
+  if (!world_ || !world_->store().alive(a))
+    return EditResult::refused("a spring starts on a part: click a part first");
+  if (b && !world_->store().alive(b)) return EditResult::refused("no part at the spring's end");
+  if (a == b) return EditResult::refused("a spring from a part to itself holds nothing");
+  if (!world_->properties().find("spring_stiffness"))
+    return EditResult::refused("no spring plugin is registered (rigid_body_from_springs)");
+  const double span = length(at_b - at_a);
+  if (span < 0.005)
+    return EditResult::refused("the ends are too close for a spring (5 mm at least)");
+  return guarded([&] {
+    // Each end in its part's frame, from its centre of mass, so that it
+    // moves with the part; an end on the board stays where it was clicked.
+    auto local = [&](ObjectId part, Vec2 at) {
+      const Vec3 c = world_->value<Vec3>(part, "position").value_or(Vec3{});
+      const Quat q = world_->value<Quat>(part, "orientation").value_or(Quat{});
+      const Quat inverse{q.w, -q.x, -q.y, -q.z};
+      return alloy::rotate(inverse, Vec3{at.x, at.y, c.z} - c);
+    };
+    const std::string name = unique_name("spring");
+    const ObjectId sp = world_->create(name);
+    try {
+      world_->set(sp, "spring_a", a);
+      world_->set(sp, "spring_anchor_a", local(a, at_a));
+      if (b) world_->set(sp, "spring_b", b);
+      const double z = world_->value<Vec3>(a, "position").value_or(Vec3{}).z;
+      world_->set(sp, "spring_anchor_b", b ? local(b, at_b) : Vec3{at_b.x, at_b.y, z});
+      world_->set(sp, "spring_stiffness", kSpringStiffness);
+      world_->set(sp, "spring_rest_length", span);
+      world_->set(sp, "spring_damping", kSpringDamping);
+      world_->check(sp);
+    } catch (...) {
+      world_->destroy(sp);
+      throw;
+    }
+    if (made) *made = sp;
+    char cm[32];
+    std::snprintf(cm, sizeof cm, "%.1f cm", span * 100);
+    return EditResult{true, "a " + std::string(cm) + " spring from " + world_->describe(a) +
+                                " to " + (b ? world_->describe(b) : std::string("the board")) +
+                                " (" + std::to_string(int(kSpringStiffness)) +
+                                " N/m; the inspector edits it)"};
+  });
 }
 
 EditResult Editor::make_joint(const char* kind, ObjectId a, ObjectId b, Vec2 at, ObjectId* made) {
@@ -611,12 +677,25 @@ EditResult Editor::set_property(ObjectId id, const std::string& property,
     std::snprintf(buf, sizeof buf, "%s<= %g", range.empty() ? "" : ", ", *def.max);
     range += buf;
   }
+  const std::optional<PropertyValue> before =
+      world_->store().has(id, *pid) ? std::optional(world_->store().get(id, *pid)) : std::nullopt;
   try {
     world_->set(id, *pid, value);
   } catch (const std::exception& e) {
     return EditResult::refused(
         world_->describe(id) + "." + property + ": " + e.what() +
         (range.empty() ? "" : " (range " + range + (def.unit.empty() ? "" : " " + def.unit) + ")"));
+  }
+  // The whole object's checks too (a hinge's limits in order, a spring
+  // stable at the step): a value that breaks one is taken back.
+  try {
+    world_->check(id);
+  } catch (const InputError& e) {
+    if (before)
+      world_->set(id, *pid, *before);
+    else
+      world_->remove(id, property);
+    return EditResult::refused(e.what());
   }
   return EditResult{true, "set " + world_->describe(id) + "." + property};
 }

@@ -83,10 +83,25 @@ class Editor {
   /// the distance (it sags). `made`: the links and hinges.
   EditResult string_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, double slack = 1.0,
                             std::vector<ObjectId>* made = nullptr);
+  /// A spring with a damper from part `a` at `at_a` to part `b` at `at_b`
+  /// (b null: the board at `at_b`), its rest length the distance between the
+  /// two points: it holds them as they are and pulls or pushes when they move.
+  /// Stiffness and damping are the defaults below, editable in the inspector;
+  /// a spring too stiff for the step on light parts is refused with the
+  /// figures (resolvers/rigid_body/rigid_body_from_springs.hpp). `made`: it.
+  EditResult spring_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, ObjectId* made = nullptr);
+  /// A new spring's stiffness (N/m) and damping (N s/m): a 15 cm steel bar
+  /// (118 g) hanging from one sags 6 cm and swings at about 2 Hz, dying out
+  /// in a few seconds; stable at 1/240 s on parts down to 4 g.
+  static constexpr double kSpringStiffness = 20, kSpringDamping = 0.05;
   /// A string's links: 4 mm steel, each about this long, m.
   static constexpr double kLinkLength = 0.025, kLinkWidth = 0.004;
   /// The joint whose pivot lies within `margin` of `point` (m), or null.
   ObjectId pick_joint(Vec2 point, double margin) const;
+  /// The spring whose line passes within `margin` of `point` (m), or null;
+  /// the tenth of its length at each end does not count (a click there
+  /// means the part the end lies on).
+  ObjectId pick_spring(Vec2 point, double margin) const;
 
   // --- sizes and properties ----------------------------------------------------
   /// Resizes a part in the play area: a box to `size` (full extents along its
@@ -95,7 +110,8 @@ class Editor {
   /// the volume (same density). Refused below 2 mm or beyond the world's limits.
   EditResult resize(ObjectId part, Vec2 size);
   /// Sets one property from the inspector; bounds are the registry's (the
-  /// message names the property, its unit and range).
+  /// message names the property, its unit and range), then the object's own
+  /// checks (World::check): a value either refuses is not kept.
   EditResult set_property(ObjectId id, const std::string& property, const PropertyValue& value);
   /// The kit's materials (mods/kit/materials.lua), by name.
   struct MaterialDef {

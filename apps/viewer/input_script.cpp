@@ -16,7 +16,7 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
       {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
       {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
       {"wheel", ScriptEvent::Kind::Wheel},           {"text", ScriptEvent::Kind::Text},
-      {"palette", ScriptEvent::Kind::Palette}};
+      {"palette", ScriptEvent::Kind::Palette},       {"set", ScriptEvent::Kind::Set}};
   std::vector<ScriptEvent> out;
   std::istringstream in(text);
   int n = 0;
@@ -34,7 +34,8 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
     if (!(ls >> kind) || !kinds.count(kind))
       throw InputError(
           ErrorLocation{file, n, ""},
-          "expected an event: press, move, release, rpress, rrelease, key, wheel, text or palette");
+          "expected an event: press, move, release, rpress, rrelease, key, wheel, text, palette "
+          "or set");
     e.kind = kinds.at(kind);
     bool ok = true;
     switch (e.kind) {
@@ -58,6 +59,13 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
         std::getline(ls >> std::ws, e.key);
         while (!e.key.empty() && (e.key.back() == ' ' || e.key.back() == '\r')) e.key.pop_back();
         ok = !e.key.empty();
+        break;
+      case ScriptEvent::Kind::Set:
+        ok = bool(ls >> e.key);
+        std::getline(ls >> std::ws, e.value);
+        while (!e.value.empty() && (e.value.back() == ' ' || e.value.back() == '\r'))
+          e.value.pop_back();
+        ok = ok && !e.value.empty();
         break;
       case ScriptEvent::Kind::Wheel:
         ok = bool(ls >> e.wheel);

@@ -13,6 +13,11 @@
 //   60       text       lever.lua            types text into the field that has the focus
 //   70       palette    steel bar            picks a palette entry by its label (as a click on
 //                                            its button): the next press puts it there
+//   80       set        spring_stiffness 40  the selected object's property as the inspector
+//                                            sets it (typed in its field, Enter): numbers,
+//                                            vectors as x y z, angles (orientation) in degrees,
+//                                            true/false, a list's entry by name; `set material
+//                                            felt` picks from the material list
 #pragma once
 
 #include <filesystem>
@@ -24,11 +29,23 @@
 namespace alloy::viewer {
 
 struct ScriptEvent {
-  enum class Kind { Press, Move, Release, RightPress, RightRelease, Key, Wheel, Text, Palette };
+  enum class Kind {
+    Press,
+    Move,
+    Release,
+    RightPress,
+    RightRelease,
+    Key,
+    Wheel,
+    Text,
+    Palette,
+    Set
+  };
   int frame = 0;
   Kind kind = Kind::Move;
   Vec2 at;                           ///< mouse events, m
-  std::string key;                   ///< Key: SDL key name; Text: the text typed
+  std::string key;                   ///< Key: SDL key name; Text: the text typed; Set: property
+  std::string value;                 ///< Set: the value as typed
   bool ctrl = false, shift = false;  ///< Key: held with it
   int wheel = 0;                     ///< Wheel: notches
   int line = 0;                      ///< line in the file, for messages

@@ -81,6 +81,27 @@ std::vector<ObjectId> carriers(const PropertyStore& store, PropertyId property) 
   return out;
 }
 
+std::optional<SpringEnds> spring_ends(const World& world, ObjectId id) {
+  const auto a = world.value<ObjectId>(id, "spring_a");
+  if (!a || !world.store().alive(*a) || !world.value<double>(id, "spring_stiffness")) return {};
+  auto end = [&](std::optional<ObjectId> part, const char* anchor) {
+    const Vec3 local = world.value<Vec3>(id, anchor).value_or(Vec3{});
+    if (!part || !world.store().alive(*part)) return xy(local);
+    const Vec3 centre = world.value<Vec3>(*part, "position").value_or(Vec3{});
+    const Quat q = world.value<Quat>(*part, "orientation").value_or(Quat{});
+    return xy(centre + rotate(q, local));
+  };
+  return SpringEnds{end(a, "spring_anchor_a"),
+                    end(world.value<ObjectId>(id, "spring_b"), "spring_anchor_b")};
+}
+
+double segment_distance(Vec2 point, Vec2 a, Vec2 b) {
+  const Vec2 d = b - a;
+  const double len2 = dot(d, d);
+  const double t = len2 > 0 ? std::clamp(dot(point - a, d) / len2, 0.0, 1.0) : 0.0;
+  return length(point - (a + d * t));
+}
+
 std::vector<Vec2> outline(const Part2D& p, int segments) {
   std::vector<Vec2> local;
   constexpr double pi = std::numbers::pi;

@@ -66,6 +66,16 @@ std::vector<Part2D> read_parts(const World& world);
 /// reads right after its own edits.)
 std::vector<ObjectId> carriers(const PropertyStore& store, PropertyId property);
 
+/// A spring's two ends in the play area (its anchors carried by its parts'
+/// poses; an end with no part is a point of the board), or nullopt if `id`
+/// is not a spring or its first part is gone.
+struct SpringEnds {
+  Vec2 a, b;
+};
+std::optional<SpringEnds> spring_ends(const World& world, ObjectId id);
+/// Distance from `point` to the segment from `a` to `b`, m.
+double segment_distance(Vec2 point, Vec2 a, Vec2 b);
+
 /// Convex outline, counter-clockwise; disks and capsule ends with `segments`
 /// points per full turn.
 std::vector<Vec2> outline(const Part2D& p, int segments = 40);

@@ -202,6 +202,84 @@ ImU32 fill_colour(const World& world, ObjectId id) {
   return colour::rgb(120 + int(60 * std::min(f, 1.0)), 150, 170);
 }
 
+std::vector<LabelPlace> place_labels(const std::vector<LabelSpot>& spots) {
+  struct Box {
+    float x0, y0, x1, y1;
+  };
+  auto overlap = [](const Box& a, const Box& b) {
+    const float w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+    const float h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+    return w > 0 && h > 0 ? w * h : 0.0f;
+  };
+  std::vector<Box> taken;
+  std::vector<LabelPlace> out;
+  constexpr float kGap = 3;
+  for (const LabelSpot& s : spots) {
+    const float w = s.width, h = s.height, cx = (s.left + s.right) / 2 - w / 2;
+    const float cy = (s.top + s.bottom) / 2 - h / 2;
+    std::vector<LabelPlace> tries = {{cx, s.top - kGap - h, false},
+                                     {cx, s.bottom + kGap, true},
+                                     {s.right + kGap + 2, cy, true},
+                                     {s.left - kGap - 2 - w, cy, true}};
+    for (int k = 1; k <= 4; ++k) {
+      tries.push_back({cx, s.top - kGap - h - float(k) * (h + 1), true});
+      tries.push_back({cx, s.bottom + kGap + float(k) * (h + 1), true});
+    }
+    LabelPlace best = tries.front();
+    float least = 1e30f;
+    for (const LabelPlace& t : tries) {
+      const Box b{t.x, t.y, t.x + w, t.y + h};
+      float sum = 0;
+      for (const Box& o : taken) sum += overlap(b, o);
+      if (sum < least) least = sum, best = t;
+      if (sum == 0) break;
+    }
+    taken.push_back({best.x, best.y, best.x + w, best.y + h});
+    out.push_back(best);
+  }
+  return out;
+}
+
+std::optional<WireCurve> wire_curve(const World& world, ObjectId wire) {
+  const auto a = world.value<ObjectId>(wire, "wire_from");
+  const auto b = world.value<ObjectId>(wire, "wire_to");
+  const PropertyStore& store = world.store();
+  if (!a || !b || !store.alive(*a) || !store.alive(*b)) return {};
+  WireCurve c;
+  c.a =
+      terminal_point(world, *a, world.value<std::int64_t>(wire, "wire_from_terminal").value_or(0));
+  c.b = terminal_point(world, *b, world.value<std::int64_t>(wire, "wire_to_terminal").value_or(0));
+  // It sags by a quarter of its span and 2 cm more, so that a short wire
+  // between two touching ends still shows.
+  c.control = (c.a + c.b) * 0.5 + Vec2{0, -0.25 * length(c.b - c.a) - 0.02};
+  return c;
+}
+
+ObjectId wire_at(const World& world, Vec2 point, double margin) {
+  const auto from = world.properties().find("wire_from");
+  if (!from) return {};
+  ObjectId best;
+  double best_d = margin;
+  for (const ObjectId w : carriers(world.store(), *from)) {
+    const auto c = wire_curve(world, w);
+    if (!c) continue;
+    // The drawn curve as straight pieces, but for the tenth at each end: the
+    // ends lie on parts, and a click there means the part.
+    auto at = [&](double t) {
+      const double u = 1 - t;
+      return c->a * (u * u) + c->control * (2 * u * t) + c->b * (t * t);
+    };
+    Vec2 prev = at(0.1);
+    for (int i = 1; i <= 20; ++i) {
+      const Vec2 q = at(0.1 + 0.8 * i / 20.0);
+      const double d = segment_distance(point, prev, q);
+      if (d <= best_d) best = w, best_d = d;
+      prev = q;
+    }
+  }
+  return best;
+}
+
 Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal) {
   const auto p = read_part(world, part);
   if (!p) return xy(world.value<Vec3>(part, "position").value_or(Vec3{}));
@@ -386,8 +464,38 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
     }
   }
 
+  // Springs: a zigzag coil between the two ends, with a fixed number of
+  // turns so that it bunches as it closes; a dark dot at an end on the board.
+  if (const auto k = world.properties().find("spring_stiffness")) {
+    for (const ObjectId sp : carriers(world.store(), *k)) {
+      const auto ends = spring_ends(world, sp);
+      if (!ends) continue;
+      const ImVec2 a = iv(cam.to_screen(ends->a)), b = iv(cam.to_screen(ends->b));
+      const float dx = b.x - a.x, dy = b.y - a.y;
+      const float len = std::sqrt(dx * dx + dy * dy);
+      if (len < 1) continue;
+      const float ux = dx / len, uy = dy / len;  // along, then across: (-uy, ux)
+      const bool chosen = sp == hl.selected;
+      const ImU32 ink = chosen ? colour::kSelected : IM_COL32(70, 70, 80, 255);
+      constexpr int kTurns = 8;
+      const float lead = std::min(8.0f, len * 0.15f), width = 6;
+      std::vector<ImVec2> zig{a, {a.x + ux * lead, a.y + uy * lead}};
+      for (int i = 0; i < 2 * kTurns; ++i) {
+        const float t = lead + (len - 2 * lead) * (float(i) + 0.5f) / float(2 * kTurns);
+        const float side = (i % 2 ? -width : width);
+        zig.push_back({a.x + ux * t - uy * side, a.y + uy * t + ux * side});
+      }
+      zig.push_back({b.x - ux * lead, b.y - uy * lead});
+      zig.push_back(b);
+      dl->AddPolyline(zig.data(), int(zig.size()), IM_COL32(255, 255, 255, 160), 0,
+                      chosen ? 5.0f : 4.0f);
+      dl->AddPolyline(zig.data(), int(zig.size()), ink, 0, chosen ? 3.0f : 2.0f);
+      for (const ImVec2 end : {a, b}) dl->AddCircleFilled(end, 2.5f, ink, 8);
+    }
+  }
+
   // Wires: a sagging curve between terminals; live ones orange, with charges
-  // moving the way the current flows.
+  // moving the way the current flows. A selected wire is drawn thicker, blue.
   if (opt.wires) {
     if (const auto from = world.properties().find("wire_from")) {
       const PropertyStore& store = world.store();
@@ -395,18 +503,20 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
         const auto a = world.value<ObjectId>(w, "wire_from");
         const auto b = world.value<ObjectId>(w, "wire_to");
         if (!a || !b || !store.alive(*a) || !store.alive(*b)) continue;
-        const Vec2 pa = terminal_point(
-            world, *a, world.value<std::int64_t>(w, "wire_from_terminal").value_or(0));
-        const Vec2 pb =
-            terminal_point(world, *b, world.value<std::int64_t>(w, "wire_to_terminal").value_or(0));
+        const WireCurve curve = *wire_curve(world, w);
+        const Vec2 pa = curve.a, pb = curve.b, mid = curve.control;
         const double span = length(pb - pa);
-        const Vec2 mid = (pa + pb) * 0.5 + Vec2{0, -0.25 * span - 0.02};
         const ImVec2 sa = iv(cam.to_screen(pa)), sb = iv(cam.to_screen(pb)),
                      sm = iv(cam.to_screen(mid));
         const double current = world.value<double>(w, "current").value_or(0);
         const bool live = world.value<bool>(w, "powered").value_or(false);
-        dl->AddBezierQuadratic(sa, sm, sb, IM_COL32(255, 255, 255, 200), 5.0f, 24);
-        dl->AddBezierQuadratic(sa, sm, sb, live ? colour::kWireLive : colour::kWireIdle, 2.5f, 24);
+        const bool chosen = w == hl.selected;
+        dl->AddBezierQuadratic(sa, sm, sb, IM_COL32(255, 255, 255, 200), chosen ? 7.0f : 5.0f, 24);
+        dl->AddBezierQuadratic(sa, sm, sb,
+                               chosen ? colour::kSelected
+                               : live ? colour::kWireLive
+                                      : colour::kWireIdle,
+                               chosen ? 4.0f : 2.5f, 24);
         for (const ImVec2 end : {sa, sb}) {
           dl->AddCircleFilled(end, 3.5f, live ? colour::kWireLive : colour::kWireIdle, 10);
           dl->AddCircle(end, 3.5f, IM_COL32_WHITE, 10, 1);
@@ -430,19 +540,8 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
     }
   }
 
-  // Magnet poles as the magnetic_forces set sees them (electromagnets and
-  // induced poles in soft iron included).
-  if (opt.poles && forces) {
-    for (const magnetism::Pole& pole : forces->poles()) {
-      const double q = std::abs(pole.strength);
-      if (q < 0.05) continue;
-      const float r = float(std::clamp(2.5 + 1.6 * std::log10(q + 1), 3.0, 7.0));
-      const ImVec2 c = iv(cam.to_screen(xy(pole.position)));
-      dl->AddCircleFilled(c, r + 1.5f, IM_COL32_WHITE, 16);
-      dl->AddCircleFilled(c, r, pole.strength > 0 ? colour::kNorth : colour::kSouth, 16);
-    }
-  }
-
+  // Magnetic forces (on by default) under the poles, so that an arrow
+  // crossing a pole does not hide its colour.
   if (opt.magnetic_forces && forces) {
     for (const magnetism::MagneticBody& b : forces->bodies()) {
       const auto p = read_part(world, b.id);
@@ -454,6 +553,19 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       const ImVec2 from = iv(cam.to_screen(p->centre));
       arrow(dl, from, {from.x + float(f.x / n) * len, from.y - float(f.y / n) * len},
             colour::kMagneticForce, 2.5f);
+    }
+  }
+
+  // Magnet poles as the magnetic_forces set sees them (electromagnets and
+  // induced poles in soft iron included).
+  if (opt.poles && forces) {
+    for (const magnetism::Pole& pole : forces->poles()) {
+      const double q = std::abs(pole.strength);
+      if (q < 0.05) continue;
+      const float r = float(std::clamp(2.5 + 1.6 * std::log10(q + 1), 3.0, 7.0));
+      const ImVec2 c = iv(cam.to_screen(xy(pole.position)));
+      dl->AddCircleFilled(c, r + 1.5f, IM_COL32_WHITE, 16);
+      dl->AddCircleFilled(c, r, pole.strength > 0 ? colour::kNorth : colour::kSouth, 16);
     }
   }
 
@@ -498,17 +610,47 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   }
 
   if (opt.labels) {
+    // Just above each part, like the paper's annotations, unless another
+    // label is there already (place_labels). Small parts are placed first:
+    // a large part's label has more room to move.
+    std::vector<std::pair<std::string, LabelSpot>> wanted;
     for (const Part2D& p : parts) {
       if (p.is_static && p.half.x * px > 300) continue;  // floors and walls speak for themselves
       const std::string name = world.describe(p.id);
       if (name.empty() || name[0] == '#') continue;
-      // Just above the part's highest point, like the paper's annotations.
-      double top = -1e300;
-      for (Vec2 v : outline(p, 16)) top = std::max(top, v.y);
-      const ScreenPoint s = cam.to_screen({p.centre.x, top});
+      LabelSpot spot{1e9f, 1e9f, -1e9f, -1e9f, 0, 0};
+      for (Vec2 v : outline(p, 16)) {
+        const ScreenPoint q = cam.to_screen(v);
+        spot.left = std::min(spot.left, q.x), spot.right = std::max(spot.right, q.x);
+        spot.top = std::min(spot.top, q.y), spot.bottom = std::max(spot.bottom, q.y);
+      }
       const ImVec2 sz = ImGui::GetFont()->CalcTextSizeA(13, 1e9f, 0, name.c_str());
-      dl->AddText(ImGui::GetFont(), 13, {s.x - sz.x / 2, s.y - 3 - sz.y}, colour::kLabel,
-                  name.c_str());
+      spot.width = sz.x, spot.height = sz.y;
+      wanted.push_back({name, spot});
+    }
+    std::vector<std::size_t> order(wanted.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    auto box_area = [&](std::size_t i) {
+      const LabelSpot& b = wanted[i].second;
+      return (b.right - b.left) * (b.bottom - b.top);
+    };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return box_area(a) < box_area(b); });
+    std::vector<LabelSpot> spots;
+    for (std::size_t i : order) spots.push_back(wanted[i].second);
+    const std::vector<LabelPlace> places = place_labels(spots);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const LabelSpot& b = spots[k];
+      const LabelPlace& at = places[k];
+      if (at.moved) {
+        // A leader from the label's nearest edge to the part's box centre.
+        const float cx = (b.left + b.right) / 2, cy = (b.top + b.bottom) / 2;
+        const float lx = std::clamp(cx, at.x, at.x + b.width);
+        const float ly = std::clamp(cy, at.y, at.y + b.height);
+        dl->AddLine({lx, ly}, {cx, cy}, with_alpha(colour::kLabel, 0.45f), 1);
+      }
+      dl->AddText(ImGui::GetFont(), 13, {at.x, at.y}, colour::kLabel,
+                  wanted[order[k]].first.c_str());
     }
   }
   (void)kPi;

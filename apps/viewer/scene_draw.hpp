@@ -57,7 +57,7 @@ struct DrawOptions {
   bool labels = true;
   bool wires = true;
   bool poles = true;
-  bool magnetic_forces = false;
+  bool magnetic_forces = true;  // on by default: they show why a coil pulls and a rotor turns
   bool contact_forces = false;
 };
 
@@ -77,6 +77,35 @@ struct Ring {
 /// clock), s: wires' current flows with it.
 void draw_world(ImDrawList* dl, World& world, const Camera& camera, const DrawOptions& options,
                 const Highlight& highlight, double clock, const std::vector<Ring>& rings);
+
+/// A wire as it is drawn: a quadratic curve from terminal `a` to terminal
+/// `b` through `control` (it sags below the straight line).
+struct WireCurve {
+  Vec2 a, control, b;
+};
+/// The wire's curve, or nullopt if it is not a wire or an end is gone.
+std::optional<WireCurve> wire_curve(const World& world, ObjectId wire);
+/// The wire whose drawn curve passes within `margin` (m) of `point`, or null;
+/// the tenth of the curve at each end does not count (it lies on a part).
+ObjectId wire_at(const World& world, Vec2 point, double margin);
+
+/// A label to lay out, in screen pixels (y down): the part's bounding box and
+/// the text's size.
+struct LabelSpot {
+  float left, top, right, bottom;  ///< the part's box on screen
+  float width, height;             ///< the text's
+};
+/// Where a label goes: its top-left corner, and whether it was moved off its
+/// first place (then a thin line joins it to its part).
+struct LabelPlace {
+  float x, y;
+  bool moved = false;
+};
+/// Lays labels out so that no two overlap where it can: each, in the order
+/// given, takes the first free place of: centred above its part, below it,
+/// right of it, left of it, then further above and below in steps of a line;
+/// failing all, the place that overlaps the least.
+std::vector<LabelPlace> place_labels(const std::vector<LabelSpot>& spots);
 
 /// Where a wire ends on a part: a two-terminal part's terminal 0 at its -x
 /// end, 1 at its +x end; a node part's centre.

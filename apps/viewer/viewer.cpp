@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numbers>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 #include "apps/viewer/scene_writer.hpp"
@@ -778,8 +779,71 @@ void Viewer::pump_script() {
         place_drag_ = false;
         break;
       }
+      case ScriptEvent::Kind::Set: {
+        const std::string where = "script line " + std::to_string(e.line) + ": ";
+        const std::string error = script_set(e.key, e.value);
+        if (!error.empty()) note(where + error, true);
+        break;
+      }
     }
   }
+}
+
+std::string Viewer::script_set(const std::string& property, const std::string& text) {
+  // What the inspector does when a value is typed into the field and Enter
+  // pressed (panel_inspector): parsed as the property's kind, then one edit.
+  World* w = world();
+  if (!w || !selected_ || !w->store().alive(selected_))
+    return "set " + property + ": nothing is selected";
+  const ObjectId id = selected_;
+  if (property == "material") {
+    const EditResult r =
+        edit("material of " + w->describe(id), [&] { return editor_.set_material(id, text); });
+    return r.ok ? "" : r.message;
+  }
+  const auto p = w->properties().find(property);
+  if (!p) return "set: no property '" + property + "'";
+  const PropertyDef& def = w->properties().def(*p);
+  std::istringstream in(text);
+  std::optional<PropertyValue> value;
+  switch (def.kind) {
+    case PropertyKind::Number: {
+      double d;
+      if (in >> d) value = d;
+      break;
+    }
+    case PropertyKind::Integer: {
+      std::int64_t i;
+      if (in >> i) value = i;
+      break;
+    }
+    case PropertyKind::Bool:
+      if (text == "true" || text == "false") value = text == "true";
+      break;
+    case PropertyKind::Vec3: {
+      Vec3 v;
+      if (in >> v.x >> v.y >> v.z) value = v;
+      break;
+    }
+    case PropertyKind::Quat: {
+      double deg;
+      if (in >> deg) value = Quat::from_angle_z(deg * std::numbers::pi / 180);
+      break;
+    }
+    case PropertyKind::Enum:
+      if (const auto e = w->properties().enum_value(*p, text)) value = *e;
+      break;
+    case PropertyKind::String:
+      value = text;
+      break;
+    case PropertyKind::Ref:
+    case PropertyKind::RefList:
+      return "set " + property + ": a reference is not typed in the inspector";
+  }
+  if (!value) return "set " + property + ": cannot read '" + text + "'";
+  const EditResult r = edit("set " + w->describe(id) + "." + property,
+                            [&] { return editor_.set_property(id, property, *value); });
+  return r.ok ? "" : r.message;
 }
 
 void Viewer::push_mouse(Uint32 type, Vec2 at, Uint8 button) {
@@ -961,11 +1025,14 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
       if (!(mod & KMOD_SHIFT)) set_tool(Tool::Hand);
       break;
     }
-    case Tool::String: {
+    case Tool::String:
+    case Tool::Spring: {
       // First click: the start (a part); second: the end (a part, or the board).
+      const bool spring = tool_ == Tool::Spring;
       if (!string_started_) {
         if (!part) {
-          note("a string starts on a part: click the part to hang it from or tie it to");
+          note(spring ? "a spring starts on a part: click the part to hang it from or tie it to"
+                      : "a string starts on a part: click the part to hang it from or tie it to");
           break;
         }
         string_start_ = part;
@@ -974,13 +1041,16 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
         break;
       }
       std::vector<ObjectId> made;
+      ObjectId made_spring;
       const ObjectId from = string_start_;
       const Vec2 from_at = string_start_at_;
-      const EditResult r = edit("string", [&] {
-        return editor_.string_between(from, from_at, part == from ? ObjectId{} : part, at, 1.0,
-                                      &made);
+      const ObjectId to = part == from ? ObjectId{} : part;
+      const EditResult r = edit(spring ? "spring" : "string", [&] {
+        return spring ? editor_.spring_between(from, from_at, to, at, &made_spring)
+                      : editor_.string_between(from, from_at, to, at, 1.0, &made);
       });
       note(r.message, !r.ok);
+      if (r.ok && spring) selected_ = made_spring;
       string_started_ = false;
       string_start_ = {};
       if (r.ok && !(mod & KMOD_SHIFT)) set_tool(Tool::Hand);
@@ -995,6 +1065,13 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
       }
       if (const ObjectId j = editor_.pick_joint(at, 6 / camera_.scale)) {
         selected_ = j;
+        break;
+      }
+      // A spring or a wire is drawn over the parts: a click on its line (but
+      // for its ends, which lie on parts) selects it; Delete removes it.
+      if (ObjectId line = editor_.pick_spring(at, 4 / camera_.scale);
+          line || (line = wire_at(*w, at, 4 / camera_.scale))) {
+        selected_ = line;
         break;
       }
       if (!part) {
@@ -1110,6 +1187,9 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
       break;
     case SDLK_t:
       set_tool(tool_ == Tool::String ? Tool::Hand : Tool::String);
+      break;
+    case SDLK_k:
+      set_tool(tool_ == Tool::Spring ? Tool::Hand : Tool::Spring);
       break;
     case SDLK_q:
     case SDLK_e: {
@@ -1403,7 +1483,7 @@ void Viewer::draw(bool capture, Image* image) {
 
 void Viewer::draw_tool_feedback(ImDrawList* dl, World& w) {
   // A string being drawn: a dashed line from its first end to the mouse.
-  if (tool_ == Tool::String && string_started_ && mouse_x_ >= 0) {
+  if ((tool_ == Tool::String || tool_ == Tool::Spring) && string_started_ && mouse_x_ >= 0) {
     const ScreenPoint a = camera_.to_screen(string_start_at_);
     const float dx = mouse_x_ - a.x, dy = mouse_y_ - a.y;
     const int dashes = std::max(1, int(std::sqrt(dx * dx + dy * dy) / 10));
@@ -1553,8 +1633,9 @@ void Viewer::panel_help() {
       {"H", "hinge tool: where two parts overlap"},
       {"J", "glue tool: where two parts overlap or touch"},
       {"T", "string tool: a part, then another part or the board"},
+      {"K", "spring tool: a part, then another part or the board (a spring with a damper)"},
       {"P", "pin the part under the mouse to the board"},
-      {"Delete", "remove the selected part or joint (a wire: with its part)"},
+      {"Delete", "remove the selected part, joint, spring or wire (click a wire to select it)"},
       {"Ctrl+Z / Ctrl+Y", "undo / redo"},
       {"Ctrl+N / O / S", "new board / open / save (Shift: save as)"},
       {"Ctrl+R", "reset to the file"},
@@ -1634,6 +1715,8 @@ void Viewer::panel_toolbar() {
       {"Glue J", Tool::Glue, "click where two parts overlap or touch: they move as one"},
       {"String T", Tool::String,
        "click a part, then another part or the board: a chain of small links"},
+      {"Spring K", Tool::Spring,
+       "click a part, then another part or the board: a spring with a damper, at rest as it is"},
   };
   const float tw = (kLeftWidth - 20 - 2 * 6) / 3;
   for (std::size_t i = 0; i < std::size(tools); ++i) {
@@ -1644,8 +1727,9 @@ void Viewer::panel_toolbar() {
     if (on) ImGui::PopStyleColor();
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tools[i].tip);
   }
-  if (tool_ == Tool::String && string_started_)
-    ImGui::TextColored(ImVec4(0.1f, 0.4f, 0.8f, 1), "string: now click its other end");
+  if ((tool_ == Tool::String || tool_ == Tool::Spring) && string_started_)
+    ImGui::TextColored(ImVec4(0.1f, 0.4f, 0.8f, 1), "%s: now click its other end",
+                       tool_ == Tool::Spring ? "spring" : "string");
   ImGui::Checkbox("labels", &draw_options_.labels);
   ImGui::SameLine();
   ImGui::Checkbox("poles", &draw_options_.poles);
@@ -1808,7 +1892,7 @@ void Viewer::panel_inspector() {
     ImGui::TextDisabled("click a part to see and edit it here");
     ImGui::TextDisabled("drag: move   wheel / Q E: turn");
     ImGui::TextDisabled("P: pin   W: wire   Del: remove");
-    ImGui::TextDisabled("H: hinge  J: glue  T: string");
+    ImGui::TextDisabled("H hinge  J glue  T string  K spring");
     ImGui::TextDisabled("Ctrl+Z / Ctrl+Y: undo / redo");
     ImGui::TextDisabled("right-click: menu   F: fit view");
     ImGui::End();
@@ -1840,6 +1924,17 @@ void Viewer::panel_inspector() {
   } else if (joint_kind) {
     ImGui::SameLine();
     ImGui::TextDisabled("%s", joint_kind->index == 0 ? "hinge (an axle)" : "glue");
+  } else if (const auto ends = spring_ends(*w, id)) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("spring with a damper");
+    const double len = length(ends->b - ends->a);
+    const double k = (*w).value<double>(id, "spring_stiffness").value_or(0);
+    const double rest = (*w).value<double>(id, "spring_rest_length").value_or(0);
+    ImGui::Text("length %.2f cm (rest %.2f cm)", len * 100, rest * 100);
+    ImGui::Text("pulls with %.3g N", k * (len - rest));
+  } else if ((*w).value<ObjectId>(id, "wire_from")) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("wire");
   }
   if (const auto emf = (*w).value<double>(id, "emf")) ImGui::Text("battery %.3g V", *emf);
   if (const auto i = (*w).value<double>(id, "current")) ImGui::Text("current %.4g A", *i);

@@ -48,7 +48,7 @@ namespace alloy::viewer {
 
 /// What a click on the play area does. Hinge, Glue: join the parts under
 /// the click (or the part and the board). String: two clicks, one per end.
-enum class Tool { Hand, Wire, Place, Hinge, Glue, String };
+enum class Tool { Hand, Wire, Place, Hinge, Glue, String, Spring };
 
 class Viewer {
  public:
@@ -157,6 +157,9 @@ class Viewer {
   void on_release(Vec2 at, Uint8 button);
   void on_key(SDL_Keycode key, Uint16 mod);
   void pump_script();
+  /// A script's `set`: the selected object's property as the inspector sets
+  /// it; "" or why it was refused.
+  std::string script_set(const std::string& property, const std::string& text);
   void simulate(double frame_seconds);
   void step_world();
   void watch_scene_file();

@@ -6,6 +6,7 @@
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
 #include "resolvers/rigid_body/rigid_body_from_gravity.hpp"
+#include "resolvers/rigid_body/rigid_body_from_springs.hpp"
 
 namespace alloy::rigid {
 
@@ -100,6 +101,7 @@ void register_rigid_body_plugins(PluginRegistry& registry) {
   registry.add(rigid_body_plugin());
   registry.add(collisions_plugin());
   registry.add(rigid_body_from_collisions_plugin());
+  register_rigid_body_from_springs(registry);
 }
 
 }  // namespace alloy::rigid

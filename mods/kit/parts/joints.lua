@@ -60,6 +60,30 @@ joints.glue = {
   end,
 }
 
+joints.spring = {
+  doc = "a spring with a damper from a point of part a to a point of part b (or of the play area)",
+  args = {
+    { "a", "object", required = true, doc = "the part at its first end" },
+    { "b", "object", doc = "the part at its other end; absent: the play area" },
+    { "at_a", "vec", doc = "its end on a, from a's centre in a's own frame {x, y}, m; default: the centre" },
+    { "at_b", "vec", doc = "its end on b, from b's centre in b's frame; with no b, a point of the play area, m" },
+    { "stiffness", "positive", required = true, doc = "N/m" },
+    { "rest_length", "nonnegative", required = true, doc = "its length with no force, m" },
+    { "damping", "nonnegative", default = 0, doc = "the damper, N s/m" },
+  },
+  build = function(a, kit)
+    if not a.b and not a.at_b then
+      kit.fail(a.name, "kit.spring needs 'b' or 'at_b' (a point of the play area) for its other end")
+    end
+    -- rigid_body_from_springs refuses one too stiff for the step (by name).
+    return {
+      spring_a = a.a, spring_b = a.b,
+      spring_anchor_a = a.at_a or { 0, 0 }, spring_anchor_b = a.at_b or { 0, 0 },
+      spring_stiffness = a.stiffness, spring_rest_length = a.rest_length, spring_damping = a.damping,
+    }
+  end,
+}
+
 -- The kit's own: other mods use these parts through `require "kit"`.
 return alloy.per_mod(function(mod)
   if mod == "kit" then return joints end

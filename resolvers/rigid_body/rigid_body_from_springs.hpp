@@ -1,0 +1,73 @@
+// Interaction rigid_body <- springs: a spring with a damper (a dashpot in
+// parallel) between two points, one on each of two parts, or one on a part and
+// one fixed to the board. Every step it queues, through the rigid body's public
+// API (add_force at a point), the force
+//
+//   F = -(k (L - L0) + c dL/dt) n        on part a at its anchor, -F on part b,
+//
+// where L is the anchors' distance, n the unit vector from b's anchor to a's,
+// and dL/dt the anchors' relative speed along n. Nothing here knows the rigid
+// body's engine, so it works on any resolver that takes forces at points.
+//
+// The force is explicit: it is worked out from the state at the start of the
+// step and held through it, and the rigid body's semi-implicit Euler then
+// moves the parts. For one mass on a spring that scheme is stable while
+// (h w)^2 + 2 h c / m < 4 (w = sqrt(k / m), h the step). A hinged or turning
+// part moves under a force at a point like a fraction of its mass (a rod
+// hinged at one end and pulled at its tip: a third), so the springs keep
+// (h w)^2 + 2 h c / m <= 1, with m the reduced mass of the two parts (a
+// static or pinned part counts as infinitely heavy). A spring past that is
+// refused, by name, when it is made or edited (World::check) and when a step
+// would use it: the message gives the figures and what to change.
+//
+// Contract:
+//   reads    position, orientation, velocity, angular_velocity, mass, static,
+//            pinned, spring_* (below)
+//   target   rigid_body (add_force at a world point)
+//   needs    spring_stiffness
+// The spring keeps no state of its own: everything is in its properties.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "runtime/plugin_registry.hpp"
+#include "runtime/stage.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::rigid {
+
+class RigidBodyEngine;
+
+/// The stability figure of a spring, (h w)^2 + 2 h c / m, and what it was
+/// worked out from; `mass` is the reduced mass (infinite: both parts fixed).
+struct SpringStability {
+  double figure = 0;     ///< (h w)^2 + 2 h c / m
+  double mass = 0;       ///< reduced mass of the two parts, kg
+  double stiffness = 0;  ///< N/m
+  double damping = 0;    ///< N s/m
+  double dt = 0;         ///< s
+};
+/// The largest figure the springs accept (the explicit scheme's own bound is 4).
+inline constexpr double kSpringStabilityLimit = 1.0;
+
+/// Works out the figure for the spring `id` of `world` (its parts' present masses).
+SpringStability spring_stability(const World& world, ObjectId id);
+
+/// The properties a spring object carries.
+std::vector<PropertyDef> spring_properties();
+
+class RigidBodyFromSprings final : public Interaction {
+ public:
+  static constexpr const char* kName = "rigid_body_from_springs";
+  explicit RigidBodyFromSprings(RigidBodyEngine& target) : target_(target) {}
+  void apply(const WorldView& world) override;
+
+ private:
+  RigidBodyEngine& target_;
+};
+
+/// Registers rigid_body_from_springs (after the rigid body's plugins).
+void register_rigid_body_from_springs(PluginRegistry& registry);
+
+}  // namespace alloy::rigid
