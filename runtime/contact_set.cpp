@@ -55,7 +55,7 @@ void ContactSet::clear_changes() {
 }
 
 void ContactSet::publish(const WorldView& world, std::span<const PairImpulse> impulses,
-                         bool computed) {
+                         bool computed, std::uint64_t step) {
   // The rigid body's impulses are for the pairs it was given, i.e. those that
   // touched at the previous update: merge them in by pair. Empty when nobody
   // demanded them.
