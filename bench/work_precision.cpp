@@ -11,6 +11,8 @@
 //   RC, LC, RLC        issue 13: q(t) = C E (1 - e^(-t/RC)); the LC period
 //                      2 pi sqrt(LC); q(t) = q0 e^(-at)(cos wt + a/w sin wt)
 //   magnets            fine RK4 of the pole model's force law
+//   induction          fine RK4 of a magnet flown through a closed coil: its
+//                      motion and the coil's current, coupled by Faraday
 //   elastic pairs, Newton's cradle, bounce, lever and bar pendulums at large
 //   swings, a 1000:1 chain, the tumbling box over 10 s: the closed-form
 //   cases of issue 12 (energy drift in the table where the scene measures it)
@@ -24,7 +26,8 @@
 // Writes docs/bench/work_precision.csv, docs/bench/wp_<scene>.svg and the
 // table between <!-- bench:work_precision --> markers in docs/performance.md.
 //
-//   build/bench/alloy_bench_work_precision [--quick] [--out DIR] [--docs FILE] [--no-progress]
+//   build/bench/alloy_bench_work_precision [--quick] [--circuits | --induction] [--out DIR]
+//                                          [--docs FILE] [--no-progress]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -270,6 +273,9 @@ std::vector<Scene> scenes() {
                [](double dt, const Method& m) { return an::run_magnets(dt, m); },
                rigid_methods(false)});
   add_circuit_scenes(s, elec);  // issue 13
+  s.push_back({"induction", "Magnet flown through a closed coil at 0.5 m/s, L/R = 3.3 ms (0.8 s)",
+               "largest current error (relative to the peak)",
+               [](double dt, const Method& m) { return an::run_induction(dt, m); }, elec});
   return s;
 }
 
@@ -295,7 +301,8 @@ std::string rate_label(int rate) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options opt = Options::parse(argc, argv, "alloy_bench_work_precision", {"--circuits"});
+  const Options opt =
+      Options::parse(argc, argv, "alloy_bench_work_precision", {"--circuits", "--induction"});
   const std::vector<int> rates =
       opt.quick ? std::vector<int>{120, 240} : std::vector<int>{60, 120, 240, 480, 960, 1920};
   std::vector<Scene> all = scenes();
@@ -303,7 +310,11 @@ int main(int argc, char** argv) {
   // to circuits.csv and the "circuits" section of docs/performance.md.
   const bool circuits = opt.flag("--circuits");
   if (circuits) std::erase_if(all, [](const Scene& s) { return !s.key.ends_with("_circuit"); });
-  const std::string stem = circuits ? "circuits" : "work_precision";
+  // --induction: the induced-EMF scene alone, to induction.csv and the
+  // "induction" section.
+  const bool induction = opt.flag("--induction");
+  if (induction) std::erase_if(all, [](const Scene& s) { return s.key != "induction"; });
+  const std::string stem = circuits ? "circuits" : induction ? "induction" : "work_precision";
   if (opt.quick)  // one method per scene: the default
     for (Scene& s : all)
       std::erase_if(s.methods, [](const NamedMethod& m) { return !m.is_default; });

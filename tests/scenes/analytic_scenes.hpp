@@ -91,6 +91,16 @@ Result run_rl(double dt, const Method& m, double seconds = 0.5);
 /// model's softened force law written out here.
 Result run_magnets(double dt, const Method& m, double seconds = 1.0);
 
+/// Induction (issue 13): a 0.5 kg magnet (q = 100 A m, poles 17 mm apart)
+/// flies at 0.5 m/s along the axis of a fixed 500-turn coil (coil_factor 0.06
+/// m, poles 4 cm apart, L = 10 mH, closed on itself: 3.01 Ohm) and through
+/// it; the EMF -dPhi/dt drives a current whose field brakes the magnet.
+/// Reference: fine RK4 of the coupled ODE m v' = I dPhi/dx, L I' + R I =
+/// -dPhi/dx v, Phi the pole model's flux linkage (flux_linkage.hpp).
+/// Error: largest |I - I_ref| / max |I_ref| at the steps' ends. Also sets
+/// `measured` to the magnet's speed at the end and `exact` to the reference's.
+Result run_induction(double dt, const Method& m, double seconds = 0.8);
+
 // --- closed-form cases (issue 12) ------------------------------------------------------
 // Each returns the error against a closed form; the tests in
 // tests/resolvers/rigid_body/closed_form_test.cpp hold them at 1/240 s and
