@@ -562,6 +562,8 @@ bool Viewer::frame() {
     }
   }
 
+  update_title();
+
   double seconds = kHeadlessFrame;
   const std::uint64_t now = SDL_GetPerformanceCounter();
   if (!opt_.headless)
@@ -786,6 +788,19 @@ void Viewer::pump_script() {
         break;
       }
     }
+  }
+}
+
+void Viewer::update_title() {
+  // "alloy view - FILE", and " *" while there are edits not saved: what a
+  // player sees in the task bar, and what a test driving the window through
+  // the X server can wait on (tests/viewer/xvfb_mouse_test.sh).
+  std::string title = "alloy view - ";
+  title += untitled_ ? std::string("new board") : fs::path(save_path_).filename().string();
+  if (history_.dirty()) title += " *";
+  if (title != title_ && window_) {
+    SDL_SetWindowTitle(window_, title.c_str());
+    title_ = title;
   }
 }
 

@@ -160,6 +160,9 @@ class Viewer {
   /// A script's `set`: the selected object's property as the inspector sets
   /// it; "" or why it was refused.
   std::string script_set(const std::string& property, const std::string& text);
+  /// The window's title: the file's name, " *" with edits not saved.
+  void update_title();
+  std::string title_;
   void simulate(double frame_seconds);
   void step_world();
   void watch_scene_file();

@@ -14,6 +14,7 @@
 #include "apps/viewer/input_script.hpp"
 #include "apps/viewer/scene_draw.hpp"
 #include "apps/viewer/viewer.hpp"
+#include "runtime/error.hpp"
 #include "runtime/state_hash.hpp"
 #include "viewer_support.hpp"
 
@@ -106,6 +107,51 @@ TEST(ViewerSpring, TheSpringToolHangsABallThatSettlesWhereMgOverKSays) {
               stretch, sag);
   EXPECT_NEAR(stretch, sag, 2e-4);
   EXPECT_NEAR(ends->a.x, ends->b.x, 1e-3) << "it hangs straight down";
+}
+
+/// A scene with a ball hung from a shelf by kit.spring (its values from `spring`).
+fs::path spring_scene(const std::string& spring) {
+  const fs::path file = test::temp_dir() / "spring.lua";
+  std::ofstream out(file);
+  out << "local kit = require \"kit\"\n"
+         "world { name = \"spring\", dt = 1 / 240 }\n"
+         "kit.floor { name = \"shelf\", at = { 0, 0.5 }, size = { 0.3, 0.02 } }\n"
+         "kit.disk { name = \"ball\", material = \"rubber\", at = { 0, 0.28 }, radius = 0.02 }\n"
+      << spring << "\n";
+  return file;
+}
+
+TEST(KitSpring, ALuaSceneHangsABallOnKitSpringAndAStiffOneIsRefusedByName) {
+  test::Loaded l = test::load(
+      spring_scene("kit.spring { name = \"hanger\", a = \"ball\", b = \"shelf\", at_b = { 0, -0.01 "
+                   "}, stiffness = 20, rest_length = 0.2, damping = 0.05 }"));
+  World& w = l.world();
+  w.start();
+  w.run(std::uint64_t(std::llround(6 / w.dt())));
+  const ObjectId spring = w.find("hanger");
+  const auto ends = spring_ends(w, spring);
+  ASSERT_TRUE(ends);
+  const double m = w.value<double>(w.find("ball"), "mass").value_or(0);
+  const double stretch = length(ends->b - ends->a) - 0.2;
+  std::printf("kit.spring: stretched %.5f m, m g / k = %.5f m\n", stretch, m * 9.81 / 20);
+  EXPECT_NEAR(stretch, m * 9.81 / 20, 2e-4);
+  try {
+    test::load(
+        spring_scene("kit.spring { name = \"stiff\", a = \"ball\", b = \"shelf\", "
+                     "stiffness = 1e6, rest_length = 0.2 }"));
+    FAIL() << "a spring too stiff for the step was loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'stiff'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("too stiff"), std::string::npos) << e.what();
+  }
+  try {
+    test::load(
+        spring_scene("kit.spring { name = \"loose\", a = \"ball\", stiffness = 20, "
+                     "rest_length = 0.2 }"));
+    FAIL() << "a spring with one end was loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("loose"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ViewerSpring, TheInspectorEditsItsStiffnessAndRefusesOneTooStiffByName) {

@@ -1,0 +1,112 @@
+#!/bin/sh
+# The viewer under a real X server (Xvfb), driven by the mouse alone
+# (xdotool), keyboard-free: a click on the palette's "steel bar", a click on
+# the board, a click on Save. It passes when the saved file holds the bar and
+# `alloy check` loads it. Waits are on the X server, the window and the file,
+# never on a fixed sleep; the whole test gives up after 30 s.
+#
+#   xvfb_mouse_test.sh ALLOY_BINARY
+#
+# Exit 77 with a message when Xvfb or xdotool is missing.
+#
+# NOT RELIABLE YET, and so not run by ctest: under Xvfb (no window manager)
+# clicks on the ImGui panels were lost in most runs (one of five passed
+# with `mousemove --sync --window` and `click`; none with mousedown/mouseup
+# and a wait on the pointer), while a click on the board always arrived.
+# The same sequence paced by hand (a few hundred ms between clicks) works.
+# docs/kit.md, "The viewer under a real X server".
+set -u
+alloy=$1
+if ! command -v Xvfb >/dev/null 2>&1 || ! command -v xdotool >/dev/null 2>&1; then
+  echo "SKIP: Xvfb or xdotool is not installed (apt-get install -y xvfb xdotool)"
+  exit 77
+fi
+dir=$(mktemp -d)
+xpid=
+vpid=
+finish() {
+  [ -n "$vpid" ] && kill "$vpid" 2>/dev/null
+  [ -n "$xpid" ] && kill "$xpid" 2>/dev/null
+  rm -rf "$dir"
+}
+trap finish EXIT
+fail() {
+  echo "FAIL: $*"
+  [ -f "$dir/viewer.log" ] && sed 's/^/  viewer: /' "$dir/viewer.log"
+  exit 1
+}
+# Polls `$@` every 50 ms until it succeeds or `deadline` (seconds since the
+# start) passes.
+start=$(date +%s)
+wait_for() {
+  what=$1
+  shift
+  while ! "$@" >/dev/null 2>&1; do
+    [ $(($(date +%s) - start)) -ge 30 ] && fail "timed out waiting for $what"
+    sleep 0.05
+  done
+}
+
+# A free display number: the first with no lock file.
+n=90
+while [ -e "/tmp/.X$n-lock" ] && [ $n -lt 140 ]; do n=$((n + 1)); done
+Xvfb ":$n" -screen 0 1100x700x24 -nolisten tcp >"$dir/xvfb.log" 2>&1 &
+xpid=$!
+export DISPLAY=":$n"
+wait_for "the X server on :$n" xdotool getdisplaygeometry
+
+# An empty board from a file, so that Save writes beside it without a name
+# to type: board.lua -> board_saved.lua.
+printf 'world { name = "board" }\n' >"$dir/board.lua"
+SDL_AUDIODRIVER=dummy "$alloy" view "$dir/board.lua" --size 1100x700 >"$dir/viewer.log" 2>&1 &
+vpid=$!
+# The title names the file once the board is loaded and drawn, and ends in
+# " *" while there are edits not saved (Viewer::update_title).
+wait_for "the viewer's window" xdotool search --onlyvisible --name 'alloy view - board_saved.lua$'
+win=$(xdotool search --onlyvisible --name 'alloy view' | head -n 1)
+
+# The panels' places at 1100 x 700 (docs/images/kit_new_board.png): the
+# palette's first button, then a point of the board, then Save. Each step
+# is checked by what it changes (the title's " *", then the file) and
+# tried again if the window missed it (at most 5 times): the viewer reads
+# the mouse between frames, and a press and release inside one frame can
+# reach a panel button as no click at all.
+at() { xdotool getmouselocation | grep -q "^x:$1 y:$2 "; }
+click() {
+  # The window is at the screen's origin (Xvfb has no window manager); the
+  # button goes down once the X server has the pointer there.
+  xdotool mousemove "$1" "$2" || fail "mousemove $1 $2"
+  wait_for "the pointer at $1 $2" at "$1" "$2"
+  xdotool mousedown 1 || fail "mousedown $1 $2"
+  xdotool mouseup 1 || fail "mouseup $1 $2"
+}
+# Tries `step` until `check` holds, each time waiting up to 2 s for it.
+attempt() {
+  what=$1 step=$2 check=$3
+  tries=0
+  while :; do
+    $step
+    t0=$(date +%s)
+    while [ $(($(date +%s) - t0)) -lt 2 ]; do
+      $check && return 0
+      sleep 0.05
+    done
+    tries=$((tries + 1))
+    [ $tries -ge 5 ] && fail "$what: not seen after 5 tries"
+    echo "retry: $what"
+  done
+}
+place() {
+  click 68 430   # Parts: steel bar
+  click 600 200  # the board: the bar goes there
+}
+edited() { xdotool search --onlyvisible --name 'alloy view - board_saved.lua [*]$' >/dev/null 2>&1; }
+save() { click 150 273; }
+saved() { grep -q '"steel_bar"' "$dir/board_saved.lua" 2>/dev/null; }
+attempt "a steel bar placed (the title's *)" place edited
+attempt "the board saved with the bar" save saved
+"$alloy" check "$dir/board_saved.lua" >"$dir/check.log" 2>&1 || {
+  cat "$dir/check.log"
+  fail "alloy check refused the saved board"
+}
+echo "ok: under Xvfb :$n, three mouse clicks put a steel bar on the board and saved it ($(($(date +%s) - start)) s)"
