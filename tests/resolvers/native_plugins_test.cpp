@@ -20,7 +20,7 @@ TEST(NativePlugins, RegisterFolderByFolderInTheOrderStagesRunIn) {
   register_native_plugins(registry);
   const std::vector<std::string> expected = {
       // rigid_body/
-      "rigid_body", "collisions", "rigid_body_from_collisions",
+      "rigid_body", "collisions", "rigid_body_from_collisions", "rigid_body_from_springs",
       // gravity/, then rigid_body_from_gravity (lives in rigid_body/, registers with gravity)
       "gravity.uniform", "gravity.nbody", "rigid_body_from_gravity",
       // electricity/
