@@ -158,11 +158,9 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
     for (const auto& p : decl.info.writes) add_property(p, true);
   for (const auto& p : decl.info.needs) add_property(p, false);
   for (const auto& d : decl.info.derived) {
-    if (native_derived_readable(d)) {
-      if (d == "collisions") {
-        collisions_ = &ctx.dependency<ContactSet>(d);
-        impulses_ = collisions_->demand_impulses();
-      }
+    if (native_derived_readable(ctx.world().plugins(), d)) {  // a contact set
+      collisions_ = &ctx.dependency<ContactSet>(d);
+      impulses_ = collisions_->demand_impulses();
       continue;
     }
     const auto& set = ctx.dependency<LuaDerivedSet>(d);
@@ -178,9 +176,9 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
       column_names_.push_back(decl.provides[o].name);
     }
   if (kind_ == StageKind::Interaction) {
-    if (const auto* fns = native_functions(decl.info.target)) {
+    if (native_resolver(ctx.world().plugins(), decl.info.target)) {
       native_target_ = bind_native_target(ctx);
-      target_functions_ = *fns;
+      target_functions_ = native_target_->functions();
     } else {
       lua_target_ = &ctx.target<LuaResolver>();
       target_functions_ = lua_target_->functions();
@@ -251,7 +249,9 @@ LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginC
     lua_setfield(L, -2, "name");
     push_functions(L, target_functions_);
     // Functions the native target takes as load records written in place.
-    in_place_ = native_target_ && native_target_->record_kind(0) >= 0;
+    in_place_ = false;
+    for (std::size_t i = 0; native_target_ && i < target_functions_.size(); ++i)
+      in_place_ = in_place_ || native_target_->record_kind(std::int32_t(i)) >= 0;
     if (in_place_) {
       for (std::size_t i = 0; i < target_functions_.size(); ++i) {
         const int kind = native_target_->record_kind(std::int32_t(i));
@@ -831,7 +831,8 @@ std::int32_t LuaStage::api_contacts(void* p, std::int32_t which) noexcept {
   auto* st = static_cast<LuaStage*>(p);
   try {
     if (!st->view_ || !st->collisions_)
-      return st->error("declare derived = { \"collisions\" } to read contacts");
+      return st->error(
+          "declare a contact set in `derived` (the native set of contacts) to read contacts");
     if (which < 0 || which >= kContactLists) return st->error("no such list of contacts");
     // Each list is made once per call and then left alone: an iterator over
     // one stays valid while the stage asks for another, or the same again.
@@ -912,7 +913,7 @@ std::int32_t LuaStage::api_bulk(void* p, std::int32_t fn, std::int32_t column) n
     if (info.n == 0) st->fetch(std::size_t(column));
     const int b = st->bulk_used_;
     BulkStore& store = st->bulk_store_[b];
-    const int width = ::alloy::lua::width(f.args[0]);
+    const int width = ::alloy::width(f.args[0]);
     // 2 everywhere, then 0 on the members: a write is refused outside them.
     // Storage is kept between calls (no allocation once it has grown).
     // Members are ascending and distinct: n of them ending at n-1 are every
@@ -1191,6 +1192,8 @@ PluginDef make_plugin(const std::shared_ptr<ModState>& mod, const StageDecl& dec
   def.info.doc = (decl.info.doc.empty() ? std::string() : decl.info.doc + " ") + "(Lua, mod '" +
                  mod->name() + "')";
   def.create = LuaStageFactory{mod, decl.info.name};
+  // Declarations only: the mod's runtime performs its resolver's calls.
+  for (const auto& f : decl.functions) def.functions.push_back(InteractionFunction{.decl = f});
   return def;
 }
 

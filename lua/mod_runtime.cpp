@@ -187,19 +187,18 @@ void ModRuntime::validate(const ModState& mod, const Program& p) const {
           throw InputError(where, msg);
         }
     for (const auto& d : s.info.derived)
-      if (!native_derived_readable(d) && !lua_stage(d, StageKind::Derived))
-        throw InputError(where, what + ": derived set '" + d +
-                                    "' is not one a Lua stage can read "
-                                    "(collisions, or a derived set defined in Lua)");
+      if (!native_derived_readable(registry_, d) && !lua_stage(d, StageKind::Derived))
+        throw InputError(
+            where, what + ": derived set '" + d + "' is not one a Lua stage can read (" +
+                       native_contact_set_names(registry_) + ", or a derived set defined in Lua)");
     for (const auto& r : s.info.resolvers)
       if (!registry_.find(r) && !p.stage(r))
         throw InputError(where, what + ": unknown resolver '" + r + "'");
     if (s.info.kind == StageKind::Interaction) {
       const std::string& t = s.info.target;
-      if (!native_functions(t) && !lua_stage(t, StageKind::Resolver)) {
-        std::string msg = what + ": target '" + t +
-                          "' is not a resolver Lua can queue on (rigid_body, or a "
-                          "resolver defined in Lua)";
+      if (!native_resolver(registry_, t) && !lua_stage(t, StageKind::Resolver)) {
+        std::string msg = what + ": target '" + t + "' is not a resolver Lua can queue on (" +
+                          native_resolver_names(registry_) + ", or a resolver defined in Lua)";
         if (const PluginDef* def = registry_.find(t); !def) {
           std::vector<std::string> names = registry_.order();
           for (const auto& st : p.stages) names.push_back(st.info.name);
@@ -312,11 +311,17 @@ void ModRuntime::hold_impulses() {
     if (!l->state->stopped() && l->state->program())
       for (const auto& [type, ref] : l->state->program()->handlers)
         wanted = wanted || type == "contact_ended" || type == "*";
-  const Stage* stage =
-      wanted && world_->has_stage("collisions") ? world_->stage("collisions") : nullptr;
+  // The world's global contact set, found by what it is, not by its name.
+  const ContactSet* set = nullptr;
+  if (wanted)
+    for (const auto& name : world_->active_stages()) {
+      const PluginDef* def = world_->plugin_def(name);
+      if (name.find('@') == std::string::npos && def && def->contacts)
+        if ((set = dynamic_cast<const ContactSet*>(world_->stage(name)))) break;
+    }
+  const Stage* stage = set;
   if (stage == impulses_from_) return;
   impulses_from_ = stage;
-  const auto* set = dynamic_cast<const ContactSet*>(stage);
   impulses_ = set ? set->demand_impulses() : ImpulseDemand{};
 }
 

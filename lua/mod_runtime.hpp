@@ -173,7 +173,7 @@ class ModRuntime {
   bool handler_failed(Loaded& l, std::size_t h, const InputError& raised);
   /// Holds a demand for contact impulses on the world's collisions set while a
   /// loaded mod handles contact_ended (or every event), whose impulse value
-  /// exists only if someone asks (resolvers/rigid_body/collisions.hpp).
+  /// exists only if someone asks (runtime/contact_set.hpp).
   void hold_impulses();
   void report(ModReport r);
 

@@ -112,17 +112,6 @@ void install_print(lua_State* L, int env, PrintSink* sink) {
   lua_setfield(L, env, "print");
 }
 
-std::string_view to_string(ArgKind kind) {
-  switch (kind) {
-    case ArgKind::Number:
-      return "number";
-    case ArgKind::Object:
-      return "object";
-    case ArgKind::Vec3:
-      return "vec3";
-  }
-  return "?";
-}
 
 bool StageDecl::same_shape(const StageDecl& o) const {
   const StageInfo& a = info;
@@ -318,7 +307,7 @@ struct Collector {
     d.info.target = string_field(L, 1, "target", what).value_or("");
     if (kind == StageKind::Interaction && d.info.target.empty())
       throw InputError(d.where,
-                       what + " needs the one resolver it queues on (target = \"rigid_body\")");
+                       what + " needs the one resolver it queues on (target = \"<resolver>\")");
     d.settings = keys_of(L, 1, "settings", what);
 
     if (kind == StageKind::Resolver) {

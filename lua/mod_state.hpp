@@ -26,6 +26,7 @@
 #include "lua/mod_loader.hpp"
 #include "lua/stage_abi.hpp"
 #include "lua/state_codec.hpp"
+#include "runtime/interaction_function.hpp"
 #include "runtime/stage.hpp"
 
 namespace alloy::lua {
@@ -81,21 +82,6 @@ struct ModBudget {
   std::size_t state_bytes = 16u << 20;
   std::size_t state_entries = 1'000'000;
   std::size_t state_depth = 64;
-};
-
-/// The kind of one argument of an interaction function, after the object.
-enum class ArgKind : std::uint8_t { Number, Object, Vec3 };
-std::string_view to_string(ArgKind kind);
-/// Doubles one argument takes in a queued command.
-inline int width(ArgKind k) {
-  return k == ArgKind::Vec3 ? 3 : 1;
-}
-
-/// An interaction function: a name and the arguments after the object.
-struct FunctionDecl {
-  std::string name;
-  std::vector<ArgKind> args;
-  friend bool operator==(const FunctionDecl&, const FunctionDecl&) = default;
 };
 
 /// An output column of a Lua derived set (number or vec3 per object).

@@ -3,160 +3,193 @@
 #include <algorithm>
 #include <bit>
 #include <cstddef>
-#include <type_traits>
 
 #include "lua/stage_abi.hpp"
-#include "resolvers/rigid_body/engine.hpp"
+#include "runtime/world.hpp"
 
 namespace alloy::lua {
 
-namespace {
-
-const std::vector<FunctionDecl> kRigidBody = {
-    {"add_force", {ArgKind::Vec3}},
-    {"add_torque", {ArgKind::Vec3}},
-    {"add_force_at", {ArgKind::Vec3, ArgKind::Vec3}},
-};
-
-// The prelude writes the rigid body's load records in place as
-// abi::LoadRecord: the same bytes. The id packs slot and generation in that
-// order (little-endian); the kinds follow RigidBodyEngine::Load.
-using LoadCommand = rigid::RigidBodyEngine::LoadCommand;
-using Load = rigid::RigidBodyEngine::Load;
-static_assert(sizeof(LoadCommand) == sizeof(abi::LoadRecord) &&
-              offsetof(LoadCommand, slot) == 0 && offsetof(LoadCommand, generation) == 4 &&
-              offsetof(LoadCommand, value) == offsetof(abi::LoadRecord, vx) &&
-              offsetof(LoadCommand, point) == offsetof(abi::LoadRecord, px) &&
-              offsetof(LoadCommand, kind) == offsetof(abi::LoadRecord, kind) &&
-              sizeof(Load) == 1 && std::is_trivially_copyable_v<LoadCommand>);
+// The prelude writes load records in place as abi::LoadRecord, into queues
+// of the runtime's LoadRecord: the same bytes. The id packs slot and
+// generation in that order (little-endian).
+static_assert(sizeof(alloy::LoadRecord) == sizeof(abi::LoadRecord) &&
+              offsetof(alloy::LoadRecord, slot) == 0 &&
+              offsetof(alloy::LoadRecord, generation) == 4 &&
+              offsetof(alloy::LoadRecord, value) == offsetof(abi::LoadRecord, vx) &&
+              offsetof(alloy::LoadRecord, point) == offsetof(abi::LoadRecord, px) &&
+              offsetof(alloy::LoadRecord, kind) == offsetof(abi::LoadRecord, kind));
 static_assert(std::endian::native == std::endian::little);
 
-class RigidBodyTarget final : public NativeTarget {
+namespace {
+
+bool has_native_calls(const PluginDef& def) {
+  return def.info.kind == StageKind::Resolver && !def.functions.empty() &&
+         std::all_of(def.functions.begin(), def.functions.end(),
+                     [](const InteractionFunction& f) { return bool(f.call); });
+}
+
+// Every declared resolver is bound by this one class: the calls go through
+// the declaration's callables, with the target's own stage.
+class DeclaredTarget final : public NativeTarget {
  public:
-  explicit RigidBodyTarget(rigid::RigidBodyEngine& rigid) : rigid_(rigid) {}
+  DeclaredTarget(Stage& stage, const PluginDef& def)
+      : stage_(stage),
+        name_(def.info.name),
+        fns_(def.functions),
+        records_(def.records),
+        decls_(declarations(def.functions)) {
+    for (const auto& f : fns_) widths_.push_back(width(f.decl.args));
+  }
+  const std::vector<FunctionDecl>& functions() const override { return decls_; }
+
   void* open_records(std::size_t n) override {
-    open_ = rigid_.open_loads(n);
+    if (!records_) return nullptr;
+    open_ = records_.open(stage_, n);
     return open_.data();
   }
   std::string close_records(std::size_t used, const PropertyStore& store,
                             bool ids_checked) override {
+    if (!records_) return "";
     used = std::min(used, open_.size());
     if (!ids_checked)
       for (std::size_t r = 0; r < used; ++r) {
-        const LoadCommand& c = open_[r];
+        const LoadRecord& c = open_[r];
         const ObjectId id = store.id_at(c.slot);
         if (!id || id.generation != c.generation) {
-          rigid_.close_loads(0);
+          records_.close(stage_, 0);
           open_ = {};
-          const std::size_t fn = c.kind == Load::Torque ? 1 : c.kind == Load::ForceAtPoint ? 2 : 0;
-          return "'" + kRigidBody[fn].name + "' on the object in slot " + std::to_string(c.slot) +
+          return "'" + name_of_kind(c.kind) + "' on the object in slot " + std::to_string(c.slot) +
                  ", which was destroyed";
         }
       }
-    rigid_.close_loads(used);
+    records_.close(stage_, used);
     open_ = {};
     return "";
   }
   int record_kind(std::int32_t fn) const override {
-    switch (fn) {
-      case 0:
-        return int(Load::Force);
-      case 1:
-        return int(Load::Torque);
-      case 2:
-        return int(Load::ForceAtPoint);
-    }
-    return -1;
+    if (!records_ || fn < 0 || std::size_t(fn) >= fns_.size()) return -1;
+    return fns_[std::size_t(fn)].record_kind;
   }
   void call(std::int32_t fn, ObjectId object, const double* a) override {
-    const Vec3 v{a[0], a[1], a[2]};
-    switch (fn) {
-      case 0:
-        rigid_.add_force(object, v);
-        return;
-      case 1:
-        rigid_.add_torque(object, v);
-        return;
-      case 2:
-        rigid_.add_force(object, v, Vec3{a[3], a[4], a[5]});
-        return;
-    }
-    throw AccessError("rigid_body has no interaction function #" + std::to_string(fn));
+    function(fn).call(stage_, object, a);
   }
   std::string perform(const double* b, std::size_t n, const PropertyStore& store,
                       bool alive_checked) override {
     for (std::size_t o = 0; o < n;) {
       const auto fn = std::int32_t(b[o]);
+      if (fn < 0 || std::size_t(fn) >= fns_.size())
+        return "a command of an unknown interaction function";
+      const InteractionFunction& f = fns_[std::size_t(fn)];
+      const std::size_t stride = 2 + std::size_t(widths_[std::size_t(fn)]);
+      if (o + stride > n) return "a truncated command";
       const auto slot = std::uint32_t(b[o + 1]);
-      if (alive_checked && fn == 0) {  // the fast path, as a native stage's loop over a column
-        rigid_.add_force(slot, Vec3{b[o + 2], b[o + 3], b[o + 4]});
-        o += 5;
-        continue;
-      }
-      const ObjectId id = store.id_at(slot);
-      if (!id)
-        return "'" + kRigidBody[std::size_t(fn < 0 || fn > 2 ? 0 : fn)].name +
-               "' on the object in slot " + std::to_string(slot) + ", which was destroyed";
-      const Vec3 v{b[o + 2], b[o + 3], b[o + 4]};
-      switch (fn) {
-        case 0:
-          rigid_.add_force(slot, v), o += 5;
-          break;  // the fast path: the slot is alive
-        case 1:
-          rigid_.add_torque(id, v), o += 5;
-          break;
-        case 2:
-          rigid_.add_force(id, v, Vec3{b[o + 5], b[o + 6], b[o + 7]}), o += 8;
-          break;
-        default:
-          return "a command of an unknown interaction function";
-      }
+      const double* args = b + o + 2;
+      o += stride;
+      if (!alive_checked && !store.id_at(slot))
+        return "'" + f.decl.name + "' on the object in slot " + std::to_string(slot) +
+               ", which was destroyed";
+      // Object arguments arrive as slots: each must hold an object still. A
+      // double is converted only once it is known to be a slot (a value out
+      // of uint32's range is undefined behaviour to convert).
+      for (std::size_t a = 0, at = 0; a < f.decl.args.size();
+           at += std::size_t(width(f.decl.args[a])), ++a)
+        if (f.decl.args[a] == ArgKind::Object) {
+          const double s = args[at];
+          if (!(s >= 0 && s < double(store.slot_count())) || !store.id_at(std::uint32_t(s)))
+            return "'" + f.decl.name + "': no object in slot " + std::to_string(s);
+        }
+      // The slot is alive: the fast form, as a native stage's loop over a
+      // column uses it, where the resolver has one.
+      if (f.call_live)
+        f.call_live(stage_, slot, args);
+      else
+        f.call(stage_, store.id_at(slot), args);
     }
     return "";
   }
   void perform_each(std::int32_t fn, std::span<const std::uint32_t> members,
                     const std::uint8_t* present, const double* v, int width,
                     const PropertyStore& store) override {
-    if (width != 3) throw AccessError("rigid_body's interaction functions take a vec3");
-    // The members are live (a column's, in this phase): the slot fast path,
-    // as a native stage looping over a column uses it.
-    switch (fn) {
-      case 0:
-        for (std::uint32_t s : members)
-          if (present[s] == 1) rigid_.add_force(s, Vec3{v[3 * s], v[3 * s + 1], v[3 * s + 2]});
-        return;
-      case 1: {
-        for (std::uint32_t s : members)
-          if (present[s] == 1)
-            rigid_.add_torque(store.id_at(s), Vec3{v[3 * s], v[3 * s + 1], v[3 * s + 2]});
-        return;
-      }
+    const InteractionFunction& f = function(fn);
+    if (width != widths_[std::size_t(fn)] || f.decl.args.size() != 1)
+      throw AccessError("'" + f.decl.name + "' of " + name_ + " takes " + signature(f.decl) +
+                        ": no bulk form of width " + std::to_string(width));
+    if (f.each) {
+      f.each(stage_, members, present, v, store);
+      return;
     }
-    throw AccessError("rigid_body's interaction function #" + std::to_string(fn) +
-                      " has no bulk form");
+    // The members are live (a column's, in this phase).
+    for (std::uint32_t s : members) {
+      if (present[s] != 1) continue;
+      const double* args = v + std::size_t(width) * s;
+      if (f.call_live)
+        f.call_live(stage_, s, args);
+      else
+        f.call(stage_, store.id_at(s), args);
+    }
   }
 
  private:
-  rigid::RigidBodyEngine& rigid_;
-  std::span<LoadCommand> open_;  // the room of the current call
+  const InteractionFunction& function(std::int32_t fn) const {
+    if (fn < 0 || std::size_t(fn) >= fns_.size())
+      throw AccessError(name_ + " has no interaction function #" + std::to_string(fn));
+    return fns_[std::size_t(fn)];
+  }
+  std::string name_of_kind(std::uint8_t kind) const {
+    for (const auto& f : fns_)
+      if (f.record_kind == int(kind)) return f.decl.name;
+    return "a load";
+  }
+
+  Stage& stage_;
+  std::string name_;
+  // Copies: the registry's definition may be replaced (hot reload of a
+  // plugin of that name) while this binding lives.
+  std::vector<InteractionFunction> fns_;
+  RecordQueue records_;
+  std::vector<FunctionDecl> decls_;
+  std::vector<int> widths_;
+  std::span<LoadRecord> open_;  // the room of the current call
 };
+
+std::string names_where(const PluginRegistry& registry, bool (*pred)(const PluginDef&)) {
+  std::string out;
+  for (const auto& n : registry.order())
+    if (const PluginDef* d = registry.find(n); d && pred(*d)) out += (out.empty() ? "" : ", ") + n;
+  return out.empty() ? "none" : out;
+}
+
+bool is_contact_set(const PluginDef& d) {
+  return d.info.kind == StageKind::Derived && d.contacts;
+}
 
 }  // namespace
 
-const std::vector<FunctionDecl>* native_functions(std::string_view resolver) {
-  if (resolver == "rigid_body") return &kRigidBody;
-  return nullptr;
+const PluginDef* native_resolver(const PluginRegistry& registry, std::string_view name) {
+  const PluginDef* d = registry.find(name);
+  return d && has_native_calls(*d) ? d : nullptr;
 }
 
 std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx) {
-  if (ctx.info().target == "rigid_body")
-    return std::make_unique<RigidBodyTarget>(ctx.target<rigid::RigidBodyEngine>());
-  throw InputError("Lua interactions cannot queue on the native resolver '" + ctx.info().target +
-                   "' (Lua can reach: rigid_body)");
+  auto [stage, def] = ctx.target_stage();
+  if (!has_native_calls(def))
+    throw InputError("Lua interactions cannot queue on the native resolver '" + def.info.name +
+                     "': it declares no interaction functions (Lua can reach: " +
+                     native_resolver_names(ctx.world().plugins()) + ")");
+  return std::make_unique<DeclaredTarget>(stage, def);
 }
 
-bool native_derived_readable(std::string_view set) {
-  return set == "collisions";
+bool native_derived_readable(const PluginRegistry& registry, std::string_view set) {
+  const PluginDef* d = registry.find(set);
+  return d && is_contact_set(*d);
+}
+
+std::string native_resolver_names(const PluginRegistry& registry) {
+  return names_where(registry, has_native_calls);
+}
+
+std::string native_contact_set_names(const PluginRegistry& registry) {
+  return names_where(registry, is_contact_set);
 }
 
 }  // namespace alloy::lua

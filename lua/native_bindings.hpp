@@ -1,13 +1,10 @@
-// What Lua stages may reach of the native plugins: a small, declared set of
-// interaction functions per native resolver (the rigid body's add_force and
-// add_torque), and the native derived sets they may read (collisions). Each
-// binding is a few lines over the resolver's own C++ interaction functions;
-// Lua never holds a pointer to a native stage.
-//
-//   rigid_body   add_force(i, f)          force at the centre of mass, N
-//                add_torque(i, t)         torque, N m, world frame
-//                add_force_at(i, f, p)    force at the world point p, N
-//   collisions   w:contacts("began" | "ongoing" | "ended" | "touching")
+// What Lua stages may reach of the native plugins, as the plugins declare it
+// (runtime/interaction_function.hpp): a native resolver's interaction
+// functions (PluginDef::functions, e.g. the rigid body's add_force), and the
+// native derived sets that are contact sets (PluginDef::contacts), which
+// `w:contacts(...)` reads. One generic binding serves every resolver: lua/
+// names none, and a second engine that provides the same thing is bound the
+// same way. Lua never holds a pointer to a native stage.
 #pragma once
 
 #include <memory>
@@ -26,7 +23,9 @@ namespace alloy::lua {
 class NativeTarget {
  public:
   virtual ~NativeTarget() = default;
-  /// Queues function `fn` (an index into native_functions()) for `object`
+  /// The functions, in the order the prelude numbers them.
+  virtual const std::vector<FunctionDecl>& functions() const = 0;
+  /// Queues function `fn` (an index into functions()) for `object`
   /// with its packed arguments. Throws AccessError or InputError.
   virtual void call(std::int32_t fn, ObjectId object, const double* args) = 0;
   /// Performs a call's command records {function, slot, arguments...}
@@ -39,19 +38,16 @@ class NativeTarget {
   /// target's own queue, after those queued before the room was first opened;
   /// asked again, more room with the records written so far kept (the
   /// pointer may move). nullptr if the target takes no records in place.
-  virtual void* open_records(std::size_t n) { (void)n; return nullptr; }
+  virtual void* open_records(std::size_t n) = 0;
   /// Keeps the first `used` records of the open room and closes it. Unless
   /// `ids_checked` (the prelude checked every id against the store as it is
   /// now), each record's object is checked first; if one is gone, no record
   /// is kept and what was refused is returned.
   virtual std::string close_records(std::size_t used, const PropertyStore& store,
-                                    bool ids_checked) {
-    (void)used, (void)store, (void)ids_checked;
-    return "";
-  }
+                                    bool ids_checked) = 0;
   /// The record kind (abi::LoadRecord::kind) of interaction function `fn`
   /// written in place, or -1 if it is queued as a command.
-  virtual int record_kind(std::int32_t fn) const { (void)fn; return -1; }
+  virtual int record_kind(std::int32_t fn) const = 0;
   /// Performs a bulk buffer of function `fn` (one argument): for each slot
   /// in `members` (live objects, from a column fetched in this call) whose
   /// `present` is 1, the call with the slot's `width` values. The values
@@ -61,15 +57,21 @@ class NativeTarget {
                             const PropertyStore& store) = 0;
 };
 
-/// The interaction functions Lua may call on the native resolver `resolver`,
-/// or nullptr if it exposes none.
-const std::vector<FunctionDecl>* native_functions(std::string_view resolver);
+/// The native resolver `name` if Lua may queue on it (a registered resolver
+/// whose interaction functions have native callables), else nullptr.
+const PluginDef* native_resolver(const PluginRegistry& registry, std::string_view name);
 
-/// Binds the target of the interaction being created by `ctx` (its info's
-/// target must have native_functions()).
+/// Binds the target of the interaction being created by `ctx`: the stage
+/// active for the interaction's area, with the functions its plugin declares.
 std::unique_ptr<NativeTarget> bind_native_target(PluginContext& ctx);
 
-/// Native derived sets a Lua stage may declare in `derived`.
-bool native_derived_readable(std::string_view set);
+/// Whether `set` names a native derived set a Lua stage may declare in
+/// `derived` (a contact set).
+bool native_derived_readable(const PluginRegistry& registry, std::string_view set);
+
+/// For messages: the native resolvers Lua may queue on, and the contact sets
+/// it may read, as "a, b" (or "none").
+std::string native_resolver_names(const PluginRegistry& registry);
+std::string native_contact_set_names(const PluginRegistry& registry);
 
 }  // namespace alloy::lua

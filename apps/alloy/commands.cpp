@@ -1,6 +1,7 @@
 #include "apps/alloy/commands.hpp"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -696,15 +698,154 @@ int check(const std::string& path, std::ostream& out, std::ostream& err) {
   return kExitOk;
 }
 
-int list_plugins(std::ostream& out) {
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+/// Everything `alloy plugins` says of one plugin, from its definition and
+/// the property registry (a property's owner is the plugin that defined it
+/// first).
+nlohmann::json plugin_json(const PluginRegistry& registry, const PluginDef& d) {
+  const auto& props = registry.properties();
+  nlohmann::json j;
+  j["name"] = d.info.name;
+  j["kind"] = std::string(to_string(d.info.kind));
+  j["origin"] = d.info.owner.empty() ? "native" : "mod";
+  if (!d.info.owner.empty()) j["mod"] = d.info.owner;
+  j["doc"] = d.info.doc;
+  nlohmann::json owns = nlohmann::json::array();
+  for (const auto& name : props.names()) {
+    const PropertyDef& p = props.def(props.id(name));
+    // A mod owns its properties as a whole: a mod's resolver is listed as
+    // owning those of them it writes.
+    const bool mine =
+        p.owner == d.info.name ||
+        (p.owner_is_mod && !d.info.owner.empty() && p.owner == d.info.owner &&
+         std::find(d.info.writes.begin(), d.info.writes.end(), p.name) != d.info.writes.end());
+    if (!mine) continue;
+    nlohmann::json pj{{"name", p.name}, {"kind", std::string(to_string(p.kind))}};
+    if (!p.unit.empty()) pj["unit"] = p.unit;
+    if (!p.doc.empty()) pj["doc"] = p.doc;
+    if (!p.enum_values.empty()) pj["values"] = p.enum_values;
+    owns.push_back(std::move(pj));
+  }
+  j["owns"] = std::move(owns);
+  j["reads"] = d.info.reads;
+  j["writes"] = d.info.writes;
+  j["needs"] = d.info.needs;
+  j["derived"] = d.info.derived;
+  j["resolvers"] = d.info.resolvers;
+  j["target"] = d.info.target;
+  j["provides"] = d.info.provides;
+  j["contacts"] = d.contacts;
+  nlohmann::json fns = nlohmann::json::array();
+  for (const auto& f : d.functions) {
+    nlohmann::json args = nlohmann::json::array();
+    for (ArgKind a : f.decl.args) args.push_back(std::string(to_string(a)));
+    nlohmann::json fj{{"name", f.decl.name}, {"args", std::move(args)}};
+    if (!f.doc.empty()) fj["doc"] = f.doc;
+    if (f.record_kind >= 0) fj["record_kind"] = f.record_kind;
+    fns.push_back(std::move(fj));
+  }
+  j["functions"] = std::move(fns);
+  return j;
+}
+
+/// The reference table of docs/modding.md: every native property a mod can
+/// read, from the registry (one row each, sorted by name). A test compares
+/// the doc with it; `alloy plugins --doc-table` prints it.
+std::string native_property_table(const PluginRegistry& registry) {
+  const auto& props = registry.properties();
+  std::ostringstream t;
+  t << "| property | kind | unit | owner | meaning |\n";
+  t << "|---|---|---|---|---|\n";
+  for (const auto& name : props.names()) {
+    const PropertyDef& p = props.def(props.id(name));
+    if (p.owner_is_mod) continue;
+    std::string kind(to_string(p.kind));
+    if (!p.enum_values.empty()) kind += ": " + joined(p.enum_values);
+    std::string doc;  // a '|' in a doc ("|current|") would end the cell
+    for (char c : p.doc) doc += c == '|' ? std::string("\\|") : std::string(1, c);
+    t << "| `" << p.name << "` | " << kind << " | " << p.unit << " | " << p.owner << " | " << doc
+      << " |\n";
+  }
+  return t.str();
+}
+
+/// `alloy plugins [PATH] [--json]`: every registered plugin, native and
+/// from mods. PATH (a scene or a mod folder) is loaded as `alloy run` and
+/// `alloy check` load it, so that its mods' plugins and properties are
+/// registered too.
+int list_plugins(const std::string& path, bool json, bool doc_table, std::ostream& out,
+                 std::ostream& err) {
   PluginRegistry registry;
   register_native_plugins(registry);
-  for (const auto& name : registry.order()) {
-    const PluginDef& d = *registry.find(name);
-    out << name << " (" << to_string(d.info.kind) << ")";
-    if (!d.info.target.empty()) out << " -> " << d.info.target;
-    if (!d.info.doc.empty()) out << ": " << d.info.doc;
+  if (doc_table) {
+    if (!path.empty()) throw InputError("--doc-table lists the native properties only: no PATH");
+    out << native_property_table(registry);
+    return kExitOk;
+  }
+  lua::LoadOptions options = load_options();
+  options.mod_log = [&](const std::string& mod, const std::string& line) {
+    err << "[" << mod << "] " << line << "\n";
+  };
+  // Declared before the scene, which must go first.
+  std::unique_ptr<lua::ModRuntime> runtime_only;
+  std::optional<lua::LoadedScene> scene;
+  std::error_code ec;
+  if (!path.empty()) {
+    bool runtime = false;
+    if (std::filesystem::is_directory(path, ec)) {
+      lua::LuaHost reader;
+      const lua::Manifest m = lua::read_manifest(reader, path);
+      runtime =
+          m.scene.empty() && !m.runtime.empty() && !std::filesystem::exists(m.folder / m.main, ec);
+    }
+    if (runtime) {
+      runtime_only = std::make_unique<lua::ModRuntime>(
+          registry, lua::ModRuntimeOptions{options.mod_paths, options.mod_budget, options.mod_log});
+      runtime_only->load_folder(path);
+    } else {
+      scene.emplace(lua::load_scene(path, registry, options));
+    }
+  }
+  nlohmann::json all = nlohmann::json::array();
+  for (const auto& name : registry.order())
+    all.push_back(plugin_json(registry, *registry.find(name)));
+  if (json) {
+    out << all.dump(2) << "\n";
+    return kExitOk;
+  }
+  for (const auto& p : all) {
+    out << p["name"].get<std::string>() << " (" << p["kind"].get<std::string>();
+    if (p["origin"] == "mod") out << ", mod '" << p["mod"].get<std::string>() << "'";
+    out << ")";
+    if (!p["target"].get<std::string>().empty()) out << " -> " << p["target"].get<std::string>();
+    if (!p["doc"].get<std::string>().empty()) out << ": " << p["doc"].get<std::string>();
     out << "\n";
+    std::vector<std::string> owns;
+    for (const auto& o : p["owns"]) owns.push_back(o["name"].get<std::string>());
+    const std::pair<const char*, std::vector<std::string>> lists[] = {
+        {"owns", owns},
+        {"reads", p["reads"].get<std::vector<std::string>>()},
+        {"writes", p["writes"].get<std::vector<std::string>>()},
+        {"needs", p["needs"].get<std::vector<std::string>>()},
+        {"derived", p["derived"].get<std::vector<std::string>>()},
+        {"resolvers", p["resolvers"].get<std::vector<std::string>>()}};
+    for (const auto& [label, list] : lists)
+      if (!list.empty()) out << "  " << label << ": " << joined(list) << "\n";
+    if (!p["provides"].get<std::string>().empty())
+      out << "  provides: " << p["provides"].get<std::string>() << "\n";
+    if (p["contacts"].get<bool>()) out << "  a contact set (Lua reads it with w:contacts)\n";
+    for (const auto& f : p["functions"]) {
+      out << "  function " << f["name"].get<std::string>() << "(";
+      const auto args = f["args"].get<std::vector<std::string>>();
+      out << joined(args) << ")";
+      if (f.contains("doc")) out << ": " << f["doc"].get<std::string>();
+      out << "\n";
+    }
   }
   return kExitOk;
 }
@@ -780,7 +921,19 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       "replay", "Run a recording (alloy run --record) again and say where it differs, if it does");
   replay_cmd->add_option("file", replay_path, "Recording file")->required();
 
-  CLI::App* plugins_cmd = app.add_subcommand("plugins", "List the native plugins");
+  std::string plugins_path;
+  bool plugins_json = false;
+  CLI::App* plugins_cmd = app.add_subcommand(
+      "plugins",
+      "List every plugin, native and from mods: the properties it owns, reads and writes, its "
+      "needs, target, provides and interaction functions");
+  plugins_cmd->add_option("path", plugins_path,
+                          "A scene or mod folder to load first (as `run` does), so that its "
+                          "mods' plugins are listed too");
+  plugins_cmd->add_flag("--json", plugins_json, "Print the list as JSON");
+  bool plugins_doc = false;
+  plugins_cmd->add_flag("--doc-table", plugins_doc,
+                        "Print the native properties as docs/modding.md's reference table");
 
   viewer::ViewerOptions vo;
   CLI::App* view_cmd = viewer::add_view_command(app, vo);
@@ -799,7 +952,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (run_cmd->parsed()) return run(ro, out, err);
     if (check_cmd->parsed()) return check(check_path, out, err);
     if (replay_cmd->parsed()) return replay_file(replay_path, out, err);
-    if (plugins_cmd->parsed()) return list_plugins(out);
+    if (plugins_cmd->parsed())
+      return list_plugins(plugins_path, plugins_json, plugins_doc, out, err);
     if (view_cmd->parsed()) return viewer::run_view(vo, out, err);
   } catch (const InputError& e) {
     err << "error: " << e.what() << "\n";

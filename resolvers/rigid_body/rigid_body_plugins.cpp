@@ -2,6 +2,7 @@
 
 #include "resolvers/gravity/uniform_gravity.hpp"
 #include "resolvers/rigid_body/collisions.hpp"
+#include "resolvers/rigid_body/engine_functions.hpp"
 #include "resolvers/rigid_body/properties.hpp"
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
@@ -33,6 +34,8 @@ PluginDef rigid_body_plugin() {
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
   def.properties = body_and_joint_properties();
   def.check = check_object;
+  def.functions = engine_functions();
+  def.records = engine_records();
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     return std::make_unique<RigidBodyResolver>(ctx.world(), RigidBodyConfig::from(ctx.settings()));
   };
@@ -47,6 +50,7 @@ PluginDef collisions_plugin() {
                         "radius", "length", "static", "joint", "body_a", "body_b"},
               .resolvers = {"rigid_body"},
               .doc = "contact pairs that began, continue and ended, with points and impulses"};
+  def.contacts = true;  // a ContactSet: Lua stages and handlers read it
   def.properties = body_and_joint_properties();
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
     ctx.settings().check_known("collisions", {"impulses"});
