@@ -12,6 +12,7 @@
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body/rigid_body_from_collisions.hpp"
 #include "resolvers/rigid_body/rigid_body_from_gravity.hpp"
+#include "resolvers/rigid_body_box2d/box2d_plugins.hpp"
 #include "resolvers/sound/sound_plugins.hpp"
 
 namespace alloy {
@@ -44,6 +45,7 @@ PluginDef rigid_body_plugin() {
               .writes = {"position", "orientation", "velocity", "angular_velocity", "mass",
                          "anchor", "axis"},
               .needs = {"mass", "density"},
+              .provides = "rigid_body",
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
   def.properties = concat({body_properties(), joint_properties()});
   def.check = check_object;
@@ -60,6 +62,8 @@ PluginDef collisions_plugin() {
               .reads = {"position", "orientation", "velocity", "angular_velocity", "shape", "size",
                         "radius", "length", "static", "joint", "body_a", "body_b"},
               .resolvers = {"rigid_body"},
+              .provides = "collisions",
+              .exact = {"rigid_body"},  // ODE's collision detection, on ODE's bodies
               .doc = "contact pairs that began, continue and ended, with points and impulses"};
   def.properties = concat({body_properties(), joint_properties()});
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
@@ -81,6 +85,9 @@ PluginDef rigid_body_from_collisions_plugin() {
       .reads = {"friction", "restitution"},
       .derived = {"collisions"},
       .target = "rigid_body",
+      // ODE's contact joints from ODE's collision set: never on another engine
+      // (rigid_body.box2d mixes the same materials inside its own step).
+      .exact = {"rigid_body", "collisions"},
       .doc = "contact joints for touching pairs (friction sqrt(mu_a mu_b), restitution max)"};
   def.properties = material_properties();
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
@@ -184,6 +191,7 @@ void register_native_plugins(PluginRegistry& registry) {
   magnetism::register_electricity_from_magnetism(registry);
   sound::register_sound_plugins(registry);
   light::register_light_plugins(registry);
+  box2d::register_rigid_body_box2d_plugins(registry);
 }
 
 }  // namespace alloy

@@ -16,9 +16,7 @@ Stage& PluginContext::stage(std::string_view name) {
                         std::find(info_.resolvers.begin(), info_.resolvers.end(), name) != info_.resolvers.end();
   if (!declared)
     throw AccessError("stage '" + info_.name + "' uses '" + std::string(name) + "' without declaring it");
-  Stage* s = nullptr;
-  if (!area_.empty()) s = world_.stage(std::string(name) + "@" + area_);
-  if (!s) s = world_.stage(name);
+  Stage* s = world_.dependency_stage(info_, area_, name);
   if (!s) throw AccessError("stage '" + info_.name + "' needs '" + std::string(name) + "', which is not active");
   return *s;
 }
