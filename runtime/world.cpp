@@ -275,8 +275,11 @@ World::Slot* World::dependency(const Slot& of, std::string_view plugin) const {
   // A stage of an area depends on the area's own instance first, else the
   // global one; of the plugin of that name, or of one that provides it
   // (unless the stage names it in StageInfo::exact).
-  const bool exact = std::find(of.info.exact.begin(), of.info.exact.end(), plugin) != of.info.exact.end();
-  auto match = [&](const Slot& s) { return s.info.name == plugin || (!exact && s.info.provides == plugin); };
+  const bool exact =
+      std::find(of.info.exact.begin(), of.info.exact.end(), plugin) != of.info.exact.end();
+  auto match = [&](const Slot& s) {
+    return s.info.name == plugin || (!exact && s.info.provides == plugin);
+  };
   if (of.area >= 0)
     for (const auto& s : slots_)
       if (s->area == of.area && match(*s)) return s.get();
