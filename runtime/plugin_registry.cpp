@@ -18,14 +18,10 @@ Stage& PluginContext::stage(std::string_view name, std::string* instance) {
   if (!declared)
     throw AccessError("stage '" + info_.name + "' uses '" + std::string(name) +
                       "' without declaring it");
-  Stage* s = nullptr;
-  std::string found = area_.empty() ? "" : std::string(name) + "@" + area_;
-  if (!area_.empty()) s = world_.stage(found);
-  if (!s) s = world_.stage(name), found = name;
+  Stage* s = world_.dependency_stage(info_, area_, name, instance);
   if (!s)
     throw AccessError("stage '" + info_.name + "' needs '" + std::string(name) +
                       "', which is not active");
-  if (instance) *instance = std::move(found);
   return *s;
 }
 

@@ -52,6 +52,13 @@ struct StageInfo {
   /// ("gravity": gravity.uniform or gravity.nbody). In any one scope only one
   /// provider of a thing is active: the scene's choice, else the first registered.
   std::string provides;
+  /// Dependencies (target, derived, resolvers) that must be these very
+  /// plugins, not another provider of the same thing: a stage written against
+  /// one engine's internals (ODE's collision set and contact queue) names that
+  /// engine here, and is not instantiated where another engine provides it.
+  /// A dependency not listed is met by the plugin of that name or by any
+  /// plugin that provides it (`rigid_body`: ODE's or rigid_body.box2d).
+  std::vector<std::string> exact;
   std::string doc;                     ///< one line for `alloy plugins` and docs
   /// Who defined the stage: the mod's name for a Lua stage, "" for a native
   /// plugin. Messages that blame a stage name its mod too (a mod chooses its

@@ -324,11 +324,32 @@ Stage* World::stage(std::string_view name) {
 }
 
 World::Slot* World::dependency(const Slot& of, std::string_view plugin) const {
-  // A stage of an area depends on the area's own instance first, else the global one.
+  // A stage of an area depends on the area's own instance first, else the
+  // global one; of the plugin of that name, or of one that provides it
+  // (unless the stage names it in StageInfo::exact).
+  const bool exact =
+      std::find(of.info.exact.begin(), of.info.exact.end(), plugin) != of.info.exact.end();
+  auto match = [&](const Slot& s) {
+    return s.info.name == plugin || (!exact && s.info.provides == plugin);
+  };
   if (of.area >= 0)
-    if (Slot* s = find_slot(std::string(plugin) + "@" + areas_[std::size_t(of.area)].def.name)) return s;
-  Slot* s = find_slot(plugin);
-  return s && s->area < 0 ? s : nullptr;
+    for (const auto& s : slots_)
+      if (s->area == of.area && match(*s)) return s.get();
+  for (const auto& s : slots_)
+    if (s->area < 0 && match(*s)) return s.get();
+  return nullptr;
+}
+
+Stage* World::dependency_stage(const StageInfo& of, std::string_view area, std::string_view name,
+                               std::string* instance) {
+  Slot probe;
+  probe.info.exact = of.exact;
+  if (!area.empty())
+    for (std::size_t i = 0; i < areas_.size(); ++i)
+      if (areas_[i].def.name == area) probe.area = int(i);
+  Slot* s = dependency(probe, name);
+  if (s && instance) *instance = s->instance;
+  return s ? s->stage.get() : nullptr;
 }
 
 std::vector<std::string> World::active_stages() const {
@@ -634,6 +655,7 @@ bool World::needed_in(const PluginDef& def, int area) const {
   const Scope* scope = nullptr;
   Slot probe;  // for dependency lookups in the right area
   probe.area = area;
+  probe.info.exact = info.exact;
   if (area < 0) {
     if (!chosen_globally(def)) return false;
     if (auto it = outside_.find(info.name); it != outside_.end()) scope = &it->second.scope;

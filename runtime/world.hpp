@@ -315,6 +315,13 @@ class World {
   /// ("gravity.nbody@orbit").
   bool has_stage(std::string_view name) const;
   Stage* stage(std::string_view name);
+  /// The stage that a stage declared by `of`, in `area` ("": global), gets
+  /// for its dependency `name`: the area's own, else the global one, of the
+  /// plugin so named or of one that provides `name` (StageInfo::exact).
+  /// `instance`, if given, receives the found stage's instance name
+  /// ("rigid_body.box2d@table").
+  Stage* dependency_stage(const StageInfo& of, std::string_view area, std::string_view name,
+                          std::string* instance = nullptr);
   /// Active stage names in run order.
   std::vector<std::string> active_stages() const;
   /// A view of the world as stage `name` sees it (scoped to its area; every

@@ -31,6 +31,7 @@ PluginDef rigid_body_plugin() {
               .writes = {"position", "orientation", "velocity", "angular_velocity", "mass",
                          "anchor", "axis"},
               .needs = {"mass", "density"},
+              .provides = "rigid_body",
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};
   def.properties = body_and_joint_properties();
   def.check = check_object;
@@ -49,6 +50,8 @@ PluginDef collisions_plugin() {
               .reads = {"position", "orientation", "velocity", "angular_velocity", "shape", "size",
                         "radius", "length", "static", "joint", "body_a", "body_b"},
               .resolvers = {"rigid_body"},
+              .provides = "collisions",
+              .exact = {"rigid_body"},  // ODE's collision detection, on ODE's bodies
               .doc = "contact pairs that began, continue and ended, with points and impulses"};
   def.contacts = true;  // a ContactSet: Lua stages and handlers read it
   def.properties = body_and_joint_properties();
@@ -71,6 +74,9 @@ PluginDef rigid_body_from_collisions_plugin() {
       .reads = {"friction", "restitution"},
       .derived = {"collisions"},
       .target = "rigid_body",
+      // ODE's contact joints from ODE's collision set: never on another engine
+      // (rigid_body.box2d mixes the same materials inside its own step).
+      .exact = {"rigid_body", "collisions"},
       .doc = "contact joints for touching pairs (friction sqrt(mu_a mu_b), restitution max)"};
   def.properties = material_properties();
   def.create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {

@@ -31,7 +31,9 @@ TEST(NativePlugins, RegisterFolderByFolderInTheOrderStagesRunIn) {
       // sound/
       "sound", "sound_from_collisions",
       // light/
-      "light", "illuminance", "light_from_electricity", "electricity_from_light"};
+      "light", "illuminance", "light_from_electricity", "electricity_from_light",
+      // rigid_body_box2d/: a second provider of rigid_body and collisions
+      "rigid_body.box2d", "collisions.box2d"};
   EXPECT_EQ(registry.order(), expected);
 }
 

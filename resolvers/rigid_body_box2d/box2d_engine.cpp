@@ -1,0 +1,779 @@
+#include "resolvers/rigid_body_box2d/box2d_engine.hpp"
+
+#include <box2d/box2d.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <numeric>
+#include <unordered_map>
+
+#include "resolvers/rigid_body/properties.hpp"
+
+namespace alloy::box2d {
+
+using rigid::JointType;
+using rigid::Shape;
+
+namespace {
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+/// The same drag as ODE's engine (rigid_body.cpp, damping_factor): the
+/// velocity is multiplied by this before the step's kick, so a drag-limited
+/// speed under a steady force is exact. Box2D's own damping, 1 / (1 + c h)
+/// after the kick, would run such a speed slow by c h / 2; it is left at 0.
+double damping_factor(double c, double h) {
+  const double x = c * h;
+  return x <= 0.5 ? 1 - x : 0.25 / x;
+}
+
+/// Moment of inertia about the part's z axis through its centre, kg m^2.
+double inertia_z(Shape shape, double m, Vec3 size, double r, double len) {
+  switch (shape) {
+    case Shape::Box:
+      return m * (size.x * size.x + size.y * size.y) / 12;
+    case Shape::Sphere:
+      return 0.4 * m * r * r;
+    case Shape::Cylinder:
+      return 0.5 * m * r * r;
+    case Shape::Capsule: {
+      // Cylinder of length len along x and two hemispheres at its ends.
+      const double vc = std::numbers::pi * r * r * len,
+                   vs = 4.0 / 3.0 * std::numbers::pi * r * r * r;
+      const double mc = m * vc / (vc + vs), ms = m - mc;
+      return mc * (3 * r * r + len * len) / 12 +
+             ms * (0.4 * r * r + len * len / 4 + 3 * len * r / 8);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+// --- settings -----------------------------------------------------------------------
+
+Box2DConfig Box2DConfig::from(const PluginSettings& s) {
+  s.check_known("rigid_body.box2d", {"scale", "velocity_iterations", "position_iterations",
+                                     "substeps", "sleep", "bounce_velocity"});
+  Box2DConfig c;
+  auto bad = [&](const std::string& what) {
+    throw InputError(s.where, "rigid_body.box2d: " + what);
+  };
+  c.scale = s.number("scale", c.scale);
+  if (!(c.scale >= 1e-3 && c.scale <= 1e3))
+    bad("scale must be between 0.001 and 1000 units per metre");
+  c.velocity_iterations = int(s.integer("velocity_iterations", c.velocity_iterations));
+  if (c.velocity_iterations < 1 || c.velocity_iterations > 1000)
+    bad("velocity_iterations must be 1..1000");
+  c.position_iterations = int(s.integer("position_iterations", c.position_iterations));
+  if (c.position_iterations < 0 || c.position_iterations > 1000)
+    bad("position_iterations must be 0..1000");
+  c.substeps = int(s.integer("substeps", c.substeps));
+  if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be 1..1000");
+  c.sleep = s.boolean("sleep", c.sleep);
+  c.bounce_velocity = s.number("bounce_velocity", c.bounce_velocity);
+  if (!(c.bounce_velocity >= 0 && c.bounce_velocity < 1e6)) bad("bounce_velocity must be >= 0 m/s");
+  return c;
+}
+
+// --- Box2D's world and the tables ----------------------------------------------------
+
+struct Box2DEngine::Impl : b2ContactListener {
+  /// A part: which body carries it and where in the body's frame.
+  struct Part {
+    ObjectId id;
+    std::uint32_t body;
+    b2Vec2 local;      // centre in the body's frame, scaled units
+    double angle = 0;  // relative to the body
+    double friction = 0.5, restitution = 0;
+    // What we last wrote (to tell an edit from outside).
+    Vec3 pos, vel, ang;
+    Quat rot;
+  };
+  struct Body {
+    b2Body* b = nullptr;
+    bool dynamic = false;
+    double linear_damping = 0, angular_damping = 0;
+    b2Vec2 force{0, 0};  // the window's summed load, for waking sleepers
+    float torque = 0;
+    b2Vec2 last_force{0, 0};
+    float last_torque = 0;
+  };
+  struct Hinge {
+    ObjectId id;
+    b2RevoluteJoint* j;
+  };
+  struct PreSpeed {
+    ObjectId a, b;
+    double speed;
+  };
+
+  double s = 10;
+  double bounce = 0.1;
+  bool want_impulses = false;
+  std::unique_ptr<b2World> world;
+  b2Body* ground = nullptr;
+  std::vector<Part> parts;
+  std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, -1: not ours
+  std::vector<Body> bodies;
+  std::vector<Hinge> hinges;
+  /// Each hinge's reference: the relative angle at its first build, kept
+  /// across rebuilds so that limits mean the same angles.
+  std::unordered_map<std::uint64_t, double> reference;
+  std::vector<PreSpeed> pre_speeds;
+  std::vector<PairImpulse> step_impulses;
+
+  Part& part_of(b2Fixture* f) { return parts[f->GetUserData().pointer]; }
+
+  double approach(b2Contact* c, const b2WorldManifold& wm, int n, bool a_is_A) const {
+    // Normal speed of a towards b at the points, SI.
+    const b2Body* A = c->GetFixtureA()->GetBody();
+    const b2Body* B = c->GetFixtureB()->GetBody();
+    double best = 0;
+    for (int i = 0; i < n; ++i) {
+      const b2Vec2 rel = B->GetLinearVelocityFromWorldPoint(wm.points[i]) -
+                         A->GetLinearVelocityFromWorldPoint(wm.points[i]);
+      // Box2D's normal points from A to B: A and B close in when rel . n < 0.
+      best = std::max(best, -double(b2Dot(rel, wm.normal)) / s);
+    }
+    (void)a_is_A;
+    return best;
+  }
+
+  void PreSolve(b2Contact* c, const b2Manifold* old) override {
+    const Part& pa = part_of(c->GetFixtureA());
+    const Part& pb = part_of(c->GetFixtureB());
+    // The same mixing as rigid_body_from_collisions for ODE.
+    c->SetFriction(float(std::sqrt(pa.friction * pb.friction)));
+    c->SetRestitution(float(std::clamp(std::max(pa.restitution, pb.restitution), 0.0, 1.0)));
+    c->SetRestitutionThreshold(float(bounce * s));
+    if (old->pointCount == 0) {
+      // Just began: the impact speed, before the solver removes it.
+      b2WorldManifold wm;
+      c->GetWorldManifold(&wm);
+      const double v = approach(c, wm, c->GetManifold()->pointCount, true);
+      pre_speeds.push_back({std::min(pa.id, pb.id), std::max(pa.id, pb.id), v});
+    }
+  }
+
+  void PostSolve(b2Contact* c, const b2ContactImpulse* imp) override {
+    if (!want_impulses) return;
+    const Part& pa = part_of(c->GetFixtureA());
+    const Part& pb = part_of(c->GetFixtureB());
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);
+    const b2Vec2 n = wm.normal, t = b2Cross(n, 1.0f);
+    double jn = 0, jt = 0;
+    for (int i = 0; i < imp->count; ++i)
+      jn += imp->normalImpulses[i], jt += imp->tangentImpulses[i];
+    // Box2D applies +P to B and -P to A, P = jn n + jt t.
+    b2Vec2 on_A = -(float(jn) * n + float(jt) * t);
+    const bool a_is_A = pa.id < pb.id;
+    const b2Vec2 on_a = a_is_A ? on_A : -on_A;
+    step_impulses.push_back({.a = std::min(pa.id, pb.id),
+                             .b = std::max(pa.id, pb.id),
+                             .impulse = {on_a.x / s, on_a.y / s, 0},
+                             .normal_impulse = jn / s});
+  }
+};
+
+// --- the engine ---------------------------------------------------------------------
+
+Box2DEngine::Box2DEngine(const World& world, Box2DConfig config)
+    : world_(world), store_(world.store()), config_(config), impl_(std::make_unique<Impl>()) {
+  impl_->s = config_.scale;
+  impl_->bounce = config_.bounce_velocity;
+}
+
+Box2DEngine::~Box2DEngine() = default;
+
+namespace {
+const char* const kDefining[] = {"shape",      "size",           "radius",          "length",
+                                 "mass",       "density",        "static",          "pinned",
+                                 "planar",     "linear_damping", "angular_damping", "joint",
+                                 "body_a",     "body_b",         "joint_friction",  "limit_low",
+                                 "limit_high", "friction",       "restitution",     "axis"};
+}
+
+void Box2DEngine::note_versions(const WorldView& v) {
+  versions_.clear();
+  for (const char* n : kDefining) versions_.push_back(v.store().column(v.property(n)).version());
+}
+
+bool Box2DEngine::edited_since_write(const WorldView& v) const {
+  std::size_t i = 0;
+  for (const char* n : kDefining)
+    if (i >= versions_.size() || v.store().column(v.property(n)).version() != versions_[i++])
+      return true;
+  return false;
+}
+
+void Box2DEngine::build(ResolverAccess& access) {
+  Impl& m = *impl_;
+  const double s = m.s;
+  ++rebuilds_;
+  m.world = std::make_unique<b2World>(b2Vec2(0, 0));  // gravity comes as loads
+  m.world->SetAllowSleeping(config_.sleep);
+  m.world->SetContactListener(&m);
+  m.parts.clear();
+  m.bodies.clear();
+  m.hinges.clear();
+  b2BodyDef gd;
+  m.ground = m.world->CreateBody(&gd);
+
+  const auto shape = access.column<EnumValue>("shape");
+  const auto size = access.column<Vec3>("size");
+  const auto radius = access.column<double>("radius");
+  const auto length = access.column<double>("length");
+  const auto mass = access.column<double>("mass");
+  const auto density = access.column<double>("density");
+  const auto static_ = access.column<std::uint8_t>("static");
+  const auto pinned = access.column<std::uint8_t>("pinned");
+  const auto position = access.column<Vec3>("position");
+  const auto orientation = access.column<Quat>("orientation");
+  const auto velocity = access.column<Vec3>("velocity");
+  const auto angular = access.column<Vec3>("angular_velocity");
+  const auto ldamp = access.column<double>("linear_damping");
+  const auto adamp = access.column<double>("angular_damping");
+  const auto friction = access.column<double>("friction");
+  const auto restitution = access.column<double>("restitution");
+  const auto joint = access.column<EnumValue>("joint");
+  const auto body_a = access.column<ObjectId>("body_a");
+  const auto body_b = access.column<ObjectId>("body_b");
+  const auto anchor = access.column<Vec3>("anchor");
+  const auto axis = access.column<Vec3>("axis");
+  const auto jfric = access.column<double>("joint_friction");
+  const auto lo = access.column<double>("limit_low");
+  const auto hi = access.column<double>("limit_high");
+  auto mass_out = access.writer<double>("mass");
+
+  auto refuse = [&](ObjectId id, const std::string& why) {
+    throw InputError("rigid_body.box2d: '" + store_.describe(id) + "' " + why +
+                     " (Box2D simulates the z = 0 plane only; use the ODE rigid_body for it)");
+  };
+
+  // Parts: every object with a shape, in the plane.
+  m.part_of_slot.assign(store_.slot_count(), -1);
+  constexpr double kTol = 1e-6;
+  for (std::uint32_t slot : shape.members()) {
+    const ObjectId id = store_.id_at(slot);
+    const Vec3 p = position.value_or(slot, {});
+    const Quat q = orientation.value_or(slot, {});
+    const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+    if (std::abs(p.z) > kTol) refuse(id, "lies off the plane (z = " + num(p.z) + " m)");
+    if (std::abs(q.x) > kTol * qn || std::abs(q.y) > kTol * qn)
+      refuse(id, "is turned about an axis other than z");
+    const bool fixed = static_.value_or(slot, 0) || pinned.value_or(slot, 0);
+    if (!fixed) {
+      const Vec3 v = velocity.value_or(slot, {}), w = angular.value_or(slot, {});
+      if (std::abs(v.z) > kTol)
+        refuse(id, "moves out of the plane (velocity.z = " + num(v.z) + " m/s)");
+      if (std::abs(w.x) > kTol || std::abs(w.y) > kTol)
+        refuse(id, "spins about an axis in the plane (angular_velocity {" + num(w.x) + ", " +
+                       num(w.y) + ", " + num(w.z) + "})");
+    }
+    m.part_of_slot[slot] = std::int32_t(m.parts.size());
+    Impl::Part part;
+    part.id = id;
+    part.friction = friction.value_or(slot, 0.5);
+    part.restitution = restitution.value_or(slot, 0.0);
+    m.parts.push_back(part);
+  }
+
+  // Glue: parts joined by fixed joints share a body (union-find).
+  std::vector<std::uint32_t> root(m.parts.size());
+  std::iota(root.begin(), root.end(), 0u);
+  auto find = [&](std::uint32_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  std::vector<char> glued_to_world(m.parts.size(), 0);
+  auto ours = [&](ObjectId id) -> std::int32_t {
+    if (id.is_null() || !store_.alive(id) || id.index >= m.part_of_slot.size()) return -1;
+    return m.part_of_slot[id.index];
+  };
+  for (std::uint32_t slot : joint.members()) {
+    if (JointType(joint[slot].index) != JointType::Fixed) continue;
+    const std::int32_t a = ours(body_a.value_or(slot, {}));
+    if (a < 0) continue;  // the joint lives with body_a's engine
+    const ObjectId bid = body_b.value_or(slot, {});
+    const std::int32_t b = ours(bid);
+    if (bid.is_null())
+      glued_to_world[std::size_t(a)] = 1;
+    else if (b < 0)
+      throw InputError(
+          "rigid_body.box2d: joint '" + store_.describe(store_.id_at(slot)) + "' glues '" +
+          store_.describe(store_.id_at(std::uint32_t(m.parts[std::size_t(a)].id.index))) +
+          "' to '" + store_.describe(bid) +
+          "', which another engine simulates (a joint lives in body_a's engine, and "
+          "both its bodies must be there)");
+    else
+      root[find(std::uint32_t(a))] = find(std::uint32_t(b));
+  }
+
+  // Bodies: one per assembly. The body's origin is its first part's centre.
+  std::vector<std::int32_t> body_of_root(m.parts.size(), -1);
+  for (std::uint32_t i = 0; i < m.parts.size(); ++i) {
+    const std::uint32_t r = find(i);
+    if (body_of_root[r] < 0) {
+      body_of_root[r] = std::int32_t(m.bodies.size());
+      m.bodies.emplace_back();
+    }
+    m.parts[i].body = std::uint32_t(body_of_root[r]);
+  }
+  struct Acc {
+    ObjectId first;
+    bool fixed = false;
+    double m = 0, I = 0;  // I about the origin, SI
+    b2Vec2 mc{0, 0};      // sum of m * local centre, scaled
+    Vec3 v, w;
+    bool have_first = false;
+  };
+  std::vector<Acc> acc(m.bodies.size());
+  for (std::uint32_t i = 0; i < m.parts.size(); ++i) {
+    const std::uint32_t slot = m.parts[i].id.index;
+    Acc& a = acc[m.parts[i].body];
+    a.fixed = a.fixed || static_.value_or(slot, 0) || pinned.value_or(slot, 0) || glued_to_world[i];
+    if (!a.have_first) a.have_first = true, a.first = m.parts[i].id;
+  }
+  for (std::uint32_t bi = 0; bi < m.bodies.size(); ++bi) {
+    const std::uint32_t slot = acc[bi].first.index;
+    const Vec3 p = position.value_or(slot, {});
+    b2BodyDef d;
+    d.type = acc[bi].fixed ? b2_staticBody : b2_dynamicBody;
+    d.position.Set(float(p.x * s), float(p.y * s));
+    d.angle = float(angle_z(orientation.value_or(slot, {})));
+    d.bullet = false;
+    m.bodies[bi].b = m.world->CreateBody(&d);
+    m.bodies[bi].dynamic = !acc[bi].fixed;
+    acc[bi].v = velocity.value_or(slot, {});
+    acc[bi].w = angular.value_or(slot, {});
+  }
+
+  // Fixtures and masses.
+  for (std::uint32_t i = 0; i < m.parts.size(); ++i) {
+    Impl::Part& part = m.parts[i];
+    const std::uint32_t slot = part.id.index;
+    Impl::Body& body = m.bodies[part.body];
+    b2Body* b = body.b;
+    const Vec3 p = position.value_or(slot, {});
+    part.local = b->GetLocalPoint(b2Vec2(float(p.x * s), float(p.y * s)));
+    part.angle = angle_z(orientation.value_or(slot, {})) - b->GetAngle();
+    const Shape sh = Shape(shape[slot].index);
+    const Vec3 sz = size.value_or(slot, {});
+    const double r = radius.value_or(slot, 0), len = length.value_or(slot, 0);
+    b2FixtureDef fd;
+    fd.density = 0;  // masses are set below, from the part's mass or density
+    fd.friction = float(part.friction);
+    fd.restitution = float(part.restitution);
+    fd.restitutionThreshold = float(m.bounce * s);
+    fd.userData.pointer = i;
+    const b2Rot rot{float(part.angle)};
+    auto circle = [&](double along_x) {
+      b2CircleShape c;
+      c.m_radius = float(r * s);
+      c.m_p = part.local + b2Mul(rot, b2Vec2(float(along_x * s), 0));
+      fd.shape = &c;
+      b->CreateFixture(&fd);
+    };
+    switch (sh) {
+      case Shape::Box: {
+        b2PolygonShape box;
+        box.SetAsBox(float(sz.x / 2 * s), float(sz.y / 2 * s), part.local, float(part.angle));
+        fd.shape = &box;
+        b->CreateFixture(&fd);
+        break;
+      }
+      case Shape::Sphere:
+      case Shape::Cylinder:
+        circle(0);
+        break;
+      case Shape::Capsule: {
+        if (len > 0) {
+          b2PolygonShape box;
+          box.SetAsBox(float(len / 2 * s), float(r * s), part.local, float(part.angle));
+          fd.shape = &box;
+          b->CreateFixture(&fd);
+        }
+        circle(-len / 2);
+        circle(len / 2);
+        break;
+      }
+    }
+    if (!body.dynamic) continue;
+    double pm = mass.value_or(slot, 0);
+    if (density.has(slot)) {
+      pm = density[slot] * rigid::shape_volume(sh, sz, r, len);
+      mass_out.set(slot, pm);
+    }
+    Acc& a = acc[part.body];
+    const double d2 = double(b2Dot(part.local, part.local)) / (s * s);
+    a.m += pm;
+    a.I += inertia_z(sh, pm, sz, r, len) + pm * d2;
+    a.mc += float(pm) * part.local;
+    body.linear_damping = std::max(body.linear_damping, ldamp.value_or(slot, 0));
+    body.angular_damping = std::max(body.angular_damping, adamp.value_or(slot, 0));
+  }
+  for (std::uint32_t bi = 0; bi < m.bodies.size(); ++bi) {
+    if (!m.bodies[bi].dynamic) continue;
+    const Acc& a = acc[bi];
+    if (!(a.m > 0))
+      throw InputError("rigid_body.box2d: '" + store_.describe(a.first) + "' has no mass");
+    b2MassData md;
+    md.mass = float(a.m);
+    md.center = (1.0f / float(a.m)) * a.mc;
+    md.I = float(a.I * s * s);
+    b2Body* b = m.bodies[bi].b;
+    b->SetMassData(&md);
+    // Velocity of the centre of mass from the first part's (at the origin).
+    const b2Vec2 rc = b->GetWorldCenter() - b->GetPosition();
+    const double w = a.w.z;
+    b->SetLinearVelocity(b2Vec2(float(a.v.x * s - w * rc.y), float(a.v.y * s + w * rc.x)));
+    b->SetAngularVelocity(float(w));
+  }
+
+  // Hinges: Box2D's revolute joints about z.
+  for (std::uint32_t slot : joint.members()) {
+    if (JointType(joint[slot].index) != JointType::Hinge) continue;
+    const ObjectId jid = store_.id_at(slot);
+    const std::int32_t a = ours(body_a.value_or(slot, {}));
+    if (a < 0) continue;  // lives with body_a's engine
+    const ObjectId bid = body_b.value_or(slot, {});
+    const std::int32_t b = ours(bid);
+    if (!bid.is_null() && b < 0)
+      throw InputError("rigid_body.box2d: hinge '" + store_.describe(jid) + "' joins '" +
+                       store_.describe(m.parts[std::size_t(a)].id) + "' to '" +
+                       store_.describe(bid) +
+                       "', which another engine simulates (a joint lives in body_a's engine, and "
+                       "both its bodies must be there)");
+    const Vec3 ax = axis.value_or(slot, {0, 0, 1});
+    const double an = std::sqrt(dot(ax, ax));
+    if (std::abs(ax.x) > kTol * an || std::abs(ax.y) > kTol * an)
+      refuse(jid, "is a hinge whose axis {" + num(ax.x) + ", " + num(ax.y) + ", " + num(ax.z) +
+                      "} is not along z");
+    const double sign = ax.z > 0 ? 1 : -1;
+    b2Body* A = m.bodies[m.parts[std::size_t(a)].body].b;
+    b2Body* B = b < 0 ? m.ground : m.bodies[m.parts[std::size_t(b)].body].b;
+    if (A == B) continue;  // glued together: nothing turns
+    const Vec3 an_at =
+        anchor.value_or(slot, position.value_or(m.parts[std::size_t(a)].id.index, {}));
+    if (std::abs(an_at.z) > kTol)
+      refuse(jid, "has its anchor off the plane (z = " + num(an_at.z) + ")");
+    b2RevoluteJointDef jd;
+    // Box2D's angle is that of its body B relative to its body A, less the
+    // reference: alloy's angle of body_a relative to body_b about +z.
+    jd.Initialize(B, A, b2Vec2(float(an_at.x * s), float(an_at.y * s)));
+    auto [it, fresh] = m.reference.try_emplace(jid.index | (std::uint64_t(jid.generation) << 32),
+                                               double(jd.referenceAngle));
+    jd.referenceAngle = float(it->second);
+    jd.collideConnected = false;
+    if (jfric.has(slot) && jfric[slot] > 0) {
+      // A motor at speed 0 whose torque is capped: Coulomb friction of the pivot.
+      jd.enableMotor = true;
+      jd.motorSpeed = 0;
+      jd.maxMotorTorque = float(jfric[slot] * s * s);
+    }
+    if (lo.has(slot) || hi.has(slot)) {
+      double l = lo.value_or(slot, -1e9), h = hi.value_or(slot, 1e9);
+      if (sign < 0) std::swap(l, h), l = -l, h = -h;
+      jd.enableLimit = true;
+      jd.lowerAngle = float(l);
+      jd.upperAngle = float(h);
+    }
+    m.hinges.push_back({jid, static_cast<b2RevoluteJoint*>(m.world->CreateJoint(&jd))});
+  }
+
+  // What we wrote is what the properties hold now.
+  for (Impl::Part& part : m.parts) {
+    const std::uint32_t slot = part.id.index;
+    part.pos = position.value_or(slot, {});
+    part.rot = orientation.value_or(slot, {});
+    part.vel = velocity.value_or(slot, {});
+    part.ang = angular.value_or(slot, {});
+  }
+  pairs_.clear(), points_.clear(), impulses_.clear();
+  dirty_ = false;
+  note_versions(access);
+  ++state_version_;
+}
+
+// --- loads ----------------------------------------------------------------------------
+
+void Box2DEngine::queue(ObjectId part, Vec3 value, Vec3 point, Load kind) {
+  store_.check_alive(part);
+  loads_.push_back({part.index, part.generation, value, point, kind});
+}
+void Box2DEngine::add_force(ObjectId part, Vec3 force) {
+  queue(part, force, {}, Load::Force);
+}
+void Box2DEngine::add_force(ObjectId part, Vec3 force, Vec3 point) {
+  queue(part, force, point, Load::ForceAtPoint);
+}
+void Box2DEngine::add_force(std::uint32_t slot, Vec3 force) {
+  loads_.push_back({slot, 0, force, {}, Load::Force});
+}
+void Box2DEngine::add_torque(ObjectId part, Vec3 torque) {
+  queue(part, torque, {}, Load::Torque);
+}
+void Box2DEngine::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate,
+                           Vec3 torque_rate) {
+  store_.check_alive(part);
+  rated_.push_back({part.index, part.generation, force, torque, force_rate, torque_rate});
+}
+std::span<rigid::RigidBodyEngine::LoadCommand> Box2DEngine::open_loads(std::size_t n) {
+  if (open_ == ~std::size_t(0)) open_ = loads_.size();
+  loads_.resize(open_ + n);
+  return std::span<LoadCommand>(loads_).subspan(open_, n);
+}
+void Box2DEngine::close_loads(std::size_t used) {
+  if (open_ == ~std::size_t(0)) return;
+  loads_.resize(open_ + std::min(used, loads_.size() - open_));
+  open_ = ~std::size_t(0);
+}
+
+// --- the step -------------------------------------------------------------------------
+
+void Box2DEngine::advance(ResolverAccess& access, double dt) {
+  Impl& m = *impl_;
+  const double s = m.s;
+  if (dirty_ || !m.world || edited_since_write(access)) build(access);
+
+  auto position = access.writer<Vec3>("position");
+  auto orientation = access.writer<Quat>("orientation");
+  auto velocity = access.writer<Vec3>("velocity");
+  auto angular = access.writer<Vec3>("angular_velocity");
+
+  const auto pos_in = access.column<Vec3>("position");
+  const auto rot_in = access.column<Quat>("orientation");
+  const auto vel_in = access.column<Vec3>("velocity");
+  const auto ang_in = access.column<Vec3>("angular_velocity");
+  // Edits from outside between steps (the viewer, a timeline, a scene's
+  // script): a part whose pose or velocity is not what we wrote moves its body there.
+  for (const Impl::Part& part : m.parts) {
+    Impl::Body& body = m.bodies[part.body];
+    if (!body.dynamic) continue;
+    const std::uint32_t slot = part.id.index;
+    const Vec3 p = pos_in.value_or(slot, {});
+    const Quat q = rot_in.value_or(slot, {});
+    const Vec3 v = vel_in.value_or(slot, {});
+    const Vec3 w = ang_in.value_or(slot, {});
+    if (p == part.pos && q == part.rot && v == part.vel && w == part.ang) continue;
+    b2Body* b = body.b;
+    const double angle = angle_z(q) - part.angle;
+    const b2Rot r{float(angle)};
+    const b2Vec2 origin = b2Vec2(float(p.x * s), float(p.y * s)) - b2Mul(r, part.local);
+    b->SetTransform(origin, float(angle));
+    const b2Vec2 rc = b->GetWorldCenter() - b2Vec2(float(p.x * s), float(p.y * s));
+    b->SetLinearVelocity(b2Vec2(float(v.x * s - w.z * rc.y), float(v.y * s + w.z * rc.x)));
+    b->SetAngularVelocity(float(w.z));
+    b->SetAwake(true);
+  }
+
+  m.want_impulses = *impulse_demand_ > 0;
+  m.step_impulses.clear();
+  m.pre_speeds.clear();
+  const int n = config_.substeps;
+  const double h = dt / n;
+  auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
+    if (slot >= m.part_of_slot.size() || m.part_of_slot[slot] < 0) return nullptr;
+    if (gen != 0 && store_.id_at(slot).generation != gen) return nullptr;
+    Impl::Body& b = m.bodies[m.parts[std::size_t(m.part_of_slot[slot])].body];
+    return b.dynamic ? &b : nullptr;
+  };
+  if (config_.sleep) {
+    // A sleeper wakes when the load on it changes (a magnet switched on), not
+    // because the same load (its weight) is queued again; loads on a sleeper
+    // are then given with wake = false, and Box2D drops them.
+    for (auto& body : m.bodies) body.force = {0, 0}, body.torque = 0;
+    for (const LoadCommand& c : loads_)
+      if (Impl::Body* b = body_of(c.slot, c.generation)) {
+        if (c.kind == Load::Torque)
+          b->torque += float(c.value.z);
+        else
+          b->force += b2Vec2(float(c.value.x), float(c.value.y));
+      }
+    for (const RatedLoad& r : rated_)
+      if (Impl::Body* b = body_of(r.slot, r.generation))
+        b->force += b2Vec2(float(r.force.x), float(r.force.y)), b->torque += float(r.torque.z);
+    for (auto& body : m.bodies) {
+      if (!body.dynamic) continue;
+      if (!body.b->IsAwake() &&
+          (body.force.x != body.last_force.x || body.force.y != body.last_force.y ||
+           body.torque != body.last_torque))
+        body.b->SetAwake(true);
+      body.last_force = body.force, body.last_torque = body.torque;
+    }
+  }
+  const bool wake = !config_.sleep;
+  for (int k = 0; k < n; ++k) {
+    for (const LoadCommand& c : loads_) {
+      Impl::Body* b = body_of(c.slot, c.generation);
+      if (!b) continue;
+      switch (c.kind) {
+        case Load::Force:
+          b->b->ApplyForceToCenter(b2Vec2(float(c.value.x * s), float(c.value.y * s)), wake);
+          break;
+        case Load::ForceAtPoint:
+          b->b->ApplyForce(b2Vec2(float(c.value.x * s), float(c.value.y * s)),
+                           b2Vec2(float(c.point.x * s), float(c.point.y * s)), wake);
+          break;
+        case Load::Torque:
+          b->b->ApplyTorque(float(c.value.z * s * s), wake);
+          break;
+      }
+    }
+    const double tau = k * h;
+    for (const RatedLoad& r : rated_) {
+      Impl::Body* b = body_of(r.slot, r.generation);
+      if (!b) continue;
+      const Vec3 f = r.force + r.force_rate * tau, t = r.torque + r.torque_rate * tau;
+      b->b->ApplyForceToCenter(b2Vec2(float(f.x * s), float(f.y * s)), wake);
+      b->b->ApplyTorque(float(t.z * s * s), wake);
+    }
+    for (auto& body : m.bodies) {
+      if (!body.dynamic) continue;
+      if (body.linear_damping > 0)
+        body.b->SetLinearVelocity(float(damping_factor(body.linear_damping, h)) *
+                                  body.b->GetLinearVelocity());
+      if (body.angular_damping > 0)
+        body.b->SetAngularVelocity(float(damping_factor(body.angular_damping, h)) *
+                                   body.b->GetAngularVelocity());
+    }
+    m.world->Step(float(h), config_.velocity_iterations, config_.position_iterations);
+  }
+  loads_.clear();
+  rated_.clear();
+  open_ = ~std::size_t(0);
+
+  // Write the parts back.
+  for (Impl::Part& part : m.parts) {
+    const Impl::Body& body = m.bodies[part.body];
+    if (!body.dynamic) continue;
+    const b2Body* b = body.b;
+    const b2Vec2 c = b->GetWorldPoint(part.local);
+    const b2Vec2 v = b->GetLinearVelocityFromWorldPoint(c);
+    const double angle = double(b->GetAngle()) + part.angle;
+    const std::uint32_t slot = part.id.index;
+    part.pos = {c.x / s, c.y / s, 0};
+    part.rot = Quat::from_angle_z(angle);
+    part.vel = {v.x / s, v.y / s, 0};
+    part.ang = {0, 0, double(b->GetAngularVelocity())};
+    position.set(slot, part.pos);
+    orientation.set(slot, part.rot);
+    velocity.set(slot, part.vel);
+    angular.set(slot, part.ang);
+  }
+  auto anchor = access.writer<Vec3>("anchor");
+  for (const Impl::Hinge& hj : m.hinges) {
+    const b2Vec2 a = hj.j->GetAnchorB();
+    anchor.set(hj.id.index, {a.x / s, a.y / s, 0});
+  }
+
+  // The contacts after the step, for collisions.box2d.
+  struct Raw {
+    ObjectId a, b;
+    ContactPoint p;
+    double speed;
+  };
+  static thread_local std::vector<Raw> raw;
+  raw.clear();
+  for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
+    if (!c->IsTouching() || !c->IsEnabled()) continue;
+    const Impl::Part& pa = m.part_of(c->GetFixtureA());
+    const Impl::Part& pb = m.part_of(c->GetFixtureB());
+    const bool a_is_A = pa.id < pb.id;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);
+    const int np = c->GetManifold()->pointCount;
+    const double speed = m.approach(c, wm, np, a_is_A);
+    // ContactPoint's normal points from b towards a; Box2D's from A to B.
+    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
+    for (int i = 0; i < np; ++i)
+      raw.push_back({std::min(pa.id, pb.id), std::max(pa.id, pb.id),
+                     ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
+                                  .normal = {nn.x, nn.y, 0},
+                                  .depth = std::max(0.0, -double(wm.separations[i]) / s)},
+                     speed});
+  }
+  std::stable_sort(raw.begin(), raw.end(),
+                   [](const Raw& x, const Raw& y) { return pair_less(x.a, x.b, y.a, y.b); });
+  std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
+            [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
+  pairs_.clear(), points_.clear();
+  std::size_t ps = 0;
+  for (const Raw& r : raw) {
+    if (pairs_.empty() || pairs_.back().a != r.a || pairs_.back().b != r.b) {
+      Box2DPair& p = pairs_.emplace_back();
+      p.a = r.a, p.b = r.b, p.first = std::uint32_t(points_.size());
+      while (ps < m.pre_speeds.size() &&
+             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, r.a, r.b))
+        ++ps;
+      for (std::size_t q = ps;
+           q < m.pre_speeds.size() && m.pre_speeds[q].a == r.a && m.pre_speeds[q].b == r.b; ++q)
+        p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
+    }
+    Box2DPair& p = pairs_.back();
+    points_.push_back(r.p);
+    ++p.count;
+    p.depth = std::max(p.depth, r.p.depth);
+    p.normal_speed = std::max(p.normal_speed, r.speed);
+  }
+  impulses_.clear();
+  impulses_computed_ = m.want_impulses;
+  if (m.want_impulses) {
+    auto& si = m.step_impulses;
+    std::stable_sort(si.begin(), si.end(),
+                     [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
+    for (const PairImpulse& q : si) {
+      if (!impulses_.empty() && impulses_.back().a == q.a && impulses_.back().b == q.b) {
+        impulses_.back().impulse = impulses_.back().impulse + q.impulse;
+        impulses_.back().normal_impulse += q.normal_impulse;
+      } else {
+        impulses_.push_back(q);
+      }
+    }
+  }
+  note_versions(access);
+  ++state_version_;
+}
+
+std::size_t Box2DEngine::body_count() const {
+  std::size_t n = 0;
+  for (const auto& b : impl_->bodies) n += b.dynamic;
+  return n;
+}
+std::size_t Box2DEngine::joint_count() const {
+  return impl_->hinges.size();
+}
+std::size_t Box2DEngine::awake_count() const {
+  std::size_t n = 0;
+  for (const auto& b : impl_->bodies) n += b.dynamic && b.b->IsAwake();
+  return n;
+}
+
+// --- collisions.box2d ----------------------------------------------------------------
+
+Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : engine_(engine) {
+  if (always_impulses) always_ = engine.demand_impulses();
+}
+
+void Box2DContacts::update(const WorldView& world) {
+  begin_update();
+  const auto pts = engine_.points();
+  points_.assign(pts.begin(), pts.end());
+  for (const Box2DPair& p : engine_.pairs()) {
+    ContactPair& c = current_.emplace_back();
+    c.a = p.a, c.b = p.b, c.first = p.first, c.count = p.count;
+    c.normal_speed = p.normal_speed;
+    c.depth = p.depth;
+  }
+  publish(world, engine_.impulses(), engine_.impulses_computed());
+}
+
+}  // namespace alloy::box2d

@@ -1,0 +1,149 @@
+// The rigid body on Box2D (2.4.1): a second engine providing `rigid_body`
+// for the 2D kit, beside ODE's (resolvers/rigid_body/). Scenes choose it with
+// `use = { rigid_body = "rigid_body.box2d", collisions = "collisions.box2d" }`
+// or swap it in while the world runs (World::swap); everything else (gravity,
+// magnetism, electricity, sound, Lua mods) talks to it through the same
+// interfaces as to ODE: RigidBodyEngine for loads, ContactSet for contacts.
+//
+// Reads   shape, size, radius, length, mass, density, static, pinned,
+//         linear_damping, angular_damping, friction, restitution, and joint
+//         objects (joint, body_a, body_b, anchor, axis, joint_friction,
+//         limit_low, limit_high): the same as ODE's engine, plus the contact
+//         materials (Box2D resolves contacts inside its step, so the engine
+//         mixes the materials itself, exactly as rigid_body_from_collisions
+//         does for ODE: friction sqrt(mu_a mu_b), restitution max(e_a, e_b)).
+// Writes  position, orientation, velocity, angular_velocity, mass (from
+//         density), and the anchor of hinges.
+//
+// What Box2D cannot express is refused at build with an InputError naming the
+// object: a part off the z = 0 plane, turned about anything but z, moving or
+// spinning out of the plane, a hinge whose axis is not along z.
+//
+// Units. Box2D's tolerances (linear slop 5 mm, the 2 m/step speed cap, the
+// sleep thresholds) are tuned for objects of 0.1 to 10 m, and the kit's parts
+// are 2 to 12 cm. The engine runs Box2D in scaled units: lengths times
+// `scale` (default 10), time and mass unchanged, so velocities scale by s,
+// forces by s, torques and moments of inertia by s^2, impulses by s.
+// docs/box2d.md has the measurements behind the default.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "resolvers/rigid_body/engine.hpp"
+#include "runtime/contact_set.hpp"
+#include "runtime/world.hpp"
+
+namespace alloy::box2d {
+
+/// Settings of `rigid_body.box2d`.
+struct Box2DConfig {
+  /// Box2D length units per metre (see the header). 1: SI metres.
+  double scale = 10;
+  /// Box2D's sequential-impulse iterations per step (its defaults are 8 and
+  /// 3; the velocity ones are raised to keep stacks as still as ODE's 40).
+  int velocity_iterations = 20;
+  int position_iterations = 8;
+  /// Box2D steps of dt / substeps per advance; loads are held over the window.
+  int substeps = 1;
+  /// Bodies at rest sleep (Box2D's islands, 0.5 s below 1 cm/s and 2 deg/s in
+  /// scaled units). Off by default, as ODE's auto_disable.
+  bool sleep = false;
+  /// Approach speeds below this do not bounce, m/s (rigid_body_from_collisions'
+  /// bounce_velocity for ODE).
+  double bounce_velocity = 0.1;
+
+  /// Reads and validates the plugin settings; InputError names the bad key.
+  static Box2DConfig from(const PluginSettings& settings);
+};
+
+/// One pair's contacts as the last advance left them (for the contact set).
+struct Box2DPair {
+  ObjectId a, b;                       ///< a < b
+  std::uint32_t first = 0, count = 0;  ///< into points()
+  double normal_speed = 0;             ///< largest approach speed, m/s
+  double depth = 0;                    ///< deepest penetration, m
+};
+
+class Box2DEngine final : public rigid::RigidBodyEngine {
+ public:
+  Box2DEngine(const World& world, Box2DConfig config);
+  ~Box2DEngine() override;
+
+  void build(ResolverAccess& access) override;
+  void advance(ResolverAccess& access, double dt) override;
+  void on_structure_changed(const WorldView&) override { dirty_ = true; }
+  std::uint64_t state_version() const override { return state_version_; }
+
+  void add_force(ObjectId part, Vec3 force) override;
+  void add_force(ObjectId part, Vec3 force, Vec3 point) override;
+  void add_force(std::uint32_t slot, Vec3 force) override;
+  void add_torque(ObjectId part, Vec3 torque) override;
+  /// Substep k of the window applies value + rate * k * dt / substeps.
+  void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate) override;
+  std::span<LoadCommand> open_loads(std::size_t n) override;
+  void close_loads(std::size_t used) override;
+
+  ImpulseDemand demand_impulses() const override { return ImpulseDemand(impulse_demand_); }
+  std::size_t body_count() const override;
+  std::size_t joint_count() const override;
+  std::size_t awake_count() const override;
+
+  // --- published for collisions.box2d ---------------------------------------------
+  /// Pairs touching after the last advance, sorted by (a, b), and their points.
+  std::span<const Box2DPair> pairs() const { return pairs_; }
+  std::span<const ContactPoint> points() const { return points_; }
+  /// Impulses of the last advance per pair, sorted by (a, b); empty unless
+  /// impulses_computed().
+  std::span<const PairImpulse> impulses() const { return impulses_; }
+  bool impulses_computed() const { return impulses_computed_; }
+  const Box2DConfig& config() const { return config_; }
+  /// Full builds so far (build() and rebuilds after an edit from outside).
+  std::uint64_t rebuild_count() const { return rebuilds_; }
+
+  struct Impl;  // Box2D's world and the part <-> body tables (box2d_engine.cpp)
+
+ private:
+  void queue(ObjectId part, Vec3 value, Vec3 point, Load kind);
+  bool edited_since_write(const WorldView& view) const;
+  void note_versions(const WorldView& view);
+
+  const World& world_;
+  const PropertyStore& store_;
+  Box2DConfig config_;
+  std::unique_ptr<Impl> impl_;
+  std::vector<LoadCommand> loads_;
+  std::size_t open_ = ~std::size_t(0);
+  struct RatedLoad {
+    std::uint32_t slot, generation;
+    Vec3 force, torque, force_rate, torque_rate;
+  };
+  std::vector<RatedLoad> rated_;
+  std::vector<Box2DPair> pairs_;
+  std::vector<ContactPoint> points_;
+  std::vector<PairImpulse> impulses_;
+  std::shared_ptr<std::size_t> impulse_demand_ = std::make_shared<std::size_t>(0);
+  bool impulses_computed_ = false;
+  bool dirty_ = true;
+  std::vector<std::uint64_t> versions_;  // of the columns read, after our last write
+  std::uint64_t state_version_ = 0;
+  std::uint64_t rebuilds_ = 0;
+};
+
+/// `collisions.box2d`: the contact lists of the Box2D engine's last advance.
+class Box2DContacts final : public ContactSet {
+ public:
+  Box2DContacts(const Box2DEngine& engine, bool always_impulses);
+  void update(const WorldView& world) override;
+  ImpulseDemand demand_impulses() const override { return engine_.demand_impulses(); }
+
+ private:
+  const Box2DEngine& engine_;
+  ImpulseDemand always_;  // impulses = true
+};
+
+}  // namespace alloy::box2d

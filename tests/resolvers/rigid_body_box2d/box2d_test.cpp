@@ -1,0 +1,340 @@
+// The rigid body on Box2D (resolvers/rigid_body_box2d): chosen with `use`,
+// the closed-form cases at several steps (the error must not grow as the step
+// falls), contacts published through the same ContactSet, refusals naming the
+// object, and ODE's contact interaction kept off it. Each test prints its figures.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "resolvers/plugins.hpp"
+#include "resolvers/rigid_body/rigid_body.hpp"
+#include "resolvers/rigid_body_box2d/box2d_engine.hpp"
+#include "tests/scenes/rigid_scenes.hpp"
+
+namespace alloy::scenes {
+namespace {
+
+constexpr double kG = 9.81;
+constexpr double kPi = std::numbers::pi;
+const std::vector<double> kSteps = {1.0 / 240, 1.0 / 480, 1.0 / 960};
+
+WorldDef on_box2d(double dt = 1.0 / 240) {
+  WorldDef def;
+  def.dt = dt;
+  def.use = {{"rigid_body", "rigid_body.box2d"}, {"collisions", "collisions.box2d"}};
+  return def;
+}
+
+box2d::Box2DEngine& engine_of(World& w) {
+  return dynamic_cast<box2d::Box2DEngine&>(*w.stage("rigid_body.box2d"));
+}
+
+/// Every error no larger than the one at the step before (a 2 % allowance
+/// for float rounding in Box2D), each printed.
+void expect_not_growing(const char* name, const std::vector<double>& e) {
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    std::printf("box2d %s at 1/%.0f s: %.4g\n", name, 1 / kSteps[i], e[i]);
+    if (i > 0) EXPECT_LE(e[i], e[i - 1] * 1.02 + 1e-6) << name << " at 1/" << 1 / kSteps[i];
+  }
+}
+
+TEST(Box2D, UseChoosesItAndKeepsOdesContactInteractionOff) {
+  Sim s(on_box2d());
+  add_floor(*s);
+  add_sphere(*s, {0, 1, 0}, 0.05, 1.0, "ball");
+  s.run_for(0.1);
+  const auto stages = s->active_stages();
+  auto has = [&](const char* n) {
+    return std::find(stages.begin(), stages.end(), n) != stages.end();
+  };
+  EXPECT_TRUE(has("rigid_body.box2d"));
+  EXPECT_TRUE(has("collisions.box2d"));
+  EXPECT_TRUE(has("rigid_body_from_gravity"));  // targets whatever provides rigid_body
+  EXPECT_FALSE(has("rigid_body"));
+  EXPECT_FALSE(has("collisions"));
+  EXPECT_FALSE(has("rigid_body_from_collisions"));  // ODE-only (StageInfo::exact)
+}
+
+TEST(Box2D, FreeFallErrorFallsWithTheStep) {
+  // y(1 s) = y0 - g / 2; semi-implicit Euler lands low by g h T / 2.
+  std::vector<double> e;
+  for (double h : kSteps) {
+    Sim s(on_box2d(h));
+    const FreeFall f = build_free_fall(*s, 10);
+    s.run_for(1.0);
+    e.push_back(std::abs(s.position(f.ball).y - (10 - kG / 2)));
+    EXPECT_LE(e.back(), kG * h / 2 * 1.05 + 1e-5);
+    EXPECT_NEAR(s.velocity(f.ball).y, -kG, 1e-4);
+  }
+  expect_not_growing("free fall |y - y_exact| (m)", e);
+}
+
+/// A 1 m pendulum: a small disk hinged to the play area, released at 0.05 rad.
+double pendulum_period(double h) {
+  Sim s(on_box2d(h));
+  const double L = 1, r = 0.02, th = 0.05;
+  const ObjectId bob = add_sphere(*s, {L * std::sin(th), -L * std::cos(th), 0}, r, 1.0, "bob");
+  add_hinge(*s, bob, {}, {0, 0, 0});
+  // Period from the upward zero crossings of x over 4 periods.
+  std::vector<double> crossings;
+  double x_prev = s.position(bob).x;
+  const auto n = std::uint64_t(std::llround(11.0 / h));
+  for (std::uint64_t i = 1; i <= n && crossings.size() < 5; ++i) {
+    s->step();
+    const double x = s.position(bob).x;
+    if (x_prev < 0 && x >= 0) crossings.push_back((i - 1) * h + h * (-x_prev) / (x - x_prev));
+    x_prev = x;
+  }
+  EXPECT_EQ(crossings.size(), 5u);
+  return (crossings.back() - crossings.front()) / 4;
+}
+
+TEST(Box2D, PendulumPeriod) {
+  // Physical pendulum (a disk of radius r at L): T = 2 pi sqrt((L^2 + r^2/2) / (g L))
+  // (a sphere in the plane is a disk: inertia 2/5 m r^2 as ODE's), times the
+  // amplitude's 1 + theta0^2 / 16.
+  const double L = 1, r = 0.02, th = 0.05;
+  const double T = 2 * kPi * std::sqrt((L * L + 0.4 * r * r) / (kG * L)) * (1 + th * th / 16);
+  std::vector<double> e;
+  for (double h : kSteps) e.push_back(std::abs(pendulum_period(h) - T) / T);
+  EXPECT_LE(e.front(), 2e-3);
+  expect_not_growing("pendulum period relative error", e);
+}
+
+double slide_distance(double h, double mu) {
+  Sim s(on_box2d(h));
+  const ObjectId floor = add_floor(*s);
+  const ObjectId box = add_box(*s, {0, 0.05, 0}, {0.1, 0.1, 0.1}, 1.0, {}, "sled");
+  s->set(floor, "friction", mu);
+  s->set(box, "friction", mu);
+  s.run_for(0.05);  // settle on the floor
+  const double x0 = s.position(box).x;
+  s->set(box, "velocity", Vec3{1, 0, 0});
+  for (int i = 0; i < int(2 / h) && s.velocity(box).x > 1e-9; ++i) s->step();
+  return s.position(box).x - x0;
+}
+
+TEST(Box2D, SlidingBoxStopsAtTheClosedFormDistance) {
+  // v0^2 / (2 mu g) with mu = sqrt(mu_a mu_b) = 0.3.
+  const double mu = 0.3, d = 1.0 / (2 * mu * kG);
+  std::vector<double> e;
+  for (double h : kSteps) e.push_back(std::abs(slide_distance(h, mu) - d) / d);
+  EXPECT_LE(e.front(), 0.02);
+  expect_not_growing("sliding stop distance relative error", e);
+}
+
+double bounce_ratio(double h, double e) {
+  Sim s(on_box2d(h));
+  const ObjectId floor = add_floor(*s);
+  const double r = 0.05, h0 = 1.0;
+  const ObjectId ball = add_sphere(*s, {0, r + h0, 0}, r, 1.0, "ball");
+  s->set(ball, "restitution", e);
+  s->set(floor, "restitution", 0.0);  // mixed by max, as for ODE
+  bool down = true;
+  double top = 0;
+  for (int i = 0; i < int(2 / h); ++i) {
+    s->step();
+    const double vy = s.velocity(ball).y;
+    if (down && vy > 0) down = false;
+    if (!down) {
+      top = std::max(top, s.position(ball).y - r);
+      if (vy < 0) break;
+    }
+  }
+  return top / h0;
+}
+
+TEST(Box2D, BounceReboundsToRestitutionSquared) {
+  const double e = 0.5;
+  std::vector<double> err;
+  for (double h : kSteps) err.push_back(std::abs(bounce_ratio(h, e) - e * e) / (e * e));
+  EXPECT_LE(err.front(), 0.08);
+  expect_not_growing("bounce height ratio relative error", err);
+}
+
+TEST(Box2D, ContactsArePublishedThroughTheContactSet) {
+  Sim s(on_box2d());
+  const ObjectId floor = add_floor(*s);
+  const ObjectId ball = add_sphere(*s, {0, 0.3, 0}, 0.05, 1.0, "ball");
+  int began = 0;
+  double impact = 0;
+  s->start();
+  auto& set = dynamic_cast<const ContactSet&>(*s->stage("collisions.box2d"));
+  const ImpulseDemand demand = set.demand_impulses();
+  for (int i = 0; i < 240; ++i) {
+    s->step();
+    for (const ContactPair& p : set.began()) {
+      ++began;
+      impact = p.normal_speed;
+      EXPECT_EQ(p.a, std::min(floor, ball));
+    }
+  }
+  EXPECT_EQ(began, 1);
+  // Dropped from 0.25 m: sqrt(2 g 0.25) = 2.21 m/s at the floor.
+  EXPECT_NEAR(impact, std::sqrt(2 * kG * 0.25), 0.05);
+  const ContactPair* p = set.find(ball, floor);
+  ASSERT_NE(p, nullptr);
+  ASSERT_TRUE(set.impulses_known());
+  // At rest: the floor's impulse on the ball over a step is m g h, upward.
+  const double on_ball = p->a == ball ? p->impulse.y : -p->impulse.y;
+  EXPECT_NEAR(on_ball, kG / 240, 1e-3 * kG / 240);
+  for (const ContactPoint& c : set.points(*p)) {
+    // Normal from b towards a.
+    const double up = p->a == ball ? 1 : -1;
+    EXPECT_NEAR(c.normal.y, up, 1e-6);
+    EXPECT_NEAR(c.position.y, 0, 1e-3);
+  }
+}
+
+template <class F>
+std::string refusal(F&& make) {
+  Sim s(on_box2d());
+  make(*s);
+  try {
+    s->step();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Box2D, WhatThePlaneCannotHoldIsRefusedByName) {
+  EXPECT_NE(refusal([](World& w) {
+              add_sphere(w, {0, 1, 0.2}, 0.05, 1, "floater");
+            }).find("'floater' lies off the plane"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal([](World& w) {
+        add_box(w, {0, 1, 0}, {0.1, 0.1, 0.1}, 1, Quat::from_axis_angle({1, 0, 0}, 0.3), "tilted");
+      }).find("'tilted' is turned about an axis other than z"),
+      std::string::npos);
+  EXPECT_NE(refusal([](World& w) {
+              const ObjectId b = add_box(w, {0, 1, 0}, {0.1, 0.1, 0.1}, 1, {}, "spinner");
+              w.set(b, "angular_velocity", Vec3{1, 0, 0});
+            }).find("'spinner' spins about an axis in the plane"),
+            std::string::npos);
+  EXPECT_NE(refusal([](World& w) {
+              const ObjectId b = add_box(w, {0, 1, 0}, {0.1, 0.1, 0.1}, 1, {}, "door");
+              add_hinge(w, b, {}, {0, 1, 0}, {1, 0, 0}, "sideways");
+            }).find("'sideways' is a hinge whose axis {1, 0, 0} is not along z"),
+            std::string::npos);
+}
+
+TEST(Box2D, GlueMakesOneBodyAndHingeLimitsHold) {
+  Sim s(on_box2d());
+  const ObjectId a = add_box(*s, {0.1, 0, 0}, {0.2, 0.02, 0.02}, 1, {}, "arm");
+  const ObjectId b = add_box(*s, {0.25, 0, 0}, {0.1, 0.1, 0.02}, 1, {}, "weight");
+  add_glue(*s, a, b);
+  const ObjectId j = add_hinge(*s, a, {}, {0, 0, 0});
+  s->set(j, "limit_low", -0.5);
+  s->set(j, "limit_high", 0.5);
+  s.run_for(1.0);
+  EXPECT_EQ(engine_of(*s).body_count(), 1u);
+  EXPECT_EQ(engine_of(*s).joint_count(), 1u);
+  const Quat q = s.orientation(a);
+  const double angle = 2 * std::atan2(q.z, q.w);
+  std::printf("box2d glued arm on a limited hinge: angle %.4f rad after 1 s\n", angle);
+  EXPECT_NEAR(angle, -0.5, 0.02);  // fell clockwise onto the low limit
+  // The glued part keeps its place on the arm.
+  const Vec3 pa = s.position(a), pb = s.position(b);
+  EXPECT_NEAR(std::hypot(pb.x - pa.x, pb.y - pa.y), 0.15, 1e-5);
+}
+
+TEST(Box2D, DampingMeansWhatItMeansForOde) {
+  // dv/dt = -c v: after 1 s, v0 e^-c to first order in h (the same factor as
+  // ODE's engine, (1 - c h)^n).
+  const double c = 2, h = 1.0 / 240;
+  Sim s(on_box2d(h));
+  const ObjectId b = add_sphere(*s, {0, 0, 0}, 0.05, 1.0, "drifter");
+  s->set(b, "linear_damping", c);
+  s->set(b, "velocity", Vec3{1, 0, 0});
+  s.run_for(1.0);
+  EXPECT_NEAR(s.velocity(b).x, std::pow(1 - c * h, 240), 1e-5);
+}
+
+TEST(Box2D, SwapFromOdeMidRunCarriesPoseVelocityAndHinge) {
+  // A pendulum on ODE for 0.5 s, then swapped to Box2D everywhere: the bob's
+  // pose and velocity carry over through the properties, the hinge is rebuilt
+  // at its anchor, and the swing goes on: after another 0.5 s it is where the
+  // same pendulum run on ODE throughout is.
+  auto make = [](World& w) {
+    const double L = 0.5, th = 0.3;
+    const ObjectId bob = add_sphere(w, {L * std::sin(th), -L * std::cos(th), 0}, 0.02, 1.0, "bob");
+    add_hinge(w, bob, {}, {0, 0, 0});
+    return bob;
+  };
+  Sim ode;
+  const ObjectId b0 = make(*ode);
+  Sim swapped;
+  const ObjectId b1 = make(*swapped);
+  ode.run_for(0.5);
+  swapped.run_for(0.5);
+  EXPECT_EQ(swapped.position(b1).x, ode.position(b0).x);
+  swapped->swap("", "rigid_body", "rigid_body.box2d");
+  swapped->swap("", "collisions", "collisions.box2d");
+  const Vec3 v_before = swapped.velocity(b1);
+  swapped->step();
+  ode->step();
+  // One step after the swap: the same motion to within a step's change.
+  EXPECT_NEAR(swapped.velocity(b1).x, ode.velocity(b0).x, 0.02 * std::abs(v_before.x) + 1e-3);
+  ode.run_for(0.5);
+  swapped.run_for(0.5);
+  const Vec3 p0 = ode.position(b0), p1 = swapped.position(b1);
+  std::printf("box2d swap at 0.5 s: bob at 1 s (%.5f, %.5f) vs ODE throughout (%.5f, %.5f)\n", p1.x,
+              p1.y, p0.x, p0.y);
+  // Box2D's hinge holds by its position iterations (no projection as ODE's
+  // engine has): 0.2 mm of stretch at 1/240 s, and the phase drifts by it.
+  EXPECT_NEAR(p1.x, p0.x, 4e-3);
+  EXPECT_NEAR(std::hypot(p1.x, p1.y), 0.5, 5e-4);
+  const auto stages = swapped->active_stages();
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "rigid_body.box2d"), stages.end());
+  EXPECT_EQ(std::find(stages.begin(), stages.end(), "rigid_body_from_collisions"), stages.end());
+}
+
+TEST(Box2D, ABallRollsFromAnOdeTableOntoABox2DTable) {
+  // mods/two_engines in C++: the area "right" (x >= 0) is Box2D's, the rest
+  // ODE's. The tables' tops meet at x = 0, where the ball's centre crosses
+  // into Box2D's area and Box2D takes it over with its velocity and spin.
+  WorldDef def;
+  AreaDef right;
+  right.name = "right";
+  right.center = {1, 0.5, 0};
+  right.half_extents = {1, 1, 1};
+  right.plugins = {"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"};
+  def.areas = {right};
+  Sim s(def);
+  const ObjectId left_table = add_box(*s, {-0.75, 0.775, 0}, {1.5, 0.05, 0.2}, 1, {}, "left_table");
+  s->set(left_table, "static", true);
+  const ObjectId right_table =
+      add_box(*s, {0.75, 0.775, 0}, {1.5, 0.05, 0.2}, 1, {}, "right_table");
+  s->set(right_table, "static", true);
+  const double r = 0.04, v0 = 0.6;
+  const ObjectId ball = add_sphere(*s, {-0.3, 0.8 + r, 0}, r, 0.1, "ball");
+  s->set(ball, "velocity", Vec3{v0, 0, 0});
+  s->set(ball, "angular_velocity", Vec3{0, 0, -v0 / r});  // rolling without slipping
+  s->step();
+  EXPECT_EQ(s->area_of(ball), "");
+  double crossed_at = -1;
+  for (int i = 0; i < 240; ++i) {
+    s->step();
+    if (crossed_at < 0 && s->area_of(ball) == "right") crossed_at = s->time();
+  }
+  const Vec3 p = s.position(ball), v = s.velocity(ball);
+  std::printf("two engines: crossed at %.4f s; at 1 s x = %.4f m, y = %.5f m, v = %.4f m/s\n",
+              crossed_at, p.x, p.y, v.x);
+  EXPECT_EQ(s->area_of(ball), "right");
+  EXPECT_NEAR(crossed_at, 0.3 / v0, 0.03);
+  EXPECT_NEAR(p.y, 0.8 + r, 2e-3);                      // on the right table, not through it
+  EXPECT_NEAR(p.x, -0.3 + v0 * (1 + 1.0 / 240), 0.03);  // rolled on at its speed
+  EXPECT_NEAR(v.x, v0, 0.03);
+  const auto stages = s->active_stages();
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "rigid_body.box2d@right"), stages.end());
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "rigid_body"), stages.end());
+}
+
+}  // namespace
+}  // namespace alloy::scenes
