@@ -23,12 +23,12 @@ const std::vector<FunctionDecl> kRigidBody = {
 // order (little-endian); the kinds follow RigidBodyEngine::Load.
 using LoadCommand = rigid::RigidBodyEngine::LoadCommand;
 using Load = rigid::RigidBodyEngine::Load;
-static_assert(sizeof(LoadCommand) == sizeof(abi::LoadRecord) &&
-              offsetof(LoadCommand, slot) == 0 && offsetof(LoadCommand, generation) == 4 &&
+static_assert(sizeof(LoadCommand) == sizeof(abi::LoadRecord) && offsetof(LoadCommand, slot) == 0 &&
+              offsetof(LoadCommand, generation) == 4 &&
               offsetof(LoadCommand, value) == offsetof(abi::LoadRecord, vx) &&
               offsetof(LoadCommand, point) == offsetof(abi::LoadRecord, px) &&
-              offsetof(LoadCommand, kind) == offsetof(abi::LoadRecord, kind) &&
-              sizeof(Load) == 1 && std::is_trivially_copyable_v<LoadCommand>);
+              offsetof(LoadCommand, kind) == offsetof(abi::LoadRecord, kind) && sizeof(Load) == 1 &&
+              std::is_trivially_copyable_v<LoadCommand>);
 static_assert(std::endian::native == std::endian::little);
 
 class RigidBodyTarget final : public NativeTarget {
