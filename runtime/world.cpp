@@ -1,8 +1,8 @@
 #include "runtime/world.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace alloy {
@@ -33,12 +33,24 @@ struct World::Slot {
 
 // --- WorldView / ResolverAccess ----------------------------------------------
 
-const PropertyRegistry& WorldView::properties() const { return world_.properties(); }
-const PropertyStore& WorldView::store() const { return world_.store_; }
-PropertyId WorldView::property(std::string_view name) const { return world_.properties().id(name); }
-std::uint64_t WorldView::step() const { return world_.step_; }
-double WorldView::time() const { return world_.time_; }
-double WorldView::dt() const { return world_.def_.dt; }
+const PropertyRegistry& WorldView::properties() const {
+  return world_.properties();
+}
+const PropertyStore& WorldView::store() const {
+  return world_.store_;
+}
+PropertyId WorldView::property(std::string_view name) const {
+  return world_.properties().id(name);
+}
+std::uint64_t WorldView::step() const {
+  return world_.step_;
+}
+double WorldView::time() const {
+  return world_.time_;
+}
+double WorldView::dt() const {
+  return world_.def_.dt;
+}
 
 void WorldView::emit(Event e) const {
   // step and time are stamped at publish: the step an event happened in, and
@@ -160,13 +172,16 @@ void World::unfreeze(ObjectId id) {
 
 World::World(PluginRegistry& plugins, WorldDef def)
     : plugins_(plugins), def_(std::move(def)), store_(plugins.properties()) {
-  if (!(def_.dt > 0) || !std::isfinite(def_.dt)) throw InputError("the time step dt must be a positive number");
+  if (!(def_.dt > 0) || !std::isfinite(def_.dt))
+    throw InputError("the time step dt must be a positive number");
   for (const auto& name : def_.plugins)
     if (!plugins_.find(name)) throw InputError("unknown plugin '" + name + "'");
   for (const auto& [name, n] : def_.every)
     if (n < 1) throw InputError("'every' for '" + name + "' must be at least 1");
-  plugins_.properties().add({.name = "name", .kind = PropertyKind::String,
-                             .doc = "unique scene name of the object", .owner = "runtime"});
+  plugins_.properties().add({.name = "name",
+                             .kind = PropertyKind::String,
+                             .doc = "unique scene name of the object",
+                             .owner = "runtime"});
   for (const AreaDef& a : def_.areas) {
     if (a.name.empty()) throw InputError("an area needs a name");
     for (const Area& other : areas_)
@@ -178,7 +193,8 @@ World::World(PluginRegistry& plugins, WorldDef def)
   for (const auto& [what, name] : def_.use) {
     const PluginDef* d = plugins_.find(name);
     if (!d) throw InputError("use: unknown plugin '" + name + "'");
-    if (d->info.provides != what) throw InputError("use: '" + name + "' does not provide '" + what + "'");
+    if (d->info.provides != what)
+      throw InputError("use: '" + name + "' does not provide '" + what + "'");
   }
 }
 
@@ -186,7 +202,8 @@ World::~World() = default;
 
 void World::set_dt(double dt) {
   if (started_) throw AccessError("the time step cannot change once the world has started");
-  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("the time step dt must be a positive number");
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InputError("the time step dt must be a positive number");
   def_.dt = dt;
 }
 
@@ -246,7 +263,8 @@ void World::check(ObjectId id) const {
     try {
       def->check(*this, id);
     } catch (const InputError& e) {
-      throw InputError(ErrorLocation{e.where().file, e.where().line, store_.describe(id)}, e.bare());
+      throw InputError(ErrorLocation{e.where().file, e.where().line, store_.describe(id)},
+                       e.bare());
     }
   }
 }
@@ -257,7 +275,8 @@ PropertyValue World::get(ObjectId id, std::string_view property) const {
 
 void World::schedule(double time, ObjectId id, PropertyId property, const PropertyValue& value) {
   if (!std::isfinite(time) || time < 0)
-    throw InputError(ErrorLocation{"", 0, store_.describe(id)}, "an input's time must be a number of seconds >= 0");
+    throw InputError(ErrorLocation{"", 0, store_.describe(id)},
+                     "an input's time must be a number of seconds >= 0");
   PropertyValue v = store_.checked(id, property, value);
   auto at = std::upper_bound(inputs_.begin() + std::ptrdiff_t(next_input_), inputs_.end(), time,
                              [](double t, const ScheduledInput& in) { return t < in.time; });
@@ -270,16 +289,24 @@ std::string value_text(const PropertyValue& v, const PropertyDef& def, const Pro
   return std::visit(
       [&](const auto& x) -> std::string {
         using T = std::decay_t<decltype(x)>;
-        if constexpr (std::is_same_v<T, double>) return std::snprintf(buf, sizeof buf, "%g", x), buf;
-        else if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(x);
-        else if constexpr (std::is_same_v<T, bool>) return x ? "true" : "false";
-        else if constexpr (std::is_same_v<T, Vec3>) return std::snprintf(buf, sizeof buf, "{%g, %g, %g}", x.x, x.y, x.z), buf;
+        if constexpr (std::is_same_v<T, double>)
+          return std::snprintf(buf, sizeof buf, "%g", x), buf;
+        else if constexpr (std::is_same_v<T, std::int64_t>)
+          return std::to_string(x);
+        else if constexpr (std::is_same_v<T, bool>)
+          return x ? "true" : "false";
+        else if constexpr (std::is_same_v<T, Vec3>)
+          return std::snprintf(buf, sizeof buf, "{%g, %g, %g}", x.x, x.y, x.z), buf;
         else if constexpr (std::is_same_v<T, Quat>)
           return std::snprintf(buf, sizeof buf, "{%g, %g, %g, %g}", x.w, x.x, x.y, x.z), buf;
-        else if constexpr (std::is_same_v<T, std::string>) return "\"" + x + "\"";
-        else if constexpr (std::is_same_v<T, ObjectId>) return x.is_null() ? "none" : store.describe(x);
-        else if constexpr (std::is_same_v<T, RefList>) return std::to_string(x.size()) + " objects";
-        else return def.enum_values.at(std::size_t(x.index));
+        else if constexpr (std::is_same_v<T, std::string>)
+          return "\"" + x + "\"";
+        else if constexpr (std::is_same_v<T, ObjectId>)
+          return x.is_null() ? "none" : store.describe(x);
+        else if constexpr (std::is_same_v<T, RefList>)
+          return std::to_string(x.size()) + " objects";
+        else
+          return def.enum_values.at(std::size_t(x.index));
       },
       v);
 }
@@ -305,7 +332,9 @@ void World::apply_inputs() {
     if (!store_.alive(in.id)) continue;  // the player removed it meanwhile
     store_.set(in.id, in.property, in.value);
     const PropertyDef& def = properties().def(in.property);
-    pending_.push_back(Event{.type = "input", .source = "schedule", .a = in.id,
+    pending_.push_back(Event{.type = "input",
+                             .source = "schedule",
+                             .a = in.id,
                              .text = def.name + " = " + value_text(in.value, def, store_)});
   }
 }
@@ -316,7 +345,9 @@ World::Slot* World::find_slot(std::string_view instance) const {
   return nullptr;
 }
 
-bool World::has_stage(std::string_view name) const { return find_slot(name) != nullptr; }
+bool World::has_stage(std::string_view name) const {
+  return find_slot(name) != nullptr;
+}
 
 Stage* World::stage(std::string_view name) {
   Slot* s = find_slot(name);
@@ -417,7 +448,9 @@ void World::step() {
   if (!input_observers_.empty()) tell(WorldInput{.kind = WorldInput::Kind::Stepped});
 }
 
-bool World::due(const Slot& s) const { return step_ % std::uint64_t(s.every) == 0; }
+bool World::due(const Slot& s) const {
+  return step_ % std::uint64_t(s.every) == 0;
+}
 
 bool World::feeds(const Slot& s, std::uint64_t advance_step) const {
   // Commands queue up until their resolver advances: an interaction whose
@@ -452,8 +485,10 @@ bool World::inputs_changed(Slot& s) const {
   std::size_t i = 0;
   bool changed = !s.updated_once;
   auto check = [&](std::uint64_t v) {
-    if (i == s.seen.size()) s.seen.push_back(v), changed = true;
-    else if (s.seen[i] != v) s.seen[i] = v, changed = true;
+    if (i == s.seen.size())
+      s.seen.push_back(v), changed = true;
+    else if (s.seen[i] != v)
+      s.seen[i] = v, changed = true;
     ++i;
   };
   for (PropertyId p : s.reads) {
@@ -638,7 +673,8 @@ const Scope* World::global_scope(const PluginDef& def) {
   for (std::size_t i = 0; i < areas_.size(); ++i)
     for (const auto& p : areas_[i].def.plugins) {
       const PluginDef* d = plugins_.find(p);
-      if (p == def.info.name || (d && !def.info.provides.empty() && d->info.provides == def.info.provides)) {
+      if (p == def.info.name ||
+          (d && !def.info.provides.empty() && d->info.provides == def.info.provides)) {
         excluded.push_back(int(i));
         break;
       }
@@ -688,7 +724,8 @@ void World::activate_needed() {
       for (int area = -1; area < int(areas_.size()); ++area) {
         for (const auto& name : plugins_.order()) {
           const PluginDef* def = plugins_.find(name);
-          const std::string instance = area < 0 ? name : name + "@" + areas_[std::size_t(area)].def.name;
+          const std::string instance =
+              area < 0 ? name : name + "@" + areas_[std::size_t(area)].def.name;
           if (def->info.kind != kind || has_stage(instance) || !needed_in(*def, area)) continue;
           instantiate(*def, area);
           grew = true;
@@ -708,29 +745,41 @@ void World::instantiate(const PluginDef& def, int area) {
   auto slot = std::make_unique<Slot>();
   slot->info = def.info;
   slot->area = area;
-  slot->instance = area < 0 ? def.info.name : def.info.name + "@" + areas_[std::size_t(area)].def.name;
+  slot->instance =
+      area < 0 ? def.info.name : def.info.name + "@" + areas_[std::size_t(area)].def.name;
   slot->scope = area < 0 ? global_scope(def) : &areas_[std::size_t(area)].scope;
   for (const auto& p : def.info.reads) slot->reads.push_back(properties().id(p));
   for (const auto& p : def.info.writes) slot->writes.push_back(properties().id(p));
-  if (auto it = def_.every.find(slot->instance); it != def_.every.end()) slot->every = it->second;
-  else if (auto it2 = def_.every.find(def.info.name); it2 != def_.every.end()) slot->every = it2->second;
+  if (auto it = def_.every.find(slot->instance); it != def_.every.end())
+    slot->every = it->second;
+  else if (auto it2 = def_.every.find(def.info.name); it2 != def_.every.end())
+    slot->every = it2->second;
   const auto& order = plugins_.order();
-  slot->registry_rank = std::size_t(std::find(order.begin(), order.end(), def.info.name) - order.begin());
+  slot->registry_rank =
+      std::size_t(std::find(order.begin(), order.end(), def.info.name) - order.begin());
 
   static const PluginSettings kNoSettings;
   const PluginSettings* settings = &kNoSettings;
-  if (auto it = def_.settings.find(def.info.name); it != def_.settings.end()) settings = &it->second;
+  if (auto it = def_.settings.find(def.info.name); it != def_.settings.end())
+    settings = &it->second;
   if (area >= 0) {
     const auto& own = areas_[std::size_t(area)].def.settings;
     if (auto it = own.find(def.info.name); it != own.end()) settings = &it->second;
   }
-  PluginContext ctx(*this, slot->info, *settings, area < 0 ? "" : areas_[std::size_t(area)].def.name);
+  PluginContext ctx(*this, slot->info, *settings,
+                    area < 0 ? "" : areas_[std::size_t(area)].def.name);
   slot->stage = def.create(ctx);
   if (!slot->stage) throw AccessError("plugin '" + def.info.name + "' created nothing");
   switch (def.info.kind) {
-    case StageKind::Resolver: slot->resolver = dynamic_cast<Resolver*>(slot->stage.get()); break;
-    case StageKind::Derived: slot->derived = dynamic_cast<DerivedSet*>(slot->stage.get()); break;
-    case StageKind::Interaction: slot->interaction = dynamic_cast<Interaction*>(slot->stage.get()); break;
+    case StageKind::Resolver:
+      slot->resolver = dynamic_cast<Resolver*>(slot->stage.get());
+      break;
+    case StageKind::Derived:
+      slot->derived = dynamic_cast<DerivedSet*>(slot->stage.get());
+      break;
+    case StageKind::Interaction:
+      slot->interaction = dynamic_cast<Interaction*>(slot->stage.get());
+      break;
   }
   if (!slot->resolver && !slot->derived && !slot->interaction)
     throw AccessError("plugin '" + def.info.name + "' created a stage of the wrong kind");
@@ -753,7 +802,8 @@ bool AreaDef::contains(Vec3 p) const {
 }
 
 std::string World::area_of(ObjectId id) const {
-  if (!store_.alive(id) || id.index >= area_of_slot_.size() || area_of_slot_[id.index] < 0) return "";
+  if (!store_.alive(id) || id.index >= area_of_slot_.size() || area_of_slot_[id.index] < 0)
+    return "";
   return areas_[std::size_t(area_of_slot_[id.index])].def.name;
 }
 
@@ -792,8 +842,12 @@ bool World::assign_areas() {
     if (in == was) continue;
     if (was >= 0) areas_[std::size_t(was)].left.push_back(slot);
     if (const ObjectId id = store_.id_at(slot); id && (was >= 0 || in >= 0) && started_) {
-      auto name = [&](int a) { return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name; };
-      pending_.push_back(Event{.type = "area_entered", .source = "world", .a = id,
+      auto name = [&](int a) {
+        return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name;
+      };
+      pending_.push_back(Event{.type = "area_entered",
+                               .source = "world",
+                               .a = id,
                                .text = name(was) + " -> " + name(in)});
     }
     was = in;
@@ -901,25 +955,31 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
   const PluginDef* f = plugins_.find(from);
   const PluginDef* t = plugins_.find(to);
   if (!f) throw InputError("swap: unknown plugin '" + std::string(from) + "'");
-  if (!t) throw InputError("swap: unknown plugin '" + std::string(to) + "'" +
-                           [&] { auto n = closest_name(to, plugins_.order());
-                                 return n.empty() ? std::string() : " (did you mean '" + n + "'?)"; }());
+  if (!t)
+    throw InputError("swap: unknown plugin '" + std::string(to) + "'" + [&] {
+      auto n = closest_name(to, plugins_.order());
+      return n.empty() ? std::string() : " (did you mean '" + n + "'?)";
+    }());
   if (f->info.kind != t->info.kind)
-    throw InputError("swap: '" + std::string(from) + "' is a " + std::string(to_string(f->info.kind)) +
-                     " and '" + std::string(to) + "' a " + std::string(to_string(t->info.kind)));
+    throw InputError("swap: '" + std::string(from) + "' is a " +
+                     std::string(to_string(f->info.kind)) + " and '" + std::string(to) + "' a " +
+                     std::string(to_string(t->info.kind)));
   Slot* old = nullptr;
   if (area.empty()) {
     old = find_slot(from);
     std::erase(disabled_, std::string(to));
     if (!listed(disabled_, from)) disabled_.emplace_back(from);
-    if (!def_.plugins.empty() && !listed(def_.plugins, to) && !listed(enabled_, to)) enabled_.emplace_back(to);
+    if (!def_.plugins.empty() && !listed(def_.plugins, to) && !listed(enabled_, to))
+      enabled_.emplace_back(to);
     if (!t->info.provides.empty()) def_.use[t->info.provides] = std::string(to);
   } else {
-    auto a = std::find_if(areas_.begin(), areas_.end(), [&](const Area& x) { return x.def.name == area; });
+    auto a = std::find_if(areas_.begin(), areas_.end(),
+                          [&](const Area& x) { return x.def.name == area; });
     if (a == areas_.end()) throw InputError("swap: no area is called '" + std::string(area) + "'");
     auto it = std::find(a->def.plugins.begin(), a->def.plugins.end(), from);
     if (it == a->def.plugins.end())
-      throw InputError("swap: area '" + std::string(area) + "' has no plugin '" + std::string(from) + "'");
+      throw InputError("swap: area '" + std::string(area) + "' has no plugin '" +
+                       std::string(from) + "'");
     *it = std::string(to);
     old = find_slot(std::string(from) + "@" + std::string(area));
   }
@@ -927,9 +987,11 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
   // Global scopes depend on which areas provide what; recompute them.
   for (auto& s : slots_)
     if (s->area < 0) s->scope = global_scope(*plugins_.find(s->info.name));
-  pending_.push_back(Event{.type = "resolver_swapped", .source = "world",
-                           .text = std::string(from) + " -> " + std::string(to) +
-                                   (area.empty() ? std::string(" (everywhere)") : " in " + std::string(area))});
+  pending_.push_back(
+      Event{.type = "resolver_swapped",
+            .source = "world",
+            .text = std::string(from) + " -> " + std::string(to) +
+                    (area.empty() ? std::string(" (everywhere)") : " in " + std::string(area))});
   if (started_) {
     synced_ = false;
     sync_structure();  // instantiate the new stage and its dependents, build, prime
@@ -947,7 +1009,8 @@ std::vector<std::string> World::plugin_changed(std::string_view plugin) {
 std::vector<std::string> World::plugin_changed_now(std::string_view plugin) {
   std::vector<std::string> before = active_stages();
   for (;;) {
-    auto it = std::find_if(slots_.begin(), slots_.end(), [&](const auto& s) { return s->info.name == plugin; });
+    auto it = std::find_if(slots_.begin(), slots_.end(),
+                           [&](const auto& s) { return s->info.name == plugin; });
     if (it == slots_.end()) break;
     remove_with_dependents(it->get());
   }
@@ -956,7 +1019,8 @@ std::vector<std::string> World::plugin_changed_now(std::string_view plugin) {
   // A slot whose plugin already left the registry (a mod unloading several
   // plugins, told one at a time) keeps its scope: its own call removes it.
   for (auto& s : slots_)
-    if (const PluginDef* d = plugins_.find(s->info.name); d && s->area < 0) s->scope = global_scope(*d);
+    if (const PluginDef* d = plugins_.find(s->info.name); d && s->area < 0)
+      s->scope = global_scope(*d);
   if (started_) {
     synced_ = false;
     sync_structure();
@@ -965,10 +1029,12 @@ std::vector<std::string> World::plugin_changed_now(std::string_view plugin) {
 }
 
 void World::schedule_swap(double time, std::string area, std::string from, std::string to) {
-  if (!std::isfinite(time) || time < 0) throw InputError("a swap's time must be a number of seconds >= 0");
+  if (!std::isfinite(time) || time < 0)
+    throw InputError("a swap's time must be a number of seconds >= 0");
   if (!plugins_.find(from)) throw InputError("swap: unknown plugin '" + from + "'");
   if (!plugins_.find(to)) throw InputError("swap: unknown plugin '" + to + "'");
-  if (!area.empty() && std::none_of(areas_.begin(), areas_.end(), [&](const Area& a) { return a.def.name == area; }))
+  if (!area.empty() &&
+      std::none_of(areas_.begin(), areas_.end(), [&](const Area& a) { return a.def.name == area; }))
     throw InputError("swap: no area is called '" + area + "'");
   auto at = std::upper_bound(swaps_.begin(), swaps_.end(), time,
                              [](double t, const ScheduledSwap& s) { return t < s.time; });

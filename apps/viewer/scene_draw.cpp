@@ -572,8 +572,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   if (opt.contact_forces) {
     if (auto* contacts = dynamic_cast<ContactSet*>(world.stage("collisions"))) {
       const double dt = world.dt();
-      for (const std::span<const ContactPair> list :
-           {contacts->began(), contacts->ongoing()}) {
+      for (const std::span<const ContactPair> list : {contacts->began(), contacts->ongoing()}) {
         for (const ContactPair& pair : list) {
           const auto points = contacts->points(pair);
           if (points.empty()) continue;

@@ -17,8 +17,8 @@
 #include "lua/mod_runtime.hpp"
 #include "lua/save_meta.hpp"
 #include "resolvers/plugins.hpp"
-#include "runtime/contact_set.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
+#include "runtime/contact_set.hpp"
 
 namespace alloy::viewer {
 

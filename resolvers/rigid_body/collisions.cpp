@@ -24,7 +24,9 @@ std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(a) << 32) | b;
 }
 
-bool by_pair(const ContactPair& x, const ContactPair& y) { return pair_less(x.a, x.b, y.a, y.b); }
+bool by_pair(const ContactPair& x, const ContactPair& y) {
+  return pair_less(x.a, x.b, y.a, y.b);
+}
 
 // --- narrow phase: cylinders and the contact point of round parts ---------------------
 
@@ -205,7 +207,7 @@ struct CollisionSet::Impl {
     bool cylinder = false;
     bool placed = false;
     bool movable = false;
-    double inscribed = 0;  ///< radius of the largest sphere inside the shape, m
+    double inscribed = 0;                ///< radius of the largest sphere inside the shape, m
     double radius = 0, half_length = 0;  ///< a cylinder's, m
     Vec3 pos;
     Quat q;
@@ -237,12 +239,14 @@ struct CollisionSet::Impl {
     shape = v.property("shape"), size = v.property("size"), radius = v.property("radius");
     length = v.property("length"), static_ = v.property("static");
     joint = v.property("joint"), body_a = v.property("body_a"), body_b = v.property("body_b");
-    for (PropertyId p : {shape, size, radius, length, static_}) shape_columns.push_back(&v.store().column(p));
+    for (PropertyId p : {shape, size, radius, length, static_})
+      shape_columns.push_back(&v.store().column(p));
     for (PropertyId p : {joint, body_a, body_b}) joint_columns.push_back(&v.store().column(p));
     have_ids = true;
   }
 
-  static bool changed(const std::vector<const ColumnBase*>& cols, std::vector<std::uint64_t>& seen) {
+  static bool changed(const std::vector<const ColumnBase*>& cols,
+                      std::vector<std::uint64_t>& seen) {
     bool any = seen.size() != cols.size();
     seen.resize(cols.size());
     for (std::size_t i = 0; i < cols.size(); ++i)
@@ -274,7 +278,8 @@ struct CollisionSet::Impl {
       switch (Shape(shp[s].index)) {
         case Shape::Box: {
           const Vec3 e = sz.value_or(s, {});
-          if (!(e.x > 0 && e.y > 0 && e.z > 0)) throw InputError(where, "a box needs a size with every extent > 0");
+          if (!(e.x > 0 && e.y > 0 && e.z > 0))
+            throw InputError(where, "a box needs a size with every extent > 0");
           g.geom = dCreateBox(space, e.x, e.y, e.z);
           g.inscribed = 0.5 * std::min({e.x, e.y, e.z});
           break;
@@ -418,7 +423,8 @@ struct CollisionSet::Impl {
     // Live objects have distinct slots, so slot order is ObjectId order. Always
     // collide a before b: the points then do not depend on the space's order.
     if (s1 > s2) std::swap(s1, s2), std::swap(g1, g2);
-    if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
+    if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2)))
+      return;
     const int n = collide_parts(g1, g2, int(m.buffer.size()), m.buffer.data());
     if (n <= 0) return;
     ContactPair& pair = m.pairs->emplace_back();
@@ -447,7 +453,7 @@ struct CollisionSet::Impl {
     const Impl* m = nullptr;
     std::uint32_t self = 0;
     const std::vector<ContactPair>* touching = nullptr;  ///< pairs of the previous update, sorted
-    double t = 1e300;  ///< distance along the ray, m
+    double t = 1e300;                                    ///< distance along the ray, m
     std::uint32_t slot = 0;
     Vec3 position, normal;
   };
@@ -458,7 +464,9 @@ struct CollisionSet::Impl {
     dGeomID other = o1 == m.ray ? o2 : o1;
     const auto s = std::uint32_t(reinterpret_cast<std::uintptr_t>(dGeomGetData(other)));
     if (s == h.self) return;
-    if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(h.self, s))) return;
+    if (!m.joined.empty() &&
+        std::binary_search(m.joined.begin(), m.joined.end(), pair_key(h.self, s)))
+      return;
     // Parts it touched already: the discrete contact is handling them.
     ContactPair key;
     key.a = m.geoms[std::min(s, h.self)].id, key.b = m.geoms[std::max(s, h.self)].id;
@@ -665,7 +673,7 @@ struct CollisionSet::Impl {
   std::vector<bool> jointed;  // by slot
   std::vector<dContactGeom> buffer;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // sort keys of the step's pairs
-  std::vector<std::uint32_t> bucket;                          // per slot: counting sort by a
+  std::vector<std::uint32_t> bucket;                           // per slot: counting sort by a
   std::vector<ContactPair> sorted;
 
   /// Sorts the step's pairs by slot pair (the same order as by (a, b): live
@@ -686,7 +694,8 @@ struct CollisionSet::Impl {
       for (const ContactPair& p : pairs) ++bucket[p.a.index + 1];
       for (std::size_t s = 1; s <= slots; ++s) bucket[s] += bucket[s - 1];
       for (std::uint32_t k = 0; k < n; ++k)
-        order[bucket[pairs[k].a.index]++] = {(std::uint64_t(pairs[k].a.index) << 32) | pairs[k].b.index, k};
+        order[bucket[pairs[k].a.index]++] = {
+            (std::uint64_t(pairs[k].a.index) << 32) | pairs[k].b.index, k};
       for (std::size_t i = 1; i < n; ++i) {  // runs of equal a: short
         const auto key = order[i];
         std::size_t j = i;
@@ -701,8 +710,8 @@ struct CollisionSet::Impl {
   bool geoms_dirty = true, joints_dirty = true;
 
   bool have_ids = false;
-  PropertyId position{}, orientation{}, velocity{}, angular_velocity{}, shape{}, size{}, radius{}, length{},
-      static_{}, joint{}, body_a{}, body_b{};
+  PropertyId position{}, orientation{}, velocity{}, angular_velocity{}, shape{}, size{}, radius{},
+      length{}, static_{}, joint{}, body_a{}, body_b{};
   std::vector<const ColumnBase*> shape_columns, joint_columns;
   std::vector<std::uint64_t> shape_seen, joint_seen;
 
@@ -717,7 +726,9 @@ CollisionSet::CollisionSet(const RigidBodyResolver& rigid, int max_contacts, boo
   if (always_impulses) always_ = rigid_.demand_impulses();
 }
 
-ImpulseDemand CollisionSet::demand_impulses() const { return rigid_.demand_impulses(); }
+ImpulseDemand CollisionSet::demand_impulses() const {
+  return rigid_.demand_impulses();
+}
 
 CollisionSet::~CollisionSet() = default;
 
@@ -875,7 +886,8 @@ void CollisionSet::sweep(const WorldView& world) {
     pair.first = std::uint32_t(points_.size());
     pair.count = 1;
     pair.depth = p.depth;
-    const std::uint32_t sa = self_first ? cand.slot : hit.slot, sb = self_first ? hit.slot : cand.slot;
+    const std::uint32_t sa = self_first ? cand.slot : hit.slot,
+                        sb = self_first ? hit.slot : cand.slot;
     pair.normal_speed = dot(m.motion(sb).at(p.position) - m.motion(sa).at(p.position), p.normal);
     points_.push_back(p);
     current_.push_back(pair);
@@ -892,7 +904,8 @@ void CollisionSet::sweep(const WorldView& world) {
     current_.resize(kept);
     for (const Impl::Candidate& cand : m.candidates) swept_at[cand.slot] = 0;
   }
-  std::sort(sweeps_.begin(), sweeps_.end(), [](const Sweep& x, const Sweep& y) { return x.part < y.part; });
+  std::sort(sweeps_.begin(), sweeps_.end(),
+            [](const Sweep& x, const Sweep& y) { return x.part < y.part; });
 }
 
 // --- save and restore (Stage::save_state; docs/saves.md) ------------------------------

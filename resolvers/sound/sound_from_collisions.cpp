@@ -13,8 +13,7 @@ void SoundFromCollisions::apply(const WorldView& world) {
   for (const Impact& impact : pending_) {
     const Key& k = impact.key;
     double impulse = 0;
-    if (const ContactPair* p = collisions_.find(k.a, k.b);
-        p && p->began_step == k.began_step) {
+    if (const ContactPair* p = collisions_.find(k.a, k.b); p && p->began_step == k.began_step) {
       impulse = p->total_impulse;
     } else {
       for (const ContactPair& e : collisions_.ended())
@@ -94,8 +93,8 @@ void register_sound_from_collisions(PluginRegistry& registry) {
                .target = "sound",
                .doc = "parts that hit each other ring, as hard as the rigid body's impulse says"},
       .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
-        return std::make_unique<SoundFromCollisions>(
-            ctx.target<SoundResolver>(), ctx.dependency<ContactSet>("collisions"));
+        return std::make_unique<SoundFromCollisions>(ctx.target<SoundResolver>(),
+                                                     ctx.dependency<ContactSet>("collisions"));
       },
   });
 }

@@ -161,7 +161,8 @@ TEST(BoundedInputs, AForceAtAFarPointIsRefusedForItsTorque) {
     if (w.step() == 3) r.add_force(b.victim, Vec3{0, 1, 0}, Vec3{1e300, 0, 0});
   };
   b.w().run(30);
-  ASSERT_NO_FATAL_FAILURE(b.expect_refused("pusher", "add_force_at {0, 1, 0} N at {1e+300, 0, 0} m"));
+  ASSERT_NO_FATAL_FAILURE(
+      b.expect_refused("pusher", "add_force_at {0, 1, 0} N at {1e+300, 0, 0} m"));
   b.expect_witness_fell();
 }
 
@@ -265,7 +266,8 @@ TEST(BoundedInputs, ATinyMassIsLeftOutOfTheRigidBody) {
   Bench b;
   b.w().set(b.victim, "mass", 1e-300);
   b.w().run(30);
-  ASSERT_NO_FATAL_FAILURE(b.expect_refused("rigid_body", "has a mass of 1e-300 kg, outside the 1e-09 .. 1e+12 kg"));
+  ASSERT_NO_FATAL_FAILURE(
+      b.expect_refused("rigid_body", "has a mass of 1e-300 kg, outside the 1e-09 .. 1e+12 kg"));
   EXPECT_EQ(b.position(b.victim).y, 10.0);  // left where it was
   b.expect_witness_fell();
 }
