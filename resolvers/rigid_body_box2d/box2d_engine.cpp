@@ -773,7 +773,7 @@ void Box2DContacts::update(const WorldView& world) {
     c.normal_speed = p.normal_speed;
     c.depth = p.depth;
   }
-  publish(world, engine_.impulses(), engine_.impulses_computed());
+  publish(world, engine_.impulses(), engine_.impulses_computed(), world.step());
 }
 
 }  // namespace alloy::box2d
