@@ -131,7 +131,7 @@ mod.interaction { name = "quiet.on_sound", reads = { "mass" }, target = "sound",
   } catch (const InputError& e) {
     const std::string m = e.what();
     EXPECT_TRUE(contains(m, "not a resolver Lua can queue on")) << m;
-    EXPECT_TRUE(contains(m, "rigid_body, recorder.native")) << m;
+    EXPECT_TRUE(contains(m, "rigid_body, rigid_body.box2d, recorder.native")) << m;
   }
 }
 
