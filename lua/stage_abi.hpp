@@ -89,8 +89,9 @@ struct Call {
 };
 
 /// A load record of a target that takes them in place: the rigid body's
-/// queue entry (rigid::RigidBodyEngine::LoadCommand, resolvers/rigid_body/engine.hpp; native_bindings.cpp asserts
-/// the layout). `id` is the slot and generation, as Call::ids holds them.
+/// queue entry (rigid::RigidBodyEngine::LoadCommand, resolvers/rigid_body/engine.hpp;
+/// native_bindings.cpp asserts the layout). `id` is the slot and generation, as Call::ids holds
+/// them.
 struct LoadRecord {
   std::uint64_t id;
   double vx, vy, vz;  ///< force or torque
