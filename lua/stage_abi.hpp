@@ -90,7 +90,8 @@ struct Call {
 
 /// A load record of a target that takes them in place: the runtime's
 /// LoadRecord (runtime/interaction_function.hpp; native_bindings.cpp asserts
-/// the layout), which such a resolver's queue holds. `id` is the slot and generation, as Call::ids holds them.
+/// the layout), which such a resolver's queue holds. `id` is the slot and generation, as Call::ids
+/// holds them.
 struct LoadRecord {
   std::uint64_t id;
   double vx, vy, vz;  ///< force or torque

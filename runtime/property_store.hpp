@@ -112,7 +112,8 @@ class ColumnBase {
   std::uint64_t version_ = 0;
   std::uint64_t membership_version_ = 0;
 
-  template <class T> friend class ColumnWriter;
+  template <class T>
+  friend class ColumnWriter;
 };
 
 template <class T>
@@ -123,13 +124,16 @@ class Column final : public ColumnBase {
   std::span<const T> values() const { return values_; }
 
   PropertyValue get_value(std::uint32_t slot) const override {
-    if constexpr (std::is_same_v<T, std::uint8_t>) return PropertyValue(values_[slot] != 0);
-    else return PropertyValue(values_[slot]);
+    if constexpr (std::is_same_v<T, std::uint8_t>)
+      return PropertyValue(values_[slot] != 0);
+    else
+      return PropertyValue(values_[slot]);
   }
 
  private:
   friend class PropertyStore;
-  template <class U> friend class ColumnWriter;
+  template <class U>
+  friend class ColumnWriter;
 
   void resize(std::size_t slots) override {
     values_.resize(slots);
@@ -268,7 +272,10 @@ class PropertyStore {
   const ColumnBase* find_column(PropertyId id) const {
     return id < columns_.size() ? columns_[id].get() : nullptr;
   }
-  template <class T> const Column<T>& typed(PropertyId id) const { return typed_mut<T>(id); }
+  template <class T>
+  const Column<T>& typed(PropertyId id) const {
+    return typed_mut<T>(id);
+  }
 
   /// Generic edit (scene loading, player edits): type-checked against the
   /// registry, throws InputError naming the property and the expected type.
@@ -313,7 +320,8 @@ class PropertyStore {
 
  private:
   friend class ResolverAccess;  // the only way to a writable column
-  template <class T> Column<T>& typed_mut(PropertyId id) const;
+  template <class T>
+  Column<T>& typed_mut(PropertyId id) const;
   ColumnBase& make_column(PropertyId id) const;
   [[noreturn]] void not_alive(ObjectId id) const;
 
@@ -342,9 +350,12 @@ bool Column<T>::set_value(std::uint32_t slot, const PropertyValue& v) {
     if (!b) return false;
     value = *b ? 1 : 0;
   } else if constexpr (std::is_same_v<T, double>) {
-    if (const double* d = std::get_if<double>(&v)) value = *d;
-    else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) value = double(*i);
-    else return false;
+    if (const double* d = std::get_if<double>(&v))
+      value = *d;
+    else if (const std::int64_t* i = std::get_if<std::int64_t>(&v))
+      value = double(*i);
+    else
+      return false;
   } else {
     const T* p = std::get_if<T>(&v);
     if (!p) return false;

@@ -100,9 +100,9 @@ struct ReplayInput {
   };
   std::uint64_t step = 0;
   Kind kind = Kind::Set;
-  ObjectId id;                       ///< Set, Timeline, Remove, Create, Destroy, Unfreeze
-  std::string property;              ///< Set, Timeline, Remove
-  PropertyValue value;               ///< Set, Timeline
+  ObjectId id;           ///< Set, Timeline, Remove, Create, Destroy, Unfreeze
+  std::string property;  ///< Set, Timeline, Remove
+  PropertyValue value;   ///< Set, Timeline
   std::string area, from, to,
       text;  ///< Swap, Swapped (area, from, to); Reload, Create, PluginChanged (text)
   /// Restore: the snapshot restored (written in the file as the snapshot's

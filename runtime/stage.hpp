@@ -38,9 +38,9 @@ std::string_view to_string(StageKind kind);
 /// stage is needed, in which order stages run, which columns a resolver may
 /// write, and when a derived set may be skipped.
 struct StageInfo {
-  std::string name;                ///< plugin name, e.g. "rigid_body", "gravity.uniform"
+  std::string name;  ///< plugin name, e.g. "rigid_body", "gravity.uniform"
   StageKind kind = StageKind::Resolver;
-  std::vector<std::string> reads;  ///< property columns read
+  std::vector<std::string> reads;   ///< property columns read
   std::vector<std::string> writes;  ///< property columns written (resolvers only)
   /// The stage is instantiated only if some object carries at least one of
   /// these properties. Empty: needed whenever its dependencies are.
@@ -59,7 +59,7 @@ struct StageInfo {
   /// A dependency not listed is met by the plugin of that name or by any
   /// plugin that provides it (`rigid_body`: ODE's or rigid_body.box2d).
   std::vector<std::string> exact;
-  std::string doc;                     ///< one line for `alloy plugins` and docs
+  std::string doc;  ///< one line for `alloy plugins` and docs
   /// Who defined the stage: the mod's name for a Lua stage, "" for a native
   /// plugin. Messages that blame a stage name its mod too (a mod chooses its
   /// stages' names, so the name alone does not say whose they are).

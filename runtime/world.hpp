@@ -106,8 +106,10 @@ class WorldView {
   const PropertyRegistry& properties() const;
   const PropertyStore& store() const;
   PropertyId property(std::string_view name) const;
-  template <class T> ColumnView<T> column(PropertyId id) const;
-  template <class T> ColumnView<T> column(std::string_view name) const {
+  template <class T>
+  ColumnView<T> column(PropertyId id) const;
+  template <class T>
+  ColumnView<T> column(std::string_view name) const {
     return column<T>(property(name));
   }
   std::uint64_t step() const;
@@ -129,8 +131,10 @@ class ResolverAccess : public WorldView {
                  const Scope* scope = nullptr)
       : WorldView(w, scope), mutable_world_(w), stage_(stage), writes_(writes) {}
   /// Throws AccessError if the resolver did not declare `id` in its writes.
-  template <class T> ColumnWriter<T> writer(PropertyId id);
-  template <class T> ColumnWriter<T> writer(std::string_view name) {
+  template <class T>
+  ColumnWriter<T> writer(PropertyId id);
+  template <class T>
+  ColumnWriter<T> writer(std::string_view name) {
     return writer<T>(property(name));
   }
   /// Refuses a value that is finite but would break the resolver (a load that
@@ -169,7 +173,8 @@ class World {
   /// The value if `property` is registered, the object carries it and it is a
   /// T (a number may be read from an integer property); else nullopt. For
   /// tools and checks, not for a stage's inner loop.
-  template <class T> std::optional<T> value(ObjectId id, std::string_view property) const;
+  template <class T>
+  std::optional<T> value(ObjectId id, std::string_view property) const;
   /// Input scheduled ahead, such as a scene's timeline ("at t = 1 s the switch
   /// bar is let go"): the edit is applied like a player's hand, between steps,
   /// at the start of the first step that begins at or after `time`, and is
@@ -412,7 +417,6 @@ class World {
   bool wanted(const Slot& s) const;
   bool inputs_changed(Slot& s) const;
 
-
   PluginRegistry& plugins_;
   WorldDef def_;
   PropertyStore store_;
@@ -420,22 +424,23 @@ class World {
   std::vector<Slot*> resolvers_, derived_, interactions_;
   std::vector<Area> areas_;
   std::vector<int> area_of_slot_;  // area index per object slot, -1 for none
-  std::map<std::string, Outside, std::less<>> outside_;  // scopes of global stages kept out of areas
-  std::vector<std::string> disabled_;  // global plugins swapped out
-  std::vector<std::string> enabled_;   // global plugins swapped in beyond def_.plugins
-  std::vector<ScheduledSwap> swaps_;   // sorted by time
+  std::map<std::string, Outside, std::less<>>
+      outside_;                         // scopes of global stages kept out of areas
+  std::vector<std::string> disabled_;   // global plugins swapped out
+  std::vector<std::string> enabled_;    // global plugins swapped in beyond def_.plugins
+  std::vector<ScheduledSwap> swaps_;    // sorted by time
   std::vector<ScheduledInput> inputs_;  // sorted by time, stable
   std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;
   double time_ = 0;
   bool started_ = false;
   bool synced_ = false;
-  bool primed_ = false;  // start() has primed the pipeline
+  bool primed_ = false;    // start() has primed the pipeline
   bool advanced_ = false;  // within step(): this step's advance is done
   std::uint64_t seen_structure_ = 0;
   std::uint64_t seen_by_resolvers_ = 0;  // store_.resolver_membership_version() at the last sync
-  std::vector<ObjectId> frozen_;  // by slot
-  bool frozen_changed_ = false;   // since the last structure sync
+  std::vector<ObjectId> frozen_;         // by slot
+  bool frozen_changed_ = false;          // since the last structure sync
   Scope live_;  // every object not frozen: the scope of global stages while any is frozen
   const std::string* current_stage_ = nullptr;  // for Event::source
   mutable std::vector<Event> pending_;

@@ -22,8 +22,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "runtime/contact_set.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/property_ref.hpp"
 
 namespace alloy::sound {
@@ -62,7 +62,7 @@ class SoundFromCollisions final : public Interaction {
 
   SoundResolver& sound_;
   const ContactSet& collisions_;
-  ImpulseDemand impulses_;  // strikes are as hard as the impulse: declared to the rigid body
+  ImpulseDemand impulses_;       // strikes are as hard as the impulse: declared to the rigid body
   std::vector<Impact> pending_;  // began at the last apply, struck at this one
   std::vector<Key> seen_;        // began pairs already handled, sorted; pruned when they end
   std::vector<Impact> pending_before_;  // pending_ and seen_ before the last apply (save_state)
