@@ -22,10 +22,12 @@
 //          x += dt v) that is semi-implicit (symplectic) Euler, first order.
 // Cost     below kTreeFromMasses sources, O(n^2) pairs by direct summation in
 //          a fixed order (accelerations(): the bundled space scene's bits);
-//          from there on the Barnes-Hut tree of resolvers/common/multipole_tree
-//          (blocked walk, SIMD near field; O(n log n), RMS relative error of
-//          the accelerations ~1e-4 at kTreeTheta, measured by
-//          bench/scaling.cpp --gravity). Nothing in a step in which no
+//          from there on the fast multipole method of resolvers/common/fmm.hpp
+//          (cell-to-cell expansions of order kTreeOrder, SIMD near field; O(n)
+//          in the expansions, RMS relative error of the accelerations 6.5e-4 on
+//          a cold grid and 2.3e-4 on a Gaussian cluster at kTreeTheta, where the
+//          Barnes-Hut tree before it made 2.9e-4 and 0.9e-4 in 1.6 and 1.2 times
+//          the time; measured by bench/scaling.cpp --gravity). Nothing in a step in which no
 //          position, mass or membership changed.
 #pragma once
 
@@ -53,15 +55,18 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
 /// with the direct sum, bench/scaling.cpp --gravity; the space scene has a
 /// handful of bodies and keeps the direct sum's bits).
 inline constexpr std::size_t kTreeFromMasses = 512;
-/// The tree's opening angle for gravity: every mass is positive, so a cell's
-/// monopole dominates and the error falls as theta^4 of the cell's pull.
+/// The FMM's separation parameter for gravity: every mass is positive, so a
+/// cell's monopole dominates and the error falls as theta^(p+1) of its pull.
 inline constexpr double kTreeTheta = 0.5;
+/// The FMM's expansion order for gravity (0 would be the Barnes-Hut walk).
+inline constexpr int kTreeOrder = 4;
 
-/// Accelerations at every source from all the others, with the tree (`tree`
-/// keeps its memory between calls). out[i] for source[i]; overwritten.
+/// Accelerations at every source from all the others, with the FMM (or, with
+/// `order` 0, the Barnes-Hut tree at opening angle `theta`); `tree` keeps its
+/// memory between calls. out[i] for source[i]; overwritten.
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out,
-                        double theta = kTreeTheta);
+                        double theta = kTreeTheta, int order = kTreeOrder);
 
 class NBodyGravity final : public Resolver {
  public:
