@@ -778,15 +778,12 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
                  ? fmt(stage_gravity_ms) + " ms (stage), " + pm(stage_gravity_ms <= 10)
                  : std::string("stage not measured")) +
             "; the sum alone " + fmt(1e3 * big.tree) + " ms against " + fmt(1e3 * big.prev_direct) +
-            ms before(" + fmt(big.prev_direct / big.tree, 3) + " x),
-          error
-              " + fmt(big.error) +
-              "; the Barnes-Hut walk of session 14 " +
-              fmt(1e3 * big.prev_tree) + " ms (FMM / it " + fmt(big.tree / big.prev_tree, 3) +
-              "), error " + fmt(big.prev_error) + ". The space scene has fewer than " +
-              std::to_string(gravity::kTreeFromMasses) +
-              " masses and keeps the direct sum: its bits, and so its energy drift, are unchanged "
-              "(golden hashes).\n";
+            " ms before (" + fmt(big.prev_direct / big.tree, 3) + "x), error " + fmt(big.error) +
+            "; the Barnes-Hut walk of session 14 " + fmt(1e3 * big.prev_tree) + " ms (FMM / it " +
+            fmt(big.tree / big.prev_tree, 3) + "), error " + fmt(big.prev_error) +
+            ". The space scene has fewer than " + std::to_string(gravity::kTreeFromMasses) +
+            " masses and keeps the direct sum: its bits, and so its energy drift, are unchanged "
+            "(golden hashes).\n";
   }
 }
 
