@@ -22,12 +22,13 @@
 //          x += dt v) that is semi-implicit (symplectic) Euler, first order.
 // Cost     below kTreeFromMasses sources, O(n^2) pairs by direct summation in
 //          a fixed order (accelerations(): the bundled space scene's bits);
-//          from there on the fast multipole method of resolvers/common/fmm.hpp
-//          (cell-to-cell expansions of order kTreeOrder, SIMD near field; O(n)
-//          in the expansions, RMS relative error of the accelerations 6.5e-4 on
-//          a cold grid and 2.3e-4 on a Gaussian cluster at kTreeTheta, where the
-//          Barnes-Hut tree before it made 2.9e-4 and 0.9e-4 in 1.6 and 1.2 times
-//          the time; measured by bench/scaling.cpp --gravity). Nothing in a step in which no
+//          from there on the Barnes-Hut tree of resolvers/common/multipole_tree
+//          (blocked walk, SIMD near field; O(n log n), RMS relative error of
+//          the accelerations ~3e-4 on a cold grid and ~1e-4 on a Gaussian
+//          cluster at kTreeTheta, measured by bench/scaling.cpp --gravity).
+//          The FMM of resolvers/common/fmm.hpp (kTreeOrder > 0) was measured
+//          against it in session 15 and took 1.3 to 2 times as long for
+//          masses at the same theta: the tree stays. Nothing in a step in which no
 //          position, mass or membership changed.
 #pragma once
 
@@ -55,15 +56,16 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
 /// with the direct sum, bench/scaling.cpp --gravity; the space scene has a
 /// handful of bodies and keeps the direct sum's bits).
 inline constexpr std::size_t kTreeFromMasses = 512;
-/// The FMM's separation parameter for gravity: every mass is positive, so a
-/// cell's monopole dominates and the error falls as theta^(p+1) of its pull.
+/// The tree's opening angle for gravity: every mass is positive, so a cell's
+/// monopole dominates and the error falls as theta^4 of the cell's pull.
 inline constexpr double kTreeTheta = 0.5;
-/// The FMM's expansion order for gravity (0 would be the Barnes-Hut walk).
-inline constexpr int kTreeOrder = 4;
+/// 0: the Barnes-Hut walk; from 1, the FMM with expansions of that order
+/// (theta then its separation parameter). 0 by measurement (above).
+inline constexpr int kTreeOrder = 0;
 
-/// Accelerations at every source from all the others, with the FMM (or, with
-/// `order` 0, the Barnes-Hut tree at opening angle `theta`); `tree` keeps its
-/// memory between calls. out[i] for source[i]; overwritten.
+/// Accelerations at every source from all the others, with the Barnes-Hut
+/// tree at opening angle `theta` (or, with `order` from 1, the FMM); `tree`
+/// keeps its memory between calls. out[i] for source[i]; overwritten.
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out,
                         double theta = kTreeTheta, int order = kTreeOrder);
