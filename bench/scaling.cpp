@@ -552,6 +552,7 @@ struct KernelRow {
   int n = 0;
   double prev_tree = 0, tree = 0, prev_direct = NAN, direct = 0;
   double prev_error = 0, error = 0;
+  double fmm = NAN, fmm_error = NAN;  ///< the fast multipole method at its defaults
 };
 
 /// Previous and current tree, previous and current direct sum, on n random magnets.
@@ -592,7 +593,34 @@ KernelRow magnet_kernels(int n, double budget) {
       },
       budget);
   r.error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
+  multipole::Tree fmm;
+  r.fmm = cpu_per_call(
+      [&] {
+        std::fill(f.begin(), f.end(), Vec3{});
+        accumulate_pole_forces(poles, eps, f, {.method = Summation::Fmm, .theta = kFmmTheta}, &fmm);
+      },
+      budget);
+  r.fmm_error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
   return r;
+}
+
+/// (theta, order, RMS relative force error, ms) of the FMM on the packed block.
+std::vector<std::array<double, 4>> packed_sweep_fmm(int nx, int ny, int nz) {
+  using namespace alloy::magnetism;
+  const auto poles = packed_poles(nx, ny, nz);
+  std::vector<Vec3> exact(poles.size());
+  accumulate_pole_forces(poles, 0.005, exact, {.method = Summation::Direct});
+  std::vector<std::array<double, 4>> out;
+  for (auto [theta, order] : {std::pair{0.7, 4}, {0.5, 4}, {0.5, 6}, {0.4, 6}}) {
+    std::vector<Vec3> f(poles.size());
+    const double c0 = cpu_seconds();
+    accumulate_pole_forces(poles, 0.005, f,
+                           {.method = Summation::Fmm, .theta = theta, .fmm_order = order});
+    const double t = cpu_seconds() - c0;
+    out.push_back({theta, double(order),
+                   rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact)), t});
+  }
+  return out;
 }
 
 /// (theta, RMS relative force error, ms) of the current tree on a packed block
@@ -630,7 +658,12 @@ KernelRow gravity_kernels(int n, bool cluster, double budget) {
   r.prev_direct =
       cpu_per_call([&] { gravity::accelerations(x, x, m, G, eps, exact); }, n > 3000 ? 0 : budget);
   multipole::Tree tree;
+  // The Barnes-Hut walk (the default), then the FMM at order 4, same theta.
   r.tree = cpu_per_call([&] { gravity::tree_accelerations(x, m, G, eps, tree, a); }, budget);
+  r.error = rms_relative(a, exact);
+  r.fmm = cpu_per_call(
+      [&] { gravity::tree_accelerations(x, m, G, eps, tree, a, gravity::kTreeTheta, 4); }, budget);
+  r.fmm_error = rms_relative(a, exact);
   r.error = rms_relative(a, exact);
   return r;
 }
@@ -651,30 +684,48 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
     for (int n : ns) rows.push_back(magnet_kernels(n, budget));
     Table t({"magnets", "previous tree (theta 0.25)", "tree", "ratio", "previous direct",
              "direct (SIMD)", "ratio", "pairs/s (SIMD)", "RMS error previous", "RMS error"});
+    Table tf({"magnets", "direct (SIMD)", "tree", "FMM", "FMM / direct", "FMM / tree",
+              "RMS error tree", "RMS error FMM"});
     for (const KernelRow& r : rows) {
       const double pairs = 4.0 * r.n * r.n;  // ordered pole pairs
       t.row({std::to_string(r.n), fmt(1e3 * r.prev_tree), fmt(1e3 * r.tree),
              fmt(r.prev_tree / r.tree, 3) + "x", fmt(1e3 * r.prev_direct), fmt(1e3 * r.direct),
              fmt(r.prev_direct / r.direct, 3) + "x", fmt(pairs / r.direct, 3), fmt(r.prev_error),
              fmt(r.error)});
+      tf.row({std::to_string(r.n), fmt(1e3 * r.direct), fmt(1e3 * r.tree), fmt(1e3 * r.fmm),
+              fmt(r.fmm / r.direct, 3), fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.fmm_error)});
     }
     md += "\nmagnetic forces on random magnets (tree at the default tolerance 1e-3, theta " +
           fmt(magnetism::kDefaultTheta) + ", leaves of 64, blocks of 32 poles):\n\n" + t.str();
-    // Crossover of the current tree with the current direct sum.
-    double cross = NAN;
-    for (std::size_t i = 1; i < rows.size(); ++i) {
-      const double ra = std::log(rows[i - 1].tree / rows[i - 1].direct),
-                   rb = std::log(rows[i].tree / rows[i].direct);
-      if (ra >= 0 && rb < 0)
-        cross = std::exp(std::log(rows[i - 1].n) +
-                         ra / (ra - rb) * (std::log(rows[i].n) - std::log(rows[i - 1].n)));
-    }
+    md += "\nThe fast multipole method (method \"fmm\": theta " + fmt(magnetism::kFmmTheta) +
+          ", order " + std::to_string(magnetism::kFmmOrder) +
+          ", leaves of 64) against the tree and the direct sum, same run (ratios: below 1 is "
+          "faster):\n\n" +
+          tf.str();
+    // Crossover of the current tree (and of the FMM) with the current direct sum.
+    auto crossover = [&](auto fast) {
+      double cross = NAN;
+      for (std::size_t i = 1; i < rows.size(); ++i) {
+        const double ra = std::log(fast(rows[i - 1]) / rows[i - 1].direct),
+                     rb = std::log(fast(rows[i]) / rows[i].direct);
+        if (ra >= 0 && rb < 0)
+          cross = std::exp(std::log(rows[i - 1].n) +
+                           ra / (ra - rb) * (std::log(rows[i].n) - std::log(rows[i - 1].n)));
+      }
+      return cross;
+    };
+    const double cross = crossover([](const KernelRow& r) { return r.tree; });
+    const double cross_fmm = crossover([](const KernelRow& r) { return r.fmm; });
     if (!quick) {
       const auto sweep = packed_sweep(25, 20, 20);
       Table p({"theta", "RMS relative force error", "ms"});
       for (const auto& [theta, e, ms] : sweep) p.row({fmt(theta), fmt(e), fmt(1e3 * ms)});
       md += "\nPacked block of 10,000 aligned bars (25 x 20 x 20, touching), current tree:\n\n" +
             p.str();
+      Table pf({"theta", "order", "RMS relative force error", "ms"});
+      for (const auto& [theta, order, e, ms] : packed_sweep_fmm(25, 20, 20))
+        pf.row({fmt(theta), fmt(order), fmt(e), fmt(1e3 * ms)});
+      md += "\nThe same block with the FMM:\n\n" + pf.str();
     }
     const KernelRow& big = rows.back();
     if (big.n == 10000) {
@@ -686,6 +737,13 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
             "; the summation alone " + fmt(1e3 * big.tree) + " ms (previous tree " +
             fmt(1e3 * big.prev_tree) + " ms, " + fmt(big.prev_tree / big.tree, 3) + "x), " +
             pm(1e3 * big.tree <= 10) + ".\n";
+      md += "- the FMM's summation alone at most 10 ms: " + fmt(1e3 * big.fmm) + " ms (" +
+            fmt(big.fmm / big.tree, 3) + " of the tree's time, " + fmt(big.fmm / big.direct, 3) +
+            " of the direct sum's), " + pm(1e3 * big.fmm <= 10) + "; its RMS error " +
+            fmt(big.fmm_error) + " (random; see the packed block above), " +
+            pm(big.fmm_error <= 1e-3) + "; crossover with the direct sum " +
+            (std::isfinite(cross_fmm) ? fmt(cross_fmm, 2) : std::string("not reached")) + ", " +
+            pm(std::isfinite(cross_fmm) && cross_fmm <= 500) + ".\n";
       md += "- RMS relative force error at most 1e-3: " + fmt(big.error) + ", " +
             pm(big.error <= 1e-3) + " (previous " + fmt(big.prev_error) + ").\n";
       md += "- crossover with the direct sum at or below 500 magnets: " +
@@ -700,16 +758,19 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
   if (gravity) {
     const std::vector<int> ns =
         quick ? std::vector<int>{100, 300} : std::vector<int>{300, 1000, 3000, 10000};
-    Table t({"bodies", "layout", "previous direct", "tree", "ratio", "RMS rel. error"});
+    Table t({"bodies", "layout", "previous direct", "tree (default)", "ratio", "FMM, order 4",
+             "FMM / tree", "RMS error tree", "RMS error FMM"});
     KernelRow big;
     for (int n : ns)
       for (bool cluster : {false, true}) {
         const KernelRow r = gravity_kernels(n, cluster, budget);
         t.row({std::to_string(n), cluster ? "Gaussian cluster" : "grid", fmt(1e3 * r.prev_direct),
-               fmt(1e3 * r.tree), fmt(r.prev_direct / r.tree, 3) + "x", fmt(r.error)});
+               fmt(1e3 * r.tree), fmt(r.prev_direct / r.tree, 3) + "x", fmt(1e3 * r.fmm),
+               fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.fmm_error)});
         if (n == 10000 && !cluster) big = r;
       }
-    md += "\ngravity.nbody's sum (theta " + fmt(gravity::kTreeTheta) + ", tree from " +
+    md += "\ngravity.nbody's sum (tree theta " + fmt(gravity::kTreeTheta) +
+          ", and the FMM at the same theta, order 4, for comparison; from " +
           std::to_string(gravity::kTreeFromMasses) + " masses):\n\n" + t.str();
     if (big.n == 10000)
       md += "\nGoal (issue 16, part 2): gravity.nbody at 10,000 bodies at most 10 ms a step: " +
@@ -718,6 +779,8 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
                  : std::string("stage not measured")) +
             "; the sum alone " + fmt(1e3 * big.tree) + " ms against " + fmt(1e3 * big.prev_direct) +
             " ms before (" + fmt(big.prev_direct / big.tree, 3) + "x), error " + fmt(big.error) +
+            "; the FMM (order 4) " + fmt(1e3 * big.fmm) + " ms (FMM / tree " +
+            fmt(big.fmm / big.tree, 3) + "), error " + fmt(big.fmm_error) +
             ". The space scene has fewer than " + std::to_string(gravity::kTreeFromMasses) +
             " masses and keeps the direct sum: its bits, and so its energy drift, are unchanged "
             "(golden hashes).\n";

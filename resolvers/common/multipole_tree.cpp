@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "resolvers/common/direct_kernel.hpp"
+#include "resolvers/common/fmm.hpp"
 
 namespace alloy::multipole {
 
@@ -67,8 +68,27 @@ Vec3 direct_sum(std::span<const Source> sources, double softening, Vec3 x, std::
   return f;
 }
 
+Tree::Tree() = default;
+Tree::~Tree() = default;
+Tree::Tree(Tree&&) noexcept = default;
+Tree& Tree::operator=(Tree&&) noexcept = default;
+
 void Tree::build(std::span<const Source> sources, double softening, TreeOptions options) {
   eps2_ = softening * softening;
+  use_fmm_ = options.fmm_order > 0;
+  if (use_fmm_) {
+    if (!fmm_) fmm_ = std::make_unique<Fmm>();
+    fmm_->build(
+        sources, softening,
+        {.theta = options.theta, .order = options.fmm_order, .leaf_size = options.leaf_size});
+    // evaluate() sums directly over these; the cells are left as they were
+    // but never used (the next Barnes-Hut build cannot refit them).
+    sources_.assign(sources.begin(), sources.end());
+    nodes_.clear();
+    cell_interactions_ = direct_interactions_ = 0;
+    refitted_ = false;
+    return;
+  }
   const double theta = std::clamp(options.theta, 1e-3, 0.99);
   theta2_ = theta * theta;
   block_ = std::max<std::uint32_t>(1, options.block);
@@ -351,12 +371,19 @@ void Tree::walk(std::span<const Vec3> x, std::uint32_t exclude, std::uint32_t se
 }
 
 Vec3 Tree::evaluate(Vec3 x, std::uint32_t exclude) const {
+  if (use_fmm_) return direct_sum(sources_, std::sqrt(eps2_), x, exclude);
   Vec3 f;
   walk(std::span(&x, 1), exclude, 0xffffffffu, std::span(&f, 1));
   return f;
 }
 
 void Tree::evaluate_at_sources(std::span<Vec3> out) const {
+  if (use_fmm_) {
+    fmm_->evaluate_at_sources(out);
+    cell_interactions_ = fmm_->cell_interactions();
+    direct_interactions_ = fmm_->direct_interactions();
+    return;
+  }
   const auto n = std::uint32_t(sources_.size());
   if (n == 0) return;
   // The block's targets (tree positions) and their arrays.

@@ -32,6 +32,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -40,6 +41,7 @@
 namespace alloy::multipole {
 
 inline constexpr std::uint32_t kNoGroup = 0xffffffffu;
+class Fmm;
 
 struct Source {
   Vec3 position;
@@ -66,6 +68,12 @@ struct TreeOptions {
   /// shapes age. The result then depends on the history of the tree, not
   /// only on the sources: off unless asked for.
   bool reuse = false;
+  /// 0: the Barnes-Hut walk above. From 1: build() builds the fast multipole
+  /// method of fmm.hpp instead, with expansions of this order, `theta` as its
+  /// separation parameter and `leaf_size` as its leaves' size, and
+  /// evaluate_at_sources() runs it (reuse is then ignored; evaluate() sums
+  /// directly, exactly).
+  int fmm_order = 0;
 };
 
 /// The softened kernel K(r), 1/m^2 along r; zero at r = 0 when eps = 0.
@@ -86,6 +94,10 @@ void direct_at_sources(std::span<const Source> sources, double softening, std::s
 
 class Tree {
  public:
+  Tree();
+  ~Tree();
+  Tree(Tree&&) noexcept;
+  Tree& operator=(Tree&&) noexcept;
   /// Builds the tree over `sources` (copied); with options.reuse, refits the
   /// previous one when it can (see TreeOptions::reuse).
   void build(std::span<const Source> sources, double softening, TreeOptions options = {});
@@ -155,6 +167,9 @@ class Tree {
   std::vector<double> sx_, sy_, sz_, sq_, sg_;
   std::uint32_t block_ = 32;
   bool refitted_ = false;
+  /// Set when the last build() was an FMM one (TreeOptions::fmm_order).
+  std::unique_ptr<Fmm> fmm_;
+  bool use_fmm_ = false;
   std::vector<std::uint32_t> scratch_;
   mutable std::vector<std::int32_t> stack_;
   mutable std::uint64_t cell_interactions_ = 0, direct_interactions_ = 0;

@@ -24,8 +24,11 @@
 //          a fixed order (accelerations(): the bundled space scene's bits);
 //          from there on the Barnes-Hut tree of resolvers/common/multipole_tree
 //          (blocked walk, SIMD near field; O(n log n), RMS relative error of
-//          the accelerations ~1e-4 at kTreeTheta, measured by
-//          bench/scaling.cpp --gravity). Nothing in a step in which no
+//          the accelerations ~3e-4 on a cold grid and ~1e-4 on a Gaussian
+//          cluster at kTreeTheta, measured by bench/scaling.cpp --gravity).
+//          The FMM of resolvers/common/fmm.hpp (kTreeOrder > 0) was measured
+//          against it in session 15 and took 1.3 to 2 times as long for
+//          masses at the same theta: the tree stays. Nothing in a step in which no
 //          position, mass or membership changed.
 #pragma once
 
@@ -56,12 +59,16 @@ inline constexpr std::size_t kTreeFromMasses = 512;
 /// The tree's opening angle for gravity: every mass is positive, so a cell's
 /// monopole dominates and the error falls as theta^4 of the cell's pull.
 inline constexpr double kTreeTheta = 0.5;
+/// 0: the Barnes-Hut walk; from 1, the FMM with expansions of that order
+/// (theta then its separation parameter). 0 by measurement (above).
+inline constexpr int kTreeOrder = 0;
 
-/// Accelerations at every source from all the others, with the tree (`tree`
-/// keeps its memory between calls). out[i] for source[i]; overwritten.
+/// Accelerations at every source from all the others, with the Barnes-Hut
+/// tree at opening angle `theta` (or, with `order` from 1, the FMM); `tree`
+/// keeps its memory between calls. out[i] for source[i]; overwritten.
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out,
-                        double theta = kTreeTheta);
+                        double theta = kTreeTheta, int order = kTreeOrder);
 
 class NBodyGravity final : public Resolver {
  public:

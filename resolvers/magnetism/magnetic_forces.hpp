@@ -8,14 +8,17 @@
 //             the magnetism resolver (whose electromagnets it sees through pole_strength)
 //   writes    only its own data below; recomputed only when an input changed
 //   settings  softening (m, default 0.005): the Plummer length eps of the pole force law
-//             method ("auto" | "direct" | "tree", default "auto"): how pole pairs are
-//             summed; auto is direct below kTreeCrossoverPoles poles (pole_model.hpp)
+//             method ("auto" | "direct" | "tree" | "fmm", default "auto"): how pole
+//             pairs are summed; auto is direct below kTreeCrossoverPoles poles
+//             (pole_model.hpp); fmm is the fast multipole method, opt-in: its
+//             error is not bounded by `tolerance` (docs/magnetism.md "Fast summation")
 //             tolerance (default 1e-3, in [1e-5, 0.1]): the RMS relative error of
 //             the parts' forces the tree may make; sets theta through
 //             theta_for_tolerance (measured on the worst configuration we know,
 //             a packed block of aligned bars)
 //             theta (in (0, 1)): the tree's opening angle, set directly (overrides
-//             tolerance)
+//             tolerance); with fmm, its separation parameter (default kFmmTheta)
+//             order (whole, 1 to 6, default 4): the fmm's expansion order
 //             reuse_tree (default false): refit the last step's tree when the
 //             parts moved little (multipole::TreeOptions::reuse); faster, but
 //             the bits then depend on the tree's history, so a restored save

@@ -59,8 +59,8 @@ void register_magnetism_resolver(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
-            s.check_known(MagneticForces::kName,
-                          {"softening", "method", "theta", "tolerance", "reuse_tree", "rates"});
+            s.check_known(MagneticForces::kName, {"softening", "method", "theta", "tolerance",
+                                                  "reuse_tree", "order", "rates"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
@@ -70,17 +70,27 @@ void register_magnetism_resolver(PluginRegistry& registry) {
               sum.method = Summation::Direct;
             else if (method == "tree")
               sum.method = Summation::Tree;
+            else if (method == "fmm")
+              sum.method = Summation::Fmm;
             else if (method != "auto")
               throw InputError(s.where,
-                               "magnetic_forces: 'method' must be \"auto\", \"direct\" "
-                               "or \"tree\", not \"" +
+                               "magnetic_forces: 'method' must be \"auto\", \"direct\", "
+                               "\"tree\" or \"fmm\", not \"" +
                                    method + "\"");
             const double tolerance = s.number("tolerance", kDefaultTolerance);
             if (!(tolerance >= 1e-5 && tolerance <= 0.1))
               throw InputError(s.where,
                                "magnetic_forces: 'tolerance' must be a relative error in "
                                "[1e-5, 0.1]");
-            sum.theta = s.number("theta", theta_for_tolerance(tolerance));
+            // The FMM's theta is its own (no tolerance table: its error depends
+            // too much on the configuration; docs/magnetism.md "Fast summation").
+            sum.theta = s.number(
+                "theta", sum.method == Summation::Fmm ? kFmmTheta : theta_for_tolerance(tolerance));
+            const double order = s.number("order", kFmmOrder);
+            if (!(order >= 1 && order <= multipole::kMaxFmmOrder && order == std::floor(order)))
+              throw InputError(s.where, "magnetic_forces: 'order' must be a whole number in [1, " +
+                                            std::to_string(multipole::kMaxFmmOrder) + "]");
+            sum.fmm_order = int(order);
             if (!(sum.theta > 0 && sum.theta < 1))
               throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
             sum.reuse = s.boolean("reuse_tree", false);

@@ -22,7 +22,10 @@ void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::
   if (options.use_tree(n)) {
     multipole::Tree local;
     multipole::Tree& tree = workspace ? *workspace : local;
-    tree.build(tree_sources(poles), softening, {.theta = options.theta, .reuse = options.reuse});
+    tree.build(tree_sources(poles), softening,
+               {.theta = options.theta,
+                .reuse = options.reuse,
+                .fmm_order = options.method == Summation::Fmm ? options.fmm_order : 0});
     std::vector<Vec3> k(n);
     tree.evaluate_at_sources(k);
     for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);
@@ -56,7 +59,10 @@ void pole_fields(std::span<const Pole> poles, double softening, std::span<const 
       (options.method == Summation::Tree || points.size() >= 64)) {
     multipole::Tree local;
     multipole::Tree& tree = workspace ? *workspace : local;
-    tree.build(tree_sources(poles), softening, {.theta = options.theta});
+    // Fields at points other than the poles: the tree's walk (the FMM sums at
+    // its sources only), at the tree's own default when the FMM was chosen.
+    tree.build(tree_sources(poles), softening,
+               {.theta = options.method == Summation::Fmm ? kDefaultTheta : options.theta});
     for (std::size_t i = 0; i < points.size(); ++i)
       field[i] = tree.evaluate(points[i], exclude_body[i]) * kInv4Pi;
     return;

@@ -21,6 +21,7 @@
 #include <span>
 #include <vector>
 
+#include "resolvers/common/fmm.hpp"
 #include "resolvers/common/multipole_tree.hpp"
 #include "runtime/math.hpp"
 
@@ -73,6 +74,11 @@ enum class Summation : std::uint8_t {
   Direct,  ///< every pair, exactly
   Tree,    ///< Barnes-Hut octree, cells expanded to the octupole
   Auto,    ///< Direct below kTreeCrossoverPoles poles, Tree from there on
+  /// The fast multipole method (multipole/fmm.hpp): cell-to-cell expansions of
+  /// order fmm_order, theta its separation parameter. Faster than the tree on
+  /// spread-out magnets, far less accurate on packed blocks at the same
+  /// settings (docs/magnetism.md "Fast summation"): opt-in.
+  Fmm,
 };
 
 /// Number of poles from which the tree is faster than the direct sum at the
@@ -88,6 +94,12 @@ inline constexpr std::size_t kSimdDirectPoles = 256;
 /// Default opening angle: the tree's at the default tolerance of 1e-3
 /// (theta_for_tolerance in magnetic_forces.hpp; docs/magnetism.md "Summation").
 inline constexpr double kDefaultTheta = 0.35;
+/// The FMM's defaults (Summation::Fmm): RMS relative force error 1e-4 to 3e-4
+/// on random magnets (1,000 to 10,000), but 5e-2 on a packed block of aligned
+/// bars, which needs theta 0.4 and order 6 for 5e-4 (bench/scaling.cpp
+/// --magnets; docs/magnetism.md "Fast summation").
+inline constexpr double kFmmTheta = 0.6;
+inline constexpr int kFmmOrder = 4;
 
 struct SummationOptions {
   Summation method = Summation::Direct;
@@ -96,9 +108,12 @@ struct SummationOptions {
   /// the poles are the same ones (multipole::TreeOptions::reuse); off by
   /// default because the result then depends on the tree's history.
   bool reuse = false;
-  /// Whether `method` sums `poles` poles with the tree.
+  /// Summation::Fmm: the expansions' order (1 to multipole::kMaxFmmOrder).
+  int fmm_order = kFmmOrder;
+  /// Whether `method` sums `poles` poles with the tree (or the FMM).
   bool use_tree(std::size_t poles) const {
-    return method == Summation::Tree || (method == Summation::Auto && poles >= kTreeCrossoverPoles);
+    return method == Summation::Tree || method == Summation::Fmm ||
+           (method == Summation::Auto && poles >= kTreeCrossoverPoles);
   }
 };
 

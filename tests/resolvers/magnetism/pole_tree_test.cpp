@@ -288,7 +288,14 @@ TEST_F(MagneticForcesMethod, TreeSettingAgreesWithDirect) {
 }
 
 TEST_F(MagneticForcesMethod, BadSettingsAreRefused) {
-  EXPECT_THROW(forces(with("fmm")), InputError);
+  EXPECT_THROW(forces(with("multipole")), InputError);
+  // "fmm" is a method since session 15; its order must be whole, 1 to 6.
+  EXPECT_NO_THROW(forces(with("fmm", kFmmTheta)));
+  for (double bad : {0.0, 7.0, 2.5, -1.0, std::nan("")}) {
+    WorldDef def = with("fmm", kFmmTheta);
+    def.settings[MagneticForces::kName].set("order", bad);
+    EXPECT_THROW(forces(def), InputError) << bad;
+  }
   EXPECT_THROW(forces(with("tree", 1.0)), InputError);
   EXPECT_THROW(forces(with("tree", 0.0)), InputError);
   for (double bad : {0.0, 1e-6, 0.5, -1e-3, std::nan("")}) {
