@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <numbers>
 #include <numeric>
-#include <unordered_map>
 
 #include "resolvers/rigid_body/properties.hpp"
 
@@ -123,9 +122,6 @@ struct Box2DEngine::Impl : b2ContactListener {
   std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, -1: not ours
   std::vector<Body> bodies;
   std::vector<Hinge> hinges;
-  /// Each hinge's reference: the relative angle at its first build, kept
-  /// across rebuilds so that limits mean the same angles.
-  std::unordered_map<std::uint64_t, double> reference;
   std::vector<PreSpeed> pre_speeds;
   std::vector<PairImpulse> step_impulses;
 
@@ -467,11 +463,15 @@ void Box2DEngine::build(ResolverAccess& access) {
       refuse(jid, "has its anchor off the plane (z = " + num(an_at.z) + ")");
     b2RevoluteJointDef jd;
     // Box2D's angle is that of its body B relative to its body A, less the
-    // reference: alloy's angle of body_a relative to body_b about +z.
+    // reference: made alloy's angle of part a relative to part b about +z,
+    // zero when their orientations are equal (as ODE's engine defines it), by
+    // taking off where each part sits turned on its body. The angle then
+    // depends on the properties alone, so limits mean the same angles after a
+    // rebuild, a swap from ODE, or a restore (a reference taken from the pose
+    // at the first build would shift them by wherever the swap found the hinge).
     jd.Initialize(B, A, b2Vec2(float(an_at.x * s), float(an_at.y * s)));
-    auto [it, fresh] = m.reference.try_emplace(jid.index | (std::uint64_t(jid.generation) << 32),
-                                               double(jd.referenceAngle));
-    jd.referenceAngle = float(it->second);
+    const double part_b_angle = b < 0 ? 0.0 : m.parts[std::size_t(b)].angle;
+    jd.referenceAngle = float(part_b_angle - m.parts[std::size_t(a)].angle);
     jd.collideConnected = false;
     if (jfric.has(slot) && jfric[slot] > 0) {
       // A motor at speed 0 whose torque is capped: Coulomb friction of the pivot.
