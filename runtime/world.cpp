@@ -170,6 +170,11 @@ void World::unfreeze(ObjectId id) {
 
 // --- World -------------------------------------------------------------------
 
+namespace {
+void use_companions(const PluginRegistry& plugins,
+                    std::map<std::string, std::string, std::less<>>& use);
+}  // namespace
+
 World::World(PluginRegistry& plugins, WorldDef def)
     : plugins_(plugins), def_(std::move(def)), store_(plugins.properties()) {
   if (!(def_.dt > 0) || !std::isfinite(def_.dt))
@@ -196,6 +201,7 @@ World::World(PluginRegistry& plugins, WorldDef def)
     if (d->info.provides != what)
       throw InputError("use: '" + name + "' does not provide '" + what + "'");
   }
+  use_companions(plugins_, def_.use);
 }
 
 World::~World() = default;
@@ -963,6 +969,23 @@ bool bound_to(const PluginDef& p, const PluginDef& e) {
   if (listed(p.info.exact, n)) return true;
   if (e.info.provides.empty() || e.info.provides == n) return false;
   return p.info.target == n || listed(p.info.derived, n) || listed(p.info.resolvers, n);
+}
+
+/// An engine chosen with `use` brings what is written against it, as a swap
+/// does: `use = { rigid_body = "rigid_body.box2d" }` means Box2D's contact set
+/// too, unless the scene chose a provider of `collisions` itself.
+void use_companions(const PluginRegistry& plugins,
+                    std::map<std::string, std::string, std::less<>>& use) {
+  std::vector<std::pair<std::string, std::string>> add;
+  for (const auto& [what, name] : use) {
+    const PluginDef* e = plugins.find(name);
+    for (const auto& p : plugins.order()) {
+      const PluginDef* q = plugins.find(p);
+      if (!q->info.provides.empty() && !use.count(q->info.provides) && bound_to(*q, *e))
+        add.emplace_back(q->info.provides, p);
+    }
+  }
+  for (auto& [what, name] : add) use.emplace(what, name);
 }
 }  // namespace
 
