@@ -170,6 +170,11 @@ void World::unfreeze(ObjectId id) {
 
 // --- World -------------------------------------------------------------------
 
+namespace {
+void use_companions(const PluginRegistry& plugins,
+                    std::map<std::string, std::string, std::less<>>& use);
+}  // namespace
+
 World::World(PluginRegistry& plugins, WorldDef def)
     : plugins_(plugins), def_(std::move(def)), store_(plugins.properties()) {
   if (!(def_.dt > 0) || !std::isfinite(def_.dt))
@@ -196,6 +201,7 @@ World::World(PluginRegistry& plugins, WorldDef def)
     if (d->info.provides != what)
       throw InputError("use: '" + name + "' does not provide '" + what + "'");
   }
+  use_companions(plugins_, def_.use);
 }
 
 World::~World() = default;
@@ -951,6 +957,38 @@ void World::swap(std::string_view area, std::string_view from, std::string_view 
            });
 }
 
+namespace {
+/// Whether `p` is written against the engine `e` itself, so that it cannot run
+/// with another provider of what `e` provides: it names `e` in its `exact`
+/// list (ODE's `collisions` and contact joints name `rigid_body`), or it
+/// depends on `e` by the engine's own name where that is not the name of what
+/// it provides (`collisions.box2d` reads `rigid_body.box2d`).
+bool bound_to(const PluginDef& p, const PluginDef& e) {
+  const std::string& n = e.info.name;
+  if (p.info.name == n) return false;
+  if (listed(p.info.exact, n)) return true;
+  if (e.info.provides.empty() || e.info.provides == n) return false;
+  return p.info.target == n || listed(p.info.derived, n) || listed(p.info.resolvers, n);
+}
+
+/// An engine chosen with `use` brings what is written against it, as a swap
+/// does: `use = { rigid_body = "rigid_body.box2d" }` means Box2D's contact set
+/// too, unless the scene chose a provider of `collisions` itself.
+void use_companions(const PluginRegistry& plugins,
+                    std::map<std::string, std::string, std::less<>>& use) {
+  std::vector<std::pair<std::string, std::string>> add;
+  for (const auto& [what, name] : use) {
+    const PluginDef* e = plugins.find(name);
+    for (const auto& p : plugins.order()) {
+      const PluginDef* q = plugins.find(p);
+      if (!q->info.provides.empty() && !use.count(q->info.provides) && bound_to(*q, *e))
+        add.emplace_back(q->info.provides, p);
+    }
+  }
+  for (auto& [what, name] : add) use.emplace(what, name);
+}
+}  // namespace
+
 void World::swap_now(std::string_view area, std::string_view from, std::string_view to) {
   const PluginDef* f = plugins_.find(from);
   const PluginDef* t = plugins_.find(to);
@@ -964,34 +1002,95 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     throw InputError("swap: '" + std::string(from) + "' is a " +
                      std::string(to_string(f->info.kind)) + " and '" + std::string(to) + "' a " +
                      std::string(to_string(t->info.kind)));
-  Slot* old = nullptr;
+  // The stages written against the engine swapped out go with it, and the new
+  // engine brings its own (a rigid body's contact set: ODE's `collisions`
+  // needs ODE, `collisions.box2d` needs Box2D). Swapping the rigid body alone
+  // would otherwise leave the scope with no contact set, and electricity,
+  // sound and the mods' contact handlers would go quiet.
+  auto counterpart = [&](const PluginDef& p) -> const PluginDef* {
+    if (p.info.provides.empty()) return nullptr;
+    for (const auto& name : plugins_.order()) {
+      const PluginDef* q = plugins_.find(name);
+      if (q->info.kind == p.info.kind && q->info.provides == p.info.provides && bound_to(*q, *t))
+        return q;
+    }
+    return nullptr;
+  };
+  std::vector<std::pair<std::string, std::string>> along;  // (companion out, companion in)
+  std::vector<Slot*> old;
   if (area.empty()) {
-    old = find_slot(from);
-    std::erase(disabled_, std::string(to));
-    if (!listed(disabled_, from)) disabled_.emplace_back(from);
-    if (!def_.plugins.empty() && !listed(def_.plugins, to) && !listed(enabled_, to))
-      enabled_.emplace_back(to);
-    if (!t->info.provides.empty()) def_.use[t->info.provides] = std::string(to);
+    for (const auto& name : plugins_.order()) {
+      const PluginDef* p = plugins_.find(name);
+      if (!bound_to(*p, *f) || !chosen_globally(*p)) continue;
+      if (const PluginDef* q = counterpart(*p)) along.emplace_back(p->info.name, q->info.name);
+    }
+    auto swap_global = [&](const std::string& out, const std::string& in) {
+      if (Slot* s = find_slot(out)) old.push_back(s);
+      std::erase(disabled_, in);
+      if (!listed(disabled_, out)) disabled_.push_back(out);
+      if (!def_.plugins.empty() && !listed(def_.plugins, in) && !listed(enabled_, in))
+        enabled_.push_back(in);
+      const PluginDef* d = plugins_.find(in);
+      if (!d->info.provides.empty()) def_.use[d->info.provides] = in;
+    };
+    swap_global(std::string(from), std::string(to));
+    for (const auto& [out, in] : along) swap_global(out, in);
   } else {
     auto a = std::find_if(areas_.begin(), areas_.end(),
                           [&](const Area& x) { return x.def.name == area; });
     if (a == areas_.end()) throw InputError("swap: no area is called '" + std::string(area) + "'");
-    auto it = std::find(a->def.plugins.begin(), a->def.plugins.end(), from);
-    if (it == a->def.plugins.end())
+    std::vector<std::string>& list = a->def.plugins;
+    auto it = std::find(list.begin(), list.end(), from);
+    if (it == list.end())
       throw InputError("swap: area '" + std::string(area) + "' has no plugin '" +
                        std::string(from) + "'");
     *it = std::string(to);
-    old = find_slot(std::string(from) + "@" + std::string(area));
+    const std::string at = "@" + std::string(area);
+    if (Slot* s = find_slot(std::string(from) + at)) old.push_back(s);
+    // The area's list names its stages: the old engine's own are replaced by
+    // the new engine's counterparts or dropped (ODE's contact joints have none
+    // on Box2D), and the new engine's own that the area lacks are added.
+    std::vector<std::string> kept;
+    for (const std::string& name : list) {
+      const PluginDef* p = plugins_.find(name);
+      if (!p || !bound_to(*p, *f)) {
+        kept.push_back(name);
+        continue;
+      }
+      if (Slot* s = find_slot(name + at)) old.push_back(s);
+      const PluginDef* q = counterpart(*p);
+      along.emplace_back(name, q ? q->info.name : std::string("nothing"));
+      if (q && !listed(kept, q->info.name)) kept.push_back(q->info.name);
+    }
+    for (const auto& name : plugins_.order()) {
+      const PluginDef* q = plugins_.find(name);
+      if (!bound_to(*q, *t) || listed(kept, name)) continue;
+      const bool provided = !q->info.provides.empty() &&
+                            std::any_of(kept.begin(), kept.end(), [&](const std::string& k) {
+                              const PluginDef* d = plugins_.find(k);
+                              return d && d->info.provides == q->info.provides;
+                            });
+      if (provided) continue;
+      kept.push_back(name);
+      along.emplace_back("nothing", name);
+    }
+    list = std::move(kept);
   }
-  if (old) remove_with_dependents(old);
+  // Removing one slot may remove another (a dependent): look each up again.
+  for (Slot* s : old)
+    if (std::any_of(slots_.begin(), slots_.end(), [&](const auto& x) { return x.get() == s; }))
+      remove_with_dependents(s);
   // Global scopes depend on which areas provide what; recompute them.
   for (auto& s : slots_)
     if (s->area < 0) s->scope = global_scope(*plugins_.find(s->info.name));
-  pending_.push_back(
-      Event{.type = "resolver_swapped",
-            .source = "world",
-            .text = std::string(from) + " -> " + std::string(to) +
-                    (area.empty() ? std::string(" (everywhere)") : " in " + std::string(area))});
+  std::string text = std::string(from) + " -> " + std::string(to) +
+                     (area.empty() ? std::string(" (everywhere)") : " in " + std::string(area));
+  if (!along.empty()) {
+    text += "; with";
+    for (std::size_t i = 0; i < along.size(); ++i)
+      text += (i ? ", " : " ") + along[i].first + " -> " + along[i].second;
+  }
+  pending_.push_back(Event{.type = "resolver_swapped", .source = "world", .text = std::move(text)});
   if (started_) {
     synced_ = false;
     sync_structure();  // instantiate the new stage and its dependents, build, prime

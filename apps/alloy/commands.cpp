@@ -882,7 +882,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       "Report a value as the run goes: OBJECT.PROPERTY[.COMPONENT][@SECONDS] (repeatable)");
   run_cmd->add_option(
       "--swap", ro.swaps,
-      "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable)");
+      "Swap a resolver for another while running: [AREA:]FROM=TO[@TIME] (repeatable); an "
+      "engine brings its own contact set, e.g. rigid_body=rigid_body.box2d@2");
   run_cmd->add_flag("--profile", ro.profile, "Print the time per step of each stage");
   run_cmd->add_flag("--energy", ro.energy,
                     "Keep the energy ledger and print the balance of the run: sources, sinks, "

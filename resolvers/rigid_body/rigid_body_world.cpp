@@ -147,6 +147,16 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
       if (!store.alive(o) || refused[o.index] || host->frozen(o)) return kGone;
       if (cand_of_slot[o.index] >= 0) return cand_of_slot[o.index];
       if (is_static.value_or(o.index, 0)) return kWorld;
+      // A rigid body outside this engine's scope: another area's engine holds it.
+      if (store.has(o, id.mass) || store.has(o, id.density)) {
+        auto named = [&](const ColumnView<ObjectId>& c) {
+          return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
+        };
+        throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
+                                    store.describe(o) +
+                                    "' is simulated by another engine (an area's): a joint's "
+                                    "two bodies must be on one engine");
+      }
       throw InputError(where, std::string(name) + " is '" + store.describe(o) +
                                   "', which is neither a rigid body (mass or density) nor static");
     };

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <numbers>
 #include <numeric>
-#include <unordered_map>
 
 #include "resolvers/rigid_body/properties.hpp"
 
@@ -123,9 +122,6 @@ struct Box2DEngine::Impl : b2ContactListener {
   std::vector<std::int32_t> part_of_slot;  // slot -> index into parts, -1: not ours
   std::vector<Body> bodies;
   std::vector<Hinge> hinges;
-  /// Each hinge's reference: the relative angle at its first build, kept
-  /// across rebuilds so that limits mean the same angles.
-  std::unordered_map<std::uint64_t, double> reference;
   std::vector<PreSpeed> pre_speeds;
   std::vector<PairImpulse> step_impulses;
 
@@ -235,6 +231,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   const auto density = access.column<double>("density");
   const auto static_ = access.column<std::uint8_t>("static");
   const auto pinned = access.column<std::uint8_t>("pinned");
+  const auto planar = access.column<std::uint8_t>("planar");
   const auto position = access.column<Vec3>("position");
   const auto orientation = access.column<Quat>("orientation");
   const auto velocity = access.column<Vec3>("velocity");
@@ -270,7 +267,10 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (std::abs(q.x) > kTol * qn || std::abs(q.y) > kTol * qn)
       refuse(id, "is turned about an axis other than z");
     const bool fixed = static_.value_or(slot, 0) || pinned.value_or(slot, 0);
-    if (!fixed) {
+    // A `planar` part is held to the plane by definition: what it carries
+    // out of the plane is another engine's constraint residue (ODE's planar
+    // joint leaves up to 1e-4 m/s of velocity.z), dropped here, not refused.
+    if (!fixed && !planar.value_or(slot, 0)) {
       const Vec3 v = velocity.value_or(slot, {}), w = angular.value_or(slot, {});
       if (std::abs(v.z) > kTol)
         refuse(id, "moves out of the plane (velocity.z = " + num(v.z) + " m/s)");
@@ -298,12 +298,22 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (id.is_null() || !store_.alive(id) || id.index >= m.part_of_slot.size()) return -1;
     return m.part_of_slot[id.index];
   };
+  // A joint whose body_b is ours and body_a another engine's (an area's):
+  // neither engine can hold it.
+  auto refuse_across = [&](std::uint32_t slot, const char* what) {
+    throw InputError("rigid_body.box2d: joint '" + store_.describe(store_.id_at(slot)) + "' (" +
+                     what + ") joins '" + store_.describe(body_a.value_or(slot, {})) + "' to '" +
+                     store_.describe(body_b.value_or(slot, {})) + "', but '" +
+                     store_.describe(body_a.value_or(slot, {})) +
+                     "' is simulated by another engine (an area's): a joint's two bodies must "
+                     "be on one engine");
+  };
   for (std::uint32_t slot : joint.members()) {
     if (JointType(joint[slot].index) != JointType::Fixed) continue;
-    const std::int32_t a = ours(body_a.value_or(slot, {}));
-    if (a < 0) continue;  // the joint lives with body_a's engine
     const ObjectId bid = body_b.value_or(slot, {});
-    const std::int32_t b = ours(bid);
+    const std::int32_t a = ours(body_a.value_or(slot, {})), b = ours(bid);
+    if (a < 0 && b >= 0) refuse_across(slot, "glues");
+    if (a < 0) continue;  // the joint lives with body_a's engine
     if (bid.is_null())
       glued_to_world[std::size_t(a)] = 1;
     else if (b < 0)
@@ -375,6 +385,19 @@ void Box2DEngine::build(ResolverAccess& access) {
     fd.restitutionThreshold = float(m.bounce * s);
     fd.userData.pointer = i;
     const b2Rot rot{float(part.angle)};
+    // Box2D gives every polygon a skin of b2_polygonRadius (1 cm in its units,
+    // 1 mm of the kit's at scale 10) around its core, and rests contacts on
+    // the skin: a box set to the part's size would stand 1 mm proud on every
+    // side, and the kit's millimetre gaps (the doorbell's switch, its
+    // contact finger) would close early. The core is shrunk by the skin, so
+    // that the skin's outside is the part's surface (corners rounded by it).
+    auto rounded_box = [&](double hx, double hy) {
+      b2PolygonShape box;
+      const double skin = std::min<double>(b2_polygonRadius, 0.5 * std::min(hx, hy));
+      box.SetAsBox(float(hx - skin), float(hy - skin), part.local, float(part.angle));
+      box.m_radius = float(skin);
+      return box;
+    };
     auto circle = [&](double along_x) {
       b2CircleShape c;
       c.m_radius = float(r * s);
@@ -384,8 +407,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     };
     switch (sh) {
       case Shape::Box: {
-        b2PolygonShape box;
-        box.SetAsBox(float(sz.x / 2 * s), float(sz.y / 2 * s), part.local, float(part.angle));
+        b2PolygonShape box = rounded_box(sz.x / 2 * s, sz.y / 2 * s);
         fd.shape = &box;
         b->CreateFixture(&fd);
         break;
@@ -396,8 +418,7 @@ void Box2DEngine::build(ResolverAccess& access) {
         break;
       case Shape::Capsule: {
         if (len > 0) {
-          b2PolygonShape box;
-          box.SetAsBox(float(len / 2 * s), float(r * s), part.local, float(part.angle));
+          b2PolygonShape box = rounded_box(len / 2 * s, r * s);
           fd.shape = &box;
           b->CreateFixture(&fd);
         }
@@ -442,10 +463,10 @@ void Box2DEngine::build(ResolverAccess& access) {
   for (std::uint32_t slot : joint.members()) {
     if (JointType(joint[slot].index) != JointType::Hinge) continue;
     const ObjectId jid = store_.id_at(slot);
-    const std::int32_t a = ours(body_a.value_or(slot, {}));
-    if (a < 0) continue;  // lives with body_a's engine
     const ObjectId bid = body_b.value_or(slot, {});
-    const std::int32_t b = ours(bid);
+    const std::int32_t a = ours(body_a.value_or(slot, {})), b = ours(bid);
+    if (a < 0 && b >= 0) refuse_across(slot, "hinge");
+    if (a < 0) continue;  // lives with body_a's engine
     if (!bid.is_null() && b < 0)
       throw InputError("rigid_body.box2d: hinge '" + store_.describe(jid) + "' joins '" +
                        store_.describe(m.parts[std::size_t(a)].id) + "' to '" +
@@ -467,11 +488,15 @@ void Box2DEngine::build(ResolverAccess& access) {
       refuse(jid, "has its anchor off the plane (z = " + num(an_at.z) + ")");
     b2RevoluteJointDef jd;
     // Box2D's angle is that of its body B relative to its body A, less the
-    // reference: alloy's angle of body_a relative to body_b about +z.
+    // reference: made alloy's angle of part a relative to part b about +z,
+    // zero when their orientations are equal (as ODE's engine defines it), by
+    // taking off where each part sits turned on its body. The angle then
+    // depends on the properties alone, so limits mean the same angles after a
+    // rebuild, a swap from ODE, or a restore (a reference taken from the pose
+    // at the first build would shift them by wherever the swap found the hinge).
     jd.Initialize(B, A, b2Vec2(float(an_at.x * s), float(an_at.y * s)));
-    auto [it, fresh] = m.reference.try_emplace(jid.index | (std::uint64_t(jid.generation) << 32),
-                                               double(jd.referenceAngle));
-    jd.referenceAngle = float(it->second);
+    const double part_b_angle = b < 0 ? 0.0 : m.parts[std::size_t(b)].angle;
+    jd.referenceAngle = float(part_b_angle - m.parts[std::size_t(a)].angle);
     jd.collideConnected = false;
     if (jfric.has(slot) && jfric[slot] > 0) {
       // A motor at speed 0 whose torque is capped: Coulomb friction of the pivot.

@@ -139,6 +139,7 @@ WorldDef world_def(double dt, const Method& m, bool gravity) {
   if (!m.joint_projection) rb.set("joint_projection", false);
   def.settings["electricity"].set("substeps", std::int64_t(m.electricity_substeps));
   if (!gravity) def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
+  if (m.engine != "rigid_body") def.use["rigid_body"] = m.engine;
   return def;
 }
 

@@ -22,6 +22,9 @@ struct Method {
   int rigid_substeps = 1;  ///< rigid_body `substeps` (ignored when the resolver has no such key)
   int electricity_substeps = 4;  ///< electricity `substeps`
   bool joint_projection = true;  ///< rigid_body `joint_projection` (false: ODE's hinges alone)
+  /// The plugin that provides `rigid_body`: ODE's "rigid_body" or "rigid_body.box2d" (which
+  /// brings its own contact set; the ODE settings above are then unused).
+  std::string engine = "rigid_body";
 };
 
 /// Whether the rigid body resolver accepts a `substeps` setting.

@@ -152,8 +152,17 @@ TEST(Box2D, BounceReboundsToRestitutionSquared) {
   const double e = 0.5;
   std::vector<double> err;
   for (double h : kSteps) err.push_back(std::abs(bounce_ratio(h, e) - e * e) / (e * e));
-  EXPECT_LE(err.front(), 0.08);
-  expect_not_growing("bounce height ratio relative error", err);
+  // Not expect_not_growing: with the polygon skin inside the floor's surface
+  // (box2d_engine.cpp, rounded_box) the error changes sign between 1/240 and
+  // 1/960 s (2.5 %, 0.22 %, 0.64 %): what is left at small steps, about
+  // +0.6 %, is Box2D's restitution (applied to the approach speed its
+  // velocity solver sees before the contact's own impulse), not the flight.
+  for (std::size_t i = 0; i < err.size(); ++i)
+    std::printf("box2d bounce height ratio relative error at 1/%.0f s: %.4g\n", 1 / kSteps[i],
+                err[i]);
+  EXPECT_LE(err.front(), 0.03);
+  for (double x : err) EXPECT_LE(x, 0.03);
+  EXPECT_LE(err.back(), 0.01);
 }
 
 TEST(Box2D, ContactsArePublishedThroughTheContactSet) {
@@ -334,6 +343,193 @@ TEST(Box2D, ABallRollsFromAnOdeTableOntoABox2DTable) {
   const auto stages = s->active_stages();
   EXPECT_NE(std::find(stages.begin(), stages.end(), "rigid_body.box2d@right"), stages.end());
   EXPECT_NE(std::find(stages.begin(), stages.end(), "rigid_body"), stages.end());
+}
+
+// --- swaps bring the engine's contact set; areas; joints across engines; saves ----------
+
+bool active(World& w, const char* stage) {
+  const auto st = w.active_stages();
+  return std::find(st.begin(), st.end(), stage) != st.end();
+}
+
+/// The largest speed of any box of the stack over `seconds`, and the top's
+/// height change (m) over them.
+struct StackMotion {
+  double vmax = 0, drop = 0;
+};
+StackMotion watch_stack(Sim& s, const Stack& st, double seconds) {
+  StackMotion m;
+  const double y0 = s.position(st.boxes.back()).y;
+  for (int i = 0; i < int(std::llround(seconds / s->dt())); ++i) {
+    s->step();
+    for (ObjectId b : st.boxes) {
+      const Vec3 v = s.velocity(b);
+      m.vmax = std::max(m.vmax, std::sqrt(dot(v, v)));
+    }
+  }
+  m.drop = y0 - s.position(st.boxes.back()).y;
+  return m;
+}
+
+TEST(Box2D, SwappingTheRigidBodyAloneBringsItsContactSetBothWays) {
+  // Only `rigid_body` is named: ODE's `collisions` (which needs ODE) and its
+  // contact joints must go, Box2D's contact set must come, and back again.
+  Sim s;
+  const Stack st = build_stack(*s, 5);
+  // Planar, as the kit's parts: ODE then keeps them exactly in z = 0 (a 3D
+  // stack drifts off the plane by 3e-5 m in 0.5 s, and Box2D refuses it).
+  for (ObjectId b : st.boxes) s->set(b, "planar", true);
+  std::vector<std::string> swapped;
+  s->add_observer([&](const Event& e) {
+    if (e.type == "resolver_swapped") swapped.push_back(e.text);
+  });
+  const StackMotion ode = watch_stack(s, st, 0.5);
+  s->swap("", "rigid_body", "rigid_body.box2d");
+  const StackMotion on_b2 = watch_stack(s, st, 0.5);
+  EXPECT_TRUE(active(*s, "rigid_body.box2d"));
+  EXPECT_TRUE(active(*s, "collisions.box2d"));
+  EXPECT_FALSE(active(*s, "collisions"));
+  EXPECT_FALSE(active(*s, "rigid_body_from_collisions"));
+  s->swap("", "rigid_body.box2d", "rigid_body");
+  const StackMotion back = watch_stack(s, st, 0.5);
+  EXPECT_TRUE(active(*s, "rigid_body"));
+  EXPECT_TRUE(active(*s, "collisions"));
+  EXPECT_TRUE(active(*s, "rigid_body_from_collisions"));
+  EXPECT_FALSE(active(*s, "collisions.box2d"));
+  ASSERT_EQ(swapped.size(), 2u);
+  EXPECT_EQ(swapped[0],
+            "rigid_body -> rigid_body.box2d (everywhere); with collisions -> collisions.box2d");
+  EXPECT_EQ(swapped[1],
+            "rigid_body.box2d -> rigid_body (everywhere); with collisions.box2d -> collisions");
+  std::printf(
+      "box2d swap of a 5-box stack (0.2 m cubes): largest speed over 0.5 s on ODE %.3g m/s, "
+      "after the swap to Box2D %.3g m/s, after the swap back %.3g m/s; the top sinks %.3g, "
+      "%.3g, %.3g m\n",
+      ode.vmax, on_b2.vmax, back.vmax, ode.drop, on_b2.drop, back.drop);
+  // The stack stands through both swaps: nothing falls through a floor that
+  // lost its contact set.
+  EXPECT_LT(std::abs(on_b2.drop), 2e-3);
+  EXPECT_LT(std::abs(back.drop), 2e-3);
+  EXPECT_LT(on_b2.vmax, 0.05);
+  EXPECT_LT(back.vmax, 0.05);
+}
+
+TEST(Box2D, UsingTheEngineAloneBringsItsContactSet) {
+  WorldDef def;
+  def.use = {{"rigid_body", "rigid_body.box2d"}};
+  Sim s(def);
+  add_floor(*s);
+  const ObjectId ball = add_sphere(*s, {0, 0.3, 0}, 0.05, 1.0, "ball");
+  s.run_for(1.0);
+  EXPECT_TRUE(active(*s, "collisions.box2d"));
+  EXPECT_FALSE(active(*s, "collisions"));
+  EXPECT_NEAR(s.position(ball).y, 0.05, 2e-3);  // resting on the floor, not fallen through
+}
+
+WorldDef with_area(std::vector<std::string> plugins) {
+  WorldDef def;
+  AreaDef right;
+  right.name = "right";
+  right.center = {2, 1, 0};
+  right.half_extents = {1, 2, 1};
+  right.plugins = std::move(plugins);
+  def.areas = {right};
+  return def;
+}
+
+TEST(Box2D, AnAreasSwapReplacesItsContactStagesBothWays) {
+  // An area on ODE (its own rigid body, collision set and contact joints)
+  // swapped to Box2D and back; a stack on the area's floor stands throughout.
+  Sim s(with_area(
+      {"rigid_body", "collisions", "rigid_body_from_collisions", "rigid_body_from_gravity"}));
+  const ObjectId floor = add_box(*s, {2, -0.5, 0}, {1.8, 1, 1}, 1, {}, "right_floor");
+  s->set(floor, "static", true);
+  Stack st;
+  st.edge = 0.2;
+  for (int i = 0; i < 4; ++i)
+    st.boxes.push_back(add_box(*s, {2, 0.1 + 0.2 * i, 0}, {0.2, 0.2, 0.2}, 1.0));
+  for (ObjectId b : st.boxes) s->set(b, "planar", true);
+  const StackMotion ode = watch_stack(s, st, 0.5);
+  EXPECT_TRUE(active(*s, "rigid_body_from_collisions@right"));
+  s->swap("right", "rigid_body", "rigid_body.box2d");
+  const StackMotion on_b2 = watch_stack(s, st, 0.5);
+  EXPECT_TRUE(active(*s, "rigid_body.box2d@right"));
+  EXPECT_TRUE(active(*s, "collisions.box2d@right"));
+  EXPECT_FALSE(active(*s, "collisions@right"));
+  EXPECT_FALSE(active(*s, "rigid_body_from_collisions@right"));
+  s->swap("right", "rigid_body.box2d", "rigid_body");
+  const StackMotion back = watch_stack(s, st, 0.5);
+  EXPECT_TRUE(active(*s, "rigid_body@right"));
+  EXPECT_TRUE(active(*s, "collisions@right"));
+  EXPECT_TRUE(active(*s, "rigid_body_from_collisions@right"));
+  std::printf(
+      "box2d area swap of a 4-box stack: largest speed %.3g (ODE), %.3g (Box2D), %.3g "
+      "(ODE again) m/s; top sinks %.3g, %.3g, %.3g m\n",
+      ode.vmax, on_b2.vmax, back.vmax, ode.drop, on_b2.drop, back.drop);
+  EXPECT_LT(std::abs(on_b2.drop), 2e-3);
+  EXPECT_LT(std::abs(back.drop), 2e-3);
+  EXPECT_EQ(s->area_of(st.boxes.back()), "right");
+}
+
+std::string joint_refusal(bool a_in_box2d) {
+  // Area "right" (x from 1 to 3) is Box2D's, the rest ODE's; a hinge joins a
+  // box on each side.
+  Sim s(with_area({"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"}));
+  const ObjectId left = add_box(*s, {0.5, 1, 0}, {0.2, 0.2, 0.2}, 1, {}, "left_box");
+  const ObjectId right = add_box(*s, {1.5, 1, 0}, {0.2, 0.2, 0.2}, 1, {}, "right_box");
+  if (a_in_box2d)
+    add_hinge(*s, right, left, {1, 1, 0}, {0, 0, 1}, "link");
+  else
+    add_hinge(*s, left, right, {1, 1, 0}, {0, 0, 1}, "link");
+  try {
+    s.run_for(0.1);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Box2D, AJointBetweenAreasOnTwoEnginesIsRefusedNamingItAndBothBodies) {
+  const std::string b = joint_refusal(true);
+  std::printf("box2d joint across engines (body_a on Box2D): %s\n", b.c_str());
+  EXPECT_NE(b.find("'link': joins 'right_box' to 'left_box', but 'right_box' is simulated by "
+                   "another engine"),
+            std::string::npos)
+      << b;
+  const std::string o = joint_refusal(false);
+  std::printf("box2d joint across engines (body_a on ODE): %s\n", o.c_str());
+  EXPECT_NE(o.find("'link': joins 'left_box' to 'right_box', but 'right_box' is simulated by "
+                   "another engine"),
+            std::string::npos)
+      << o;
+}
+
+TEST(Box2D, ARestoreRebuildsFromPropertiesAndTheContinuationIsMeasured) {
+  // Box2D keeps warm-start impulses and contact memory that properties do not
+  // hold and that Box2D 2.4 cannot be given back: a restore rebuilds its
+  // world from the properties, as a swap does. A swinging hinge with a box
+  // hitting a floor: the continuation after a restore against the run that
+  // went on.
+  Sim s(on_box2d());
+  add_floor(*s);
+  const ObjectId bob = add_sphere(*s, {0.3, 0.5, 0}, 0.02, 1.0, "bob");
+  add_hinge(*s, bob, {}, {0, 0.8, 0});
+  const ObjectId box = add_box(*s, {1, 0.3, 0}, {0.1, 0.1, 0.1}, 1, {}, "box");
+  s.run_for(0.5);
+  const Snapshot snap = s->snapshot();
+  s.run_for(0.5);
+  const Vec3 bob_on = s.position(bob), box_on = s.position(box);
+  s->restore(snap);
+  s.run_for(0.5);
+  const Vec3 bob_re = s.position(bob), box_re = s.position(box);
+  const double dbob = std::sqrt(dot(bob_on - bob_re, bob_on - bob_re)),
+               dbox = std::sqrt(dot(box_on - box_re, box_on - box_re));
+  std::printf(
+      "box2d restore at 0.5 s, 0.5 s on: bob %.3g m, resting box %.3g m from the run "
+      "that went on\n",
+      dbob, dbox);
+  EXPECT_LT(dbob, 1e-4);
+  EXPECT_LT(dbox, 1e-4);
 }
 
 }  // namespace
