@@ -437,9 +437,18 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   }
   // The commands in flight belong to the coil, not to its network: they
   // outlive an opened loop, which is when book_substep needs them.
-  for (Coil& c : coils)
-    for (const Coil& old : coils_)
-      if (old.slot == c.slot) c.force_acting = old.force_acting, c.force_next = old.force_next;
+  // By slot, in linear time (a network may have thousands of coils).
+  if (!coils_.empty()) {
+    std::uint32_t top = 0;
+    for (const Coil& old : coils_) top = std::max(top, old.slot);
+    std::vector<std::int32_t> old_of_slot(std::size_t(top) + 1, -1);
+    for (std::size_t k = 0; k < coils_.size(); ++k) old_of_slot[coils_[k].slot] = std::int32_t(k);
+    for (Coil& c : coils)
+      if (c.slot <= top && old_of_slot[c.slot] >= 0) {
+        const Coil& old = coils_[std::size_t(old_of_slot[c.slot])];
+        c.force_acting = old.force_acting, c.force_next = old.force_next;
+      }
+  }
   batteries_ = std::move(batteries);
   coils_ = std::move(coils);
   capacitors_ = std::move(capacitors);
