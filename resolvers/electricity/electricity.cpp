@@ -435,6 +435,20 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
     guard_ = true;
     battery_emf_.assign(batteries.size(), 0.0);
   }
+  // The commands in flight belong to the coil, not to its network: they
+  // outlive an opened loop, which is when book_substep needs them.
+  // By slot, in linear time (a network may have thousands of coils).
+  if (!coils_.empty()) {
+    std::uint32_t top = 0;
+    for (const Coil& old : coils_) top = std::max(top, old.slot);
+    std::vector<std::int32_t> old_of_slot(std::size_t(top) + 1, -1);
+    for (std::size_t k = 0; k < coils_.size(); ++k) old_of_slot[coils_[k].slot] = std::int32_t(k);
+    for (Coil& c : coils)
+      if (c.slot <= top && old_of_slot[c.slot] >= 0) {
+        const Coil& old = coils_[std::size_t(old_of_slot[c.slot])];
+        c.force_acting = old.force_acting, c.force_next = old.force_next;
+      }
+  }
   batteries_ = std::move(batteries);
   coils_ = std::move(coils);
   capacitors_ = std::move(capacitors);
@@ -598,6 +612,14 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     }
   }
   if (config_.rates) write_current_rates(access);
+  // The command magnetism_from_electricity will send from this advance's
+  // end: the current predicted 1.5 steps on along its rate (with rates),
+  // else the current (docs/magnetism.md "The coupling's timing").
+  for (Coil& c : coils_) {
+    const double di = c.inductance > 0 ? c.v_l / c.inductance : 0.0;
+    const double command = config_.rates ? c.current + 1.5 * access.dt() * di : c.current;
+    c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
+  }
   write_outputs(access);
 }
 
@@ -641,8 +663,19 @@ void ElectricityResolver::book_substep(double trap, double hs) {
     const double r = network_.branches[nb + n].z - 2 * c.inductance / h_;
     const double v_l = mean(books_.v_l0[n], c.v_l);
     books_.heat += r * i * i * hs;
-    books_.emf_work +=
-        mean(books_.emf0.size() > n ? books_.emf0[n] : c.series_emf, c.series_emf) * i * hs;
+    const double emf = mean(books_.emf0.size() > n ? books_.emf0[n] : c.series_emf, c.series_emf);
+    books_.emf_work += emf * i * hs;
+    // A coil whose loop is open passes no current, but its pole strength,
+    // commanded before the loop opened, still pushes the parts for the
+    // steps it outlives the current (the coupling's delay). The EMF of the
+    // motion, -dPhi/dt at that strength, is that work; the energy is the
+    // field's that the opening released, so it is booked as the EMF's work
+    // on the parts and taken from the spark (switching), not left as the
+    // coupling's mismatch (docs/magnetism.md "An opened loop").
+    if (!branch_on_loop_[nb + n] && c.force_acting != 0) {
+      books_.emf_work += emf * c.force_acting * hs;
+      books_.switching += emf * c.force_acting * hs;
+    }
     const double i0 = books_.coil_current0[n];
     books_.switching += v_l * i * hs - 0.5 * c.inductance * (c.current * c.current - i0 * i0);
   }

@@ -267,6 +267,14 @@ class ElectricityResolver final : public Resolver {
     /// 1/2 L I^2 (J) released this advance because the coil lost its last
     /// loop with current flowing (the spark at the opening contact).
     double released = 0;
+    /// The current magnetism_from_electricity commands for this coil from
+    /// the last advance's end (force_next) and from the one before
+    /// (force_acting), A. The coupling's delay holds the pole strength of
+    /// the older one over the rigid body's step that this advance spans, so
+    /// a coil whose loop has just opened still pushes the parts with it for
+    /// up to two steps; book_substep books that work. The books only: it
+    /// changes no current.
+    double force_acting = 0, force_next = 0;
   };
   struct Capacitor {
     std::uint32_t slot;

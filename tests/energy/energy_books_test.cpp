@@ -289,23 +289,27 @@ SceneBooks scene_books(const char* scene, double dt, double seconds) {
 TEST(EnergyBooks, MotorsBooksCloseAndTheResidueShrinksWithTheStep) {
   // Since the motor was retuned so that back-EMF sets its speed (6000-turn
   // coils, an oiled bearing: docs/motor.md), most of the battery's work
-  // passes through the magnet-coil coupling. The coupling is now
+  // passes through the magnet-coil coupling. The coupling is
   // energy-consistent to second order (docs/magnetism.md "The coupling's
   // timing": the coil's force carries the current predicted for the step the
-  // EMF is paid over, the EMF ramps to the flux rate at the step's end). Over
-  // 10 s the residue is 0.65 % of the energy moved at 1/240 s (the
-  // coupling's mismatch 0.48 %, the stages' own books 0.17 %) and 0.040 % at
-  // 1/480 s; it was 5.7 % at 1/240 s with the force 1.5 steps behind its
-  // current.
+  // EMF is paid over, the EMF ramps to the flux rate at the step's end), and
+  // the pull a coil's pole strength keeps for the steps after its loop
+  // opened at a commutation is booked from the field the opening released
+  // ("An opened loop"). Over 10 s the residue is 0.155 % of the energy moved
+  // at 1/240 s and 0.091 % at 1/480 s; it was 0.65 % and 0.040 % with that
+  // pull left as the coupling's mismatch, 5.7 % at 1/240 s with the force
+  // 1.5 steps behind its current. What is left no longer falls at each
+  // halving: smooth-current prediction errors and the commutations' share
+  // have opposite signs.
   const SceneBooks coarse = scene_books("mods/motor", 1.0 / 240, 10);
   const SceneBooks fine = scene_books("mods/motor", 1.0 / 480, 10);
   for (const SceneBooks* m : {&coarse, &fine}) {
     EXPECT_GT(m->battery, 0.1);
     EXPECT_GT(m->coils_work, 0.05);
     EXPECT_LT(std::abs(m->balance.unexplained()), 3e-3 * m->balance.moved);
-    EXPECT_LT(m->balance.fraction(), 0.01);
   }
-  EXPECT_LT(fine.balance.fraction(), 0.3 * coarse.balance.fraction());
+  EXPECT_LT(coarse.balance.fraction(), 2e-3);
+  EXPECT_LT(fine.balance.fraction(), 1e-3);
 }
 
 TEST(EnergyBooks, GeneratorsBooksCloseAsTheStepShrinks) {
@@ -332,22 +336,21 @@ TEST(EnergyBooks, GeneratorsBooksCloseAsTheStepShrinks) {
   EXPECT_LT(fraction(fine), 0.4 * fraction(coarse));
 }
 
-TEST(EnergyBooks, DoorbellBooksCloseButForTheElectromagnetsLag) {
-  // Every stage's own books close, and what is left is the magnetic
-  // coupling's mismatch: the electromagnet's pole strength follows its
-  // current two steps late (electricity -> magnetism_from_electricity ->
+TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
+  // Every stage's own books close. The electromagnet's pole strength follows
+  // its current two steps late (electricity -> magnetism_from_electricity ->
   // magnetism -> magnetic_forces -> rigid_body_from_magnetism), so it pulls
-  // the armature for a step after the interrupter opened the circuit, with
-  // no EMF to pay for it (1.8 mJ an interruption at 1/240 s). That is 0.13 %
-  // of the energy moved at 1/240 s, above the 0.1 % asked (docs/energy.md);
-  // 0.17 % since the coupling predicts the current for the force's step (an
-  // interruption is a step no prediction carries).
+  // the armature for up to two steps after the interrupter opened the
+  // circuit, when no current flows and no EMF pays for it. That pull is the
+  // field's: electricity books it as the EMF's work at the commanded
+  // strength, out of the energy the opening released (switching;
+  // docs/magnetism.md "An opened loop"). Residue at 1/240 s: 0.075 % of the
+  // energy moved (0.1 % asked); 0.171 % with the pull left unbooked.
   const SceneBooks d = scene_books("mods/doorbell", 1.0 / 240, 10);
   EXPECT_GT(d.battery, 1.0);
   EXPECT_LT(std::abs(d.balance.unexplained()), 1e-5 * d.balance.moved);
   EXPECT_NEAR(d.balance.residue(), -d.balance.transfers, 1e-5 * d.balance.moved);
-  EXPECT_GT(d.magnetism_mismatch, 0.0);  // the lagging pull gives more than the EMF takes
-  EXPECT_LT(d.balance.fraction(), 2e-3);
+  EXPECT_LT(d.balance.fraction(), 1e-3);
 }
 
 }  // namespace
