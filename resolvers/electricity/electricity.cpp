@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 namespace alloy::electricity {
@@ -234,6 +235,7 @@ void ElectricityResolver::perform_commands(const WorldView& view) {
 
 void ElectricityResolver::build_network(const WorldView& view, double h) {
   ++network_builds_;
+  solved_valid_ = false;  // first: a build that throws leaves nothing to reuse either
   h_ = h;
   const PropertyStore& store = view.store();
   const auto conductive = view.column<std::uint8_t>(prop::kConductive);
@@ -574,9 +576,20 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Eigen::VectorXd coupling = -(2 / h) * (mutual_m * after);
       for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += coupling[a];
     }
-    solver_.solve(e_, potential_, branch_current_);
-    for (std::size_t k = 0; k < branch_current_.size(); ++k)
-      if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+    // The same sources, bit for bit, as the solve whose answer we hold: the
+    // same answer (the factor is the same until build_network), so reuse it.
+    if (solved_valid_ && solved_e_.size() == e_.size() &&
+        std::memcmp(solved_e_.data(), e_.data(), e_.size() * sizeof(double)) == 0) {
+      ++solves_skipped_;
+    } else {
+      solved_valid_ = false;  // until the solve below succeeds
+      solver_.solve(e_, potential_, branch_current_);
+      for (std::size_t k = 0; k < branch_current_.size(); ++k)
+        if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+      solved_e_ = e_;
+      solved_valid_ = true;
+      ++solves_;
+    }
     // The mutual part of each coupled coil's inductive voltage.
     std::vector<double> mutual_v(k > 0 ? nc : 0, 0.0);
     for (std::size_t a = 0; a < k; ++a)

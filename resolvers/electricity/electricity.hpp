@@ -220,6 +220,11 @@ class ElectricityResolver final : public Resolver {
   /// Rebuilds of the network from properties (cheap; a rebuild that yields the
   /// same matrix does not factorise).
   std::uint64_t network_builds() const { return network_builds_; }
+  /// Substep solves of the network since construction, and substeps whose
+  /// sources were bit for bit those of the last solve, so that its answer
+  /// was reused instead (tests; the benchmark).
+  std::uint64_t solves() const { return solves_; }
+  std::uint64_t solves_skipped() const { return solves_skipped_; }
   const MnaSolver& solver() const { return solver_; }
   /// The network last factorised (for the scaling benchmark).
   const Network& network() const { return network_; }
@@ -363,6 +368,14 @@ class ElectricityResolver final : public Resolver {
 
   // Per-solve results.
   std::vector<double> e_, potential_, branch_current_;
+  // The sources of the solve whose answer potential_ and branch_current_
+  // hold, while `solved_valid_`. A substep whose sources are the same bits
+  // would get the same answer, so it is not solved again: a resistive
+  // circuit solves once an advance, a settled one not at all. Invalid after
+  // every build_network (a new factorisation, zeroed results).
+  std::vector<double> solved_e_;
+  bool solved_valid_ = false;
+  std::uint64_t solves_ = 0, solves_skipped_ = 0;
   // restore_state: the history saved, applied after the first build_network.
   struct SavedHistory {
     bool guard = true;

@@ -50,51 +50,47 @@ struct MnaSolver::Component {
   // ordering and the elimination tree, so a new impedance costs only the
   // numeric factorisation.
   std::unique_ptr<ReducedLdlt> ldlt;
-  mutable Eigen::VectorXd rhs, x;  // work buffers, sized once
+  // Work buffers, sized once. The reduced form uses x alone: the right-hand
+  // side, then the solution, both in the factor's permuted order.
+  mutable Eigen::VectorXd rhs, x;
 };
 
 namespace {
-/// x = A^-1 b from A's factors P^T L D L^T P, in place in x, with no
-/// temporaries: Eigen's solve() makes a permuted copy and a scaled copy of the
-/// vector and copies the result out, which at 20,000 nodes cost as much as
-/// the triangular sweeps. The same floating-point operations in the same
-/// order as Eigen's (so the same bits): x = P b, L x = x (unit lower, by
-/// columns), x = D^-1 x, L^T x = x (by columns of L, as rows of L^T), then
-/// P^T.
-void solve_ldlt(const ReducedLdlt& f, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+/// Solves A y = b in place, where y holds b in the factor's (permuted) order
+/// on entry and the solution in that order on return, from A's factors
+/// P^T L D L^T P. The caller scatters the right-hand side straight into the
+/// permuted positions and gathers the solution from them (node_pos_), so the
+/// per-step path has no permutation pass and no temporary: at 20,000 nodes
+/// those passes and Eigen's copies cost about as much as the sweeps. The
+/// floating-point operations are Eigen's, in Eigen's order (so the same
+/// bits): L y = y (unit lower, by columns), y = D^-1 y, L^T y = y (by
+/// columns of L, as rows of L^T).
+void solve_ldlt_permuted(const ReducedLdlt& f, Eigen::VectorXd& y) {
   const auto& l = f.matrixL().nestedExpression();
+  const Eigen::Index m = y.size();
   if (!l.isCompressed()) {  // not seen with Eigen 3.4; the library's own solve then
-    x = f.solve(b);
+    const auto& perm = f.permutationP().indices();
+    Eigen::VectorXd b(m);
+    for (Eigen::Index i = 0; i < m; ++i) b[i] = y[perm.size() > 0 ? perm[i] : i];
+    const Eigen::VectorXd x = f.solve(b);
+    for (Eigen::Index i = 0; i < m; ++i) y[perm.size() > 0 ? perm[i] : i] = x[i];
     return;
   }
-  const auto& perm = f.permutationP().indices();
-  const auto& pinv = f.permutationPinv().indices();
   const Eigen::VectorXd& d = f.vectorD();
   const int* outer = l.outerIndexPtr();
   const int* inner = l.innerIndexPtr();
   const double* value = l.valuePtr();
-  const Eigen::Index m = b.size();
-  thread_local Eigen::VectorXd y;
-  y.resize(m);
-  if (perm.size() > 0)
-    for (Eigen::Index i = 0; i < m; ++i) y[perm[i]] = b[i];
-  else
-    y = b;
   // Eigen's L holds the strictly lower part only (D apart): no diagonal to skip.
   for (Eigen::Index j = 0; j < m; ++j) {
     const double yj = y[j];
     for (int p = outer[j]; p < outer[j + 1]; ++p) y[inner[p]] -= yj * value[p];
   }
-  // D^-1, L^T and P^T fused into one backward pass: y[j] is scaled just
-  // before its row of L^T is applied (the rows below are final by then),
-  // and is final, so it goes to its place at once. Same operations as three
-  // passes, one sweep over the vector.
-  x.resize(m);
+  // D^-1 and L^T fused into one backward pass: y[j] is scaled just before
+  // its row of L^T is applied (the rows below are final by then).
   for (Eigen::Index j = m - 1; j >= 0; --j) {
     double s = (1.0 / d[j]) * y[j];
     for (int p = outer[j]; p < outer[j + 1]; ++p) s -= value[p] * y[inner[p]];
     y[j] = s;
-    x[pinv.size() > 0 ? pinv[j] : j] = s;
   }
 }
 }  // namespace
@@ -169,6 +165,7 @@ void MnaSolver::partition(const Network& net) {
   // k -> row after the component's nodes. One array per network, filled per
   // component (components are disjoint, so entries never clash).
   node_row_.assign(n, kGround);
+  node_pos_.assign(n, kGround);
   branch_row_.assign(net.branches.size(), kGround);
   for (Component& comp : components_) {
     // The ground: node a of the first branch. The resolver lists batteries
@@ -251,7 +248,7 @@ void MnaSolver::factor_components(const Network& net) {
         if (net.branches[k].a != net.branches[k].b)
           stamp(net.branches[k].a, net.branches[k].b, 1.0 / net.branches[k].z);
       const Eigen::Index m = Eigen::Index(comp.nodes.size() - 1);
-      comp.rhs.setZero(m);
+      comp.rhs.resize(0);  // the reduced solve works in x alone, in the factor's order
       comp.x.setZero(m);
       if (m > 0) {
         SparseMatrix a(m, m);
@@ -265,6 +262,13 @@ void MnaSolver::factor_components(const Network& net) {
         if (comp.ldlt->info() != Eigen::Success)
           throw std::runtime_error("electric network component " + std::to_string(ci) +
                                    " is singular");
+        // Each node's place in the factor's order: solve() scatters into it
+        // and gathers from it. The ordering is the symbolic analysis's, so
+        // this changes only with the topology; it is O(nodes) either way.
+        const auto& perm = comp.ldlt->permutationP().indices();
+        for (std::uint32_t v : comp.nodes)
+          if (const std::int32_t r = node_row_[v]; r != kGround)
+            node_pos_[v] = perm.size() > 0 ? perm[r] : r;
       }
     } else {
       t.reserve(4 * conductances.size() + 5 * comp.branches.size());
@@ -316,20 +320,20 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
     if (!comp.dense && sparse_method_ == SparseMethod::Cholesky) {
       // Reduced form: each branch's source as the current e/z it would drive
       // through a short, injected at its ends; then I = (V_a - V_b + e) / z.
-      comp.rhs.setZero();
+      // The right-hand side goes straight to the factor's order (node_pos_).
+      Eigen::VectorXd& y = comp.x;
+      y.setZero();
       for (std::uint32_t k : comp.branches) {
         const auto [a, b] = branch_ends(k);
-        const std::int32_t ra = node_row_[a], rb = node_row_[b];
         const double w = e[k] / branch_z_[k];
-        if (ra != kGround) comp.rhs[ra] -= w;
-        if (rb != kGround) comp.rhs[rb] += w;
+        if (a != comp.ground) y[node_pos_[a]] -= w;
+        if (b != comp.ground) y[node_pos_[b]] += w;
       }
-      if (comp.ldlt) solve_ldlt(*comp.ldlt, comp.rhs, comp.x);
-      if (!comp.x.allFinite())
+      if (comp.ldlt) solve_ldlt_permuted(*comp.ldlt, y);
+      if (!y.allFinite())
         throw std::runtime_error("electric network component " + std::to_string(ci) +
                                  " gave a non-finite solution");
-      for (std::uint32_t v : comp.nodes)
-        potential[v] = v == comp.ground ? 0.0 : comp.x[node_row_[v]];
+      for (std::uint32_t v : comp.nodes) potential[v] = v == comp.ground ? 0.0 : y[node_pos_[v]];
       for (std::uint32_t k : comp.branches) {
         const auto [a, b] = branch_ends(k);
         current[k] = (potential[a] - potential[b] + e[k]) / branch_z_[k];

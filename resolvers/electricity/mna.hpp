@@ -151,8 +151,11 @@ class MnaSolver {
   std::size_t branch_count_ = 0;
   std::vector<std::uint32_t> component_of_node_;
   std::vector<Component> components_;
-  std::vector<std::int32_t> node_row_;             // row of each node in its component, -1: ground
-  std::vector<std::int32_t> branch_row_;           // row of each branch's current in its component
+  std::vector<std::int32_t> node_row_;    // row of each node in its component, -1: ground
+  std::vector<std::int32_t> branch_row_;  // row of each branch's current in its component
+  // Reduced (L D L^T) components: each node's position in the factor's
+  // permuted order, -1 for the ground (solve() works in that order).
+  std::vector<std::int32_t> node_pos_;
   std::vector<std::uint32_t> conductances_of_;     // conductance indices grouped by component
   std::vector<std::uint32_t> conductances_start_;  // component c: [start[c], start[c + 1])
   std::vector<std::pair<std::uint32_t, std::uint32_t>> topology_;
