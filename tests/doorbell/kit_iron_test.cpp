@@ -26,11 +26,12 @@ class KitIron : public ::testing::Test {
   static void SetUpTestSuite() {
     PluginRegistry registry;
     register_native_plugins(registry);
-    lua::LoadedScene scene = lua::load_scene(source("tests/doorbell/scenes/kit_iron.lua"), registry);
+    lua::LoadedScene scene =
+        lua::load_scene(source("tests/doorbell/scenes/kit_iron.lua"), registry);
     World& w = *scene.world;
-    const char* parts[] = {"lying_armature",   "idle_armature", "standing_armature",
+    const char* parts[] = {"lying_armature",    "idle_armature",  "standing_armature",
                            "touching_armature", "loose_armature", "core_magnet",
-                           "air_magnet",          "turn_armature"};
+                           "air_magnet",        "turn_armature"};
     for (const char* p : parts) start_[p] = state(w, p);
     // The bar's angle through the run, to see it settle.
     for (int i = 0; i < 240; ++i) {
@@ -46,7 +47,8 @@ class KitIron : public ::testing::Test {
   static State state(const World& w, const std::string& name) {
     const ObjectId id = w.find(name);
     if (!id) throw std::runtime_error("no object " + name);
-    return {std::get<Vec3>(w.get(id, "position")), angle_z(std::get<Quat>(w.get(id, "orientation")))};
+    return {std::get<Vec3>(w.get(id, "position")),
+            angle_z(std::get<Quat>(w.get(id, "orientation")))};
   }
   static Vec3 moved(const std::string& name) { return end_[name].at - start_[name].at; }
   static inline std::map<std::string, State> start_, end_;
