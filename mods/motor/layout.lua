@@ -66,6 +66,13 @@ local defaults = {
   -- bearing sets the speed).
   coil_angle = 22.5, coil_gap = 0.004, coil_length = 0.05, coil_diameter = 0.056, turns = 6000,
   wire_diameter = 0.27e-3,
+  -- The cores amplify the coils' own field but are not magnetised by the
+  -- spokes (core_pulled = false): with them pulled, the spokes' field at a
+  -- core (about 5 times the coil's own NI / L here) cogs the rotor into
+  -- detents 22.5 degrees from where the bias magnet holds it, which are the
+  -- commutation's dead points, and the rotor stalls (docs/motor.md, "Iron
+  -- cores"). A retune that runs with pulled cores is not found yet.
+  core_pulled = false,
   -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
   -- below the axle, north up; it pulls a south spoke to the bottom, which
   -- puts a north spoke under the slider, where the torque is largest.
@@ -115,7 +122,7 @@ return function(options)
   for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
     kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
                diameter = o.coil_diameter, turns = o.turns,
-               wire_diameter = o.wire_diameter }
+               wire_diameter = o.wire_diameter, core_pulled = o.core_pulled }
   end
 
   -- The bias magnet, standing below the axle, north up.

@@ -98,6 +98,13 @@ TEST_F(KitParts, ACoilsWindingAndCoreGiveItsResistanceInductanceAndPull) {
   EXPECT_NEAR(get<double>(w(), "coil", "coil_factor"), 0.061, 0.0005);
   EXPECT_FALSE(has(w(), "coil", "conductive"))
       << "its winding is enamelled: touching it connects nothing";
+  // The core is soft iron to the other parts too: an 18 mm rod, saturating
+  // at Ms V over the pole separation.
+  EXPECT_DOUBLE_EQ(get<double>(w(), "coil", "susceptibility"), chi);
+  EXPECT_DOUBLE_EQ(get<double>(w(), "coil", "core_diameter"), 0.018);
+  EXPECT_NEAR(get<double>(w(), "coil", "saturation_pole"),
+              1.71e6 * pi * 0.018 * 0.018 / 4 * L / (0.85 * L), 1e-9);
+  EXPECT_FALSE(has(w(), "air_coil", "susceptibility"));
   // Without the core: the winding's own area, far less pull per ampere-turn.
   EXPECT_NEAR(get<double>(w(), "air_coil", "coil_factor"), mean_area / (0.85 * L), 1e-12);
   EXPECT_GT(get<double>(w(), "coil", "coil_factor"),

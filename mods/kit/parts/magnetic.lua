@@ -21,6 +21,8 @@ magnetic.coil = {
     { "wire_diameter", "positive", default = 0.5e-3, doc = "m" },
     { "core", "string", default = "iron", doc = "\"iron\" (a soft-iron rod inside the winding) or \"air\"" },
     { "core_diameter", "positive", doc = "m; default 0.6 x the diameter" },
+    { "core_pulled", "boolean", default = true,
+      doc = "an iron core is magnetised by the other parts' fields too (pulled by a magnet, cogging); false: only the coil's own current magnetises it (the model before session 15, kept by the motor family until its retune)" },
   }),
   build = function(a, kit)
     local L, D, N, dw = a.length, a.diameter, a.turns, a.wire_diameter
@@ -66,6 +68,17 @@ magnetic.coil = {
       friction = 0.4,
       restitution = 0.3,
     }
+    if a.core == "iron" and a.core_pulled then
+      -- The core is soft iron to the other parts too: a magnet's field, or
+      -- another coil's, magnetises it along the coil's axis (the resolver's
+      -- cored electromagnet, docs/magnetism.md "Soft iron"), so an unpowered
+      -- coil is pulled by a magnet and a powered one pulls harder on iron
+      -- than its own moment alone would. Its own current's share is already
+      -- in coil_factor above.
+      p.susceptibility = iron.susceptibility
+      p.core_diameter = dc
+      p.saturation_pole = iron.saturation_magnetization * core_area * L / separation
+    end
     return mount.place(a, p, mass)
   end,
 }
