@@ -1751,8 +1751,8 @@ void Viewer::paste_clipboard() {
 }
 
 void Viewer::draw_legend(ImDrawList* dl) {
-  // What each colour and mark on the board means, in the play area's lower
-  // left corner (where the panels leave it free).
+  // What each colour and mark on the board means, in the play area's upper
+  // right corner (the messages take the bottom).
   float x0, y0, x1, y1;
   play_rect(x0, y0, x1, y1);
   struct Row {
@@ -1773,9 +1773,9 @@ void Viewer::draw_legend(ImDrawList* dl) {
   };
   const float line = 16, width = 186;
   const int n = int(std::size(rows)) + (draw_options_.compass ? 1 : 0);
-  const float top = y1 - 10 - line * float(n) - 8, left = x0 + 10;
-  dl->AddRectFilled({left, top}, {left + width, y1 - 10}, colour::rgb(255, 255, 255, 225), 4);
-  dl->AddRect({left, top}, {left + width, y1 - 10}, colour::rgb(180, 184, 192), 4);
+  const float top = y0 + 10, bottom = top + line * float(n) + 8, left = x1 - width - 10;
+  dl->AddRectFilled({left, top}, {left + width, bottom}, colour::rgb(255, 255, 255, 225), 4);
+  dl->AddRect({left, top}, {left + width, bottom}, colour::rgb(180, 184, 192), 4);
   float y = top + 4;
   auto text = [&](const char* t) {
     dl->AddText({left + 30, y}, colour::rgb(40, 40, 48), t);

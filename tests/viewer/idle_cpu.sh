@@ -20,7 +20,7 @@ xpid=$!
 trap 'kill $xpid 2>/dev/null' EXIT
 export DISPLAY=":$n"
 i=0
-while ! xdpyinfo >/dev/null 2>&1 && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+while ! xdotool getdisplaygeometry >/dev/null 2>&1 && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
 ticks() { awk '{ print $14 + $15 }' "/proc/$1/stat"; }
 hz=$(getconf CLK_TCK)
 for mode in --paused ""; do
