@@ -31,7 +31,8 @@ FUZZ_SECONDS ?= 60
 PACKAGES := build-essential cmake pkg-config \
             libluajit-5.1-dev libode-dev libeigen3-dev libsdl2-dev \
             libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
-            libimgui-dev libpng-dev fonts-dejavu-core libxxhash-dev libzstd-dev libbox2d-dev
+            libimgui-dev libpng-dev fonts-dejavu-core libxxhash-dev libzstd-dev libbox2d-dev \
+            xvfb xdotool
 
 # What `make test-asan` and `make fuzz` need besides: Debian's clang 16 (bookworm's default clang,
 # 14, cannot build alloy: it lacks C++20's parenthesized aggregate

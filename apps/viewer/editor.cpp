@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
 #include <set>
 
@@ -81,15 +82,27 @@ std::vector<ObjectId> Editor::joined_group(ObjectId part) const {
 }
 
 EditResult Editor::grab(ObjectId part, Vec2 at) {
-  if (!world_ || !world_->store().alive(part))
+  return grab_all({part}, at);
+}
+
+EditResult Editor::grab_all(const std::vector<ObjectId>& parts, Vec2 at) {
+  if (parts.empty() || !world_ || !world_->store().alive(parts.front()))
     return EditResult::refused("nothing to pick up there");
-  const auto p0 = read_part(*world_, part);
-  if (!p0) return EditResult::refused(world_->describe(part) + " is not a part that can be moved");
+  const auto p0 = read_part(*world_, parts.front());
+  if (!p0)
+    return EditResult::refused(world_->describe(parts.front()) +
+                               " is not a part that can be moved");
   held_.clear();
   turn_ = 0;
   grab_point_ = target_ = at;
-  const std::vector<ObjectId> group = joined_group(part);
-  const std::set<ObjectId> members(group.begin(), group.end());
+  // Each part with what is joined to it, once, the part the hand took first.
+  std::vector<ObjectId> group;
+  std::set<ObjectId> members;
+  for (ObjectId part : parts) {
+    if (!world_->store().alive(part) || members.count(part)) continue;
+    for (ObjectId id : joined_group(part))
+      if (members.insert(id).second) group.push_back(id);
+  }
   for (ObjectId id : group) {
     const auto p = read_part(*world_, id);
     if (!p) continue;
@@ -107,6 +120,165 @@ EditResult Editor::grab(ObjectId part, Vec2 at) {
     }
   }
   return {};
+}
+
+Vec2 Editor::snapped(Vec2 hand, double grid, double reach) const {
+  if (!carrying() || !world_) return hand;
+  const Held& h = held_.front();
+  const auto p = read_part(*world_, h.id);
+  if (!p) return hand;
+  const Vec2 centre = hand + viewer::rotate(h.offset, turn_);
+  const double angle = h.angle + turn_;
+  const Vec2 half = viewer::rotate({p->half_extent_x(), 0}, angle);
+  // Ends first: the nearest pair of (an end of what is carried, an end of a
+  // part that is not held) within reach.
+  std::set<ObjectId> held;
+  for (const Held& o : held_) held.insert(o.id);
+  double best = reach;
+  Vec2 shift;
+  bool found = false;
+  for (const Part2D& other : read_parts(*world_)) {
+    if (held.count(other.id)) continue;
+    const Vec2 oh = viewer::rotate({other.half_extent_x(), 0}, other.angle);
+    for (const Vec2 mine : {centre - half, centre + half})
+      for (const Vec2 theirs : {other.centre - oh, other.centre + oh}) {
+        const double d = length(theirs - mine);
+        if (d < best) best = d, shift = theirs - mine, found = true;
+      }
+  }
+  if (found) return hand + shift;
+  if (!(grid > 0)) return hand;
+  const Vec2 on_grid{std::round(centre.x / grid) * grid, std::round(centre.y / grid) * grid};
+  return hand + (on_grid - centre);
+}
+
+std::vector<ObjectId> Editor::parts_in(Vec2 a, Vec2 b) const {
+  std::vector<ObjectId> out;
+  if (!world_) return out;
+  const double x0 = std::min(a.x, b.x), x1 = std::max(a.x, b.x);
+  const double y0 = std::min(a.y, b.y), y1 = std::max(a.y, b.y);
+  for (const Part2D& p : read_parts(*world_))
+    if (!p.is_static && p.centre.x >= x0 && p.centre.x <= x1 && p.centre.y >= y0 &&
+        p.centre.y <= y1)
+      out.push_back(p.id);
+  return out;
+}
+
+EditResult Editor::remove_all(const std::vector<ObjectId>& parts) {
+  std::size_t removed = 0;
+  for (ObjectId part : parts) {
+    if (!world_ || !world_->store().alive(part)) continue;  // gone with an earlier one
+    const EditResult r = remove(part);
+    if (!r.ok) return r;
+    ++removed;
+  }
+  if (removed == 0) return EditResult::refused("nothing to remove");
+  return {true, "removed " + std::to_string(removed) + " parts"};
+}
+
+Editor::Clipboard Editor::copy(const std::vector<ObjectId>& parts) const {
+  Clipboard clip;
+  if (!world_) return clip;
+  const PropertyStore& store = world_->store();
+  const PropertyRegistry& reg = world_->properties();
+  std::set<ObjectId> chosen;
+  Vec2 sum;
+  for (ObjectId id : parts) {
+    const auto p = read_part(*world_, id);
+    if (!p || !chosen.insert(id).second) continue;
+    clip.from.push_back(id);
+    sum = sum + p->centre;
+  }
+  clip.parts = clip.from.size();
+  if (clip.parts == 0) return clip;
+  clip.centre = sum * (1.0 / double(clip.parts));
+  // Every other object whose references (at least one) all point at copied
+  // parts: the joints, wires and springs among them.
+  for (std::uint32_t s = 0; s < store.slot_count(); ++s) {
+    const ObjectId o = store.id_at(s);
+    if (!o || chosen.count(o)) continue;
+    bool any = false, all = true;
+    for (PropertyId p = 0; p < reg.size() && all; ++p) {
+      if (!store.has(o, p)) continue;
+      const PropertyValue v = store.get(o, p);
+      auto see = [&](ObjectId r) {
+        if (r.is_null()) return;
+        any = true;
+        if (!chosen.count(r)) all = false;
+      };
+      if (const ObjectId* r = std::get_if<ObjectId>(&v)) see(*r);
+      if (const RefList* l = std::get_if<RefList>(&v))
+        for (ObjectId r : *l) see(r);
+    }
+    if (any && all) clip.from.push_back(o);
+  }
+  const PropertyId name_id = reg.id("name");
+  for (ObjectId id : clip.from) {
+    Clipboard::Object obj;
+    for (PropertyId p = 0; p < reg.size(); ++p) {
+      if (!store.has(id, p)) continue;
+      if (p == name_id)
+        obj.name = std::get<std::string>(store.get(id, p));
+      else
+        obj.values.emplace_back(p, store.get(id, p));
+    }
+    clip.objects.push_back(std::move(obj));
+  }
+  return clip;
+}
+
+EditResult Editor::paste(const Clipboard& clip, Vec2 offset, std::vector<ObjectId>* made) {
+  if (!world_) return EditResult::refused("no world");
+  if (clip.empty()) return EditResult::refused("nothing to paste: copy some parts first (Ctrl+C)");
+  std::vector<ObjectId> fresh;
+  const EditResult r = guarded([&] {
+    const PropertyRegistry& reg = world_->properties();
+    const auto position = reg.find("position"), anchor = reg.find("anchor");
+    const auto spring_b = reg.find("spring_b"), spring_anchor_b = reg.find("spring_anchor_b");
+    std::map<ObjectId, ObjectId> to_new;
+    for (std::size_t i = 0; i < clip.objects.size(); ++i) {
+      const std::string& name = clip.objects[i].name;
+      // bar_2 copied is bar_3 (the next free), not bar_2_2.
+      std::string base = name;
+      if (const auto cut = base.find_last_of('_');
+          cut != std::string::npos && cut + 1 < base.size() &&
+          base.find_first_not_of("0123456789", cut + 1) == std::string::npos)
+        base.erase(cut);
+      fresh.push_back(world_->create(name.empty() ? "" : unique_name(base)));
+      to_new[clip.from[i]] = fresh.back();
+    }
+    auto remap = [&](ObjectId r) {
+      const auto it = to_new.find(r);
+      return it == to_new.end() ? ObjectId{} : it->second;
+    };
+    const Vec3 by{offset.x, offset.y, 0};
+    for (std::size_t i = 0; i < clip.objects.size(); ++i) {
+      const Clipboard::Object& obj = clip.objects[i];
+      // A spring with no part b has a point of the board for that end: it moves too.
+      bool board_end = true;
+      for (const auto& [p, v] : obj.values)
+        if (spring_b && p == *spring_b && !std::get<ObjectId>(v).is_null()) board_end = false;
+      for (const auto& [p, v] : obj.values) {
+        PropertyValue value = v;
+        if (ObjectId* ref = std::get_if<ObjectId>(&value)) *ref = remap(*ref);
+        if (RefList* list = std::get_if<RefList>(&value))
+          for (ObjectId& ref : *list) ref = remap(ref);
+        const bool placed = (position && p == *position) || (anchor && p == *anchor) ||
+                            (board_end && spring_anchor_b && p == *spring_anchor_b);
+        if (placed) value = std::get<Vec3>(value) + by;
+        world_->set(fresh[i], p, value);
+      }
+    }
+    for (ObjectId id : fresh) world_->check(id);
+    return EditResult{true, "pasted " + std::to_string(clip.parts) + " parts"};
+  });
+  if (!r.ok) {
+    for (ObjectId id : fresh)
+      if (world_->store().alive(id)) world_->destroy(id);
+    return r;
+  }
+  if (made) made->assign(fresh.begin(), fresh.begin() + std::ptrdiff_t(clip.parts));
+  return r;
 }
 
 void Editor::place(const std::vector<Held>& group, Vec2 hand, double turn) {

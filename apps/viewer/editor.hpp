@@ -37,6 +37,9 @@ class Editor {
   /// Picks up `part` at `at`, with every part joined to it (a pinned wheel
   /// with its pin, a rotor with its spokes); they move as one.
   EditResult grab(ObjectId part, Vec2 at);
+  /// Picks up several parts at once (a multi-selection), each with what is
+  /// joined to it; the first is the one the hand took.
+  EditResult grab_all(const std::vector<ObjectId>& parts, Vec2 at);
   /// Where the hand is now.
   void carry_to(Vec2 at) { target_ = at; }
   /// Turns what is held about the hand, rad (counter-clockwise > 0).
@@ -53,6 +56,39 @@ class Editor {
   ObjectId carried() const { return carrying() ? held_.front().id : ObjectId{}; }
   /// Where the hand took hold, and where it is now (for drawing).
   Vec2 hand() const { return target_; }
+
+  /// Where the hand should be so that what is held snaps (the snap toggle):
+  /// an end of the carried part (either end along its own x axis) onto the
+  /// nearest end of another part within `reach` (m); else its centre onto
+  /// the grid of `grid` (m). Not carrying: `hand` as it is.
+  Vec2 snapped(Vec2 hand, double grid, double reach) const;
+
+  // --- many parts: the rubber band, copy and paste -----------------------------
+  /// The parts that can move (not static) whose centres lie in the box with
+  /// corners `a` and `b` (m), in slot order.
+  std::vector<ObjectId> parts_in(Vec2 a, Vec2 b) const;
+  /// Removes several parts at once (each with its joints, wires and springs).
+  EditResult remove_all(const std::vector<ObjectId>& parts);
+  /// A copy of some parts with every property they carry, and of the joints,
+  /// wires and springs among them: each object that refers only to copied
+  /// parts (a hinge, glue or spring to the board comes along too).
+  struct Clipboard {
+    struct Object {
+      std::string name;  ///< "" for an unnamed object
+      std::vector<std::pair<PropertyId, PropertyValue>> values;
+    };
+    std::vector<ObjectId> from;   ///< the objects copied (refs among them are remapped)
+    std::vector<Object> objects;  ///< their names and values, in the same order
+    Vec2 centre;                  ///< the mean centre of the copied parts, m
+    std::size_t parts = 0;        ///< how many of the objects are parts
+    bool empty() const { return objects.empty(); }
+  };
+  Clipboard copy(const std::vector<ObjectId>& parts) const;
+  /// Makes the clipboard's objects again, moved by `offset` (m): new names
+  /// (name_2, ...), references among them pointing at the new objects, each
+  /// checked as the world checks any object. `made`: the new parts (not the
+  /// joints, wires and springs).
+  EditResult paste(const Clipboard& clip, Vec2 offset, std::vector<ObjectId>* made = nullptr);
 
   // --- other edits ------------------------------------------------------------
   EditResult set_pinned(ObjectId part, bool pinned);

@@ -292,6 +292,26 @@ Vec2 terminal_point(const World& world, ObjectId part, std::int64_t terminal) {
   return p->to_world({terminal == 1 ? x : -x, 0});
 }
 
+std::vector<Needle> compass_needles(World& world, const Camera& cam, float width, float height,
+                                    float spacing) {
+  std::vector<Needle> out;
+  auto* forces =
+      dynamic_cast<magnetism::MagneticForces*>(world.stage(magnetism::MagneticForces::kName));
+  if (!forces || forces->poles().empty() || !(spacing > 4)) return out;
+  // Needles at the middles of the grid's cells, so that none sits on the
+  // window's edge.
+  for (float y = spacing / 2; y < height; y += spacing)
+    for (float x = spacing / 2; x < width; x += spacing) {
+      const Vec2 at = cam.to_world(x, y);
+      const Vec3 b = forces->field({at.x, at.y, 0});
+      const Vec2 bxy = xy(b);
+      const double t = length(bxy);
+      if (!(t >= kCompassFloor)) continue;
+      out.push_back({at, bxy * (1 / t), t});
+    }
+  return out;
+}
+
 void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptions& opt,
                 const Highlight& hl, double clock, const std::vector<Ring>& rings) {
   // The background is the renderer's clear colour (colour::kBackground): a
@@ -553,6 +573,25 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       const ImVec2 from = iv(cam.to_screen(p->centre));
       arrow(dl, from, {from.x + float(f.x / n) * len, from.y - float(f.y / n) * len},
             colour::kMagneticForce, 2.5f);
+    }
+  }
+
+  // Compass needles (key C): a diamond each, its north half red and its
+  // south half pale, pointing along B; the stronger the field, the bolder,
+  // from 1 uT (faint) to 10 mT (solid), so that the field's shape reads at a
+  // glance and its strength roughly.
+  if (opt.compass) {
+    for (const Needle& n : compass_needles(world, cam, size.x, size.y)) {
+      const float alpha =
+          float(std::clamp(0.25 + 0.75 * std::log10(n.tesla / kCompassFloor) / 4, 0.25, 1.0));
+      const ImVec2 c = iv(cam.to_screen(n.at));
+      const ImVec2 d{float(n.north.x) * 11, -float(n.north.y) * 11};
+      const ImVec2 side{-d.y * 0.22f, d.x * 0.22f};
+      const ImVec2 tip{c.x + d.x, c.y + d.y}, tail{c.x - d.x, c.y - d.y};
+      const ImVec2 l{c.x + side.x, c.y + side.y}, r{c.x - side.x, c.y - side.y};
+      dl->AddTriangleFilled(tip, l, r, with_alpha(colour::kNorth, alpha));
+      dl->AddTriangleFilled(tail, r, l, with_alpha(colour::rgb(120, 130, 150), alpha));
+      dl->AddCircleFilled(c, 1.5f, with_alpha(colour::rgb(40, 40, 40), alpha), 6);
     }
   }
 

@@ -59,7 +59,24 @@ struct DrawOptions {
   bool poles = true;
   bool magnetic_forces = true;  // on by default: they show why a coil pulls and a rotor turns
   bool contact_forces = false;
+  bool compass = false;  ///< a grid of compass needles showing the magnetic field
 };
+
+/// A compass needle: where it stands, which way its north end points (a unit
+/// vector in the play area) and the field's strength there.
+struct Needle {
+  Vec2 at;
+  Vec2 north;
+  double tesla = 0;
+};
+/// Needles on a grid of `spacing` pixels over the screen rectangle `width` x
+/// `height`, from the magnetic_forces set's field (B of every pole). None
+/// where the field is under 1 uT (a needle there would only show the noise),
+/// nor with no magnetism in the world.
+std::vector<Needle> compass_needles(World& world, const Camera& camera, float width, float height,
+                                    float spacing = 36);
+/// Below this field a compass shows nothing, T.
+inline constexpr double kCompassFloor = 1e-6;
 
 struct Highlight {
   ObjectId selected, hovered, wire_start;

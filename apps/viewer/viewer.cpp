@@ -202,6 +202,7 @@ void Viewer::load() {
   auto fresh_registry = std::make_unique<PluginRegistry>();
   register_native_plugins(*fresh_registry);
   std::unique_ptr<lua::LoadedScene> fresh;  // declared after its registry: destroyed first
+  many_.clear();
   lua::LoadOptions options = opt_.load;
   options.mod_log = [this](const std::string& mod, const std::string& line) {
     note(mod + ": " + line);
@@ -369,6 +370,7 @@ bool Viewer::undo() {
     return false;
   }
   editor_.attach(w);
+  many_.clear();  // its ids may be gone or another's now
   note("undone: " + what);
   return true;
 }
@@ -388,6 +390,7 @@ bool Viewer::redo() {
     return false;
   }
   editor_.attach(w);
+  many_.clear();
   note("redone: " + what);
   return true;
 }
@@ -544,11 +547,30 @@ bool Viewer::frame() {
   SDL_Event e;
   // Paused and idle (nothing held, no script, no ring fading), a window
   // waits for input instead of drawing the same picture 60 times a second:
-  // a quarter of a second at most, so that messages still fade.
+  // a quarter of a second at most while a message fades, else a second (the
+  // scene file is still watched for changes). Measured under Xvfb on the
+  // doorbell (tests/viewer/idle_cpu.sh): 6.2 % of a core with 250 ms waits.
   if (!opt_.headless && paused_ && single_steps_ == 0 && !editor_.carrying() && !resizing_ &&
-      script_next_ >= script_.size() && rings_.empty() && SDL_WaitEventTimeout(&e, 250))
+      script_next_ >= script_.size() && rings_.empty() &&
+      SDL_WaitEventTimeout(&e, toasts_.empty() ? 1000 : 250))
     handle(e);
-  while (SDL_PollEvent(&e)) handle(e);
+  while (true) {
+    // A press over a panel where the panels have not yet seen the pointer
+    // waits for the next frame: Dear ImGui gives a click to a window only if
+    // the pointer hovered it in the frame before (a real X server delivers
+    // the move and the press together; without this the click is lost).
+    SDL_PumpEvents();
+    if (SDL_PeepEvents(&e, 1, SDL_PEEKEVENT, SDL_FIRSTEVENT, SDL_LASTEVENT) == 1 &&
+        e.type == SDL_MOUSEBUTTONDOWN) {
+      const float x = float(e.button.x), y = float(e.button.y);
+      if (imgui_ready_ && over_panel(x, y) && (x != panels_saw_x_ || y != panels_saw_y_)) {
+        mouse_x_ = x, mouse_y_ = y;
+        break;
+      }
+    }
+    if (!SDL_PollEvent(&e)) break;
+    handle(e);
+  }
   // Edits this frame: the stages the new parts need are made now, so that the
   // world is whole between frames (and a snapshot of it restores).
   if (history_.changes() != synced_changes_) {
@@ -930,7 +952,8 @@ void Viewer::handle(const SDL_Event& e) {
       const Vec2 at = camera_.to_world(mouse_x_, mouse_y_);
       if (panning_ && had)
         camera_.centre = camera_.centre - Vec2{dx / camera_.scale, -dy / camera_.scale};
-      if (editor_.carrying()) editor_.carry_to(at);
+      if (editor_.carrying())
+        editor_.carry_to(snap_ ? editor_.snapped(at, kSnapGrid, 8 / camera_.scale) : at);
       if (resizing_) on_drag(at);
       hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
       break;
@@ -1089,14 +1112,41 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
         selected_ = line;
         break;
       }
+      if (mod & KMOD_SHIFT) {
+        // Shift: a click adds a part to the selection (or takes it away); on
+        // the board it starts a rubber band.
+        if (!part) {
+          band_ = true;
+          band_from_ = at;
+          break;
+        }
+        if (many_.empty() && selected_ && selected_ != part && read_part(*w, selected_))
+          many_.push_back(selected_);
+        const auto it = std::find(many_.begin(), many_.end(), part);
+        if (it != many_.end())
+          many_.erase(it);
+        else
+          many_.push_back(part);
+        selected_ = many_.empty() ? ObjectId{} : many_.back();
+        if (many_.size() < 2) many_.clear();
+        break;
+      }
       if (!part) {
-        selected_ = {};
+        select({});
         panning_ = true;
         break;
       }
+      // A part of the multi-selection carries all of it; another part is
+      // selected alone.
+      const bool in_many = std::find(many_.begin(), many_.end(), part) != many_.end();
+      if (!in_many) many_.clear();
       selected_ = part;
-      history_.record(*w, "move " + w->describe(part));
-      const EditResult r = editor_.grab(part, at);
+      history_.record(*w, many_.empty() ? "move " + w->describe(part)
+                                        : "move " + std::to_string(many_.size()) + " parts");
+      std::vector<ObjectId> carried{part};
+      for (ObjectId o : many_)
+        if (o != part && w->store().alive(o)) carried.push_back(o);
+      const EditResult r = editor_.grab_all(carried, at);
       if (!r.ok) {
         history_.forget_last();
         note(r.message, true);
@@ -1109,6 +1159,17 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
 void Viewer::on_release(Vec2 at, Uint8 button) {
   panning_ = false;
   if (button != SDL_BUTTON_LEFT) return;
+  if (band_) {
+    band_ = false;
+    // Every part the band holds joins the selection (a second band adds).
+    std::vector<ObjectId> got = selection();
+    if (got.size() == 1 && !read_part(*world(), got.front())) got.clear();
+    for (ObjectId id : editor_.parts_in(band_from_, at))
+      if (std::find(got.begin(), got.end(), id) == got.end()) got.push_back(id);
+    many_ = got.size() >= 2 ? got : std::vector<ObjectId>{};
+    selected_ = got.empty() ? ObjectId{} : got.front();
+    return;
+  }
   if (tool_ == Tool::Place && place_drag_) {
     // Dragged from the palette and let go over the play area: drop it there.
     place_drag_ = false;
@@ -1131,6 +1192,7 @@ void Viewer::on_release(Vec2 at, Uint8 button) {
     return;
   }
   if (editor_.carrying()) {
+    if (snap_) at = editor_.snapped(at, kSnapGrid, 8 / camera_.scale);
     editor_.carry_to(at);
     // A click that moved nothing only selected: it is not an edit to undo.
     const bool moved = editor_.moved();
@@ -1228,9 +1290,28 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
     case SDLK_w:
       set_tool(tool_ == Tool::Wire ? Tool::Hand : Tool::Wire);
       break;
+    case SDLK_c:
+      if (ctrl)
+        copy_selection();
+      else
+        draw_options_.compass = !draw_options_.compass;
+      break;
+    case SDLK_v:
+      if (ctrl) paste_clipboard();
+      break;
+    case SDLK_x:
+      snap_ = !snap_;
+      note(snap_ ? "snapping on: part ends onto part ends, else centres onto the 1 cm grid"
+                 : "snapping off");
+      break;
     case SDLK_DELETE:
     case SDLK_BACKSPACE:
-      if (selected_ && w) {
+      if (const std::vector<ObjectId> all = selection(); all.size() > 1 && w) {
+        const EditResult r = edit("remove " + std::to_string(all.size()) + " parts",
+                                  [&] { return editor_.remove_all(all); });
+        note(r.message, !r.ok);
+        if (r.ok) select({}), hovered_ = {};
+      } else if (selected_ && w) {
         const ObjectId doomed = selected_;
         const EditResult r =
             edit("remove " + w->describe(doomed), [&] { return editor_.remove(doomed); });
@@ -1262,6 +1343,7 @@ void Viewer::on_key(SDL_Keycode key, Uint16 mod) {
     case SDLK_ESCAPE:
       set_tool(Tool::Hand);
       help_ = false;
+      many_.clear();
       break;
     case SDLK_a:
       // A meter probe on the part under the mouse (again: taken off). It
@@ -1418,6 +1500,7 @@ void Viewer::draw(bool capture, Image* image) {
   // knows nothing of pushed events): scripted input drives the panels too.
   ImGuiIO& io = ImGui::GetIO();
   io.MousePos = mouse_x_ >= 0 ? ImVec2(mouse_x_, mouse_y_) : ImVec2(-FLT_MAX, -FLT_MAX);
+  panels_saw_x_ = mouse_x_, panels_saw_y_ = mouse_y_;
   for (int i = 0; i < 3; ++i) {
     io.MouseDown[i] = mouse_down_[i] || mouse_pressed_[i];
     mouse_pressed_[i] = false;
@@ -1440,7 +1523,28 @@ void Viewer::draw(bool capture, Image* image) {
       dl->AddLine({s.x, s.y}, {mouse_x_, mouse_y_}, colour::kWireIdle, 2.5f);
     }
     draw_tool_feedback(dl, *w);
+    // The multi-selection: each part outlined.
+    for (ObjectId id : many_)
+      if (const auto p = read_part(*w, id)) {
+        std::vector<ImVec2> pts;
+        for (Vec2 v : outline(*p, 32)) {
+          const ScreenPoint q = camera_.to_screen(v);
+          pts.push_back({q.x, q.y});
+        }
+        dl->AddPolyline(pts.data(), int(pts.size()), colour::kSelected, ImDrawFlags_Closed, 2.5f);
+      }
+    if (band_ && mouse_x_ >= 0) {
+      const ScreenPoint a = camera_.to_screen(band_from_);
+      dl->AddRectFilled({std::min(a.x, mouse_x_), std::min(a.y, mouse_y_)},
+                        {std::max(a.x, mouse_x_), std::max(a.y, mouse_y_)},
+                        colour::rgb(0, 150, 220, 40));
+      dl->AddRect({std::min(a.x, mouse_x_), std::min(a.y, mouse_y_)},
+                  {std::max(a.x, mouse_x_), std::max(a.y, mouse_y_)}, colour::kSelected, 0, 0,
+                  1.5f);
+    }
     draw_scale_bar(dl);
+    if (legend_) draw_legend(dl);
+    draw_tooltip(*w);
     // Meter probes: a reading in a box beside each probed part.
     const std::vector<std::string> readings = probe_readings();
     for (std::size_t k = 0; k < probes_.size(); ++k) {
@@ -1607,6 +1711,145 @@ std::vector<std::string> Viewer::probe_readings() {
   return out;
 }
 
+std::vector<ObjectId> Viewer::selection() const {
+  std::vector<ObjectId> out;
+  const World* w = scene_ ? scene_->world.get() : nullptr;
+  if (!w) return out;
+  for (ObjectId id : many_)
+    if (w->store().alive(id)) out.push_back(id);
+  if (out.empty() && selected_ && w->store().alive(selected_)) out.push_back(selected_);
+  return out;
+}
+
+void Viewer::copy_selection() {
+  World* w = world();
+  if (!w) return;
+  clipboard_ = editor_.copy(selection());
+  if (clipboard_.empty())
+    note("nothing to copy: select parts first (a click, Shift+click or a Shift+drag band)", true);
+  else
+    note("copied " + std::to_string(clipboard_.parts) + " parts and " +
+         std::to_string(clipboard_.objects.size() - clipboard_.parts) +
+         " joints, wires and springs among them");
+}
+
+void Viewer::paste_clipboard() {
+  World* w = world();
+  if (!w) return;
+  // At the mouse (the copy's centre there), else a little aside of the original.
+  const bool mouse = mouse_x_ >= 0 && !over_panel(mouse_x_, mouse_y_);
+  const Vec2 to =
+      mouse ? camera_.to_world(mouse_x_, mouse_y_) : clipboard_.centre + Vec2{0.05, 0.05};
+  std::vector<ObjectId> made;
+  const EditResult r =
+      edit("paste", [&] { return editor_.paste(clipboard_, to - clipboard_.centre, &made); });
+  note(r.message, !r.ok);
+  if (!r.ok) return;
+  // The copy comes selected, so that it can be carried off at once.
+  many_ = made.size() >= 2 ? made : std::vector<ObjectId>{};
+  selected_ = made.empty() ? ObjectId{} : made.front();
+}
+
+void Viewer::draw_legend(ImDrawList* dl) {
+  // What each colour and mark on the board means, in the play area's upper
+  // right corner (the messages take the bottom).
+  float x0, y0, x1, y1;
+  play_rect(x0, y0, x1, y1);
+  struct Row {
+    ImU32 colour;
+    int mark;  // 0 dot, 1 line, 2 arrow, 3 square
+    const char* text;
+  };
+  static const Row rows[] = {
+      {colour::kNorth, 0, "north pole"},
+      {colour::kSouth, 0, "south pole"},
+      {colour::kWireLive, 1, "wire carrying current"},
+      {colour::kWireIdle, 1, "wire, no current"},
+      {colour::kPowered, 3, "powered part"},
+      {colour::kMagneticForce, 2, "magnetic force (G)"},
+      {colour::kContactForce, 2, "contact force"},
+      {colour::kSelected, 1, "selected"},
+      {colour::kStaticWood, 3, "fixed to the board"},
+  };
+  const float line = 16, width = 186;
+  const int n = int(std::size(rows)) + (draw_options_.compass ? 1 : 0);
+  const float top = y0 + 10, bottom = top + line * float(n) + 8, left = x1 - width - 10;
+  dl->AddRectFilled({left, top}, {left + width, bottom}, colour::rgb(255, 255, 255, 225), 4);
+  dl->AddRect({left, top}, {left + width, bottom}, colour::rgb(180, 184, 192), 4);
+  float y = top + 4;
+  auto text = [&](const char* t) {
+    dl->AddText({left + 30, y}, colour::rgb(40, 40, 48), t);
+    y += line;
+  };
+  for (const Row& r : rows) {
+    const float cy = y + line / 2 - 1, cx = left + 14;
+    switch (r.mark) {
+      case 0:
+        dl->AddCircleFilled({cx, cy}, 5, r.colour, 12);
+        break;
+      case 1:
+        dl->AddLine({cx - 9, cy}, {cx + 9, cy}, r.colour, 3);
+        break;
+      case 2:
+        dl->AddLine({cx - 9, cy}, {cx + 5, cy}, r.colour, 2.5f);
+        dl->AddTriangleFilled({cx + 10, cy}, {cx + 3, cy - 4}, {cx + 3, cy + 4}, r.colour);
+        break;
+      default:
+        dl->AddRectFilled({cx - 7, cy - 5}, {cx + 7, cy + 5}, r.colour, 2);
+        break;
+    }
+    text(r.text);
+  }
+  if (draw_options_.compass) {
+    const float cy = y + line / 2 - 1, cx = left + 14;
+    dl->AddTriangleFilled({cx + 10, cy}, {cx, cy - 3}, {cx, cy + 3}, colour::kNorth);
+    dl->AddTriangleFilled({cx - 10, cy}, {cx, cy + 3}, {cx, cy - 3}, colour::rgb(120, 130, 150));
+    text("compass: red end to north");
+  }
+}
+
+void Viewer::draw_tooltip(World& w) {
+  // The part under the mouse, with the hand idle: its name and what it is.
+  tooltip_.clear();
+  if (tool_ != Tool::Hand || editor_.carrying() || band_ || !hovered_ ||
+      !w.store().alive(hovered_) || mouse_x_ < 0 || over_panel(mouse_x_, mouse_y_))
+    return;
+  const auto p = read_part(w, hovered_);
+  if (!p) return;
+  char buf[96];
+  std::string t = w.describe(hovered_);
+  static const char* const names[] = {"steel",  "iron", "brass",  "bronze",
+                                      "copper", "wood", "rubber", ""};
+  if (const char* m = names[int(material_of(w, hovered_))]; *m) t += std::string(", ") + m;
+  if (p->radius > 0 && p->shape != Shape2D::Box)
+    std::snprintf(buf, sizeof buf, "\nradius %.1f cm", p->radius * 100);
+  else
+    std::snprintf(buf, sizeof buf, "\n%.1f x %.1f cm", p->half.x * 200, p->half.y * 200);
+  t += buf;
+  if (const auto m = w.value<double>(hovered_, "mass")) {
+    std::snprintf(buf, sizeof buf, ", %.3g g", *m * 1000);
+    t += buf;
+  }
+  if (p->is_static) t += ", fixed";
+  if (p->pinned) t += ", pinned";
+  if (const auto v = w.value<double>(hovered_, "emf")) {
+    std::snprintf(buf, sizeof buf, "\nbattery %.3g V", *v);
+    t += buf;
+  }
+  if (const auto i = w.value<double>(hovered_, "current")) {
+    std::snprintf(buf, sizeof buf, "\ncurrent %.3g A", *i);
+    t += buf;
+  }
+  if (const auto spin = w.value<Vec3>(hovered_, "angular_velocity"); spin && spin->z != 0) {
+    std::snprintf(buf, sizeof buf, "\nturning %.3g rad/s", spin->z);
+    t += buf;
+  }
+  tooltip_ = t;
+  ImGui::BeginTooltip();
+  ImGui::TextUnformatted(tooltip_.c_str());
+  ImGui::EndTooltip();
+}
+
 void Viewer::draw_scale_bar(ImDrawList* dl) {
   // The longest of 1, 2 or 5 times a power of ten that fits in 120 pixels:
   // a length a reader can take in at a glance.
@@ -1651,6 +1894,11 @@ void Viewer::panel_help() {
       {"K", "spring tool: a part, then another part or the board (a spring with a damper)"},
       {"P", "pin the part under the mouse to the board"},
       {"Delete", "remove the selected part, joint, spring or wire (click a wire to select it)"},
+      {"Shift+click, Shift+drag", "add a part to the selection; a rubber band on the board"},
+      {"Ctrl+C / Ctrl+V",
+       "copy the selection (with its joints, wires, springs); paste at the mouse"},
+      {"X", "snapping on / off: part ends onto part ends, else the 1 cm grid"},
+      {"C", "compass needles on / off (the magnetic field)"},
       {"Ctrl+Z / Ctrl+Y", "undo / redo"},
       {"Ctrl+N / O / S", "new board / open / save (Shift: save as)"},
       {"Ctrl+R", "reset to the file"},
@@ -1748,9 +1996,14 @@ void Viewer::panel_toolbar() {
   ImGui::Checkbox("labels", &draw_options_.labels);
   ImGui::SameLine();
   ImGui::Checkbox("poles", &draw_options_.poles);
+  ImGui::SameLine();
+  ImGui::Checkbox("legend", &legend_);
   ImGui::Checkbox("magnetic F", &draw_options_.magnetic_forces);
   ImGui::SameLine();
   ImGui::Checkbox("contacts", &draw_options_.contact_forces);
+  ImGui::Checkbox("compass (C)", &draw_options_.compass);
+  ImGui::SameLine();
+  ImGui::Checkbox("snap (X)", &snap_);
   ImGui::Separator();
   panel_files();
   ImGui::End();

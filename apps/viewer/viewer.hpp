@@ -117,7 +117,29 @@ class Viewer {
   Tool tool() const { return tool_; }
   void set_tool(Tool t);
   ObjectId selected() const { return selected_; }
-  void select(ObjectId id) { selected_ = id; }
+  void select(ObjectId id) {
+    selected_ = id;
+    many_.clear();
+  }
+  /// Everything selected: the multi-selection (shift-click adds or takes a
+  /// part away, shift-drag on the board draws a rubber band), else the one
+  /// selected object. Delete, Ctrl+C and dragging act on all of it.
+  std::vector<ObjectId> selection() const;
+  /// Snapping (key X, or the toolbar): a carried part's end goes onto
+  /// another part's end within 8 pixels, else its centre onto the grid.
+  bool snapping() const { return snap_; }
+  void set_snapping(bool on) { snap_ = on; }
+  /// The grid a carried part snaps to, m.
+  static constexpr double kSnapGrid = 0.01;
+  /// Compass needles over the board (key C): the magnetic field's direction.
+  bool compass() const { return draw_options_.compass; }
+  /// The legend (the toolbar's checkbox): what each colour and mark means.
+  bool legend() const { return legend_; }
+  void set_legend(bool on) { legend_ = on; }
+  /// What the clipboard holds (Ctrl+C), how many parts.
+  std::size_t clipboard_parts() const { return clipboard_.parts; }
+  /// The tooltip drawn for the part under the mouse ("" none), as drawn.
+  const std::string& tooltip() const { return tooltip_; }
 
   // --- files and history --------------------------------------------------------
   /// An empty board with a floor (a scene of its own, "untitled" until saved).
@@ -171,6 +193,11 @@ class Viewer {
   void draw_panels();
   void panel_help();
   void draw_scale_bar(ImDrawList* dl);
+  void draw_legend(ImDrawList* dl);
+  void draw_tooltip(World& w);
+  /// Ctrl+C and Ctrl+V.
+  void copy_selection();
+  void paste_clipboard();
   void panel_toolbar();
   void panel_palette();
   void panel_inspector();
@@ -231,12 +258,20 @@ class Viewer {
   std::vector<ScriptEvent> script_;
   std::size_t script_next_ = 0;
   float mouse_x_ = -1, mouse_y_ = -1;
+  float panels_saw_x_ = -1, panels_saw_y_ = -1;  ///< the pointer as the panels last saw it
   bool mouse_down_[3] = {false, false, false}, mouse_pressed_[3] = {false, false, false};
   bool panning_ = false;
   Tool tool_ = Tool::Hand;
   int placing_ = -1;  // palette entry
   bool place_drag_ = false;
   ObjectId selected_, hovered_, wire_start_;
+  std::vector<ObjectId> many_;  ///< the multi-selection (two or more), else empty
+  bool band_ = false;           ///< a rubber band is being drawn (shift-drag on the board)
+  Vec2 band_from_;              ///< its first corner, m
+  bool snap_ = false;
+  bool legend_ = true;
+  Editor::Clipboard clipboard_;
+  std::string tooltip_;
   Vec2 wire_start_at_;
   ObjectId context_part_;
   Vec2 context_at_;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "resolvers/rigid_body/engine.hpp"
 #include "runtime/error.hpp"
@@ -99,32 +100,35 @@ SpringStability spring_stability(const World& w, ObjectId id) {
                    w.value<double>(id, "spring_damping").value_or(0), w.dt());
 }
 
-void RigidBodyFromSprings::apply(const WorldView& world) {
-  const auto stiffness = world.column<double>("spring_stiffness");
-  const auto part_a = world.column<ObjectId>("spring_a");
-  const auto part_b = world.column<ObjectId>("spring_b");
-  const auto anchor_a = world.column<Vec3>("spring_anchor_a");
-  const auto anchor_b = world.column<Vec3>("spring_anchor_b");
-  const auto rest = world.column<double>("spring_rest_length");
-  const auto damping = world.column<double>("spring_damping");
-  const auto position = world.column<Vec3>("position");
-  const auto orientation = world.column<Quat>("orientation");
-  const auto velocity = world.column<Vec3>("velocity");
-  const auto spin = world.column<Vec3>("angular_velocity");
-  const auto mass = world.column<double>("mass");
-  // Flags are stored as bytes (no vector<bool>).
-  const auto is_static = world.column<std::uint8_t>("static");
-  const auto pinned = world.column<std::uint8_t>("pinned");
-  const PropertyStore& store = world.store();
+namespace {
 
-  // One end: its world point and velocity, and the part's mass as the spring
-  // sees it. No part: a fixed point of the board.
+/// The columns a spring reads, taken once per pass.
+struct SpringColumns {
+  explicit SpringColumns(const WorldView& world)
+      : stiffness(world.column<double>("spring_stiffness")),
+        part_a(world.column<ObjectId>("spring_a")),
+        part_b(world.column<ObjectId>("spring_b")),
+        anchor_a(world.column<Vec3>("spring_anchor_a")),
+        anchor_b(world.column<Vec3>("spring_anchor_b")),
+        rest(world.column<double>("spring_rest_length")),
+        damping(world.column<double>("spring_damping")),
+        position(world.column<Vec3>("position")),
+        orientation(world.column<Quat>("orientation")),
+        velocity(world.column<Vec3>("velocity")),
+        spin(world.column<Vec3>("angular_velocity")),
+        mass(world.column<double>("mass")),
+        is_static(world.column<std::uint8_t>("static")),
+        pinned(world.column<std::uint8_t>("pinned")),
+        store(world.store()) {}
+
+  /// One end: its world point and velocity, and the part's mass as the
+  /// spring sees it. No part: a fixed point of the board.
   struct End {
     ObjectId part;
     Vec3 at, v;
     double mass = kInfinite;
   };
-  auto end_of = [&](ObjectId part, Vec3 anchor) {
+  End end_of(ObjectId part, Vec3 anchor) const {
     End e;
     if (part.is_null() || !store.alive(part) || !position.has(part.index)) {
       e.at = anchor;
@@ -138,15 +142,84 @@ void RigidBodyFromSprings::apply(const WorldView& world) {
     const bool fixed = is_static.value_or(s, 0) != 0 || pinned.value_or(s, 0) != 0;
     e.mass = moving_mass(fixed, mass.has(s) ? &mass[s] : nullptr);
     return e;
-  };
+  }
 
-  for (std::uint32_t s : stiffness.members()) {
-    const ObjectId a_id = part_a.value_or(s, ObjectId{});
-    if (a_id.is_null()) continue;  // a spring not yet fixed to anything
-    const End a = end_of(a_id, anchor_a.value_or(s, {}));
-    const End b = end_of(part_b.value_or(s, ObjectId{}), anchor_b.value_or(s, {}));
+  ColumnView<double> stiffness;
+  ColumnView<ObjectId> part_a, part_b;
+  ColumnView<Vec3> anchor_a, anchor_b;
+  ColumnView<double> rest, damping;
+  ColumnView<Vec3> position;
+  ColumnView<Quat> orientation;
+  ColumnView<Vec3> velocity, spin;
+  ColumnView<double> mass;
+  ColumnView<std::uint8_t> is_static, pinned;
+  const PropertyStore& store;
+};
+
+}  // namespace
+
+void RigidBodyFromSprings::close_books(const WorldView& world) {
+  if (held_.empty()) return;
+  const SpringColumns col(world);
+  for (const Held& h : held_) {
+    // A spring or part removed since (an edit between steps): its step is not booked.
+    if (!col.store.alive(h.spring) || (!h.a.is_null() && !col.store.alive(h.a)) ||
+        (!h.b.is_null() && !col.store.alive(h.b)))
+      continue;
+    const Vec3 a1 = col.end_of(h.a, h.anchor_a).at, b1 = col.end_of(h.b, h.anchor_b).at;
+    const Vec3 da = h.a.is_null() ? Vec3{} : a1 - h.at_a;
+    const Vec3 db = h.b.is_null() ? Vec3{} : b1 - h.at_b;
+    // The work the held force did on the parts, along their ends' moves.
+    const double work = dot(h.force, da) - dot(h.force, db);
+    // Its two parts, along the stretch the ends made (the force is along n).
+    const Vec3 n = h.length > 0 ? (h.at_a - h.at_b) / h.length : Vec3{};
+    const double stretch = dot(n, da - db);
+    const double stored_before = 0.5 * h.stiffness * (h.length - h.rest) * (h.length - h.rest);
+    const double l1 = length(a1 - b1);
+    const double stored_after = 0.5 * h.stiffness * (l1 - h.rest) * (l1 - h.rest);
+    given_ += work;
+    heat_ += h.damper * stretch;
+    // The elastic part gave -elastic * stretch; what the store lost beyond
+    // that is the explicit scheme's (0 as the step goes to 0).
+    integration_ -= -h.elastic * stretch + (stored_after - stored_before);
+  }
+  held_.clear();
+}
+
+void RigidBodyFromSprings::report_energy(const WorldView& world, EnergyReport& out) {
+  // The forces held now act in the next step's advance: they are booked at
+  // the next apply (which runs after that advance), not here.
+  const SpringColumns col(world);
+  double stored = 0;
+  for (std::uint32_t s : col.stiffness.members()) {
+    const ObjectId a_id = col.part_a.value_or(s, ObjectId{});
+    if (a_id.is_null()) continue;
+    const auto a = col.end_of(a_id, col.anchor_a.value_or(s, {}));
+    const auto b = col.end_of(col.part_b.value_or(s, ObjectId{}), col.anchor_b.value_or(s, {}));
     if (a.part.is_null() && b.part.is_null()) continue;
-    const double k = stiffness[s], c = damping.value_or(s, 0);
+    const double stretch = length(a.at - b.at) - col.rest.value_or(s, 0);
+    stored += 0.5 * col.stiffness[s] * stretch * stretch;
+  }
+  out.store("spring energy", stored);
+  out.sink("damper heat", std::exchange(heat_, 0.0));
+  out.sink("integration (explicit spring force)", std::exchange(integration_, 0.0));
+  out.transfer("springs", -std::exchange(given_, 0.0));
+}
+
+void RigidBodyFromSprings::apply(const WorldView& world) {
+  // The step's advance has just moved the parts under the forces held since
+  // the last apply: their books first.
+  close_books(world);
+  const SpringColumns col(world);
+  const PropertyStore& store = col.store;
+  for (std::uint32_t s : col.stiffness.members()) {
+    const ObjectId a_id = col.part_a.value_or(s, ObjectId{});
+    if (a_id.is_null()) continue;  // a spring not yet fixed to anything
+    const Vec3 anchor_a = col.anchor_a.value_or(s, {}), anchor_b = col.anchor_b.value_or(s, {});
+    const auto a = col.end_of(a_id, anchor_a);
+    const auto b = col.end_of(col.part_b.value_or(s, ObjectId{}), anchor_b);
+    if (a.part.is_null() && b.part.is_null()) continue;
+    const double k = col.stiffness[s], c = col.damping.value_or(s, 0);
     refuse_if_unstable(stability(a.mass, b.mass, k, c, world.dt()), store.describe(store.id_at(s)));
     const Vec3 d = a.at - b.at;
     const double L = length(d);
@@ -154,10 +227,24 @@ void RigidBodyFromSprings::apply(const WorldView& world) {
     // zero holds them there; any other pushes them apart once they move).
     if (!(L > 1e-12)) continue;
     const Vec3 n = d / L;
-    const double tension = k * (L - rest.value_or(s, 0)) + c * dot(a.v - b.v, n);
-    const Vec3 f = -tension * n;
+    const double rest = col.rest.value_or(s, 0);
+    const double elastic = k * (L - rest), damper = c * dot(a.v - b.v, n);
+    const Vec3 f = -(elastic + damper) * n;
     if (!a.part.is_null()) target_.add_force(a.part, f, a.at);
     if (!b.part.is_null()) target_.add_force(b.part, -f, b.at);
+    held_.push_back({.spring = store.id_at(s),
+                     .a = a.part,
+                     .b = b.part,
+                     .anchor_a = anchor_a,
+                     .anchor_b = anchor_b,
+                     .at_a = a.at,
+                     .at_b = b.at,
+                     .force = f,
+                     .elastic = elastic,
+                     .damper = damper,
+                     .stiffness = k,
+                     .rest = rest,
+                     .length = L});
   }
 }
 

@@ -20,12 +20,28 @@
 // refused, by name, when it is made or edited (World::check) and when a step
 // would use it: the message gives the figures and what to change.
 //
+// Energy books (runtime/energy_ledger.hpp): each apply's force is kept with
+// where its ends were; the rigid body's next advance moves the parts under
+// it, and the apply after that advance (in the same step, before the ledger's
+// report) closes its books from the ends' moves:
+//   store     "spring energy": sum of k (L - L0)^2 / 2 now, J
+//   sink      "damper heat": the damper's force times the stretch it worked
+//             along, c (dL/dt) n . (da - db), J
+//   sink      "integration (explicit spring force)": what the held force gave
+//             that the store did not lose, -(W_elastic + change of the store);
+//             it shrinks with the step (negative: energy the scheme made)
+//   transfer  "springs": minus the work the forces did on the parts along the
+//             ends' moves; the rigid body books the other side under the same
+//             name, so the ledger shows how far the two measures are apart.
+//
 // Contract:
 //   reads    position, orientation, velocity, angular_velocity, mass, static,
 //            pinned, spring_* (below)
 //   target   rigid_body (add_force at a world point)
 //   needs    spring_stiffness
-// The spring keeps no state of its own: everything is in its properties.
+// The spring keeps no physical state of its own: everything is in its
+// properties. The books' last step (forces and ends) is bookkeeping only; a
+// restore makes the stage afresh, so the step before a restore is not booked.
 #pragma once
 
 #include <string>
@@ -62,9 +78,27 @@ class RigidBodyFromSprings final : public Interaction {
   static constexpr const char* kName = "rigid_body_from_springs";
   explicit RigidBodyFromSprings(RigidBodyEngine& target) : target_(target) {}
   void apply(const WorldView& world) override;
+  void report_energy(const WorldView& world, EnergyReport& out) override;
 
  private:
+  /// One spring's force over the last step and where its ends were.
+  struct Held {
+    ObjectId spring, a, b;                       ///< the spring and its parts (b null: the board)
+    Vec3 anchor_a, anchor_b;                     ///< the ends in the parts' frames (no part: world)
+    Vec3 at_a, at_b;                             ///< the ends' world points at the step's start, m
+    Vec3 force;                                  ///< the force on a (on b: minus it), N
+    double elastic = 0;                          ///< k (L - L0) at the start (tension > 0), N
+    double damper = 0;                           ///< c dL/dt at the start, N
+    double stiffness = 0, rest = 0, length = 0;  ///< k, L0, L at the start
+  };
+  /// Books the held forces along their ends' moves since they were worked out.
+  void close_books(const WorldView& world);
+
   RigidBodyEngine& target_;
+  std::vector<Held> held_;
+  double given_ = 0;        ///< work done on the parts since the last report, J
+  double heat_ = 0;         ///< damper heat since the last report, J
+  double integration_ = 0;  ///< energy the explicit force did not take from the store, J
 };
 
 /// Registers rigid_body_from_springs (after the rigid body's plugins).

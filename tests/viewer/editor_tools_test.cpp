@@ -4,6 +4,7 @@
 // script that `alloy run` then runs the same.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -15,6 +16,7 @@
 
 #include "apps/viewer/input_script.hpp"
 #include "apps/viewer/viewer.hpp"
+#include "resolvers/magnetism/magnetic_forces.hpp"
 #include "runtime/replay.hpp"
 #include "runtime/save_file.hpp"
 #include "runtime/state_hash.hpp"
@@ -610,6 +612,234 @@ TEST(ViewerRecord, AnEditSessionReplaysIdentically) {
   EXPECT_EQ(d.stage, "rigid_body") << d.message();
   EXPECT_NE(std::find(d.properties.begin(), d.properties.end(), "mass"), d.properties.end())
       << d.message();
+}
+
+}  // namespace
+}  // namespace alloy::viewer
+
+// --- a real editor's power (issue 17 item 7): many parts at once, copy and
+// paste, snapping, the tooltip; and seeing the field (item 6) ------------------
+
+namespace alloy::viewer {
+namespace {
+
+/// A press and release with Shift held (SDL reads the modifiers of a mouse
+/// event from its keyboard state, which pushed events do not set).
+void shift_drag(Viewer& v, Vec2 from, Vec2 to) {
+  SDL_SetModState(KMOD_LSHIFT);
+  drag(v, from, to);
+  SDL_SetModState(KMOD_NONE);
+}
+void shift_click(Viewer& v, Vec2 at) {
+  SDL_SetModState(KMOD_LSHIFT);
+  click(v, at);
+  SDL_SetModState(KMOD_NONE);
+}
+
+std::vector<ObjectId> of(World& w, std::initializer_list<const char*> names) {
+  std::vector<ObjectId> out;
+  for (const char* n : names) out.push_back(w.find(n));
+  return out;
+}
+
+TEST(ViewerSelect, ShiftClickAndARubberBandSelectManyAndDeleteRemovesThemAllUndoably) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("steel bar"), {-0.2, 0.3});
+  v->drop_part(entry("rubber ball"), {0, 0.3});
+  v->drop_part(entry("steel disk"), {0.2, 0.3});
+  click(*v, {-0.2, 0.3});
+  shift_click(*v, {0, 0.3});
+  EXPECT_EQ(v->selection(), of(w, {"steel_bar", "ball"}));
+  shift_click(*v, {0, 0.3});  // again: taken away
+  EXPECT_EQ(v->selection(), of(w, {"steel_bar"}));
+  key(*v, SDLK_ESCAPE);
+  click(*v, {0.5, 0.6});  // the board: nothing selected
+  EXPECT_TRUE(v->selection().empty());
+  // A band round the three (and over the floor, which is fixed: not taken).
+  shift_drag(*v, {-0.35, 0.45}, {0.35, -0.05});
+  EXPECT_EQ(v->selection(), of(w, {"steel_bar", "ball", "steel_disk"}));
+  expect_undoable(*v, "remove three (Delete)", [&] { key(*v, SDLK_DELETE); });
+  EXPECT_EQ(read_parts(w).size(), 1u) << "the floor alone is left";
+}
+
+TEST(ViewerSelect, DraggingOneOfManyCarriesThemAllByTheSameStepUndoably) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("steel bar"), {-0.2, 0.3});
+  v->drop_part(entry("rubber ball"), {0.1, 0.3});
+  shift_drag(*v, {-0.35, 0.45}, {0.35, 0.15});
+  ASSERT_EQ(v->selection().size(), 2u);
+  const Vec2 bar0 = test::position_of(w, "steel_bar"), ball0 = test::position_of(w, "ball");
+  expect_undoable(*v, "move two", [&] { drag(*v, {0.1, 0.3}, {0.15, 0.4}); });
+  const Vec2 bar1 = test::position_of(w, "steel_bar"), ball1 = test::position_of(w, "ball");
+  EXPECT_NEAR(ball1.x - ball0.x, 0.05, 0.004);
+  EXPECT_NEAR(ball1.y - ball0.y, 0.1, 0.004);
+  EXPECT_NEAR(bar1.x - bar0.x, ball1.x - ball0.x, 1e-9);
+  EXPECT_NEAR(bar1.y - bar0.y, ball1.y - ball0.y, 1e-9);
+}
+
+TEST(ViewerClipboard, CopyAndPasteOfACircuitBringsItsWiresAndItLightsLikeTheFirst) {
+  auto v = palette_circuit();
+  v->set_paused(true);
+  World& w = *v->world();
+  // Battery, switch and lamp in a band; the three wires among them come along.
+  shift_drag(*v, {-0.1, 0.25}, {0.4, 0.0});
+  std::vector<ObjectId> chosen = v->selection();
+  std::sort(chosen.begin(), chosen.end());
+  ASSERT_EQ(chosen, of(w, {"battery", "switch", "lamp"})) << all_messages(*v);
+  Vec2 centre;
+  for (const char* n : {"battery", "switch", "lamp"})
+    centre = centre + test::position_of(w, n) * (1.0 / 3);
+  key(*v, SDLK_c, KMOD_LCTRL);
+  EXPECT_EQ(v->clipboard_parts(), 3u);
+  EXPECT_NE(v->messages().back().find("3 parts and "), std::string::npos) << v->messages().back();
+  v->push_mouse(SDL_MOUSEMOTION, {0.15, 0.45});
+  expect_undoable(*v, "paste", [&] { key(*v, SDLK_v, KMOD_LCTRL); });
+  const ObjectId lamp2 = w.find("lamp_2"), bat2 = w.find("battery_2");
+  ASSERT_TRUE(lamp2 && bat2 && w.find("switch_2")) << all_messages(*v);
+  // Moved as one: the copy's centre is where the mouse was (to a pixel).
+  const Vec2 d = test::position_of(w, "lamp_2") - test::position_of(w, "lamp");
+  const double px = 1 / v->camera().scale;
+  EXPECT_NEAR(d.x, 0.15 - centre.x, px);
+  EXPECT_NEAR(d.y, 0.45 - centre.y, px);
+  EXPECT_NEAR(length(test::position_of(w, "battery_2") - test::position_of(w, "battery") - d), 0,
+              1e-12);
+  // The copied wires join the copies, not the first circuit.
+  for (const char* n : {"wire_4", "wire_5", "wire_6"}) {
+    const ObjectId wire = w.find(n);
+    ASSERT_TRUE(bool(wire)) << n;
+    for (const char* end : {"wire_from", "wire_to"}) {
+      const ObjectId to = w.value<ObjectId>(wire, end).value_or(ObjectId{});
+      const std::string name = w.describe(to);
+      EXPECT_NE(name.find("_2"), std::string::npos) << n << "." << end << " -> " << name;
+    }
+  }
+  // Run: the copy carries the current the first does.
+  for (int i = 0; i < 20; ++i) v->step_once();
+  v->frame();
+  const double i1 = w.value<double>(w.find("lamp"), "current").value_or(0);
+  const double i2 = w.value<double>(lamp2, "current").value_or(0);
+  std::printf("lamp %.6f A, its pasted copy %.6f A\n", i1, i2);
+  EXPECT_GT(std::abs(i1), 0.4);
+  EXPECT_NEAR(i2, i1, 1e-9);
+}
+
+TEST(ViewerClipboard, APastedHingedBarKeepsItsHingeOnTheCopyAndAnEmptyPasteIsRefused) {
+  auto v = new_board();
+  World& w = *v->world();
+  key(*v, SDLK_v, KMOD_LCTRL);
+  EXPECT_NE(v->messages().back().find("nothing to paste"), std::string::npos);
+  EXPECT_FALSE(v->history().can_undo());
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  key(*v, SDLK_h);
+  click(*v, {0.05, 0.3});  // the bar alone there: hinged to the board
+  const ObjectId hinge = w.find("hinge");
+  ASSERT_TRUE(bool(hinge)) << all_messages(*v);
+  const Vec3 pivot = std::get<Vec3>(w.get(hinge, "anchor"));
+  click(*v, {-0.03, 0.3});  // the bar alone is selected
+  ASSERT_EQ(v->selection(), of(w, {"steel_bar"}));
+  key(*v, SDLK_c, KMOD_LCTRL);
+  v->push_mouse(SDL_MOUSEMOTION, {0.3, 0.5});
+  key(*v, SDLK_v, KMOD_LCTRL);
+  const ObjectId hinge2 = w.find("hinge_2");
+  ASSERT_TRUE(bool(hinge2)) << all_messages(*v);
+  EXPECT_EQ(w.value<ObjectId>(hinge2, "body_a").value_or(ObjectId{}), w.find("steel_bar_2"));
+  EXPECT_FALSE(w.value<ObjectId>(hinge2, "body_b").value_or(ObjectId{}));
+  // Its pivot moved with the bar: the same point of the copy.
+  const Vec2 moved = test::position_of(w, "steel_bar_2") - test::position_of(w, "steel_bar");
+  const Vec3 pivot2 = std::get<Vec3>(w.get(hinge2, "anchor"));
+  EXPECT_NEAR(pivot2.x, pivot.x + moved.x, 1e-12);
+  EXPECT_NEAR(pivot2.y, pivot.y + moved.y, 1e-12);
+  EXPECT_GT(length(moved), 0.1);
+  // The copy is selected; the original's hinge is untouched.
+  EXPECT_EQ(v->selection(), of(w, {"steel_bar_2"}));
+  EXPECT_EQ(w.value<ObjectId>(hinge, "body_a").value_or(ObjectId{}), w.find("steel_bar"));
+  // Run: the copy swings about its own pivot.
+  for (int i = 0; i < 60; ++i) v->step_once();
+  v->frame();
+  const Vec2 c2 = test::position_of(w, "steel_bar_2");
+  EXPECT_NEAR(length(c2 - xy(pivot2)), 0.05, 1e-3) << "it hangs from its pivot";
+}
+
+TEST(ViewerSnap, AnEndSnapsOntoAnEndNearbyElseTheCentreOntoTheGrid) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("steel bar"), {0, 0.3});  // ends at x = -0.075 and 0.075
+  v->drop_part(entry("brass bar"), {0.25, 0.5});
+  key(*v, SDLK_x);
+  ASSERT_TRUE(v->snapping());
+  // The brass bar's left end let go 3 px from the steel bar's right end.
+  const double px = 1 / v->camera().scale;
+  const Vec2 off{3 * px, 2 * px};
+  expect_undoable(*v, "snapped move", [&] {
+    drag(*v, {0.25, 0.5}, Vec2{0.075 + 0.075, 0.3} + off);
+  });
+  EXPECT_NEAR(test::position_of(w, "brass_bar").x, 0.15, 1e-9);
+  EXPECT_NEAR(test::position_of(w, "brass_bar").y, 0.3, 1e-9);
+  // Far from every end: the centre on the 1 cm grid.
+  drag(*v, {0.0, 0.3}, {-0.2537, 0.6041});
+  const Vec2 c = test::position_of(w, "steel_bar");
+  EXPECT_NEAR(c.x, -0.25, 1e-9);
+  EXPECT_NEAR(c.y, 0.60, 1e-9);
+  // Off: it stays where it is let go.
+  key(*v, SDLK_x);
+  drag(*v, {-0.25, 0.6}, {-0.2537, 0.6041});
+  EXPECT_GT(std::abs(test::position_of(w, "steel_bar").x + 0.25), 1e-3);
+}
+
+TEST(ViewerTooltip, ThePartUnderTheMouseShowsItsNameMaterialSizeAndMass) {
+  auto v = new_board();
+  v->drop_part(entry("steel bar"), {0, 0.3});
+  v->push_mouse(SDL_MOUSEMOTION, {0.02, 0.3});
+  v->frame();
+  const std::string t = v->tooltip();
+  EXPECT_NE(t.find("steel_bar"), std::string::npos) << t;
+  EXPECT_NE(t.find("steel"), std::string::npos) << t;
+  EXPECT_NE(t.find("15.0 x 1.0 cm"), std::string::npos) << t;
+  EXPECT_NE(t.find(" g"), std::string::npos) << t;
+  v->push_mouse(SDL_MOUSEMOTION, {0.4, 0.6});  // the board: none
+  v->frame();
+  EXPECT_EQ(v->tooltip(), "");
+}
+
+TEST(ViewerCompass, NeedlesPointAwayFromNorthOnTheAxisAndBackAlongTheSide) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->drop_part(entry("magnet"), {0, 0.3});
+  v->step_once();  // the poles are summed in a step
+  v->frame();
+  key(*v, SDLK_c);
+  ASSERT_TRUE(v->compass());
+  auto* forces = dynamic_cast<magnetism::MagneticForces*>(w.stage("magnetic_forces"));
+  ASSERT_TRUE(forces);
+  Vec2 north, south;
+  for (const magnetism::Pole& p : forces->poles())
+    (p.strength > 0 ? north : south) = xy(p.position);
+  const Vec2 axis = (north - south) * (1 / length(north - south));
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  // As drawn, one every 36 px; here one every 6 px, to find one close to
+  // each point asked about.
+  ASSERT_GT(compass_needles(w, v->camera(), size.x, size.y).size(), 50u);
+  const std::vector<Needle> needles = compass_needles(w, v->camera(), size.x, size.y, 6);
+  auto nearest = [&](Vec2 p) {
+    const Needle* best = &needles.front();
+    for (const Needle& n : needles)
+      if (length(n.at - p) < length(best->at - p)) best = &n;
+    return *best;
+  };
+  // Beyond the north pole on the axis, B points on outwards; beyond the
+  // south pole, in towards it; beside the magnet, from north to south.
+  const Needle beyond_n = nearest(north + axis * 0.06), beyond_s = nearest(south - axis * 0.06);
+  const Needle beside = nearest((north + south) * 0.5 + Vec2{-axis.y, axis.x} * 0.06);
+  std::printf("needles: %zu; beyond N %.2f, beyond S %.2f, beside %.2f (cosines with the axis)\n",
+              needles.size(), dot(beyond_n.north, axis), dot(beyond_s.north, axis),
+              dot(beside.north, axis));
+  EXPECT_GT(dot(beyond_n.north, axis), 0.9);
+  EXPECT_GT(dot(beyond_s.north, axis), 0.9);
+  EXPECT_LT(dot(beside.north, axis), -0.8);
+  // Stronger near the magnet than far from it.
+  EXPECT_GT(beyond_n.tesla, nearest(north + axis * 0.3).tesla);
 }
 
 }  // namespace
