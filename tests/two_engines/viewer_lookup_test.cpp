@@ -54,28 +54,6 @@ TEST(ViewerEngines, TheContactSetIsFoundOnEitherEngine) {
   }
 }
 
-TEST(ViewerEngines, AStageInAnAreaIsNotTheGlobalSet) {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  WorldDef def;
-  AreaDef right;
-  right.name = "right";
-  right.center = {1, 0, 0};
-  right.half_extents = {1, 1, 1};
-  right.plugins = {"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"};
-  def.areas = {right};
-  World w(registry, def);
-  const ObjectId ball = w.create("ball");
-  w.set(ball, "shape", std::string("sphere"));
-  w.set(ball, "radius", 0.05);
-  w.set(ball, "mass", 0.1);
-  w.set(ball, "position", Vec3{1, 0, 0});  // in the Box2D area; nothing global
-  w.step();
-  ContactSet* set = global_contacts(w);
-  const std::string name = set ? stage_name_of(w, set) : "";
-  EXPECT_TRUE(name.find('@') == std::string::npos) << name;
-}
-
 TEST(ViewerEngines, TheSwapListOffersTheOtherEngine) {
   PluginRegistry registry;
   register_native_plugins(registry);
