@@ -46,6 +46,9 @@ struct Rates {
   /// reaches the magnetism with its rate, and its pole strength moves on
   /// between windows; false: the scene's
   bool current_rates = false;
+  /// The rigid body's engine: "box2d" runs the scene on rigid_body.box2d and
+  /// collisions.box2d (world `use`); empty: the scene's (ODE)
+  std::string engine;
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
@@ -78,6 +81,10 @@ inline std::string rate_prelude(const Rates& r) {
     s << "    w.every = w.every or {}\n";
     for (const auto& [stage, n] : r.every) s << "    w.every[\"" << stage << "\"] = " << n << "\n";
   }
+  if (r.engine == "box2d")
+    s << "    w.use = w.use or {}\n"
+      << "    w.use.rigid_body = \"rigid_body.box2d\"\n"
+      << "    w.use.collisions = \"collisions.box2d\"\n";
   s << "    return scene_world(w)\n  end\nend\n";
   return s.str();
 }
@@ -142,6 +149,7 @@ inline Rates with(Rates base, const Rates& over) {
   base.load_rates = base.load_rates || over.load_rates;
   base.current_rates = base.current_rates || over.current_rates;
   if (!over.substep_contacts.empty()) base.substep_contacts = over.substep_contacts;
+  if (!over.engine.empty()) base.engine = over.engine;
   return base;
 }
 

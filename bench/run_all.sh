@@ -18,7 +18,7 @@ if [ $quick = 1 ]; then
 fi
 
 # Cheapest first: a broken build shows in seconds, not after the sweeps.
-order=(sound lua_stage rigid work_precision scaling coupled multirate stress)
+order=(sound lua_stage rigid engines work_precision scaling coupled multirate stress)
 programs=()
 for name in "${order[@]}"; do
   [ -x "$build/bench/alloy_bench_$name" ] && programs+=("$build/bench/alloy_bench_$name")

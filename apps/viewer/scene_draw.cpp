@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "apps/viewer/engines.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "runtime/contact_set.hpp"
 
@@ -609,7 +610,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
   }
 
   if (opt.contact_forces) {
-    if (auto* contacts = dynamic_cast<ContactSet*>(world.stage("collisions"))) {
+    if (auto* contacts = global_contacts(world)) {
       const double dt = world.dt();
       for (const std::span<const ContactPair> list : {contacts->began(), contacts->ongoing()}) {
         for (const ContactPair& pair : list) {

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "apps/viewer/engines.hpp"
 #include "apps/viewer/scene_writer.hpp"
 #include "lua/mod_runtime.hpp"
 #include "lua/save_meta.hpp"
@@ -678,10 +679,9 @@ void Viewer::simulate(double frame_seconds) {
 
 void Viewer::step_world() {
   World* w = world();
-  // Taken again each step: the collisions stage may have been replaced.
-  const auto* contacts = draw_options_.contact_forces
-                             ? dynamic_cast<const ContactSet*>(w->stage("collisions"))
-                             : nullptr;
+  // Taken again each step: the contact set may have been replaced (a swap of
+  // engines), and it is found by what its plugin provides, not by its name.
+  const ContactSet* contacts = draw_options_.contact_forces ? global_contacts(*w) : nullptr;
   contact_impulses_ = contacts ? contacts->demand_impulses() : ImpulseDemand{};
   try {
     w->step();
@@ -2419,21 +2419,17 @@ void Viewer::panel_resolvers() {
     const auto at = stage.find('@');
     const std::string plugin = stage.substr(0, at),
                       area = at == std::string::npos ? "" : stage.substr(at + 1);
+    // By what plugins provide: ODE's `rigid_body` lists rigid_body.box2d.
+    const std::vector<std::string> alternatives = swap_alternatives(*registry_, plugin);
+    if (alternatives.empty()) continue;
     const PluginDef* def = registry_->find(plugin);
-    if (!def || def->info.provides.empty()) continue;
-    std::vector<std::string> alternatives;
-    for (const std::string& n : registry_->order())
-      if (const PluginDef* d = registry_->find(n);
-          d && d->info.provides == def->info.provides && d->info.kind == def->info.kind)
-        alternatives.push_back(n);
-    if (alternatives.size() < 2) continue;
     if (!any) {
       ImGui::Separator();
       ImGui::TextDisabled("swap live");
     }
     any = true;
     ImGui::SetNextItemWidth(width * 0.6f);
-    const std::string label = def->info.provides + (area.empty() ? "" : " @" + area) + "##" + stage;
+    const std::string label = provided(*def) + (area.empty() ? "" : " @" + area) + "##" + stage;
     if (ImGui::BeginCombo(label.c_str(), plugin.c_str())) {
       for (const std::string& alt : alternatives)
         if (ImGui::Selectable(alt.c_str(), alt == plugin) && alt != plugin) swap(area, plugin, alt);

@@ -114,7 +114,7 @@ std::string differing_columns(const std::string& expected, const std::string& ac
   return out.empty() ? " none (objects, schedule or stage state differ)" : out;
 }
 
-const std::vector<std::string> kScenes = {"doorbell", "motor",      "space",
+const std::vector<std::string> kScenes = {"doorbell", "motor",      "space",     "two_engines",
                                           "magic",    "rigid_demo", "hoist"};
 
 class GoldenHash : public ::testing::TestWithParam<std::string> {};
