@@ -154,6 +154,18 @@ void Recorder::State::input(World& world, const WorldInput& in) {
     case K::Sync:
       r.kind = ReplayInput::Kind::Sync;
       break;
+    case K::Schedule:
+      r.kind = ReplayInput::Kind::Schedule;
+      r.time = in.time;
+      break;
+    case K::ScheduleSwap:
+      r.kind = ReplayInput::Kind::ScheduleSwap;
+      r.area = in.area, r.from = in.from, r.to = in.to;
+      r.time = in.time;
+      break;
+    case K::DemandImpulses:
+      r.kind = ReplayInput::Kind::DemandImpulses;
+      break;
     case K::Stepped:
       return;
   }
@@ -164,6 +176,10 @@ Recorder::Recorder(World& world, SaveMeta meta) : world_(world), state_(std::mak
   meta.kind = "replay";
   state_->data.meta = std::move(meta);
   state_->data.snapshot = world.snapshot();
+  // Not in the snapshot: a demand held when recording begins is its first input.
+  if (world.impulses_demanded())
+    state_->data.inputs.push_back(
+        {.step = state_->clock(), .kind = ReplayInput::Kind::DemandImpulses, .value = true});
   std::weak_ptr<State> weak = state_;
   world.set_stage_hook([weak, &world](const std::string& stage) {
     if (auto s = weak.lock()) s->stages.emplace_back(stage, stage_hash(world, stage));
@@ -322,6 +338,20 @@ void apply_inputs(World& w, const SaveData& data, std::size_t& next, const Repla
       case ReplayInput::Kind::Sync:
         w.sync();
         break;
+      case ReplayInput::Kind::Schedule:
+        w.schedule(r.time, r.id, w.properties().id(r.property), r.value);
+        break;
+      case ReplayInput::Kind::ScheduleSwap:
+        w.schedule_swap(r.time, r.area, r.from, r.to);
+        break;
+      case ReplayInput::Kind::DemandImpulses: {
+        const bool* on = std::get_if<bool>(&r.value);
+        if (!on)
+          throw InputError("the recording's impulse demand before step " +
+                           std::to_string(r.step + 1) + " is not true or false");
+        w.demand_impulses(*on);
+        break;
+      }
       case ReplayInput::Kind::Timeline:
       case ReplayInput::Kind::Swapped:
         break;  // the world makes them from its snapshot

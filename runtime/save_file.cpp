@@ -597,6 +597,10 @@ void write_log(Out& o, const std::vector<ReplayInput>& log) {
     o.value(r.value);
     o.str(r.area), o.str(r.from), o.str(r.to), o.str(r.text);
     if (r.kind == ReplayInput::Kind::Restore) o.str(r.snapshot ? encode_snapshot(*r.snapshot) : "");
+    // Only these kinds carry a time: the log of a file without them is
+    // byte for byte what it was before they were added.
+    if (r.kind == ReplayInput::Kind::Schedule || r.kind == ReplayInput::Kind::ScheduleSwap)
+      o.put(r.time);
   }
 }
 
@@ -609,7 +613,7 @@ void read_log(In& in, const std::string& what, const SaveMeta& meta,
     if (r.step < last) in.fail("the inputs are not in step order");
     last = r.step;
     const auto k = in.get<std::uint8_t>();
-    if (k > std::uint8_t(ReplayInput::Kind::Sync))
+    if (k > std::uint8_t(ReplayInput::Kind::DemandImpulses))
       in.fail("an input of unknown kind " + std::to_string(k));
     r.kind = ReplayInput::Kind(k);
     r.id = in.id();
@@ -630,6 +634,11 @@ void read_log(In& in, const std::string& what, const SaveMeta& meta,
       }
       if (!sub.done()) sub.fail("bytes after its last section");
       r.snapshot = std::move(snap);
+    }
+    if (r.kind == ReplayInput::Kind::Schedule || r.kind == ReplayInput::Kind::ScheduleSwap) {
+      r.time = in.get<double>();
+      if (!std::isfinite(r.time) || r.time < 0)
+        in.fail("an input scheduled at " + std::to_string(r.time) + " s");
     }
   }
 }

@@ -90,19 +90,23 @@ struct ReplayInput {
     Timeline = 3,  ///< a timeline input the world applied; for the report only
     Swapped = 4,   ///< a scheduled swap the world made (scene or --swap); report only
     // The rest of World's inputs (WorldInput), all replayed:
-    Remove = 5,         ///< World::remove: object, property
-    Create = 6,         ///< World::create: id = the object made, text = its name
-    Destroy = 7,        ///< World::destroy: object
-    Unfreeze = 8,       ///< World::unfreeze: object
-    PluginChanged = 9,  ///< World::plugin_changed: text = the plugin
-    Restore = 10,       ///< World::restore (the viewer's undo): snapshot
-    Sync = 11,          ///< World::sync
+    Remove = 5,           ///< World::remove: object, property
+    Create = 6,           ///< World::create: id = the object made, text = its name
+    Destroy = 7,          ///< World::destroy: object
+    Unfreeze = 8,         ///< World::unfreeze: object
+    PluginChanged = 9,    ///< World::plugin_changed: text = the plugin
+    Restore = 10,         ///< World::restore (the viewer's undo): snapshot
+    Sync = 11,            ///< World::sync
+    Schedule = 12,        ///< World::schedule from outside: object, property, value, time
+    ScheduleSwap = 13,    ///< World::schedule_swap from outside: area, from, to, time
+    DemandImpulses = 14,  ///< World::demand_impulses: value (bool)
   };
   std::uint64_t step = 0;
   Kind kind = Kind::Set;
   ObjectId id;           ///< Set, Timeline, Remove, Create, Destroy, Unfreeze
   std::string property;  ///< Set, Timeline, Remove
-  PropertyValue value;   ///< Set, Timeline
+  PropertyValue value;   ///< Set, Timeline, Schedule; DemandImpulses (bool)
+  double time = 0;       ///< Schedule, ScheduleSwap: when it comes due, s
   std::string area, from, to,
       text;  ///< Swap, Swapped (area, from, to); Reload, Create, PluginChanged (text)
   /// Restore: the snapshot restored (written in the file as the snapshot's

@@ -283,10 +283,27 @@ void World::schedule(double time, ObjectId id, PropertyId property, const Proper
   if (!std::isfinite(time) || time < 0)
     throw InputError(ErrorLocation{"", 0, store_.describe(id)},
                      "an input's time must be a number of seconds >= 0");
-  PropertyValue v = store_.checked(id, property, value);
-  auto at = std::upper_bound(inputs_.begin() + std::ptrdiff_t(next_input_), inputs_.end(), time,
+  as_input(
+      [&] {
+        PropertyValue v = store_.checked(id, property, value);
+        auto at =
+            std::upper_bound(inputs_.begin() + std::ptrdiff_t(next_input_), inputs_.end(), time,
                              [](double t, const ScheduledInput& in) { return t < in.time; });
-  inputs_.insert(at, ScheduledInput{time, id, property, std::move(v)});
+        return inputs_.insert(at, ScheduledInput{time, id, property, std::move(v)});
+      },
+      [&](auto it) {
+        return WorldInput{.kind = WorldInput::Kind::Schedule,
+                          .id = id,
+                          .property = properties().def(property).name,
+                          .value = it->value,
+                          .time = time};
+      });
+}
+
+void World::demand_impulses(bool on) {
+  if (on == impulses_demanded_) return;
+  as_input([&] { impulses_demanded_ = on; },
+           [&] { return WorldInput{.kind = WorldInput::Kind::DemandImpulses, .value = on}; });
 }
 
 namespace {
@@ -426,6 +443,14 @@ void World::step() {
   const bool crossed = assign_areas();
   sync_structure();
   if (crossed) rescope();
+  // Demanded from outside: held through this step's advance, taken again
+  // each step from the contact sets there are now (a swap or a restore
+  // makes new ones).
+  impulse_demands_.clear();
+  if (impulses_demanded_)
+    for (const auto& s : slots_)
+      if (const auto* contacts = dynamic_cast<const ContactSet*>(s->stage.get()))
+        impulse_demands_.push_back(contacts->demand_impulses());
   const double t1 = now_seconds();
   advance_phase();
   advanced_ = true;
@@ -1137,7 +1162,17 @@ void World::schedule_swap(double time, std::string area, std::string from, std::
     throw InputError("swap: no area is called '" + area + "'");
   auto at = std::upper_bound(swaps_.begin(), swaps_.end(), time,
                              [](double t, const ScheduledSwap& s) { return t < s.time; });
-  swaps_.insert(at, ScheduledSwap{time, std::move(area), std::move(from), std::move(to)});
+  as_input(
+      [&] {
+        swaps_.insert(at, ScheduledSwap{time, area, from, to});
+      },
+      [&] {
+        return WorldInput{.kind = WorldInput::Kind::ScheduleSwap,
+                          .time = time,
+                          .area = area,
+                          .from = from,
+                          .to = to};
+      });
 }
 
 void World::order_stages() {

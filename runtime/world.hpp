@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "runtime/access.hpp"
+#include "runtime/contact_set.hpp"
 #include "runtime/events.hpp"
 #include "runtime/plugin_registry.hpp"
 #include "runtime/profile.hpp"
@@ -57,25 +58,30 @@ struct AreaDef {
 /// made: the one place a recorder (runtime/replay.hpp) learns every input,
 /// whoever made it (the viewer's tools, its undo, a test, a script).
 /// Edits the world makes itself are not told: timeline inputs and scheduled
-/// swaps (a snapshot holds them), and an edit made inside another (the
-/// restore inside sync(), the swaps of a scene's timeline).
+/// swaps when they come due (a snapshot holds them; their scheduling from
+/// outside is told), and an edit made inside another (the restore inside
+/// sync(), the swaps of a scene's timeline).
 struct WorldInput {
   enum class Kind : std::uint8_t {
-    Set,            ///< id, property, value (World::set)
-    Remove,         ///< id, property (World::remove)
-    Create,         ///< id (the one made), name (World::create)
-    Destroy,        ///< id (World::destroy)
-    Unfreeze,       ///< id (World::unfreeze)
-    Swap,           ///< area, from, to (World::swap)
-    PluginChanged,  ///< name: the plugin (World::plugin_changed)
-    Restore,        ///< snapshot (World::restore)
-    Sync,           ///< nothing (World::sync)
-    Stepped,        ///< not an input: a step() has ended (for per-step hashes)
+    Set,             ///< id, property, value (World::set)
+    Remove,          ///< id, property (World::remove)
+    Create,          ///< id (the one made), name (World::create)
+    Destroy,         ///< id (World::destroy)
+    Unfreeze,        ///< id (World::unfreeze)
+    Swap,            ///< area, from, to (World::swap)
+    PluginChanged,   ///< name: the plugin (World::plugin_changed)
+    Restore,         ///< snapshot (World::restore)
+    Sync,            ///< nothing (World::sync)
+    Stepped,         ///< not an input: a step() has ended (for per-step hashes)
+    Schedule,        ///< time, id, property, value (World::schedule, as checked)
+    ScheduleSwap,    ///< time, area, from, to (World::schedule_swap)
+    DemandImpulses,  ///< value: true (held) or false (released) (World::demand_impulses)
   };
   Kind kind = Kind::Set;
   ObjectId id;                         ///< Set, Remove, Create, Destroy, Unfreeze
   std::string property;                ///< Set, Remove
-  PropertyValue value;                 ///< Set (as the store keeps it)
+  PropertyValue value;                 ///< Set, Schedule (as the store keeps it); DemandImpulses
+  double time = 0;                     ///< Schedule, ScheduleSwap: when it comes due, s
   std::string name;                    ///< Create: the object's name; PluginChanged: the plugin
   std::string area, from, to;          ///< Swap
   const Snapshot* snapshot = nullptr;  ///< Restore: valid during the call only
@@ -181,6 +187,8 @@ class World {
   /// published as an "input" event. The value is checked now (InputError).
   void schedule(double time, ObjectId id, PropertyId property, const PropertyValue& value);
   /// Scheduled edits not yet applied.
+  /// (A call from outside, between steps, is an input: told to the input
+  /// observers, so that a recording made after the scene loaded replays it.)
   std::size_t pending_inputs() const { return inputs_.size() - next_input_; }
   ObjectId find(std::string_view name) const { return store_.find(name); }
   /// Runs every registered plugin's whole-object check on `id`; throws
@@ -235,6 +243,18 @@ class World {
     World& world_;
   };
 
+  // --- impulses demanded from outside ------------------------------------------
+  /// An edit: while `on`, from the next step on, every contact set of the
+  /// world computes impulses, as if one of its readers demanded them
+  /// (ContactSet::demand_impulses). For a viewer that draws contact forces:
+  /// the demand changes what the contact sets and the rigid body keep and
+  /// save (impulse totals, whether impulses are known), so it is an input,
+  /// told to the input observers and made again by a replay. Not in a
+  /// snapshot: a restore keeps the world's own setting. Setting the value it
+  /// has does nothing and is not told.
+  void demand_impulses(bool on);
+  bool impulses_demanded() const { return impulses_demanded_; }
+
   // --- frozen objects ------------------------------------------------------------
   // A resolver that writes a non-finite value (NaN, +-Inf) into a property is
   // refused (the old value stays), a "non_finite" event is published (source:
@@ -265,6 +285,7 @@ class World {
   /// stages that depended on the old one are recreated. Throws InputError.
   void swap(std::string_view area, std::string_view from, std::string_view to);
   /// The same at a time to come (a scene's timeline, `alloy run --swap`).
+  /// An input, told as schedule() is.
   void schedule_swap(double time, std::string area, std::string from, std::string to);
   /// The registry's definition of `plugin` changed or is gone (a mod was
   /// reloaded or unloaded), between steps: every stage of it, globally and in
@@ -430,6 +451,8 @@ class World {
   std::vector<std::string> enabled_;    // global plugins swapped in beyond def_.plugins
   std::vector<ScheduledSwap> swaps_;    // sorted by time
   std::vector<ScheduledInput> inputs_;  // sorted by time, stable
+  bool impulses_demanded_ = false;      // demand_impulses()
+  std::vector<ImpulseDemand> impulse_demands_;  // held for this step's advance
   std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;
   double time_ = 0;

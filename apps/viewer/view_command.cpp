@@ -24,7 +24,8 @@ CLI::App* add_view_command(CLI::App& app, ViewerOptions& o) {
   cmd->add_option("--save", o.save, "Save the scene as a Lua file when the run ends");
   cmd->add_option("--record", o.record,
                   "Record the run (every edit, undo and step) into FILE when it ends; "
-                  "check it with `alloy replay FILE`");
+                  "a New, Open or Reset starts the next part, FILE-2.EXT, ...; "
+                  "check each with `alloy replay FILE`");
   cmd->add_option("--time-scale", o.time_scale, "Simulated seconds per second of the clock")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--paused", o.paused, "Start paused");

@@ -236,10 +236,21 @@ void Viewer::load() {
   if (scene_->mods) scene_->mods->watch();  // a mod saved on disk is reloaded while the world runs
   World& w = *scene_->world;
   editor_.attach(&w);
-  if (!opt_.record.empty() && !recorded_) {
-    recorded_ = true;
+  // A recording follows the user: each world loaded (the first, a New, an
+  // Open, a Reset) is recorded from its own first snapshot, to FILE, then
+  // FILE-2.EXT, FILE-3.EXT, ...; each part replays on its own.
+  if (!opt_.record.empty()) {
+    const fs::path first(opt_.record);
+    const std::string path =
+        ++record_part_ == 1
+            ? opt_.record
+            : (first.parent_path() / (first.stem().string() + "-" + std::to_string(record_part_) +
+                                      first.extension().string()))
+                  .string();
     recorder_ =
         std::make_unique<Recorder>(w, lua::save_meta(*scene_, opt_.load, opt_.scene.string()));
+    record_path_ = path;
+    if (record_part_ > 1) note("recording " + scene_->name + " to " + path);
   }
   selected_ = hovered_ = wire_start_ = {};
   event_counts_.clear();
@@ -496,8 +507,8 @@ bool Viewer::finish_recording() {
   if (!recorder_) return true;
   const std::unique_ptr<Recorder> r = std::move(recorder_);
   try {
-    r->write(opt_.record);
-    note("recorded " + std::to_string(r->steps()) + " steps to " + opt_.record);
+    r->write(record_path_);
+    note("recorded " + std::to_string(r->steps()) + " steps to " + record_path_);
     return true;
   } catch (const std::exception& e) {
     note(std::string("the recording was not written: ") + e.what(), true);
@@ -679,10 +690,10 @@ void Viewer::simulate(double frame_seconds) {
 
 void Viewer::step_world() {
   World* w = world();
-  // Taken again each step: the contact set may have been replaced (a swap of
-  // engines), and it is found by what its plugin provides, not by its name.
-  const ContactSet* contacts = draw_options_.contact_forces ? global_contacts(*w) : nullptr;
-  contact_impulses_ = contacts ? contacts->demand_impulses() : ImpulseDemand{};
+  // Drawn contact forces need impulses. The demand changes what the contact
+  // sets keep and save, so it goes through the world as an input that a
+  // recording logs and a replay makes again (World::demand_impulses).
+  w->demand_impulses(draw_options_.contact_forces);
   try {
     w->step();
     sample_plot();

@@ -223,7 +223,8 @@ class Viewer {
   /// --record: hears the world's every input and step (World's input
   /// observer); goes before the world it records.
   std::unique_ptr<Recorder> recorder_;
-  bool recorded_ = false;   ///< a recording was started (only the first scene is recorded)
+  int record_part_ = 0;      ///< worlds recorded so far (each load starts the next part)
+  std::string record_path_;  ///< the file of the part under way
   bool finish_recording();  ///< writes it and stops; false if the file could not be written
   std::string load_error_;
   std::filesystem::file_time_type scene_mtime_{};
@@ -327,10 +328,7 @@ class Viewer {
   double step_ms_ = 0;
   int steps_last_frame_ = 0;
 
-  DrawOptions draw_options_;
-  // Contact forces are drawn from the rigid body's impulses, which it
-  // computes only for readers: held while they are shown.
-  ImpulseDemand contact_impulses_;
+  DrawOptions draw_options_;  // contact forces: the world demands impulses (step_world)
   std::vector<std::string> palette_problems_;  // per entry: "" or why it cannot be made
 };
 

@@ -19,9 +19,10 @@ struct ViewerOptions {
   std::string screenshot;  ///< PNG of the last frame, written when the run ends
   std::string script;      ///< input script (input_script.hpp)
   std::string save;        ///< scene file written when the run ends
-  /// Recording of the run (runtime/replay.hpp: every edit, undo and step of
-  /// the scene loaded at start), written when the run ends or another scene
-  /// is loaded; `alloy replay FILE` checks it.
+  /// Recording of the run (runtime/replay.hpp: every edit, undo and step),
+  /// written when the run ends or another world is loaded (New, Open,
+  /// Reset), which starts the next part, FILE-2.EXT, FILE-3.EXT, ... from
+  /// that world's snapshot; `alloy replay FILE` checks a part.
   std::string record;
   double time_scale = 1;
   bool paused = false;

@@ -1,6 +1,7 @@
 #include "resolvers/magnetism/magnetism_resolver.hpp"
 
 #include <cmath>
+#include <string>
 
 #include "resolvers/magnetism/magnet_parts.hpp"
 
@@ -116,6 +117,52 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     // relaxation toward the (moving) target.
     if (pole_rate)
       pole_rate->set(slot, tau > 0 ? (target - next) / tau : per_ampere * coil.rate);
+  }
+}
+
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+//
+// The bytes: a version, then the commanded coils (slot, id, current, rate),
+// in slot order. The rate matters with `rates` only, but is saved always so
+// that the bytes do not depend on a setting.
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+struct SavedCoil {
+  ObjectId id;
+  double current, rate;
+};
+static_assert(sizeof(SavedCoil) == 24, "no padding: a padding byte would be arbitrary");
+}  // namespace
+
+bool MagnetismResolver::save_state(StateWriter& out) const {
+  std::vector<SavedCoil> coils;
+  for (const Coil& c : coils_)
+    if (!c.id.is_null() && c.commanded) coils.push_back({c.id, c.current, c.rate});
+  if (coils.empty()) return false;
+  out.put(kStateVersion);
+  out.put_vector(coils);
+  return true;
+}
+
+void MagnetismResolver::restore_state(StateReader& in) {
+  auto fail = [&](const std::string& why) {
+    throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + why);
+  };
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    fail("state version " + std::to_string(v) + ", this build reads " +
+         std::to_string(kStateVersion));
+  const std::vector<SavedCoil> coils = in.get_vector<SavedCoil>();
+  // build() ran on the restored properties: coils_ covers every slot, and a
+  // record must name a live electromagnet, in slot order, once.
+  std::uint32_t next = 0;
+  for (const SavedCoil& s : coils) {
+    if (s.id.is_null() || s.id.index >= coils_.size() || s.id.index < next)
+      fail("a coil record names slot " + std::to_string(s.id.index) + " out of order or range");
+    if (!std::isfinite(s.current) || !std::isfinite(s.rate))
+      fail("coil #" + std::to_string(s.id.index) + " has a current that is not a finite number");
+    coils_[s.id.index] = Coil{.id = s.id, .commanded = true, .current = s.current, .rate = s.rate};
+    next = s.id.index + 1;
   }
 }
 

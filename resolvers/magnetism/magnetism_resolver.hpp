@@ -35,6 +35,7 @@
 
 #include "resolvers/magnetism/magnet_parts.hpp"
 #include "runtime/stage.hpp"
+#include "runtime/stage_state.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::magnetism {
@@ -61,6 +62,13 @@ class MagnetismResolver : public Resolver {
   // --- Resolver ------------------------------------------------------------------
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
+  /// The coil records (each commanded coil's current and rate): a coil's
+  /// "electromagnet_off" is published when a command turns an "on" record
+  /// off, so a restored resolver without them would miss it. Not the queue:
+  /// a restore primes the interactions, which queue the same commands again.
+  /// Nothing (no state) while no coil was ever commanded.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   // --- inspection ----------------------------------------------------------------
   /// The current last commanded for electromagnet `id` (A), or nullopt if none yet.

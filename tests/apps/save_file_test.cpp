@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -530,6 +531,31 @@ TEST(HostileSave, AnEnumIndexOutOfRange) {
   expect_refused(encode_save(v.data), "has enum index 5, it has 1 values");
 }
 
+// A recording whose log schedules an input at a negative time, and one whose
+// log holds an input of a kind this build does not know: each refused.
+TEST(HostileSave, AScheduledInputAtANegativeTime) {
+  Valid v;
+  v.data.meta.kind = "replay";
+  ReplayInput in;
+  in.step = v.data.snapshot.step;
+  in.kind = ReplayInput::Kind::Schedule;
+  in.id = v.scene.world().find("probe");
+  in.property = "mass";
+  in.value = 2.0;
+  in.time = -1;
+  v.data.inputs.push_back(in);
+  expect_refused(encode_save(v.data), "an input scheduled at -1");
+}
+TEST(HostileSave, AnInputOfAnUnknownKind) {
+  Valid v;
+  v.data.meta.kind = "replay";
+  ReplayInput in;
+  in.step = v.data.snapshot.step;
+  in.kind = ReplayInput::Kind(15);
+  v.data.inputs.push_back(in);
+  expect_refused(encode_save(v.data), "an input of unknown kind 15");
+}
+
 // --- atomic writes -------------------------------------------------------------------
 
 TEST(SaveFile, AWriterKilledMidWriteLeavesThePreviousFile) {
@@ -757,6 +783,116 @@ TEST(Replay, ADivergenceInAnEditSessionIsNamed) {
     EXPECT_NE(std::string(e.what()).find("step 26 ran where it has step 6"), std::string::npos)
         << e.what();
   }
+}
+
+/// Records `steps` steps of `name` in-process, calling `between` before each.
+SaveData record_scene(const std::string& name, std::uint64_t steps,
+                      const std::function<void(World&)>& between) {
+  Scene s(name);
+  Recorder rec(s.world(), meta_of(s, name));
+  for (std::uint64_t i = 0; i < steps; ++i) {
+    between(s.world());
+    s.world().step();
+  }
+  return decode_save(encode_save(rec.data()), "recording");
+}
+
+struct RebuildScene {
+  std::string name;
+  std::optional<Scene> scene;
+  World& operator()() {
+    scene.reset();
+    scene.emplace(name);
+    return scene->world();
+  }
+};
+
+/// The recording without its inputs of kind `k`.
+SaveData without_kind(SaveData d, ReplayInput::Kind k) {
+  std::erase_if(d.inputs, [k](const ReplayInput& in) { return in.kind == k; });
+  return d;
+}
+
+// schedule() and schedule_swap() called after recording began (a game's
+// script, a tool) are inputs: logged with their time, made again by the
+// replay (which then applies them when they come due, as the world did).
+// Without them the replay parts at the step after each call.
+TEST(Replay, ScheduleCallsAfterRecordingBeganAreReplayed) {
+  const SaveData rec = record_scene("rigid_demo", 60, [](World& w) {
+    if (w.step_count() == 10)
+      w.schedule(20 * w.dt(), w.find("ball"), w.properties().id("velocity"), Vec3{0.7, 2.0, 0});
+    if (w.step_count() == 12) w.schedule_swap(30 * w.dt(), "", "gravity.uniform", "gravity.nbody");
+  });
+  std::map<ReplayInput::Kind, const ReplayInput*> by_kind;
+  for (const auto& in : rec.inputs) by_kind.emplace(in.kind, &in);
+  ASSERT_TRUE(by_kind.contains(ReplayInput::Kind::Schedule)) << "the schedule() was not logged";
+  ASSERT_TRUE(by_kind.contains(ReplayInput::Kind::ScheduleSwap))
+      << "the schedule_swap() was not logged";
+  EXPECT_EQ(by_kind[ReplayInput::Kind::Schedule]->step, 10u);
+  EXPECT_EQ(by_kind[ReplayInput::Kind::Schedule]->time, 20 * (1.0 / 240));
+  EXPECT_EQ(by_kind[ReplayInput::Kind::ScheduleSwap]->to, "gravity.nbody");
+  RebuildScene rebuild{"rigid_demo"};
+  const ReplayResult r = replay(rec, std::ref(rebuild));
+  EXPECT_TRUE(r.identical) << r.message();
+  EXPECT_EQ(r.message(), "identical through step 60");
+
+  // Without them the replay parts at once: the state hash covers the
+  // pending inputs and swaps (the schedule), so the step after each call.
+  const ReplayResult a = replay(without_kind(rec, ReplayInput::Kind::Schedule), std::ref(rebuild));
+  ASSERT_FALSE(a.identical);
+  EXPECT_EQ(a.step, 11u) << a.message();
+  const ReplayResult b =
+      replay(without_kind(rec, ReplayInput::Kind::ScheduleSwap), std::ref(rebuild));
+  ASSERT_FALSE(b.identical);
+  EXPECT_EQ(b.step, 13u) << b.message();
+}
+
+// A viewer that draws contact forces demands impulses (World::demand_impulses):
+// the demand changes what the contact set and the rigid body keep (impulse
+// totals, whether impulses are known), so the state hash moves with it. It
+// is an input: the replay makes it again and is identical; without it the
+// replay parts at the first step with the demand. A demand held when
+// recording begins is the recording's first input.
+TEST(Replay, AnImpulseDemandFromOutsideIsReplayed) {
+  auto demand = [](World& w) {
+    if (w.step_count() == 5) w.demand_impulses(true);
+    if (w.step_count() == 40) w.demand_impulses(false);
+  };
+  // The demand does change the hash (else this test could not fail).
+  {
+    Scene a("rigid_demo"), b("rigid_demo");
+    bool differs = false;
+    for (int i = 0; i < 60; ++i) {
+      demand(a.world());
+      a.world().step();
+      b.world().step();
+      differs = differs || hash_state(a.world()).world != hash_state(b.world()).world;
+    }
+    ASSERT_TRUE(differs) << "demanding impulses changed no state hash in rigid_demo";
+  }
+  const SaveData rec = record_scene("rigid_demo", 60, demand);
+  ASSERT_EQ(std::count_if(
+                rec.inputs.begin(), rec.inputs.end(),
+                [](const ReplayInput& in) { return in.kind == ReplayInput::Kind::DemandImpulses; }),
+            2);
+  RebuildScene rebuild{"rigid_demo"};
+  const ReplayResult r = replay(rec, std::ref(rebuild));
+  EXPECT_TRUE(r.identical) << r.message();
+  const ReplayResult d =
+      replay(without_kind(rec, ReplayInput::Kind::DemandImpulses), std::ref(rebuild));
+  ASSERT_FALSE(d.identical);
+  EXPECT_EQ(d.step, 6u) << d.message();
+
+  // Held before recording begins: logged as the first input.
+  Scene s("rigid_demo");
+  s.world().demand_impulses(true);
+  s.world().run(3);
+  Recorder held(s.world(), meta_of(s, "rigid_demo"));
+  s.world().run(20);
+  const SaveData h = decode_save(encode_save(held.data()), "recording");
+  ASSERT_FALSE(h.inputs.empty());
+  EXPECT_EQ(h.inputs[0].kind, ReplayInput::Kind::DemandImpulses);
+  EXPECT_TRUE(replay(h, std::ref(rebuild)).identical);
 }
 
 TEST(ReplayCli, RecordThenReplay) {
