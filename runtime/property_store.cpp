@@ -295,6 +295,41 @@ void PropertyStore::restore(const Objects& objects, const std::vector<const Colu
     if (s >= n || objects.alive[s])
       throw InputError("a snapshot's free list names slot " + std::to_string(s) +
                        ", which is not free");
+  // A snapshot may come from a file that someone edited (and whose checksum
+  // they recomputed): everything the store and the engines rely on is checked
+  // here, before anything changes, as an edit would be. Every free slot is on
+  // the free list once; no column holds a value on a free slot; every value is
+  // finite, within its property's bounds, and refers only to live objects.
+  {
+    std::vector<std::uint8_t> listed(n, 0);
+    for (std::uint32_t s : objects.free_slots)
+      if (listed[s]++)
+        throw InputError("a snapshot's free list names slot " + std::to_string(s) + " twice");
+    for (std::uint32_t s = 0; s < n; ++s)
+      if (!objects.alive[s] && !listed[s])
+        throw InputError("a snapshot's slot " + std::to_string(s) +
+                         " holds no object but is not on its free list");
+    auto alive_in = [&](ObjectId o) {
+      return o.index < n && objects.alive[o.index] && objects.generations[o.index] == o.generation;
+    };
+    for (PropertyId p = 0; p < registry_.size() && p < columns.size(); ++p) {
+      const ColumnBase* from = columns[p];
+      if (!from) continue;
+      const PropertyDef& def = registry_.def(p);
+      const auto present = from->presence();
+      for (std::uint32_t s = 0; s < present.size() && s < n; ++s) {
+        if (!present[s]) continue;
+        const std::string at = "a snapshot's '" + def.name + "' of slot " + std::to_string(s);
+        if (!objects.alive[s]) throw InputError(at + ", which holds no object");
+        const PropertyValue v = from->get_value(s);
+        if (!finite_value(v)) throw InputError(at + " is not a finite number: " + text(v));
+        check_bounds(def, v, ErrorLocation{"", 0, at});
+        if (const ObjectId* ref = std::get_if<ObjectId>(&v);
+            ref && !ref->is_null() && !alive_in(*ref))
+          throw InputError(at + " refers to an object that is not alive in it");
+      }
+    }
+  }
   generations_ = objects.generations;
   alive_ = objects.alive;
   free_slots_ = objects.free_slots;

@@ -136,7 +136,11 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     std::int32_t a, b;  // candidate indices, -1: the play area
   };
   std::vector<PendingHinge> pending;
-  constexpr std::int32_t kWorld = -1, kGone = -2;
+  // kOther: a rigid body outside this engine's scope, which another area's
+  // engine holds. A joint whose bodies are all another engine's (or the play
+  // area) lives with body_a's engine and is skipped here; one that joins a
+  // body of ours to another engine's is refused below.
+  constexpr std::int32_t kWorld = -1, kGone = -2, kOther = -3;
   for (std::uint32_t s : joint.members()) {
     const ObjectId jid = store.id_at(s);
     const ErrorLocation where{"", 0, store.describe(jid)};
@@ -148,21 +152,26 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
       if (cand_of_slot[o.index] >= 0) return cand_of_slot[o.index];
       if (is_static.value_or(o.index, 0)) return kWorld;
       // A rigid body outside this engine's scope: another area's engine holds it.
-      if (store.has(o, id.mass) || store.has(o, id.density)) {
-        auto named = [&](const ColumnView<ObjectId>& c) {
-          return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
-        };
-        throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
-                                    store.describe(o) +
-                                    "' is simulated by another engine (an area's): a joint's "
-                                    "two bodies must be on one engine");
-      }
+      if (store.has(o, id.mass) || store.has(o, id.density)) return kOther;
       throw InputError(where, std::string(name) + " is '" + store.describe(o) +
                                   "', which is neither a rigid body (mass or density) nor static");
     };
     if (!body_a.has(s)) throw InputError(where, "a joint needs body_a");
     std::int32_t a = ref(body_a, "body_a"), b = ref(body_b, "body_b");
     if (a == kGone || b == kGone || (a == kWorld && b == kWorld)) continue;
+    if (a == kOther || b == kOther) {
+      if (a >= 0 || b >= 0) {
+        auto named = [&](const ColumnView<ObjectId>& c) {
+          return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
+        };
+        const ObjectId other = a == kOther ? body_a[s] : body_b[s];
+        throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
+                                    store.describe(other) +
+                                    "' is simulated by another engine (an area's): a joint's "
+                                    "two bodies must be on one engine");
+      }
+      continue;  // both another engine's: it lives there
+    }
     if (JointType(joint[s].index) == JointType::Fixed) {
       if (a >= 0 && b >= 0)
         parent[find(a)] = find(b);

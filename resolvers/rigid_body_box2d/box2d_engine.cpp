@@ -53,6 +53,48 @@ double inertia_z(Shape shape, double m, Vec3 size, double r, double len) {
   return 0;
 }
 
+/// What another engine leaves out of the plane on a part that never left it:
+/// ODE's contact solver and planar joint leave velocity.z of 1e-6 to 1e-4 m/s
+/// and a tilt of the same order on a stack in the plane. Up to these bounds
+/// the residue is dropped (Box2D keeps the part in z = 0); beyond them the
+/// part is out of the plane and refused.
+constexpr double kResidueZ = 1e-4;         // m, of position.z
+constexpr double kResidueTilt = 1e-4;      // of the quaternion's x and y, by its norm
+constexpr double kResidueSpeedZ = 1e-3;    // m/s, of velocity.z
+constexpr double kResidueInPlaneW = 1e-2;  // rad/s, of angular_velocity.x and .y
+
+/// Why a part with this pose and motion cannot be simulated in the plane, or
+/// empty. `moving`: a part that is neither fixed nor `planar` (a `planar`
+/// part's out-of-plane motion is residue by definition).
+std::string off_plane(Vec3 p, Quat q, Vec3 v, Vec3 w, bool moving) {
+  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  if (!(std::abs(p.z) <= kResidueZ)) return "lies off the plane (z = " + num(p.z) + " m)";
+  if (!(std::abs(q.x) <= kResidueTilt * qn && std::abs(q.y) <= kResidueTilt * qn))
+    return "is turned about an axis other than z";
+  if (!moving) return {};
+  if (!(std::abs(v.z) <= kResidueSpeedZ))
+    return "moves out of the plane (velocity.z = " + num(v.z) + " m/s)";
+  if (!(std::abs(w.x) <= kResidueInPlaneW && std::abs(w.y) <= kResidueInPlaneW))
+    return "spins about an axis in the plane (angular_velocity {" + num(w.x) + ", " + num(w.y) +
+           ", " + num(w.z) + "})";
+  return {};
+}
+
+/// Box2D mixes friction as sqrt(a b) and restitution as max(a, b) in single
+/// precision: a coefficient of 1e80 overflows to inf and the solver makes NaN
+/// of it. Past 1e6 a friction coefficient already means "never slides" for
+/// every load the bounds allow, so larger ones are held there.
+constexpr double kMaxCoefficient = 1e6;
+double coefficient(double c) {
+  return std::min(c, kMaxCoefficient);
+}
+
+/// The most one Box2D step may move a body (b2_maxTranslation, in its units)
+/// and turn it (b2_maxRotation, rad): Box2D clamps faster motion silently.
+/// The engine takes as many substeps as keep every body within 90 % of them,
+/// up to kMaxAutoSubsteps; a body that would need more is refused.
+constexpr int kMaxAutoSubsteps = 64;
+
 }  // namespace
 
 // --- settings -----------------------------------------------------------------------
@@ -257,32 +299,18 @@ void Box2DEngine::build(ResolverAccess& access) {
 
   // Parts: every object with a shape, in the plane.
   m.part_of_slot.assign(store_.slot_count(), -1);
-  constexpr double kTol = 1e-6;
   for (std::uint32_t slot : shape.members()) {
     const ObjectId id = store_.id_at(slot);
-    const Vec3 p = position.value_or(slot, {});
-    const Quat q = orientation.value_or(slot, {});
-    const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-    if (std::abs(p.z) > kTol) refuse(id, "lies off the plane (z = " + num(p.z) + " m)");
-    if (std::abs(q.x) > kTol * qn || std::abs(q.y) > kTol * qn)
-      refuse(id, "is turned about an axis other than z");
     const bool fixed = static_.value_or(slot, 0) || pinned.value_or(slot, 0);
-    // A `planar` part is held to the plane by definition: what it carries
-    // out of the plane is another engine's constraint residue (ODE's planar
-    // joint leaves up to 1e-4 m/s of velocity.z), dropped here, not refused.
-    if (!fixed && !planar.value_or(slot, 0)) {
-      const Vec3 v = velocity.value_or(slot, {}), w = angular.value_or(slot, {});
-      if (std::abs(v.z) > kTol)
-        refuse(id, "moves out of the plane (velocity.z = " + num(v.z) + " m/s)");
-      if (std::abs(w.x) > kTol || std::abs(w.y) > kTol)
-        refuse(id, "spins about an axis in the plane (angular_velocity {" + num(w.x) + ", " +
-                       num(w.y) + ", " + num(w.z) + "})");
-    }
+    const std::string why = off_plane(position.value_or(slot, {}), orientation.value_or(slot, {}),
+                                      velocity.value_or(slot, {}), angular.value_or(slot, {}),
+                                      !fixed && !planar.value_or(slot, 0));
+    if (!why.empty()) refuse(id, why);
     m.part_of_slot[slot] = std::int32_t(m.parts.size());
     Impl::Part part;
     part.id = id;
-    part.friction = friction.value_or(slot, 0.5);
-    part.restitution = restitution.value_or(slot, 0.0);
+    part.friction = coefficient(friction.value_or(slot, 0.5));
+    part.restitution = coefficient(restitution.value_or(slot, 0.0));
     m.parts.push_back(part);
   }
 
@@ -446,6 +474,25 @@ void Box2DEngine::build(ResolverAccess& access) {
     const Acc& a = acc[bi];
     if (!(a.m > 0))
       throw InputError("rigid_body.box2d: '" + store_.describe(a.first) + "' has no mass");
+    // The same bounds as ODE's engine (rigid_body_bounds.cpp), for the same
+    // reason, and sharper here: Box2D inverts mass and inertia in single
+    // precision. A body outside them is refused (frozen, an out_of_bounds
+    // event naming it) and held static until the next step drops it.
+    std::string why;
+    if (!(a.m >= rigid::limits::min_mass && a.m <= rigid::limits::max_mass))
+      why = "has a mass of " + num(a.m) + " kg, outside the " + num(rigid::limits::min_mass) +
+            " .. " + num(rigid::limits::max_mass) + " kg a moving body may have";
+    else if (!(a.I >= rigid::limits::min_inertia))
+      why = "has a moment of inertia about z of " + num(a.I) + " kg m^2, below the " +
+            num(rigid::limits::min_inertia) +
+            " kg m^2 a moving body needs (a part too light or too thin)";
+    if (!why.empty()) {
+      access.refuse(a.first.index, "", why + ": it was left out of the rigid body",
+                    {{"mass", a.m}});
+      m.bodies[bi].dynamic = false;
+      m.bodies[bi].b->SetType(b2_staticBody);
+      continue;
+    }
     b2MassData md;
     md.mass = float(a.m);
     md.center = (1.0f / float(a.m)) * a.mc;
@@ -475,7 +522,7 @@ void Box2DEngine::build(ResolverAccess& access) {
                        "both its bodies must be there)");
     const Vec3 ax = axis.value_or(slot, {0, 0, 1});
     const double an = std::sqrt(dot(ax, ax));
-    if (std::abs(ax.x) > kTol * an || std::abs(ax.y) > kTol * an)
+    if (std::abs(ax.x) > kResidueTilt * an || std::abs(ax.y) > kResidueTilt * an)
       refuse(jid, "is a hinge whose axis {" + num(ax.x) + ", " + num(ax.y) + ", " + num(ax.z) +
                       "} is not along z");
     const double sign = ax.z > 0 ? 1 : -1;
@@ -484,7 +531,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (A == B) continue;  // glued together: nothing turns
     const Vec3 an_at =
         anchor.value_or(slot, position.value_or(m.parts[std::size_t(a)].id.index, {}));
-    if (std::abs(an_at.z) > kTol)
+    if (std::abs(an_at.z) > kResidueZ)
       refuse(jid, "has its anchor off the plane (z = " + num(an_at.z) + ")");
     b2RevoluteJointDef jd;
     // Box2D's angle is that of its body B relative to its body A, less the
@@ -589,6 +636,15 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     const Vec3 v = vel_in.value_or(slot, {});
     const Vec3 w = ang_in.value_or(slot, {});
     if (p == part.pos && q == part.rot && v == part.vel && w == part.ang) continue;
+    // An edit that takes the part out of the plane is refused as the scene
+    // would have been at the build (the part freezes, with an out_of_bounds
+    // event naming it, and the next step rebuilds without it), not projected
+    // back into the plane unseen.
+    if (const std::string why = off_plane(p, q, v, w, true); !why.empty()) {
+      access.refuse(slot, "", why + " (Box2D simulates the z = 0 plane only)");
+      dirty_ = true;
+      continue;
+    }
     b2Body* b = body.b;
     const double angle = angle_z(q) - part.angle;
     const b2Rot r{float(angle)};
@@ -603,7 +659,38 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   m.want_impulses = *impulse_demand_ > 0;
   m.step_impulses.clear();
   m.pre_speeds.clear();
-  const int n = config_.substeps;
+  // Substeps: the configured number, or as many more as keep every body's
+  // move and turn within 90 % of what Box2D allows a step (it clamps past
+  // that, silently). A body too fast even for kMaxAutoSubsteps is refused.
+  int n = config_.substeps;
+  {
+    const double max_move = 0.9 * double(b2_maxTranslation),
+                 max_turn = 0.9 * double(b2_maxRotation);
+    for (std::size_t bi = 0; bi < m.bodies.size(); ++bi) {
+      Impl::Body& body = m.bodies[bi];
+      if (!body.dynamic) continue;
+      const double v = double(body.b->GetLinearVelocity().Length()) * dt;
+      const double w = std::abs(double(body.b->GetAngularVelocity())) * dt;
+      const double need = std::ceil(std::max(v / max_move, w / max_turn));
+      if (need <= n) continue;
+      if (need <= kMaxAutoSubsteps) {
+        n = int(need);
+        continue;
+      }
+      for (const Impl::Part& part : m.parts)
+        if (part.body == bi) {
+          access.refuse(part.id.index, "",
+                        "moves at " + num(v / dt / s) + " m/s and turns at " + num(w / dt) +
+                            " rad/s, faster than Box2D can follow in " +
+                            std::to_string(kMaxAutoSubsteps) + " substeps of this step",
+                        {{"speed", v / dt / s}, {"angular_speed", w / dt}});
+          break;
+        }
+      body.dynamic = false;
+      body.b->SetType(b2_staticBody);
+      dirty_ = true;
+    }
+  }
   const double h = dt / n;
   auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
     if (slot >= m.part_of_slot.size() || m.part_of_slot[slot] < 0) return nullptr;
