@@ -327,6 +327,10 @@ void PropertyStore::restore(const Objects& objects, const std::vector<const Colu
         if (const ObjectId* ref = std::get_if<ObjectId>(&v);
             ref && !ref->is_null() && !alive_in(*ref))
           throw InputError(at + " refers to an object that is not alive in it");
+        if (const RefList* list = std::get_if<RefList>(&v))
+          for (const ObjectId& o : *list)
+            if (!o.is_null() && !alive_in(o))
+              throw InputError(at + " refers to an object that is not alive in it");
       }
     }
   }

@@ -341,6 +341,39 @@ TEST(Snapshot, ASnapshotThatDoesNotFitIsRefusedBeforeAnythingChanges) {
     s.inputs.push_back({1.0, w.find("a"), "nope", 1.0});
     refused(s, "pending input sets property 'nope'");
   }
+  // What a forged save file (its checksum recomputed) can hold: each would
+  // reach the stages or an engine as a live object with no values, a value
+  // on a slot with no object, or a number no edit could set.
+  {
+    Snapshot s = good;
+    s.objects.alive[0] = 0;  // 'a', not put on the free list
+    refused(s, "slot 0 holds no object but is not on its free list");
+  }
+  {
+    Snapshot s = good;
+    s.objects.alive[0] = 0;
+    s.objects.free_slots.push_back(0);  // on the list, but its values are still there
+    refused(s, "of slot 0, which holds no object");
+  }
+  {
+    Snapshot s = good;
+    s.objects.free_slots.push_back(s.objects.free_slots.front());
+    refused(s, "names slot 1 twice");
+  }
+  auto with_value = [&](const char* property, std::uint32_t slot, PropertyValue v) {
+    Snapshot s = good;
+    for (auto& c : s.columns)
+      if (c.property == property) {
+        auto copy = c.values->clone();
+        EXPECT_TRUE(copy->set_value(slot, v));
+        c.values = std::move(copy);
+      }
+    return s;
+  };
+  refused(with_value("x", 0, std::nan("")), "'x' of slot 0 is not a finite number");
+  refused(with_value("x", 0, HUGE_VAL), "'x' of slot 0 is not a finite number");
+  refused(with_value("links", 2, RefList{ObjectId{1, 1}}),
+          "'links' of slot 2 refers to an object that is not alive in it");
 }
 
 TEST(Snapshot, DamagedStageStateIsAnErrorNamingTheStage) {
