@@ -360,18 +360,23 @@ TEST(Snapshot, ASnapshotThatDoesNotFitIsRefusedBeforeAnythingChanges) {
     s.objects.free_slots.push_back(s.objects.free_slots.front());
     refused(s, "names slot 1 twice");
   }
-  auto with_value = [&](const char* property, std::uint32_t slot, PropertyValue v) {
+  // A column as a save file's reader makes it (Column::detached), with one
+  // value changed.
+  auto with_value = [&]<class T>(const char* property, std::uint32_t slot, T v) {
     Snapshot s = good;
     for (auto& c : s.columns)
       if (c.property == property) {
-        auto copy = c.values->clone();
-        EXPECT_TRUE(copy->set_value(slot, v));
-        c.values = std::move(copy);
+        const auto& from = dynamic_cast<const Column<T>&>(*c.values);
+        std::vector<T> values(from.values().begin(), from.values().end());
+        std::vector<std::uint8_t> present(from.presence().begin(), from.presence().end());
+        values.at(slot) = v;
+        c.values =
+            Column<T>::detached(w.properties().id(property), std::move(values), std::move(present));
       }
     return s;
   };
   refused(with_value("x", 0, std::nan("")), "'x' of slot 0 is not a finite number");
-  refused(with_value("x", 0, HUGE_VAL), "'x' of slot 0 is not a finite number");
+  refused(with_value("x", 0, double(HUGE_VAL)), "'x' of slot 0 is not a finite number");
   refused(with_value("links", 2, RefList{ObjectId{1, 1}}),
           "'links' of slot 2 refers to an object that is not alive in it");
 }
