@@ -1011,6 +1011,27 @@ void use_companions(const PluginRegistry& plugins,
     }
   }
   for (auto& [what, name] : add) use.emplace(what, name);
+  // The other way round: a stage written against an engine needs that
+  // engine. `use = { collisions = "collisions.box2d" }` alone brings Box2D's
+  // rigid body (without it the contact set would stay out and every body
+  // fall through the floor, silently); a scene that chose another engine
+  // for the same thing is told so.
+  std::vector<std::pair<std::string, std::string>> engines;
+  for (const auto& [what, name] : use) {
+    const PluginDef* d = plugins.find(name);
+    if (!d) continue;
+    for (const auto& e_name : plugins.order()) {
+      const PluginDef* e = plugins.find(e_name);
+      if (e->info.provides.empty() || !bound_to(*d, *e)) continue;
+      const auto chosen = use.find(e->info.provides);
+      if (chosen != use.end() && chosen->second != e_name)
+        throw InputError("use: '" + name + "' is written against '" + e_name +
+                         "', but the scene uses '" + chosen->second + "' for '" + e->info.provides +
+                         "'");
+      engines.emplace_back(e->info.provides, e_name);
+    }
+  }
+  for (auto& [what, name] : engines) use.emplace(what, name);
 }
 }  // namespace
 
@@ -1027,6 +1048,21 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     throw InputError("swap: '" + std::string(from) + "' is a " +
                      std::string(to_string(f->info.kind)) + " and '" + std::string(to) + "' a " +
                      std::string(to_string(t->info.kind)));
+  // A stage written against an engine (Box2D's contact set) swapped in where
+  // that engine does not run would stay out, and bodies would fall through
+  // one another unseen: refused, saying what to swap instead.
+  if (area.empty())
+    for (const auto& e_name : plugins_.order()) {
+      const PluginDef* e = plugins_.find(e_name);
+      if (e->info.provides.empty() || e == f || !bound_to(*t, *e)) continue;
+      const auto chosen = def_.use.find(e->info.provides);
+      const std::string current = chosen != def_.use.end() ? chosen->second : e->info.provides;
+      if (current != e_name)
+        throw InputError("swap: '" + std::string(to) + "' is written against '" + e_name +
+                         "', which does not run here ('" + current + "' is the " +
+                         e->info.provides + "); swap '" + current + "' to '" + e_name +
+                         "' and its contact set comes along");
+    }
   // The stages written against the engine swapped out go with it, and the new
   // engine brings its own (a rigid body's contact set: ODE's `collisions`
   // needs ODE, `collisions.box2d` needs Box2D). Swapping the rigid body alone

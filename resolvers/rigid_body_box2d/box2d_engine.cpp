@@ -299,13 +299,27 @@ void Box2DEngine::build(ResolverAccess& access) {
 
   // Parts: every object with a shape, in the plane.
   m.part_of_slot.assign(store_.slot_count(), -1);
+  const bool mid_run = rebuilds_ > 1 || world_.step_count() > 0;
+  std::vector<char> skipped(store_.slot_count(), 0);  // parts refused in this build
+  auto refused_part = [&](ObjectId id) {
+    return !id.is_null() && id.index < skipped.size() && skipped[id.index];
+  };
   for (std::uint32_t slot : shape.members()) {
     const ObjectId id = store_.id_at(slot);
     const bool fixed = static_.value_or(slot, 0) || pinned.value_or(slot, 0);
     const std::string why = off_plane(position.value_or(slot, {}), orientation.value_or(slot, {}),
                                       velocity.value_or(slot, {}), angular.value_or(slot, {}),
                                       !fixed && !planar.value_or(slot, 0));
-    if (!why.empty()) refuse(id, why);
+    if (!why.empty()) {
+      // At the scene's load the scene is wrong: an error naming the part. In
+      // a run (a rebuild after an edit or a mod's write, a swap to this
+      // engine, a part crossing into its area) the part is refused instead
+      // (frozen, an out_of_bounds event naming it) and the world goes on.
+      if (!mid_run) refuse(id, why);
+      access.refuse(slot, "", why + " (Box2D simulates the z = 0 plane only)");
+      skipped[slot] = 1;
+      continue;
+    }
     m.part_of_slot[slot] = std::int32_t(m.parts.size());
     Impl::Part part;
     part.id = id;
@@ -339,6 +353,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   for (std::uint32_t slot : joint.members()) {
     if (JointType(joint[slot].index) != JointType::Fixed) continue;
     const ObjectId bid = body_b.value_or(slot, {});
+    if (refused_part(body_a.value_or(slot, {})) || refused_part(bid)) continue;  // holds nothing
     const std::int32_t a = ours(body_a.value_or(slot, {})), b = ours(bid);
     if (a < 0 && b >= 0) refuse_across(slot, "glues");
     if (a < 0) continue;  // the joint lives with body_a's engine
@@ -511,6 +526,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (JointType(joint[slot].index) != JointType::Hinge) continue;
     const ObjectId jid = store_.id_at(slot);
     const ObjectId bid = body_b.value_or(slot, {});
+    if (refused_part(body_a.value_or(slot, {})) || refused_part(bid)) continue;  // holds nothing
     const std::int32_t a = ours(body_a.value_or(slot, {})), b = ours(bid);
     if (a < 0 && b >= 0) refuse_across(slot, "hinge");
     if (a < 0) continue;  // lives with body_a's engine

@@ -594,5 +594,65 @@ TEST(Box2D, AHingeInsideABox2DAreaIsItsAndNotOdes) {
   EXPECT_LT(p.y, 0.95);
 }
 
+TEST(Box2D, ItsContactSetAloneBringsItsEngineAndAMixIsRefused) {
+  // collisions.box2d reads Box2D's world: without rigid_body.box2d it would
+  // stay out, and every body fall through the floor with no word.
+  {
+    WorldDef def;
+    def.use = {{"collisions", "collisions.box2d"}};
+    Sim s(def);
+    add_floor(*s);
+    const ObjectId ball = add_sphere(*s, {0, 0.3, 0}, 0.05, 1.0, "ball");
+    s.run_for(1.0);
+    EXPECT_TRUE(active(*s, "rigid_body.box2d"));
+    EXPECT_NEAR(s.position(ball).y, 0.05, 2e-3);
+  }
+  {
+    WorldDef def;
+    def.use = {{"collisions", "collisions.box2d"}, {"rigid_body", "rigid_body"}};
+    try {
+      Sim s(def);
+      ADD_FAILURE() << "a contact set of one engine with the rigid body of another";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("'collisions.box2d' is written against "
+                                           "'rigid_body.box2d', but the scene uses 'rigid_body'"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  {
+    Sim s;  // ODE
+    add_floor(*s);
+    add_sphere(*s, {0, 0.3, 0}, 0.05, 1.0, "ball");
+    s.run_for(0.1);
+    try {
+      s->swap("", "collisions", "collisions.box2d");
+      s.run_for(0.1);
+      ADD_FAILURE() << "swapped in Box2D's contact set on ODE";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("swap 'rigid_body' to 'rigid_body.box2d'"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+TEST(Box2D, APartLeavingThePlaneInARunIsFrozenAndTheWorldGoesOn) {
+  // Mid-run, a part that leaves the plane through a rebuild (here an edit of
+  // its mass with its position, as a mod's write can make) is refused by
+  // name and frozen; at the scene's load the same part is an error.
+  Sim s(on_box2d());
+  add_floor(*s);
+  const ObjectId stray = add_sphere(*s, {0, 0.5, 0}, 0.05, 1.0, "stray");
+  const ObjectId ball = add_sphere(*s, {0.5, 0.5, 0}, 0.05, 1.0, "ball");
+  s.run_for(0.1);
+  s->set(stray, "position", Vec3{0, 0.5, 0.5});
+  s->set(stray, "mass", 2.0);
+  s.run_for(0.5);
+  EXPECT_TRUE(s->frozen(stray));
+  EXPECT_FALSE(s->frozen(ball));
+  EXPECT_NEAR(s.position(ball).y, 0.05, 2e-3);
+}
+
 }  // namespace
 }  // namespace alloy::scenes
