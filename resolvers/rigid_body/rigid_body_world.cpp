@@ -137,9 +137,9 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
   };
   std::vector<PendingHinge> pending;
   // kOther: a rigid body outside this engine's scope, which another area's
-  // engine holds. A joint whose bodies are all another engine's (or the play
-  // area) lives with body_a's engine and is skipped here; one that joins a
-  // body of ours to another engine's is refused below.
+  // engine holds. A joint that joins a body of ours to another engine's is
+  // refused, naming both; one whose bodies are all another engine's too,
+  // since that engine never sees the joint (it has no position, so no area).
   constexpr std::int32_t kWorld = -1, kGone = -2, kOther = -3;
   for (std::uint32_t s : joint.members()) {
     const ObjectId jid = store.id_at(s);
@@ -160,17 +160,24 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     std::int32_t a = ref(body_a, "body_a"), b = ref(body_b, "body_b");
     if (a == kGone || b == kGone || (a == kWorld && b == kWorld)) continue;
     if (a == kOther || b == kOther) {
+      auto named = [&](const ColumnView<ObjectId>& c) {
+        return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
+      };
       if (a >= 0 || b >= 0) {
-        auto named = [&](const ColumnView<ObjectId>& c) {
-          return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
-        };
         const ObjectId other = a == kOther ? body_a[s] : body_b[s];
         throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
                                     store.describe(other) +
                                     "' is simulated by another engine (an area's): a joint's "
                                     "two bodies must be on one engine");
       }
-      continue;  // both another engine's: it lives there
+      // Both bodies another engine's (an area's): a joint has no position,
+      // so it belongs to the whole world and the area's engine never sees
+      // it. Refused rather than dropped, until joints follow their bodies
+      // into areas.
+      throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) +
+                                  ", which another engine (an area's) simulates: a joint "
+                                  "inside an area with its own rigid-body engine is not "
+                                  "simulated yet (a joint belongs to the whole world)");
     }
     if (JointType(joint[s].index) == JointType::Fixed) {
       if (a >= 0 && b >= 0)
