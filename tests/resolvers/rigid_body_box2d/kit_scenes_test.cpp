@@ -135,11 +135,12 @@ TEST(KitOnBox2D, DoorbellRingsOnBothEngines) {
   std::printf("doorbell to 3 s: ODE %d strikes, period %.4f s; Box2D %d strikes, period %.4f s\n",
               a.count, a.period, b.count, b.period);
   // Step-exact on this build (the runs are deterministic; golden hashes
-  // hold the same). One strike a cycle on both; Box2D's cycle is 8 % longer.
+  // hold the same). One strike a cycle on both; Box2D's cycle is 7 % longer.
+  // (Since session 15's live iron core and 950 turns; 0.0719 s before.)
   EXPECT_EQ(a.count, 37);
   EXPECT_NEAR(a.period, 0.0667, 1e-4);
   EXPECT_EQ(b.count, 33);
-  EXPECT_NEAR(b.period, 0.0719, 1e-4);
+  EXPECT_NEAR(b.period, 0.0712, 1e-4);
   EXPECT_GT(b2.strikes().front(), 0.5) << "nothing rings before the switch bar is let go";
 }
 
@@ -181,12 +182,13 @@ TEST(KitOnBox2D, DoorbellSwappedMidRunBothWays) {
     EXPECT_GT(after.count, 10) << "it rings on after the swap";
   }
   // Step-exact: the strikes before the swap are the first engine's, after it
-  // the period is the second's within a strike (ODE 0.0667 s, Box2D 0.0719 s
-  // from the start; 0.0661 s after the swap, the rebuilt contacts' transient).
+  // the period is the second's within a strike (ODE 0.0667 s, Box2D 0.0712 s
+  // from the start; 0.0761 s after the swap, the rebuilt contacts' transient;
+  // with session 14's air-cored coil it was 23 strikes at 0.0661 s).
   EXPECT_EQ(ringing(to_b2, 0, at).count, 14);
-  EXPECT_EQ(ringing(to_b2, at, kDoorbellSeconds).count, 23);
-  EXPECT_NEAR(ringing(to_b2, at, kDoorbellSeconds).period, 0.0661, 1e-4);
-  EXPECT_EQ(ringing(to_ode, 0, at).count, 13);
+  EXPECT_EQ(ringing(to_b2, at, kDoorbellSeconds).count, 20);
+  EXPECT_NEAR(ringing(to_b2, at, kDoorbellSeconds).period, 0.0761, 1e-4);
+  EXPECT_EQ(ringing(to_ode, 0, at).count, 12);
   EXPECT_EQ(ringing(to_ode, at, kDoorbellSeconds).count, 22);
   EXPECT_NEAR(ringing(to_ode, at, kDoorbellSeconds).period, 0.0667, 1e-4);
 }
