@@ -1,40 +1,29 @@
 // Tests for apps/alloy: the command line as a user meets it. Runs in-process
 // through run_cli (fast), and once through the real binary for exit codes.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "apps/alloy/commands.hpp"
+#include "tests/apps/cli_runner.hpp"
 
 namespace fs = std::filesystem;
 
 namespace alloy::app {
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "alloy");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_cli(int(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
+using cli_test::cli;
+using cli_test::Result;
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -60,8 +49,8 @@ TEST(AlloyCli, RunNarratesAndSucceeds) {
 
 TEST(AlloyCli, TraceIsLongFormatWithNamedObjectsAndComponents) {
   const fs::path trace = temp_dir() / "trace.csv";
-  Result r = cli({"run", kDemo, "--steps", "10", "--trace", trace.string(), "--trace-props", "position,mass",
-                  "--trace-every", "5", "--quiet"});
+  Result r = cli({"run", kDemo, "--steps", "10", "--trace", trace.string(), "--trace-props",
+                  "position,mass", "--trace-every", "5", "--quiet"});
   ASSERT_EQ(r.code, kExitOk) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
   std::ifstream in(trace);
@@ -87,7 +76,9 @@ TEST(AlloyCli, TraceIsLongFormatWithNamedObjectsAndComponents) {
 TEST(AlloyCli, SameSceneTwiceGivesAnIdenticalTrace) {
   const fs::path dir = temp_dir();
   for (const char* name : {"a.csv", "b.csv"})
-    ASSERT_EQ(cli({"run", kDemo, "--seconds", "3", "--trace", (dir / name).string(), "--quiet"}).code, kExitOk);
+    ASSERT_EQ(
+        cli({"run", kDemo, "--seconds", "3", "--trace", (dir / name).string(), "--quiet"}).code,
+        kExitOk);
   const std::string a = slurp(dir / "a.csv"), b = slurp(dir / "b.csv");
   EXPECT_GT(a.size(), 1000u);
   EXPECT_TRUE(a == b) << "traces differ";
@@ -95,7 +86,8 @@ TEST(AlloyCli, SameSceneTwiceGivesAnIdenticalTrace) {
 
 TEST(AlloyCli, EventsAreJsonLinesWithStepTimeType) {
   const fs::path events = temp_dir() / "events.jsonl";
-  ASSERT_EQ(cli({"run", kDemo, "--seconds", "2", "--events", events.string(), "--quiet"}).code, kExitOk);
+  ASSERT_EQ(cli({"run", kDemo, "--seconds", "2", "--events", events.string(), "--quiet"}).code,
+            kExitOk);
   std::ifstream in(events);
   int n = 0;
   for (std::string line; std::getline(in, line); ++n) {
@@ -174,10 +166,12 @@ TEST(AlloyCli, MalformedScenesGiveExitCodeTwoWithFileLineAndObject) {
     // "line N: rest" is printed as "FILE:N: rest" (see tests/lua/bad_scenes/README.md).
     std::smatch lm;
     const std::string expect_line = m[1];
-    ASSERT_TRUE(std::regex_match(expect_line, lm, std::regex("line ([0-9]+): (.*)"))) << entry.path();
+    ASSERT_TRUE(std::regex_match(expect_line, lm, std::regex("line ([0-9]+): (.*)")))
+        << entry.path();
     const std::string expected = entry.path().string() + ":" + lm[1].str() + ": " + lm[2].str();
-    for (const std::vector<std::string>& args : {std::vector<std::string>{"check", entry.path().string()},
-                                                 std::vector<std::string>{"run", entry.path().string(), "--quiet"}}) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"check", entry.path().string()},
+          std::vector<std::string>{"run", entry.path().string(), "--quiet"}}) {
       const std::string& cmd = args[0];
       Result r = cli(args);
       EXPECT_EQ(r.code, kExitBadInput) << cmd << " " << entry.path() << "\n" << r.out << r.err;
@@ -201,7 +195,9 @@ TEST(AlloyCli, SwapReplacesAResolverWhileRunning) {
                   "moon:gravity.uniform=gravity.uniform@0.05"});
   ASSERT_EQ(r.code, kExitOk) << r.err;
   EXPECT_NE(r.out.find("step     13"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("resolver swapped  (gravity.uniform -> gravity.uniform in moon)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("resolver swapped  (gravity.uniform -> gravity.uniform in moon)"),
+            std::string::npos)
+      << r.out;
   r = cli({"run", "tests/lua/scenes/areas.lua", "--swap", "mars:gravity.uniform=gravity.uniform"});
   EXPECT_EQ(r.code, kExitBadInput);
   EXPECT_NE(r.err.find("no area is called 'mars'"), std::string::npos) << r.err;
@@ -211,8 +207,10 @@ TEST(AlloyCli, SwapReplacesAResolverWhileRunning) {
 TEST(AlloyCli, ReportPrintsAValueAsTheRunGoes) {
   Result r = cli({"run", kDemo, "--seconds", "1", "--report", "ball.position.y@0.5"});
   ASSERT_EQ(r.code, kExitOk) << r.err;
-  EXPECT_NE(r.out.find("step    120  t=  0.500 s  report: ball position.y = "), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("step    240  t=  1.000 s  report: ball position.y = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("step    120  t=  0.500 s  report: ball position.y = "), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("step    240  t=  1.000 s  report: ball position.y = "), std::string::npos)
+      << r.out;
   r = cli({"run", kDemo, "--report", "ball.position"});
   EXPECT_EQ(r.code, kExitBadInput);
   EXPECT_NE(r.err.find("name a component: x, y or z"), std::string::npos) << r.err;

@@ -16,23 +16,13 @@
 #include "apps/alloy/commands.hpp"
 #include "resolvers/rigid_body/engine_functions.hpp"
 #include "runtime/plugin_registry.hpp"
+#include "tests/apps/cli_runner.hpp"
 
 namespace alloy::app {
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "alloy");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_cli(int(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
+using cli_test::cli;
+using cli_test::Result;
 
 const nlohmann::json* plugin(const nlohmann::json& all, const std::string& name) {
   for (const auto& p : all)

@@ -29,25 +29,15 @@
 #include "runtime/replay.hpp"
 #include "runtime/state_hash.hpp"
 #include "runtime/world.hpp"
+#include "tests/apps/cli_runner.hpp"
 
 namespace fs = std::filesystem;
 
 namespace alloy {
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "alloy");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = app::run_cli(int(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
+using app::cli_test::cli;
+using app::cli_test::Result;
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
