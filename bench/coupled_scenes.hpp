@@ -9,6 +9,8 @@
 // scenes as they change, and a rate left at 0 is the scene's default.
 #pragma once
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -20,8 +22,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "lua/scene_loader.hpp"
 #include "resolvers/electricity/electricity.hpp"
 #include "resolvers/plugins.hpp"
@@ -32,16 +32,17 @@ namespace alloy::bench::coupled {
 
 /// Where the rates of a run differ from the scene's.
 struct Rates {
-  double dt = 0;                  ///< the world's step = the coupling window, s; 0: the scene's
-  std::string solver;             ///< rigid_body solver "step" | "quick"; empty: the scene's
-  int iterations = 0;             ///< rigid_body iterations (quick); 0: the scene's
-  int electricity_substeps = 0;   ///< electricity substeps; 0: the scene's
-  int rigid_substeps = 0;         ///< rigid_body substeps; 0: the scene's
+  double dt = 0;                     ///< the world's step = the coupling window, s; 0: the scene's
+  std::string solver;                ///< rigid_body solver "step" | "quick"; empty: the scene's
+  int iterations = 0;                ///< rigid_body iterations (quick); 0: the scene's
+  int electricity_substeps = 0;      ///< electricity substeps; 0: the scene's
+  int rigid_substeps = 0;            ///< rigid_body substeps; 0: the scene's
   std::map<std::string, int> every;  ///< world every = { stage = n }
   /// magnetic_forces rates = true: the magnetic loads reach the rigid body
   /// with their rates, a first-order hold over its substeps; false: the scene's
   bool load_rates = false;
-  std::string substep_contacts;  ///< rigid_body substep_contacts "kept" | "found"; empty: the scene's
+  std::string
+      substep_contacts;  ///< rigid_body substep_contacts "kept" | "found"; empty: the scene's
   /// electricity rates = true and magnetism rates = true: a coil's current
   /// reaches the magnetism with its rate, and its pole strength moves on
   /// between windows; false: the scene's
@@ -52,7 +53,9 @@ struct Rates {
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
-inline std::filesystem::path source_dir() { return std::filesystem::path(ALLOY_SOURCE_DIR); }
+inline std::filesystem::path source_dir() {
+  return std::filesystem::path(ALLOY_SOURCE_DIR);
+}
 
 /// The Lua put in front of a scene: wraps world{} to override the rates.
 inline std::string rate_prelude(const Rates& r) {
@@ -164,12 +167,12 @@ inline std::string step_name(double dt) {
 
 /// What a run measured.
 struct Measure {
-  double value = NAN;       ///< the figure (strike period, s; steady speed, rad/s); NaN: fails
-  int count = 0;            ///< strikes / whole turns it is made of
-  double cpu = 0;           ///< CPU seconds spent stepping
-  double simulated = 0;     ///< simulated seconds
+  double value = NAN;    ///< the figure (strike period, s; steady speed, rad/s); NaN: fails
+  int count = 0;         ///< strikes / whole turns it is made of
+  double cpu = 0;        ///< CPU seconds spent stepping
+  double simulated = 0;  ///< simulated seconds
   std::uint64_t steps = 0;
-  std::vector<StageTiming> stages;  ///< the world's per-stage timing (wall clock)
+  std::vector<StageTiming> stages;                 ///< the world's per-stage timing (wall clock)
   double cost() const { return cpu / simulated; }  ///< CPU s per simulated s
   bool ok() const { return std::isfinite(value); }
 };
@@ -259,9 +262,8 @@ inline Measure motor_speed(const Rates& rates, double from, double to, const std
   time.reserve(m.steps + 1), angle.reserve(m.steps + 1);
   auto sample = [&] {
     const double a = angle_z(std::get<Quat>(world.get(axle, "orientation")));
-    angle.push_back(angle.empty() ? a
-                                  : angle.back() + std::remainder(a - angle.back(),
-                                                                  2 * std::numbers::pi));
+    angle.push_back(
+        angle.empty() ? a : angle.back() + std::remainder(a - angle.back(), 2 * std::numbers::pi));
     time.push_back(world.time());
   };
   double cpu = 0;
@@ -274,7 +276,8 @@ inline Measure motor_speed(const Rates& rates, double from, double to, const std
   }
   m.cpu = cpu;
   m.stages = world.profile().stages;
-  const auto i0 = std::size_t(std::lower_bound(time.begin(), time.end(), from - 1e-9) - time.begin());
+  const auto i0 =
+      std::size_t(std::lower_bound(time.begin(), time.end(), from - 1e-9) - time.begin());
   if (i0 >= time.size()) return m;
   const double start = angle[i0], turn = 2 * std::numbers::pi;
   int turns = 0;

@@ -112,7 +112,6 @@ void install_print(lua_State* L, int env, PrintSink* sink) {
   lua_setfield(L, env, "print");
 }
 
-
 bool StageDecl::same_shape(const StageDecl& o) const {
   const StageInfo& a = info;
   const StageInfo& b = o.info;

@@ -446,12 +446,12 @@ class World {
   std::vector<Area> areas_;
   std::vector<int> area_of_slot_;  // area index per object slot, -1 for none
   std::map<std::string, Outside, std::less<>>
-      outside_;                         // scopes of global stages kept out of areas
-  std::vector<std::string> disabled_;   // global plugins swapped out
-  std::vector<std::string> enabled_;    // global plugins swapped in beyond def_.plugins
-  std::vector<ScheduledSwap> swaps_;    // sorted by time
-  std::vector<ScheduledInput> inputs_;  // sorted by time, stable
-  bool impulses_demanded_ = false;      // demand_impulses()
+      outside_;                                 // scopes of global stages kept out of areas
+  std::vector<std::string> disabled_;           // global plugins swapped out
+  std::vector<std::string> enabled_;            // global plugins swapped in beyond def_.plugins
+  std::vector<ScheduledSwap> swaps_;            // sorted by time
+  std::vector<ScheduledInput> inputs_;          // sorted by time, stable
+  bool impulses_demanded_ = false;              // demand_impulses()
   std::vector<ImpulseDemand> impulse_demands_;  // held for this step's advance
   std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;

@@ -225,7 +225,7 @@ class Viewer {
   std::unique_ptr<Recorder> recorder_;
   int record_part_ = 0;      ///< worlds recorded so far (each load starts the next part)
   std::string record_path_;  ///< the file of the part under way
-  bool finish_recording();  ///< writes it and stops; false if the file could not be written
+  bool finish_recording();   ///< writes it and stops; false if the file could not be written
   std::string load_error_;
   std::filesystem::file_time_type scene_mtime_{};
   double last_watch_ = -1;

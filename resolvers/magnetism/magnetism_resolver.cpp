@@ -115,8 +115,7 @@ void MagnetismResolver::advance(ResolverAccess& access, double dt) {
     pole_strength.set(slot, next);
     // dq/dt at the end: the target's own rate, or with a time constant the
     // relaxation toward the (moving) target.
-    if (pole_rate)
-      pole_rate->set(slot, tau > 0 ? (target - next) / tau : per_ampere * coil.rate);
+    if (pole_rate) pole_rate->set(slot, tau > 0 ? (target - next) / tau : per_ampere * coil.rate);
   }
 }
 
