@@ -189,7 +189,7 @@ Recorder::Recorder(World& world, SaveMeta meta) : world_(world), state_(std::mak
   world.add_input_observer([weak, &world](const WorldInput& in) {
     if (auto s = weak.lock()) s->input(world, in);
   });
-  world.add_observer([weak, &world](const Event& e) {
+  world.add_observer([weak](const Event& e) {
     auto s = weak.lock();
     if (!s) return;
     ReplayInput r;

@@ -1002,12 +1002,29 @@ void ElectricityResolver::restore_state(StateReader& in) {
   if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
     throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
                      std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  auto damaged = [&](const std::string& what) {
+    throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
+  };
+  // Everything is read and checked before anything changes. A contact's
+  // terminals index its parts' two nodes when the network is built, and
+  // connect() keeps every pair in (low, high) order: a file can hold neither
+  // a terminal other than 0 or 1 nor a pair out of order.
+  const auto contacts = in.get_vector<SavedContact>();
+  for (const SavedContact& c : contacts)
+    if (c.terminal_a < 0 || c.terminal_a > 1 || c.terminal_b < 0 || c.terminal_b > 1 ||
+        !(c.a < c.b))
+      damaged("a contact names terminal " + std::to_string(c.terminal_a) + " and " +
+              std::to_string(c.terminal_b) + " of objects " + std::to_string(c.a.index) + " and " +
+              std::to_string(c.b.index) + " (terminals are 0 and 1, in order)");
+  const auto closed = in.get_vector<SavedClosed>();
+  for (const SavedClosed& c : closed)
+    if (c.closed > 1) damaged("a switch's reported state is " + std::to_string(c.closed));
   contacts_.clear();
-  for (const SavedContact& c : in.get_vector<SavedContact>())
+  for (const SavedContact& c : contacts)
     contacts_[{c.a, c.b}] = Contact{int(c.terminal_a), int(c.terminal_b)};
   reported_closed_.clear();
   reported_cache_.clear();
-  for (const SavedClosed& c : in.get_vector<SavedClosed>()) reported_closed_[c.id] = c.closed != 0;
+  for (const SavedClosed& c : closed) reported_closed_[c.id] = c.closed != 0;
   auto saved = std::make_unique<SavedHistory>();
   saved->guard = in.get<std::uint8_t>() != 0;
   saved->network.node_count = in.get<std::uint32_t>();
@@ -1031,6 +1048,14 @@ void ElectricityResolver::restore_state(StateReader& in) {
   }
   if (saved->coils.size() != coils || saved->capacitors.size() != capacitors)
     throw InputError("the saved state of stage '" + in.stage() + "' is cut short");
+  // The history is used only if the network matches (apply_restored), but a
+  // value that is not finite would then reach every solve.
+  auto finite = [](double v) { return std::isfinite(v); };
+  bool ok = std::all_of(saved->battery_emf.begin(), saved->battery_emf.end(), finite);
+  for (const Coil& c : saved->coils)
+    ok = ok && finite(c.current) && finite(c.v_l) && finite(c.series_emf);
+  for (const Capacitor& c : saved->capacitors) ok = ok && finite(c.charge) && finite(c.current);
+  if (!ok) damaged("a battery's EMF, a coil's or a capacitor's state is not a finite number");
   restored_ = std::move(saved);
 }
 

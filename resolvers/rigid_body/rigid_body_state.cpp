@@ -1,3 +1,5 @@
+#include <cfloat>
+
 #include "resolvers/rigid_body/rigid_body_impl.hpp"
 
 namespace alloy::rigid {
@@ -24,7 +26,34 @@ namespace alloy::rigid {
 // Queued commands are not saved: the world primes the interactions again.
 namespace {
 constexpr std::uint32_t kStateVersion = 1;
+
+bool finite(const Vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
+bool finite(const dReal* v, int n) {
+  return std::all_of(v, v + n, [](dReal x) { return std::isfinite(x); });
+}
+// A rotation as saved: finite and not zero (ODE normalises what it is given,
+// and asserts on a zero vector).
+bool usable_quat(const Quat& q) {
+  const double n = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  return std::isfinite(n) && n > 0.25 && n < 4;
+}
+bool usable_axis(const Vec3& a) {
+  const double n = dot(a, a);
+  return std::isfinite(n) && n > 0.25 && n < 4;
+}
+// What dBodySetMass asserts (its mass check and the centre at the origin),
+// tested here so that a damaged file is an input error, not an ODE failure.
+bool usable_mass(const dMass& m) {
+  if (!(m.mass > 0) || !std::isfinite(m.mass) || !finite(m.c, 3) || !finite(m.I, 12)) return false;
+  for (int i = 0; i < 3; ++i)
+    if (std::fabs(m.c[i]) > DBL_EPSILON) return false;
+  dMatrix3 inertia;
+  std::copy(m.I, m.I + 12, inertia);
+  return dIsPositiveDefinite(inertia, 3) != 0;
+}
+}  // namespace
 
 bool RigidBodyResolver::save_state(StateWriter& out) const {
   if (!unapplied_.empty()) {  // restored, not rebuilt yet: see restore_state
@@ -115,13 +144,19 @@ void RigidBodyResolver::restore_state(StateReader& in) {
       Impl::Body& b = m.bodies[bi];
       if (m.plain(b)) continue;
       const auto mass = in.get<dMass>();
+      if (!usable_mass(mass)) refuse("an assembly's mass or inertia is not a body's");
       dBodySetMass(b.id, &mass);
       b.mass = mass.mass;
       for (std::uint32_t i = b.first_part; i < b.first_part + b.part_count; ++i) {
         m.parts[i].offset = in.get<Vec3>();
         m.parts[i].rot = in.get<Quat>();
+        if (!finite(m.parts[i].offset) || !usable_quat(m.parts[i].rot))
+          refuse("a part's place in its assembly is not finite");
       }
       state[bi] = {in.get<Vec3>(), in.get<Quat>(), in.get<Vec3>(), in.get<Vec3>()};
+      if (!finite(state[bi].x) || !usable_quat(state[bi].q) || !finite(state[bi].v) ||
+          !finite(state[bi].w))
+        refuse("an assembly's pose or velocity is not finite");
     }
     for (Impl::Gyro& g : m.gyros) {  // from the mass just restored, as build computes it
       if (m.plain(m.bodies[g.body])) continue;
@@ -139,6 +174,15 @@ void RigidBodyResolver::restore_state(StateReader& in) {
     if (m.hinge_setup.size() != m.hinges.size())
       refuse("it sets up " + std::to_string(m.hinge_setup.size()) + " hinges, the world has " +
              std::to_string(m.hinges.size()));
+    for (const auto& sp : m.setup_poses)
+      if (!finite(sp.pos, 3) || !usable_quat(Quat{sp.q[0], sp.q[1], sp.q[2], sp.q[3]}))
+        refuse("a hinge's body was set up at a pose that is not finite");
+    for (const auto& hs : m.hinge_setup)
+      if (!finite(hs.pivot) || !usable_axis(hs.axis) || !std::isfinite(hs.angle))
+        refuse("a hinge's pivot, axis or angle is not finite or its axis is not a direction");
+    for (const auto& c : m.projection_calls)
+      if (!finite(c.pivot) || !finite(c.axis) || (c.body < 0 && !usable_axis(c.axis)))
+        refuse("a projected hinge's pivot or axis is not finite");
     for (const auto& sp : m.setup_poses) {
       if (sp.body >= m.bodies.size()) refuse("a hinge's body is out of range");
       Impl::set_exact_pose(m.bodies[sp.body].id, sp.pos, sp.q);
@@ -195,6 +239,9 @@ void RigidBodyResolver::restore_state(StateReader& in) {
         b.asleep = in.get<std::uint8_t>() != 0;
         b.load_force = in.get<Vec3>(), b.load_torque = in.get<Vec3>();
         b.awake_force = in.get<Vec3>(), b.awake_torque = in.get<Vec3>();
+        if (!finite(b.load_force) || !finite(b.load_torque) || !finite(b.awake_force) ||
+            !finite(b.awake_torque))
+          refuse("a sleeping body's loads are not finite");
       }
     // 4. The values last written, as write_poses wrote them, so that the
     // next advance does not take the restored properties for an edit.
@@ -219,6 +266,15 @@ void RigidBodyResolver::restore_state(StateReader& in) {
   }
   if (was_dirty) m.dirty = true;
   impulses_ = in.get_vector<PairImpulse>();
+  for (std::size_t i = 0; i < impulses_.size(); ++i) {
+    const PairImpulse& p = impulses_[i];
+    // Merged by pair into the contacts (ContactSet::publish): sorted, distinct.
+    if (!(p.a < p.b) || !finite(p.impulse) || !(p.normal_impulse >= 0) ||
+        !std::isfinite(p.normal_impulse) ||
+        (i > 0 &&
+         !(impulses_[i - 1].a < p.a || (impulses_[i - 1].a == p.a && impulses_[i - 1].b < p.b))))
+      refuse("a contact impulse is not finite or the pairs are out of order");
+  }
   impulses_computed_ = in.get<std::uint8_t>() != 0;
   state_version_ = in.get<std::uint64_t>();
 }

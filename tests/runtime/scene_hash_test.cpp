@@ -13,8 +13,10 @@
 #include <algorithm>
 #include <bit>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -652,6 +654,54 @@ TEST(SceneRestore, DamagedCoilRecordsAreRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("stage 'magnetism'"), std::string::npos) << e.what();
   }
+}
+
+// Other stages' own saved state, damaged where a forged file can reach: the
+// electricity's contact terminals (they index a part's two nodes) and the
+// rigid body's assembly masses (ODE asserts on them). Each is refused by name
+// before a step runs. Found by forging the SSTA section of bundled scenes'
+// saves with a rebuilt checksum (a SIGSEGV and ODE failures before).
+TEST(SceneRestore, DamagedStageStatesAreRefused) {
+  Scene scene("doorbell");
+  World& w = scene.world();
+  w.run(120);
+  const Snapshot good = w.snapshot();
+  auto refused = [&](const char* stage, std::size_t offset, auto value) {
+    Snapshot s = good;
+    auto it = std::find_if(s.stage_states.begin(), s.stage_states.end(),
+                           [&](const Snapshot::StageState& st) { return st.stage == stage; });
+    if (it == s.stage_states.end())
+      return ::testing::AssertionFailure() << stage << " saved nothing";
+    if (it->bytes.size() < offset + sizeof value)
+      return ::testing::AssertionFailure() << stage << "'s state is too short";
+    std::memcpy(it->bytes.data() + offset, &value, sizeof value);
+    try {
+      w.restore(s);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      if (what.find(std::string("stage '") + stage + "'") == std::string::npos)
+        return ::testing::AssertionFailure() << "refused without naming the stage: " << what;
+      return ::testing::AssertionSuccess();
+    }
+    return ::testing::AssertionFailure()
+           << stage << ": the damage at byte " << offset << " was accepted";
+  };
+  // electricity: version (4 B), the contacts' count (8 B), then each contact:
+  // two ids (16 B) and two terminals (8 B each).
+  std::uint64_t contacts = 0;
+  for (const auto& st : good.stage_states)
+    if (st.stage == "electricity") std::memcpy(&contacts, st.bytes.data() + 4, 8);
+  ASSERT_GE(contacts, 1u) << "the doorbell's circuit has no contact at step 120";
+  EXPECT_TRUE(refused("electricity", 4 + 8 + 16 + 8, std::int64_t{7}));
+  EXPECT_TRUE(refused("electricity", 4 + 8 + 16, std::int64_t{-1}));
+  // rigid_body: version (4 B), a flag (1 B), three counts (24 B), then the
+  // first assembly's mass.
+  EXPECT_TRUE(refused("rigid_body", 29, -1.0));
+  EXPECT_TRUE(refused("rigid_body", 29, std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_TRUE(refused("rigid_body", 29 + 8, 0.5));  // the centre of mass off the origin
+  // The good snapshot still restores and runs.
+  w.restore(good);
+  w.run(10);
 }
 
 // A packed delta (runtime/packed_delta.hpp) unpacks to the snapshot it was
