@@ -12,8 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "lua/mod_runtime.hpp"
@@ -226,20 +228,29 @@ void save(const std::uint8_t* data, std::size_t size) {
   } catch (const InputError&) {
     return;  // refused: fine
   }
-  // One space world for every input: restore replaces everything in it.
+  // One world per scene, loaded once: restore replaces everything in it. The
+  // save names its scene; the doorbell brings the stages with their own saved
+  // state (electricity, magnetism, sound, contacts, hinged assemblies), the
+  // space scene the bare rigid body, rigid_demo hinges and glue.
   static PluginRegistry registry;
-  static std::unique_ptr<lua::LoadedScene> space;
-  if (!space) {
-    register_native_plugins(registry);
+  static std::map<std::string, std::unique_ptr<lua::LoadedScene>> worlds;
+  if (worlds.empty()) register_native_plugins(registry);
+  const std::string name = d.meta.scene_name == "doorbell" || d.meta.scene_name == "rigid_demo"
+                               ? d.meta.scene_name
+                               : "space";
+  std::unique_ptr<lua::LoadedScene>& loaded = worlds[name];
+  if (!loaded) {
     lua::LoadOptions o = load_options();
-    o.mod_paths.push_back(fs::path(ALLOY_SOURCE_DIR) / "mods");  // space uses the kit; loaded once
-    space = std::make_unique<lua::LoadedScene>(
-        lua::load_scene(fs::path(ALLOY_SOURCE_DIR) / "mods" / "space", registry, o));
+    o.mod_paths.push_back(fs::path(ALLOY_SOURCE_DIR) / "mods");  // the kit; loaded once
+    loaded = std::make_unique<lua::LoadedScene>(
+        lua::load_scene(fs::path(ALLOY_SOURCE_DIR) / "mods" / name, registry, o));
   }
   try {
-    check_save_fits(d, "fuzz", *space->world, {{"space", "0.1.0"}}, nullptr);
-    space->world->restore(d.snapshot);
-    for (int i = 0; i < 3; ++i) space->world->step();
+    // The save's own mod list: what is checked here is how the world reads
+    // the snapshot, not which mods a player has installed.
+    check_save_fits(d, "fuzz", *loaded->world, d.meta.mods, nullptr);
+    loaded->world->restore(d.snapshot);
+    for (int i = 0; i < 3; ++i) loaded->world->step();
   } catch (const InputError&) {
   }
 }
