@@ -25,10 +25,10 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
 
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out, double theta,
-                        int order) {
+                        int order, std::uint32_t leaf_size) {
   std::vector<multipole::Source> sources(source.size());
   for (std::size_t i = 0; i < source.size(); ++i) sources[i] = {source[i], mass[i]};
-  tree.build(sources, softening, {.theta = theta, .fmm_order = order});
+  tree.build(sources, softening, {.theta = theta, .leaf_size = leaf_size, .fmm_order = order});
   tree.evaluate_at_sources(out);
   // The tree sums m K(x - p), which points away from the masses.
   for (Vec3& a : out) a = a * -G;
