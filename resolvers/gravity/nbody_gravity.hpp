@@ -22,13 +22,15 @@
 //          x += dt v) that is semi-implicit (symplectic) Euler, first order.
 // Cost     below kTreeFromMasses sources, O(n^2) pairs by direct summation in
 //          a fixed order (accelerations(): the bundled space scene's bits);
-//          from there on the fast multipole method of resolvers/common/fmm.hpp
-//          (through multipole_tree's FMM mode; O(n), RMS relative error of
+//          from there the Barnes-Hut walk of resolvers/common/multipole_tree
+//          and from kFmmFromMasses the fast multipole method of
+//          resolvers/common/fmm.hpp (its FMM mode; O(n)), RMS relative error of
 //          the accelerations ~3e-4 on a cold grid and ~1e-4 on a Gaussian
 //          cluster at kTreeTheta and kTreeOrder, measured by bench/scaling.cpp
 //          --gravity). In session 15 the FMM took 1.3 to 2 times the
 //          Barnes-Hut walk's time; its batched translations and once-each
-//          near field (session 16) made it 0.79 of it. Nothing in a step in which no
+//          near field (session 16) made it 0.84 to 0.93 of it at 10,000.
+//          Nothing in a step in which no
 //          position, mass or membership changed.
 #pragma once
 
@@ -63,13 +65,21 @@ inline constexpr double kTreeTheta = 0.55;
 /// 0: the Barnes-Hut walk; from 1, the FMM with expansions of that order
 /// (theta then its separation parameter). 5, with leaves of kTreeLeaf, by
 /// measurement (issue 16, session 16; bench/scaling.cpp --gravity): at 10,000
-/// bodies 0.79 of the Barnes-Hut walk's time (theta 0.5) on a grid and on a
-/// Gaussian cluster, at an RMS error no larger (2.6e-4 against 2.9e-4 on the
-/// grid, 1.1e-4 against 9.9e-5 on the cluster).
+/// bodies 0.84 (grid) and 0.93 (Gaussian cluster) of the Barnes-Hut walk's
+/// time (theta 0.5), at about its error (2.6e-4 against 2.9e-4 on the grid,
+/// 1.05e-4 against 9.9e-5 on the cluster).
 inline constexpr int kTreeOrder = 5;
 /// Largest number of bodies in a leaf (the FMM's balance of near field and
 /// translations; the Barnes-Hut walk's own default is 64).
 inline constexpr std::uint32_t kTreeLeaf = 48;
+/// The resolver sums with the FMM (the settings above) from this many masses
+/// and with the Barnes-Hut walk (kWalkTheta, kWalkLeaf) below: the walk was
+/// 1.4 to 1.9 times faster at 300 to 1,000 bodies, the two even near 3,000,
+/// the FMM 0.84 (grid) to 0.93 (cluster) of it at 10,000 (bench/scaling.cpp
+/// --gravity, session 16, load 13).
+inline constexpr std::size_t kFmmFromMasses = 4000;
+inline constexpr double kWalkTheta = 0.5;
+inline constexpr std::uint32_t kWalkLeaf = 64;
 
 /// Accelerations at every source from all the others, with the Barnes-Hut
 /// tree at opening angle `theta` (or, with `order` from 1, the FMM); `tree`
