@@ -66,6 +66,7 @@
 #include "resolvers/magnetism/pole_model.hpp"
 #include "resolvers/plugins.hpp"
 #include "resolvers/sound/sound_resolver.hpp"
+#include "tests/resolvers/magnetism/magnet_layouts.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
 namespace {
@@ -115,18 +116,12 @@ void build_nbody(World& w, int n) {
     scenes::add_sphere(w, {1.0 * (i % s), 1.0 * (i / s % s), 1.0 * (i / (s * s))}, 0.05, 1e3);
 }
 
-/// The magnets of the tests (tests/resolvers/magnetism/pole_tree_test.cpp), as bodies.
+/// The tests' random magnets (tests/resolvers/magnetism/magnet_layouts.hpp), as bodies.
 void build_magnets(World& w, int n) {
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0, 1);
-  const double side = 0.15 * std::cbrt(double(n));
-  for (int i = 0; i < n; ++i) {
-    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
-    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
-    const double sz = std::sqrt(1 - z * z);
-    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
+  for (const layouts::Bar& bar : layouts::random_bars(std::size_t(n), 1)) {
+    const Vec3 c = bar.centre, a = bar.axis;
+    const double q = bar.strength;
     // The rotation taking x to the random direction a: about x cross a.
-    const Vec3 a{sz * std::cos(phi), sz * std::sin(phi), z};
     Vec3 axis = cross({1, 0, 0}, a);
     const double sin_angle = length(axis);
     const Quat rot = sin_angle > 1e-12
@@ -541,34 +536,22 @@ double cpu_per_call(F&& f, double budget) {
   return (cpu_seconds() - c0) / reps;
 }
 
-std::vector<magnetism::Pole> random_poles(int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0, 1);
-  const double side = 0.15 * std::cbrt(double(n));
+/// The tests' layouts (tests/resolvers/magnetism/magnet_layouts.hpp) as poles.
+std::vector<magnetism::Pole> as_poles(const std::vector<layouts::Bar>& bars) {
   std::vector<magnetism::Pole> poles;
-  for (int i = 0; i < n; ++i) {
-    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
-    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
-    const double sz = std::sqrt(1 - z * z);
-    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
-    const auto p = magnetism::bar_poles(c, {sz * std::cos(phi), sz * std::sin(phi), z}, 0.085);
-    poles.push_back({p.north, q, std::uint32_t(i)});
-    poles.push_back({p.south, -q, std::uint32_t(i)});
+  std::uint32_t b = 0;
+  for (const layouts::Bar& bar : bars) {
+    const auto p = magnetism::bar_poles(bar.centre, bar.axis, layouts::kBarSeparation);
+    poles.push_back({p.north, bar.strength, b});
+    poles.push_back({p.south, -bar.strength, b++});
   }
   return poles;
 }
-
+std::vector<magnetism::Pole> random_poles(int n, std::uint64_t seed) {
+  return as_poles(layouts::random_bars(std::size_t(n), seed));
+}
 std::vector<magnetism::Pole> packed_poles(int nx, int ny, int nz) {
-  std::vector<magnetism::Pole> poles;
-  std::uint32_t b = 0;
-  for (int i = 0; i < nx; ++i)
-    for (int j = 0; j < ny; ++j)
-      for (int k = 0; k < nz; ++k, ++b) {
-        const auto p = magnetism::bar_poles({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085);
-        poles.push_back({p.north, 100, b});
-        poles.push_back({p.south, -100, b});
-      }
-  return poles;
+  return as_poles(layouts::packed_bars(nx, ny, nz));
 }
 
 std::vector<multipole::Source> as_sources(const std::vector<magnetism::Pole>& poles) {
@@ -603,6 +586,10 @@ struct KernelRow {
   double prev_tree = 0, tree = 0, prev_direct = NAN, direct = 0;
   double prev_error = 0, error = 0;
   double fmm = NAN, fmm_error = NAN;  ///< the fast multipole method at its defaults
+  /// The FMM as session 15 left it (theta 0.6, order 4, leaves of 64, one
+  /// translation at a time, each near pair twice), same run.
+  double prev_fmm = NAN, prev_fmm_error = NAN;
+  multipole::FmmProfile profile;  ///< the current FMM's phases, one evaluation
 };
 
 /// Previous and current tree, previous and current direct sum, on n random magnets.
@@ -651,6 +638,30 @@ KernelRow magnet_kernels(int n, double budget) {
       },
       budget);
   r.fmm_error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
+  // The phases of one evaluation (multipole::Fmm directly, on the same sources).
+  {
+    multipole::Fmm one;
+    one.build(sources, eps, {.theta = kFmmTheta, .order = kFmmOrder, .leaf_size = 64});
+    one.evaluate_at_sources(k);
+    r.profile = one.profile();
+  }
+  // Session 15's FMM, same run.
+  {
+    multipole::Fmm old;
+    const multipole::FmmOptions o{.theta = 0.6,
+                                  .order = 4,
+                                  .leaf_size = 64,
+                                  .m2l = multipole::FmmOptions::M2l::Reference,
+                                  .mutual_near = false};
+    r.prev_fmm = cpu_per_call(
+        [&] {
+          old.build(sources, eps, o);
+          old.evaluate_at_sources(k);
+        },
+        budget);
+    for (std::size_t i = 0; i < poles.size(); ++i) k[i] = k[i] * (kMu0Over4Pi * poles[i].strength);
+    r.prev_fmm_error = rms_relative(magnet_forces(poles, k), magnet_forces(poles, exact));
+  }
   return r;
 }
 
@@ -661,7 +672,8 @@ std::vector<std::array<double, 4>> packed_sweep_fmm(int nx, int ny, int nz) {
   std::vector<Vec3> exact(poles.size());
   accumulate_pole_forces(poles, 0.005, exact, {.method = Summation::Direct});
   std::vector<std::array<double, 4>> out;
-  for (auto [theta, order] : {std::pair{0.7, 4}, {0.5, 4}, {0.5, 6}, {0.4, 6}}) {
+  for (auto [theta, order] :
+       {std::pair{kFmmTheta, kFmmOrder}, {0.7, 4}, {0.5, 4}, {0.5, 6}, {0.4, 6}}) {
     std::vector<Vec3> f(poles.size());
     const double c0 = cpu_seconds();
     accumulate_pole_forces(poles, 0.005, f,
@@ -708,13 +720,13 @@ KernelRow gravity_kernels(int n, bool cluster, double budget) {
   r.prev_direct =
       cpu_per_call([&] { gravity::accelerations(x, x, m, G, eps, exact); }, n > 3000 ? 0 : budget);
   multipole::Tree tree;
-  // The Barnes-Hut walk (the default), then the FMM at order 4, same theta.
-  r.tree = cpu_per_call([&] { gravity::tree_accelerations(x, m, G, eps, tree, a); }, budget);
+  // The Barnes-Hut walk (session 15's default, theta 0.5, leaves of 64), then
+  // the default (the FMM at kTreeOrder, kTreeTheta, kTreeLeaf).
+  r.tree =
+      cpu_per_call([&] { gravity::tree_accelerations(x, m, G, eps, tree, a, 0.5, 0, 64); }, budget);
   r.error = rms_relative(a, exact);
-  r.fmm = cpu_per_call(
-      [&] { gravity::tree_accelerations(x, m, G, eps, tree, a, gravity::kTreeTheta, 4); }, budget);
+  r.fmm = cpu_per_call([&] { gravity::tree_accelerations(x, m, G, eps, tree, a); }, budget);
   r.fmm_error = rms_relative(a, exact);
-  r.error = rms_relative(a, exact);
   return r;
 }
 
@@ -734,24 +746,37 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
     for (int n : ns) rows.push_back(magnet_kernels(n, budget));
     Table t({"magnets", "previous tree (theta 0.25)", "tree", "ratio", "previous direct",
              "direct (SIMD)", "ratio", "pairs/s (SIMD)", "RMS error previous", "RMS error"});
-    Table tf({"magnets", "direct (SIMD)", "tree", "FMM", "FMM / direct", "FMM / tree",
-              "RMS error tree", "RMS error FMM"});
+    Table tf({"magnets", "direct (SIMD)", "tree", "FMM (session 15)", "FMM", "FMM / previous FMM",
+              "FMM / direct", "FMM / tree", "RMS error tree", "RMS error FMM (session 15)",
+              "RMS error FMM"});
     for (const KernelRow& r : rows) {
       const double pairs = 4.0 * r.n * r.n;  // ordered pole pairs
       t.row({std::to_string(r.n), fmt(1e3 * r.prev_tree), fmt(1e3 * r.tree),
              fmt(r.prev_tree / r.tree, 3) + "x", fmt(1e3 * r.prev_direct), fmt(1e3 * r.direct),
              fmt(r.prev_direct / r.direct, 3) + "x", fmt(pairs / r.direct, 3), fmt(r.prev_error),
              fmt(r.error)});
-      tf.row({std::to_string(r.n), fmt(1e3 * r.direct), fmt(1e3 * r.tree), fmt(1e3 * r.fmm),
-              fmt(r.fmm / r.direct, 3), fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.fmm_error)});
+      tf.row({std::to_string(r.n), fmt(1e3 * r.direct), fmt(1e3 * r.tree), fmt(1e3 * r.prev_fmm),
+              fmt(1e3 * r.fmm), fmt(r.fmm / r.prev_fmm, 3), fmt(r.fmm / r.direct, 3),
+              fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.prev_fmm_error), fmt(r.fmm_error)});
     }
     md += "\nmagnetic forces on random magnets (tree at the default tolerance 1e-3, theta " +
           fmt(magnetism::kDefaultTheta) + ", leaves of 64, blocks of 32 poles):\n\n" + t.str();
     md += "\nThe fast multipole method (method \"fmm\": theta " + fmt(magnetism::kFmmTheta) +
           ", order " + std::to_string(magnetism::kFmmOrder) +
-          ", leaves of 64) against the tree and the direct sum, same run (ratios: below 1 is "
-          "faster):\n\n" +
+          ", leaves of 64; translations in SIMD batches, near pairs once each) against session "
+          "15's FMM (theta 0.6, one translation at a time, near pairs twice), the tree and the "
+          "direct sum, same run (ratios: below 1 is faster):\n\n" +
           tf.str();
+    {
+      const multipole::FmmProfile& p = rows.back().profile;
+      const double T = p.total();
+      auto pc = [&](double x) { return fmt(100 * x / T, 2) + " %"; };
+      md += "\nWhere the FMM's time goes at " + std::to_string(rows.back().n) +
+            " magnets (one evaluation, CPU " + fmt(1e3 * T) + " ms): tree " + pc(p.tree) +
+            ", multipoles (P2M, M2M) " + pc(p.upward) + ", walk " + pc(p.walk) +
+            ", translations (M2L) " + pc(p.m2l) + ", near field (P2P) " + pc(p.near) +
+            ", local expansions down and out (L2L, L2P) " + pc(p.downward) + ".\n";
+    }
     // Crossover of the current tree (and of the FMM) with the current direct sum.
     auto crossover = [&](auto fast) {
       double cross = NAN;
@@ -788,10 +813,11 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
             fmt(1e3 * big.prev_tree) + " ms, " + fmt(big.prev_tree / big.tree, 3) + "x), " +
             pm(1e3 * big.tree <= 10) + ".\n";
       md += "- the FMM's summation alone at most 10 ms: " + fmt(1e3 * big.fmm) + " ms (" +
-            fmt(big.fmm / big.tree, 3) + " of the tree's time, " + fmt(big.fmm / big.direct, 3) +
-            " of the direct sum's), " + pm(1e3 * big.fmm <= 10) + "; its RMS error " +
-            fmt(big.fmm_error) + " (random; see the packed block above), " +
-            pm(big.fmm_error <= 1e-3) + "; crossover with the direct sum " +
+            fmt(big.fmm / big.prev_fmm, 3) + " of session 15's FMM, " + fmt(big.fmm / big.tree, 3) +
+            " of the tree's time, " + fmt(big.fmm / big.direct, 3) + " of the direct sum's), " +
+            pm(1e3 * big.fmm <= 10) + "; its RMS error " + fmt(big.fmm_error) +
+            " (random; see the packed block above), " + pm(big.fmm_error <= 1e-3) +
+            "; crossover with the direct sum " +
             (std::isfinite(cross_fmm) ? fmt(cross_fmm, 2) : std::string("not reached")) + ", " +
             pm(std::isfinite(cross_fmm) && cross_fmm <= 500) + ".\n";
       md += "- RMS relative force error at most 1e-3: " + fmt(big.error) + ", " +
@@ -808,7 +834,7 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
   if (gravity) {
     const std::vector<int> ns =
         quick ? std::vector<int>{100, 300} : std::vector<int>{300, 1000, 3000, 10000};
-    Table t({"bodies", "layout", "previous direct", "tree (default)", "ratio", "FMM, order 4",
+    Table t({"bodies", "layout", "previous direct", "tree (session 15)", "ratio", "FMM (default)",
              "FMM / tree", "RMS error tree", "RMS error FMM"});
     KernelRow big;
     for (int n : ns)
@@ -819,18 +845,21 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
                fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.fmm_error)});
         if (n == 10000 && !cluster) big = r;
       }
-    md += "\ngravity.nbody's sum (tree theta " + fmt(gravity::kTreeTheta) +
-          ", and the FMM at the same theta, order 4, for comparison; from " +
-          std::to_string(gravity::kTreeFromMasses) + " masses):\n\n" + t.str();
+    md +=
+        "\ngravity.nbody's sum (session 15's Barnes-Hut tree, theta 0.5, leaves of 64, against "
+        "the default FMM, theta " +
+        fmt(gravity::kTreeTheta) + ", order " + std::to_string(gravity::kTreeOrder) +
+        ", leaves of " + std::to_string(gravity::kTreeLeaf) + "; from " +
+        std::to_string(gravity::kTreeFromMasses) + " masses):\n\n" + t.str();
     if (big.n == 10000)
       md += "\nGoal (issue 16, part 2): gravity.nbody at 10,000 bodies at most 10 ms a step: " +
             (std::isfinite(stage_gravity_ms)
                  ? fmt(stage_gravity_ms) + " ms (stage), " + pm(stage_gravity_ms <= 10)
                  : std::string("stage not measured")) +
-            "; the sum alone " + fmt(1e3 * big.tree) + " ms against " + fmt(1e3 * big.prev_direct) +
-            " ms before (" + fmt(big.prev_direct / big.tree, 3) + "x), error " + fmt(big.error) +
-            "; the FMM (order 4) " + fmt(1e3 * big.fmm) + " ms (FMM / tree " +
-            fmt(big.fmm / big.tree, 3) + "), error " + fmt(big.fmm_error) +
+            "; the sum alone (the default FMM) " + fmt(1e3 * big.fmm) + " ms, " +
+            pm(1e3 * big.fmm <= 10) + ", error " + fmt(big.fmm_error) + ", against the tree's " +
+            fmt(1e3 * big.tree) + " ms (FMM / tree " + fmt(big.fmm / big.tree, 3) + ", error " +
+            fmt(big.error) + ") and the direct sum's " + fmt(1e3 * big.prev_direct) + " ms" +
             ". The space scene has fewer than " + std::to_string(gravity::kTreeFromMasses) +
             " masses and keeps the direct sum: its bits, and so its energy drift, are unchanged "
             "(golden hashes).\n";

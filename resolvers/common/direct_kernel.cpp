@@ -36,7 +36,105 @@ void accumulate_scalar(const SoaTargets& t, const SoaSources& s, double eps2) {
   }
 }
 
+// Each pair once: the target's sum in registers, the source's in memory.
+void mutual_scalar(const SoaTargets& t, const double* tq, const SoaSources& s, double* sfx,
+                   double* sfy, double* sfz, double eps2) {
+  for (std::size_t i = 0; i < t.n; ++i) {
+    const double x = t.x[i], y = t.y[i], z = t.z[i], g = t.g[i], q = tq[i];
+    double ax = 0, ay = 0, az = 0;
+    for (std::size_t j = 0; j < s.n; ++j) {
+      const double dx = x - s.x[j], dy = y - s.y[j], dz = z - s.z[j];
+      const double s2 = dx * dx + dy * dy + dz * dz + eps2;
+      if (s.g[j] == g || !(s2 > eps2)) continue;
+      const double w = 1.0 / (s2 * std::sqrt(s2));
+      const double ws = s.q[j] * w, wt = q * w;
+      ax += ws * dx, ay += ws * dy, az += ws * dz;
+      sfx[j] -= wt * dx, sfy[j] -= wt * dy, sfz[j] -= wt * dz;
+    }
+    t.fx[i] += ax, t.fy[i] += ay, t.fz[i] += az;
+  }
+}
+
 #ifdef ALLOY_DIRECT_KERNEL_X86
+
+// Each pair once, eight sources a lane: 1/s^3 as in lane512 below. Two
+// targets share each load of the sources and each load and store of the
+// sources' sums (the stores are what the one-way kernel does not have).
+__attribute__((target("avx512f"), always_inline)) inline __m512d inv_cube512(__m512d s2) {
+  const __m512d half = _mm512_set1_pd(0.5), three_halves = _mm512_set1_pd(1.5);
+  __m512d r = _mm512_rsqrt14_pd(s2);
+  const __m512d h = _mm512_mul_pd(half, s2);
+  r = _mm512_mul_pd(r, _mm512_fnmadd_pd(h, _mm512_mul_pd(r, r), three_halves));
+  r = _mm512_mul_pd(r, _mm512_fnmadd_pd(h, _mm512_mul_pd(r, r), three_halves));
+  return _mm512_mul_pd(r, _mm512_mul_pd(r, r));
+}
+
+__attribute__((target("avx512f"))) void mutual_avx512(const SoaTargets& t, const double* tq,
+                                                      const SoaSources& s, double* sfx, double* sfy,
+                                                      double* sfz, double eps2) {
+  const __m512d e2 = _mm512_set1_pd(eps2), zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const std::size_t n = s.n;
+  std::size_t i = 0;
+  for (; i < t.n; i += 2) {
+    // An odd last target pairs with itself at strength 0 and sums dropped.
+    const std::size_t i1 = i + 1 < t.n ? i + 1 : i;
+    const __m512d x0 = _mm512_set1_pd(t.x[i]), y0 = _mm512_set1_pd(t.y[i]),
+                  z0 = _mm512_set1_pd(t.z[i]), g0 = _mm512_set1_pd(t.g[i]),
+                  q0 = _mm512_set1_pd(tq[i]);
+    const __m512d x1 = _mm512_set1_pd(t.x[i1]), y1 = _mm512_set1_pd(t.y[i1]),
+                  z1 = _mm512_set1_pd(t.z[i1]), g1 = _mm512_set1_pd(t.g[i1]),
+                  q1 = _mm512_set1_pd(i1 != i ? tq[i1] : 0.0);
+    __m512d ax0 = zero, ay0 = zero, az0 = zero, ax1 = zero, ay1 = zero, az1 = zero;
+    for (std::size_t j = 0; j < n; j += 8) {
+      const __mmask8 valid = n - j >= 8 ? __mmask8(0xff) : __mmask8((1u << (n - j)) - 1);
+      const __m512d sx = _mm512_maskz_loadu_pd(valid, s.x + j),
+                    sy = _mm512_maskz_loadu_pd(valid, s.y + j),
+                    sz = _mm512_maskz_loadu_pd(valid, s.z + j),
+                    sq = _mm512_maskz_loadu_pd(valid, s.q + j),
+                    sg = _mm512_maskz_loadu_pd(valid, s.g + j);
+      const __m512d dx0 = _mm512_sub_pd(x0, sx), dy0 = _mm512_sub_pd(y0, sy),
+                    dz0 = _mm512_sub_pd(z0, sz);
+      const __m512d dx1 = _mm512_sub_pd(x1, sx), dy1 = _mm512_sub_pd(y1, sy),
+                    dz1 = _mm512_sub_pd(z1, sz);
+      __m512d s20 =
+          _mm512_fmadd_pd(dx0, dx0, _mm512_fmadd_pd(dy0, dy0, _mm512_fmadd_pd(dz0, dz0, e2)));
+      __m512d s21 =
+          _mm512_fmadd_pd(dx1, dx1, _mm512_fmadd_pd(dy1, dy1, _mm512_fmadd_pd(dz1, dz1, e2)));
+      const __mmask8 keep0 =
+          valid & _mm512_cmp_pd_mask(g0, sg, _CMP_NEQ_UQ) & _mm512_cmp_pd_mask(s20, e2, _CMP_GT_OQ);
+      const __mmask8 keep1 =
+          valid & _mm512_cmp_pd_mask(g1, sg, _CMP_NEQ_UQ) & _mm512_cmp_pd_mask(s21, e2, _CMP_GT_OQ);
+      s20 = _mm512_mask_blend_pd(keep0, one, s20);
+      s21 = _mm512_mask_blend_pd(keep1, one, s21);
+      const __m512d w0 = _mm512_maskz_mov_pd(keep0, inv_cube512(s20)),
+                    w1 = _mm512_maskz_mov_pd(keep1, inv_cube512(s21));
+      const __m512d ws0 = _mm512_mul_pd(w0, sq), ws1 = _mm512_mul_pd(w1, sq);
+      ax0 = _mm512_fmadd_pd(ws0, dx0, ax0), ay0 = _mm512_fmadd_pd(ws0, dy0, ay0),
+      az0 = _mm512_fmadd_pd(ws0, dz0, az0);
+      ax1 = _mm512_fmadd_pd(ws1, dx1, ax1), ay1 = _mm512_fmadd_pd(ws1, dy1, ay1),
+      az1 = _mm512_fmadd_pd(ws1, dz1, az1);
+      const __m512d wt0 = _mm512_mul_pd(w0, q0), wt1 = _mm512_mul_pd(w1, q1);
+      // The sources' sums: minus both targets' pulls, the first then the second.
+      _mm512_mask_storeu_pd(
+          sfx + j, valid,
+          _mm512_fnmadd_pd(wt1, dx1,
+                           _mm512_fnmadd_pd(wt0, dx0, _mm512_maskz_loadu_pd(valid, sfx + j))));
+      _mm512_mask_storeu_pd(
+          sfy + j, valid,
+          _mm512_fnmadd_pd(wt1, dy1,
+                           _mm512_fnmadd_pd(wt0, dy0, _mm512_maskz_loadu_pd(valid, sfy + j))));
+      _mm512_mask_storeu_pd(
+          sfz + j, valid,
+          _mm512_fnmadd_pd(wt1, dz1,
+                           _mm512_fnmadd_pd(wt0, dz0, _mm512_maskz_loadu_pd(valid, sfz + j))));
+    }
+    t.fx[i] += _mm512_reduce_add_pd(ax0), t.fy[i] += _mm512_reduce_add_pd(ay0),
+        t.fz[i] += _mm512_reduce_add_pd(az0);
+    if (i1 != i)
+      t.fx[i1] += _mm512_reduce_add_pd(ax1), t.fy[i1] += _mm512_reduce_add_pd(ay1),
+          t.fz[i1] += _mm512_reduce_add_pd(az1);
+  }
+}
 
 // Eight sources a lane each. 1/s from rsqrt14 (|rel. error| < 2^-14) and two
 // Newton steps y <- y (3 - s^2 y^2) / 2, which square the error each time
@@ -167,6 +265,25 @@ Kernel kernel() {
 void direct_accumulate(const SoaTargets& targets, const SoaSources& sources, double eps2) {
   if (targets.n == 0 || sources.n == 0) return;
   kernel()(targets, sources, eps2);
+}
+
+bool direct_accumulate_mutual(const SoaTargets& targets, const double* tq,
+                              const SoaSources& sources, double* sfx, double* sfy, double* sfz,
+                              double eps2) {
+#ifdef ALLOY_DIRECT_KERNEL_X86
+  if (kernel() == accumulate_avx512) {
+    if (targets.n != 0 && sources.n != 0) mutual_avx512(targets, tq, sources, sfx, sfy, sfz, eps2);
+    return true;
+  }
+#endif
+  (void)targets, (void)tq, (void)sources, (void)sfx, (void)sfy, (void)sfz, (void)eps2;
+  return false;
+}
+
+void direct_accumulate_mutual_scalar(const SoaTargets& targets, const double* tq,
+                                     const SoaSources& sources, double* sfx, double* sfy,
+                                     double* sfz, double eps2) {
+  mutual_scalar(targets, tq, sources, sfx, sfy, sfz, eps2);
 }
 
 const char* direct_kernel_isa() {

@@ -54,6 +54,21 @@ struct SoaTargets {
 /// in its group. `eps2` is the softening length squared.
 void direct_accumulate(const SoaTargets& targets, const SoaSources& sources, double eps2);
 
+/// Each pair once, both ways: every target gets the sum over the sources (as
+/// direct_accumulate) and every source j gets, in (sfx, sfy, sfz)[j], the sum
+/// over the targets of tq_i K(p_j - t_i) (the targets' own strengths `tq`).
+/// Half the kernel evaluations of two direct_accumulate calls for two
+/// disjoint sets (the FMM's near field between two leaves). Returns false (and
+/// adds nothing) where this CPU has no wide kernel for it (AVX-512 only): the
+/// caller then makes the two one-way calls, which are faster there.
+bool direct_accumulate_mutual(const SoaTargets& targets, const double* tq,
+                              const SoaSources& sources, double* sfx, double* sfy, double* sfz,
+                              double eps2);
+/// The same on the scalar reference loop (tests compare the two).
+void direct_accumulate_mutual_scalar(const SoaTargets& targets, const double* tq,
+                                     const SoaSources& sources, double* sfx, double* sfy,
+                                     double* sfz, double eps2);
+
 /// Which kernel direct_accumulate runs on this CPU: "avx512", "avx2" or "scalar".
 const char* direct_kernel_isa();
 

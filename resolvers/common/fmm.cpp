@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <ctime>
 #include <stdexcept>
 
 #include "resolvers/common/direct_kernel.hpp"
@@ -13,6 +14,14 @@ namespace {
 // Below this a cube is not split further, whatever it holds: atoms at one
 // point (or nearly) would otherwise recurse without end.
 constexpr int kMaxDepth = 40;
+
+// The calling thread's CPU time: the profile stays meaningful on a loaded
+// machine (the bench runs beside other work).
+double seconds_now() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 }  // namespace
 
 void Fmm::make_tables(int p) {
@@ -46,6 +55,7 @@ void Fmm::make_tables(int p) {
   inv_fact_.resize(nterms_), dx_.resize(nterms_), dy_.resize(nterms_), dz_.resize(nterms_);
   rec_axis_.resize(nterms_), rec_prev_.resize(nterms_), rec_prev2_.resize(nterms_);
   rec_k_.resize(nterms_);
+  rcp_.assign(nterms_, 0.0);
   for (int t = 0; t < nterms_; ++t) {
     const int a = ia_[t], b = ib_[t], c = ic_[t];
     inv_fact_[t] = 1.0 / (fact(a) * fact(b) * fact(c));
@@ -65,6 +75,7 @@ void Fmm::make_tables(int p) {
       rec_k_[t] = c - 1;
     }
   }
+  for (int t = 1; t < nterms_; ++t) rcp_[t] = 1.0 / (rec_k_[t] + 1);
   m2m_terms_.clear(), l2l_terms_.clear(), l2l_coef_.clear();
   for (int to = 0; to < nterms_; ++to)
     for (int from = 0; from < nterms_; ++from) {
@@ -80,9 +91,12 @@ void Fmm::make_tables(int p) {
 }
 
 void Fmm::build(std::span<const Source> sources, double softening, FmmOptions options) {
+  const double t0 = seconds_now();
   eps2_ = softening * softening;
   theta_ = std::clamp(options.theta, 1e-3, 0.99);
   leaf_size_ = std::max<std::uint32_t>(1, options.leaf_size);
+  options_vector_m2l_ = int(options.m2l);
+  mutual_near_ = options.mutual_near;
   make_tables(std::clamp(options.order, 1, kMaxFmmOrder));
   nodes_.clear();
   atoms_.clear();
@@ -156,7 +170,10 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
     sg_[t] = s.group == kNoGroup ? -1.0 : double(s.group);
     tg_[t] = s.group == kNoGroup ? -2.0 : double(s.group);
   }
+  const double t1 = seconds_now();
   upward();
+  profile_.tree += t1 - t0;
+  profile_.upward += seconds_now() - t1;
 }
 
 // Splits node `index` (its begin/end are atom positions) into its non-empty
@@ -204,23 +221,22 @@ std::int32_t Fmm::make_node(Vec3 box_centre, double half, std::uint32_t begin, s
   return index;
 }
 
+// out[t] = s^t / t!, each term from the one a step back along its axis, times
+// the coordinate and a reciprocal from the table (no division).
+void Fmm::scaled_powers(Vec3 s, double* out) const {
+  const double xyz[3] = {s.x, s.y, s.z};
+  out[0] = 1;
+  for (int t = 1; t < nterms_; ++t)
+    out[t] = out[rec_prev_[std::size_t(t)]] * xyz[rec_axis_[std::size_t(t)]] * rcp_[std::size_t(t)];
+}
+
 // Centres, radii and multipole moments, leaves from their sources (P2M) and
 // the rest from their children (M2M), children before parents.
 void Fmm::upward() {
   const std::size_t nt = std::size_t(nterms_);
   mult_.assign(nodes_.size() * nt, 0.0);
   std::vector<double> pw(nt);
-  auto powers = [&](Vec3 s, double* out) {  // out[t] = s^t / t!
-    out[0] = 1;
-    for (int t = 1; t < nterms_; ++t) {
-      if (ia_[t] > 0)
-        out[t] = out[dx_[t]] * s.x / ia_[t];
-      else if (ib_[t] > 0)
-        out[t] = out[dy_[t]] * s.y / ib_[t];
-      else
-        out[t] = out[dz_[t]] * s.z / ic_[t];
-    }
-  };
+  auto powers = [&](Vec3 v, double* out) { scaled_powers(v, out); };
   for (std::size_t k = nodes_.size(); k-- > 0;) {
     Node& node = nodes_[k];
     double w = 0;
@@ -387,6 +403,161 @@ void Fmm::contract(const double* mn, const double* d, double* u) const {
   }
 }
 
+// --- M2L in batches: several translations at once, one per SIMD lane ---------
+//
+// The translations of the walk's list are independent, so W of them run side
+// by side, each in its own lane: the derivatives of the W separations and the
+// two contractions (A from B, B from A) as straight-line code on W-wide
+// vectors. The lanes' multipoles are gathered in and their local expansions
+// added back lane by lane, in the list's order, so the bits do not depend on
+// the batching (a pair's result is computed the same in any lane), only on
+// the instruction set (FMA contraction), as for direct_kernel.hpp.
+//
+// B from A uses the same derivatives: U_B[m] = sum_k (-1)^|k| M_A[k]
+// D_(k+m)(-r) = (-1)^|m| sum_k M_A[k] D_(k+m)(r), so the contraction takes A's
+// plain moments and the sign is applied on the way out.
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define ALLOY_FMM_AVX2 1
+typedef double V4d __attribute__((vector_size(32)));
+inline double lane(V4d v, int l) {
+  return v[l];
+}
+inline void set_lane(V4d& v, int l, double x) {
+  v[l] = x;
+}
+#endif
+inline double lane(double v, int) {
+  return v;
+}
+inline void set_lane(double& v, int, double x) {
+  v = x;
+}
+
+/// What one batch reads and writes: W separations r = c_A - c_B, the moments
+/// (A's plain, B's with (-1)^|k|) and the local expansions to add to.
+struct M2lBatch {
+  Vec3 r[4];
+  const double* plain_a[4];
+  const double* neg_b[4];
+  double* local_a[4];
+  double* local_b[4];
+};
+
+template <int P, class V, int W>
+[[gnu::always_inline]] inline void m2l_lanes(const M2lBatch& in, double eps2) {
+  static constexpr Terms<P> T = make_terms<P>();
+  static constexpr Pairs<P> L = make_pairs<P>();
+  V x{}, y{}, z{};
+  for (int l = 0; l < W; ++l)
+    set_lane(x, l, in.r[l].x), set_lane(y, l, in.r[l].y), set_lane(z, l, in.r[l].z);
+  const V inv_s2 = 1.0 / (x * x + y * y + z * z + eps2);
+  V aux[T.N][P + 1];
+  V root{};
+  for (int l = 0; l < W; ++l) set_lane(root, l, std::sqrt(lane(inv_s2, l)));
+  aux[0][0] = root;
+#pragma GCC unroll 16
+  for (int j = 1; j <= P; ++j) aux[0][j] = -double(2 * j - 1) * aux[0][j - 1] * inv_s2;
+  const V xyz[3] = {x, y, z};
+#pragma GCC unroll 200
+  for (int t = 1; t < T.N; ++t) {
+    const V X = xyz[T.axis[t]];
+#pragma GCC unroll 16
+    for (int j = 0; j < P; ++j) {
+      if (j > P - T.deg[t]) continue;  // a constant once unrolled
+      if (T.prev2[t] >= 0)
+        aux[t][j] = X * aux[T.prev[t]][j + 1] +
+                    double(T.k[t]) * aux[T.prev2[t] < 0 ? 0 : T.prev2[t]][j + 1];
+      else
+        aux[t][j] = X * aux[T.prev[t]][j + 1];
+    }
+  }
+  V d[(P + 1) * (P + 1) * (P + 1)];
+#pragma GCC unroll 200
+  for (int t = 0; t < T.N; ++t) d[T.off[t]] = aux[t][0];
+  V ma[T.N], mb[T.N], ua[T.N], ub[T.N];
+  for (int k = 0; k < T.N; ++k) {
+    for (int l = 0; l < W; ++l)
+      set_lane(ma[k], l, in.plain_a[l][k]), set_lane(mb[k], l, in.neg_b[l][k]);
+    ua[k] = V{}, ub[k] = V{};
+  }
+#pragma GCC unroll 1024
+  for (int i = 0; i < int(L.e.size()); ++i) {
+    ua[L.e[i][0]] += mb[L.e[i][1]] * d[L.e[i][2]];
+    ub[L.e[i][0]] += ma[L.e[i][1]] * d[L.e[i][2]];
+  }
+  for (int l = 0; l < W; ++l)
+    for (int m = 0; m < T.N; ++m) {
+      in.local_a[l][m] += lane(ua[m], l);
+      in.local_b[l][m] += (T.deg[m] & 1) ? -lane(ub[m], l) : lane(ub[m], l);
+    }
+}
+
+/// The list's translations, W at a time (the last batch padded with a dummy
+/// pair whose moments are zero and whose output goes to `sink`).
+struct M2lList {
+  const std::pair<std::int32_t, std::int32_t>* pairs;
+  std::size_t count;
+  const Vec3* centre;
+  const double *plain, *neg;
+  double* local;
+  const double* zero;  ///< nt zeros
+  double* sink;        ///< nt doubles, written and ignored
+  std::size_t nt;
+  double eps2;
+};
+
+template <int P, class V, int W>
+[[gnu::always_inline]] inline void m2l_run(const M2lList& list) {
+  M2lBatch b;
+  for (std::size_t i = 0; i < list.count; i += W) {
+    for (int l = 0; l < W; ++l) {
+      if (i + l < list.count) {
+        const auto [a, c] = list.pairs[i + l];
+        b.r[l] = list.centre[a] - list.centre[c];
+        b.plain_a[l] = list.plain + std::size_t(a) * list.nt;
+        b.neg_b[l] = list.neg + std::size_t(c) * list.nt;
+        b.local_a[l] = list.local + std::size_t(a) * list.nt;
+        b.local_b[l] = list.local + std::size_t(c) * list.nt;
+      } else {
+        b.r[l] = {1, 0, 0};
+        b.plain_a[l] = b.neg_b[l] = list.zero;
+        b.local_a[l] = b.local_b[l] = list.sink;
+      }
+    }
+    m2l_lanes<P, V, W>(b, list.eps2);
+  }
+}
+
+template <int P>
+void m2l_run_scalar(const M2lList& list) {
+  m2l_run<P, double, 1>(list);
+}
+#ifdef ALLOY_FMM_AVX2
+template <int P>
+__attribute__((target("avx2,fma"))) void m2l_run_avx2(const M2lList& list) {
+  m2l_run<P, V4d, 4>(list);
+}
+#endif
+
+using M2lRunner = void (*)(const M2lList&);
+M2lRunner m2l_runner(int order, bool vector) {
+  static constexpr M2lRunner scalar[] = {m2l_run_scalar<1>, m2l_run_scalar<2>, m2l_run_scalar<3>,
+                                         m2l_run_scalar<4>, m2l_run_scalar<5>, m2l_run_scalar<6>};
+  const int i = std::clamp(order, 1, kMaxFmmOrder) - 1;
+#ifdef ALLOY_FMM_AVX2
+  static constexpr M2lRunner avx2[] = {m2l_run_avx2<1>, m2l_run_avx2<2>, m2l_run_avx2<3>,
+                                       m2l_run_avx2<4>, m2l_run_avx2<5>, m2l_run_avx2<6>};
+  static const bool has_avx2 = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  if (vector && has_avx2) return avx2[i];
+#endif
+  (void)vector;
+  return scalar[i];
+}
+
 void Fmm::m2l(std::int32_t a, std::int32_t b) {
   const std::size_t nt = std::size_t(nterms_);
   const Vec3 r = nodes_[a].centre - nodes_[b].centre;
@@ -456,6 +627,53 @@ void Fmm::near_field(const Node& leaf, std::span<const std::int32_t> near) {
   p2p_ += std::uint64_t(n) * nx_.size();
 }
 
+// The near field of one cell whose pairs with `near` (cells after it, and
+// perhaps itself) are each listed once: itself one way (every ordered pair of
+// its own sources), the others both ways at once, their sources gathered into
+// one run and their sums added back.
+void Fmm::near_field_mutual(std::int32_t k, std::span<const std::int32_t> near) {
+  const Node& leaf = nodes_[std::size_t(k)];
+  const std::uint32_t n = leaf.end - leaf.begin;
+  const SoaTargets targets{sx_.data() + leaf.begin, sy_.data() + leaf.begin,
+                           sz_.data() + leaf.begin, tg_.data() + leaf.begin,
+                           fx_.data() + leaf.begin, fy_.data() + leaf.begin,
+                           fz_.data() + leaf.begin, n};
+  nx_.clear(), ny_.clear(), nz_.clear(), nq_.clear(), ng_.clear(), runs_.clear();
+  for (std::int32_t b : near) {
+    if (b == k) {
+      direct_accumulate(targets,
+                        {sx_.data() + leaf.begin, sy_.data() + leaf.begin, sz_.data() + leaf.begin,
+                         sq_.data() + leaf.begin, sg_.data() + leaf.begin, n},
+                        eps2_);
+      p2p_ += std::uint64_t(n) * n;
+      continue;
+    }
+    const Node& B = nodes_[std::size_t(b)];
+    if (!runs_.empty() && runs_.back().second == B.begin)
+      runs_.back().second = B.end;  // neighbours in memory: one run
+    else
+      runs_.emplace_back(B.begin, B.end);
+  }
+  if (runs_.empty()) return;
+  for (const auto& [b, e] : runs_) {
+    nx_.insert(nx_.end(), sx_.begin() + b, sx_.begin() + e);
+    ny_.insert(ny_.end(), sy_.begin() + b, sy_.begin() + e);
+    nz_.insert(nz_.end(), sz_.begin() + b, sz_.begin() + e);
+    nq_.insert(nq_.end(), sq_.begin() + b, sq_.begin() + e);
+    ng_.insert(ng_.end(), sg_.begin() + b, sg_.begin() + e);
+  }
+  const std::size_t m = nx_.size();
+  gx_.assign(m, 0.0), gy_.assign(m, 0.0), gz_.assign(m, 0.0);
+  direct_accumulate_mutual(targets, sq_.data() + leaf.begin,
+                           {nx_.data(), ny_.data(), nz_.data(), nq_.data(), ng_.data(), m},
+                           gx_.data(), gy_.data(), gz_.data(), eps2_);
+  std::size_t at = 0;
+  for (const auto& [b, e] : runs_)
+    for (std::uint32_t t = b; t < e; ++t, ++at)
+      fx_[t] += gx_[at], fy_[t] += gy_[at], fz_[t] += gz_[at];
+  p2p_ += std::uint64_t(n) * m;
+}
+
 void Fmm::evaluate_at_sources(std::span<Vec3> out) {
   const std::size_t n = src_.size();
   if (n == 0) return;
@@ -466,10 +684,16 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
 
   // The dual-tree walk: every pair of cells is either separated (M2L both
   // ways), two leaves (direct both ways), or split at its larger cell.
+  const double t0 = seconds_now();
+  // Near pairs of distinct cells each once, both ways (half the kernel's
+  // work), where the CPU has the kernel for it.
+  const bool mutual =
+      mutual_near_ && direct_accumulate_mutual({}, nullptr, {}, nullptr, nullptr, nullptr, 0);
   const double theta2 = theta_ * theta_;
   const std::uint64_t direct_pairs = std::uint64_t(leaf_size_) * leaf_size_;
   stack_.clear();
   near_pairs_.clear();
+  m2l_pairs_.clear();
   stack_.emplace_back(0, 0);
   while (!stack_.empty()) {
     const auto [a, b] = stack_.back();
@@ -489,13 +713,17 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
     const Vec3 gap = A.centre - B.centre;
     const double reach = A.radius + B.radius;
     if (reach * reach < theta2 * dot(gap, gap)) {
-      m2l(a, b);
+      m2l_pairs_.emplace_back(a, b);
     } else if ((A.children == 0 && B.children == 0) ||
                std::uint64_t(A.end - A.begin) * (B.end - B.begin) <= direct_pairs) {
       // Two leaves, or two cells so small that their pairs cost less than
       // splitting them into many small translations: summed directly.
-      near_pairs_.emplace_back(a, b);
-      near_pairs_.emplace_back(b, a);
+      if (mutual) {
+        near_pairs_.emplace_back(std::min(a, b), std::max(a, b));  // summed both ways at once
+      } else {
+        near_pairs_.emplace_back(a, b);
+        near_pairs_.emplace_back(b, a);
+      }
     } else if (B.children == 0 || (A.children != 0 && A.radius >= B.radius)) {
       for (std::int32_t i = A.first_child; i < A.first_child + A.children; ++i)
         stack_.emplace_back(i, b);
@@ -505,18 +733,46 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
     }
   }
 
-  // The near field, leaf by leaf (target leaf, then its near leaves in
-  // memory order: a fixed order, so fixed bits).
-  std::sort(near_pairs_.begin(), near_pairs_.end());
-  near_list_.clear();
-  for (std::size_t i = 0; i < near_pairs_.size();) {
-    std::size_t j = i;
-    near_list_.clear();
-    while (j < near_pairs_.size() && near_pairs_[j].first == near_pairs_[i].first)
-      near_list_.push_back(near_pairs_[j++].second);
-    near_field(nodes_[std::size_t(near_pairs_[i].first)], near_list_);
-    i = j;
+  const double t1 = seconds_now();
+  // The translations, in the walk's order (a fixed order, so fixed bits).
+  if (options_vector_m2l_ == 0) {
+    for (const auto& [a, b] : m2l_pairs_) m2l(a, b);  // the reference, one pair at a time
+  } else {
+    centres_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) centres_[k] = nodes_[k].centre;
+    zero_.assign(nt, 0.0), sink_.assign(nt, 0.0);
+    m2l_runner(order_, options_vector_m2l_ >
+                           1)({m2l_pairs_.data(), m2l_pairs_.size(), centres_.data(), mult_.data(),
+                               mneg_.data(), local_.data(), zero_.data(), sink_.data(), nt, eps2_});
+    m2l_ += m2l_pairs_.size();
   }
+  const double t2 = seconds_now();
+
+  // The near field, leaf by leaf: each target leaf's near leaves in memory
+  // order (a fixed order, so fixed bits). A counting sort by target, then each
+  // short list sorted: the pairs are many, the lists short.
+  near_start_.assign(nodes_.size() + 1, 0);
+  for (const auto& pr : near_pairs_) ++near_start_[std::size_t(pr.first) + 1];
+  for (std::size_t k = 0; k < nodes_.size(); ++k) near_start_[k + 1] += near_start_[k];
+  near_list_.resize(near_pairs_.size());
+  {
+    std::vector<std::int32_t>& fill = near_order_fill_;
+    fill.assign(near_start_.begin(), near_start_.end() - 1);
+    for (const auto& pr : near_pairs_)
+      near_list_[std::size_t(fill[std::size_t(pr.first)]++)] = pr.second;
+  }
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    const auto first = near_list_.begin() + near_start_[k],
+               last = near_list_.begin() + near_start_[k + 1];
+    if (first == last) continue;
+    std::sort(first, last);
+    const std::span<const std::int32_t> list(&*first, std::size_t(last - first));
+    if (mutual)
+      near_field_mutual(std::int32_t(k), list);
+    else
+      near_field(nodes_[k], list);
+  }
+  const double t3 = seconds_now();
 
   // The translations summed U[m] = m! L[m].
   for (std::size_t k = 0; k < nodes_.size(); ++k)
@@ -524,17 +780,7 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
   // Down: each cell's local expansion moved to its children's centres (L2L),
   // parents first (a parent's index is below its children's).
   std::vector<double> pw(nt);
-  auto powers = [&](Vec3 s, double* o) {  // o[t] = s^t / t!
-    o[0] = 1;
-    for (int t = 1; t < nterms_; ++t) {
-      if (ia_[t] > 0)
-        o[t] = o[dx_[t]] * s.x / ia_[t];
-      else if (ib_[t] > 0)
-        o[t] = o[dy_[t]] * s.y / ib_[t];
-      else
-        o[t] = o[dz_[t]] * s.z / ic_[t];
-    }
-  };
+  auto powers = [&](Vec3 v, double* out) { scaled_powers(v, out); };
   for (std::size_t k = 1; k < nodes_.size(); ++k) {
     const Node& node = nodes_[k];
     powers(node.centre - nodes_[std::size_t(node.parent)].centre, pw.data());
@@ -545,24 +791,46 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
       lc[s.to] += l2l_coef_[e] * lp[s.from] * pw[s.power];
     }
   }
-  // At the leaves' sources: F = -grad phi, phi(c + y) = sum_m L_m y^m.
+  // At the leaves' sources: F = -grad phi, phi(c + y) = sum_m L_m y^m. The
+  // gradient's three polynomials are formed once per leaf (g_x[m - x] = a L_m,
+  // and so on), so that each source takes its plain powers y^t and three dot
+  // products: no division and no index table in the inner loop.
+  const int ngrad = order_ >= 1 ? prefix_[std::size_t(order_ - 1)] : 0;
+  grad_.resize(3 * std::size_t(ngrad));
   for (std::size_t k = 0; k < nodes_.size(); ++k) {
     const Node& node = nodes_[k];
     if (node.children != 0) continue;
     const double* l = local_.data() + k * nt;
+    double* gxp = grad_.data();
+    double* gyp = gxp + ngrad;
+    double* gzp = gyp + ngrad;
+    std::fill(grad_.begin(), grad_.end(), 0.0);
+    for (int m = 1; m < nterms_; ++m) {
+      if (ia_[m] > 0) gxp[dx_[m]] = l[m] * ia_[m];
+      if (ib_[m] > 0) gyp[dy_[m]] = l[m] * ib_[m];
+      if (ic_[m] > 0) gzp[dz_[m]] = l[m] * ic_[m];
+    }
     for (std::uint32_t t = node.begin; t < node.end; ++t) {
       const Vec3 y = src_[t].position - node.centre;
-      powers(y, pw.data());  // y^m / m!: times m! below
+      // Plain powers y^m, |m| <= p - 1, each from the one a step back.
+      pw[0] = 1;
+      for (int m = 1; m < ngrad; ++m)
+        pw[std::size_t(m)] = ia_[m] > 0   ? pw[std::size_t(dx_[m])] * y.x
+                             : ib_[m] > 0 ? pw[std::size_t(dy_[m])] * y.y
+                                          : pw[std::size_t(dz_[m])] * y.z;
       double gx = 0, gy = 0, gz = 0;
-      for (int m = 1; m < nterms_; ++m) {
-        // d/dy_x of y^m = a y^(m - x): term dx_[m] of pw, times its factorial.
-        if (ia_[m] > 0) gx += l[m] * ia_[m] * pw[dx_[m]] / inv_fact_[dx_[m]];
-        if (ib_[m] > 0) gy += l[m] * ib_[m] * pw[dy_[m]] / inv_fact_[dy_[m]];
-        if (ic_[m] > 0) gz += l[m] * ic_[m] * pw[dz_[m]] / inv_fact_[dz_[m]];
+      for (int m = 0; m < ngrad; ++m) {
+        gx += gxp[m] * pw[std::size_t(m)];
+        gy += gyp[m] * pw[std::size_t(m)];
+        gz += gzp[m] * pw[std::size_t(m)];
       }
       fx_[t] -= gx, fy_[t] -= gy, fz_[t] -= gz;
     }
   }
+  profile_.walk += t1 - t0;
+  profile_.m2l += t2 - t1;
+  profile_.near += t3 - t2;
+  profile_.downward += seconds_now() - t3;
   for (std::size_t t = 0; t < n; ++t) out[order_of_[t]] = {fx_[t], fy_[t], fz_[t]};
 }
 

@@ -50,9 +50,31 @@ struct FmmOptions {
   /// Largest number of sources in a leaf (a leaf holds whole atoms, so a
   /// group larger than this is a leaf of its own).
   std::uint32_t leaf_size = 32;
+  /// How the cell-to-cell translations run: one at a time (the reference),
+  /// in batches of one lane, or in batches of four SIMD lanes where the CPU
+  /// has AVX2 and FMA (else one lane). The bits differ between the first and
+  /// the others by rounding only (tests/resolvers/magnetism/fmm_test.cpp).
+  enum class M2l : std::uint8_t { Reference, Batched, Simd };
+  M2l m2l = M2l::Simd;
+  /// The near field between two distinct cells summed each pair once, both
+  /// ways (direct_accumulate_mutual), where the CPU has that kernel; false:
+  /// each way on its own (twice the kernel's work; the same sums to rounding).
+  bool mutual_near = true;
 };
 
 inline constexpr int kMaxFmmOrder = 6;
+
+/// Where an FMM's time goes, CPU seconds of the calling thread summed over the calls so far
+/// (bench/scaling.cpp prints it; issue 16 asked for the profile by phase).
+struct FmmProfile {
+  double tree = 0;      ///< build(): atoms, the octree and the sources in tree order
+  double upward = 0;    ///< build(): centres, radii and multipoles (P2M, M2M)
+  double walk = 0;      ///< evaluate: the dual-tree walk that lists the cell pairs
+  double m2l = 0;       ///< evaluate: the listed translations (M2L)
+  double near = 0;      ///< evaluate: the direct near field (P2P, SIMD kernel)
+  double downward = 0;  ///< evaluate: L2L and the local expansions at the sources (L2P)
+  double total() const { return tree + upward + walk + m2l + near + downward; }
+};
 
 class Fmm {
  public:
@@ -68,6 +90,8 @@ class Fmm {
   /// source pairs summed directly, by the evaluations so far.
   std::uint64_t cell_interactions() const { return m2l_; }
   std::uint64_t direct_interactions() const { return p2p_; }
+  /// Time by phase over the calls so far.
+  const FmmProfile& profile() const { return profile_; }
 
  private:
   struct Node {
@@ -87,9 +111,11 @@ class Fmm {
   std::int32_t make_node(Vec3 box_centre, double half, std::uint32_t begin, std::uint32_t end,
                          int depth, std::int32_t index);
   void upward();
+  void scaled_powers(Vec3 s, double* out) const;
   void m2l(std::int32_t a, std::int32_t b);
   void contract(const double* mn, const double* d, double* u) const;
   void near_field(const Node& leaf, std::span<const std::int32_t> near);
+  void near_field_mutual(std::int32_t k, std::span<const std::int32_t> near);
 
   double eps2_ = 0, theta_ = 0.5;
   int order_ = 0;
@@ -106,6 +132,7 @@ class Fmm {
   std::vector<std::int8_t> rec_axis_;
   std::vector<std::int32_t> rec_prev_, rec_prev2_;
   std::vector<double> rec_k_;
+  std::vector<double> rcp_;           ///< 1 / (the term's exponent along rec_axis_)
   std::vector<std::int32_t> offset_;  ///< term -> (a (p+1) + b) (p+1) + c
   std::vector<std::int32_t> prefix_;  ///< degree n -> number of terms of degree <= n
   // M2M / L2L: binomial shifts.
@@ -127,9 +154,19 @@ class Fmm {
   std::vector<std::int32_t> leaf_of_;
   std::vector<std::pair<std::int32_t, std::int32_t>> stack_;
   std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs_;  ///< (target leaf, source leaf)
-  std::vector<std::int32_t> near_list_;
+  std::vector<std::pair<std::int32_t, std::int32_t>> m2l_pairs_;   ///< separated cells, both ways
+  std::vector<std::int32_t> near_start_, near_list_;  ///< near sources by target, counting-sorted
+  std::vector<std::int32_t> near_order_fill_;
+  int options_vector_m2l_ = 2;
+  bool mutual_near_ = true;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  ///< gathered source ranges
+  std::vector<double> gx_, gy_, gz_;                           ///< their mutual sums
+  std::vector<Vec3> centres_;        ///< node centres, for the batched M2L
+  std::vector<double> zero_, sink_;  ///< the batches' padding
+  std::vector<double> grad_;         ///< one leaf's gradient polynomials (x, y, z), for L2P
   std::vector<double> nx_, ny_, nz_, nq_, ng_;  ///< one leaf's near sources, gathered
   std::uint64_t m2l_ = 0, p2p_ = 0;
+  FmmProfile profile_;
 };
 
 }  // namespace alloy::multipole

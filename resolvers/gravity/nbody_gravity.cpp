@@ -25,10 +25,10 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
 
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out, double theta,
-                        int order) {
+                        int order, std::uint32_t leaf_size) {
   std::vector<multipole::Source> sources(source.size());
   for (std::size_t i = 0; i < source.size(); ++i) sources[i] = {source[i], mass[i]};
-  tree.build(sources, softening, {.theta = theta, .fmm_order = order});
+  tree.build(sources, softening, {.theta = theta, .leaf_size = leaf_size, .fmm_order = order});
   tree.evaluate_at_sources(out);
   // The tree sums m K(x - p), which points away from the masses.
   for (Vec3& a : out) a = a * -G;
@@ -102,7 +102,13 @@ void NBodyGravity::compute(ResolverAccess& access) {
       // Every target is a source (a non-static mass in scope): sum at the
       // sources with the tree and pick the targets' values out.
       source_a_.resize(masses_.size());
-      tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_);
+      // The Barnes-Hut walk up to kFmmFromMasses, the FMM from there (each the
+      // faster where it is used, at no larger error: bench/scaling.cpp --gravity).
+      if (masses_.size() >= kFmmFromMasses)
+        tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_);
+      else
+        tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_, kWalkTheta, 0,
+                           kWalkLeaf);
       std::size_t k = 0;
       for (std::size_t i = 0; i < targets_.size(); ++i) {
         while (k < masses_.size() && masses_[k] < targets_[i]) ++k;

@@ -22,17 +22,20 @@
 //          x += dt v) that is semi-implicit (symplectic) Euler, first order.
 // Cost     below kTreeFromMasses sources, O(n^2) pairs by direct summation in
 //          a fixed order (accelerations(): the bundled space scene's bits);
-//          from there on the Barnes-Hut tree of resolvers/common/multipole_tree
-//          (blocked walk, SIMD near field; O(n log n), RMS relative error of
+//          from there the Barnes-Hut walk of resolvers/common/multipole_tree
+//          and from kFmmFromMasses the fast multipole method of
+//          resolvers/common/fmm.hpp (its FMM mode; O(n)), RMS relative error of
 //          the accelerations ~3e-4 on a cold grid and ~1e-4 on a Gaussian
-//          cluster at kTreeTheta, measured by bench/scaling.cpp --gravity).
-//          The FMM of resolvers/common/fmm.hpp (kTreeOrder > 0) was measured
-//          against it in session 15 and took 1.3 to 2 times as long for
-//          masses at the same theta: the tree stays. Nothing in a step in which no
+//          cluster at kTreeTheta and kTreeOrder, measured by bench/scaling.cpp
+//          --gravity). In session 15 the FMM took 1.3 to 2 times the
+//          Barnes-Hut walk's time; its batched translations and once-each
+//          near field (session 16) made it 0.84 to 0.93 of it at 10,000.
+//          Nothing in a step in which no
 //          position, mass or membership changed.
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -56,19 +59,35 @@ void accelerations(std::span<const Vec3> at, std::span<const Vec3> source,
 /// with the direct sum, bench/scaling.cpp --gravity; the space scene has a
 /// handful of bodies and keeps the direct sum's bits).
 inline constexpr std::size_t kTreeFromMasses = 512;
-/// The tree's opening angle for gravity: every mass is positive, so a cell's
-/// monopole dominates and the error falls as theta^4 of the cell's pull.
-inline constexpr double kTreeTheta = 0.5;
+/// The summation's separation parameter for gravity: every mass is positive,
+/// so a cell's monopole dominates and the error falls fast with the order.
+inline constexpr double kTreeTheta = 0.55;
 /// 0: the Barnes-Hut walk; from 1, the FMM with expansions of that order
-/// (theta then its separation parameter). 0 by measurement (above).
-inline constexpr int kTreeOrder = 0;
+/// (theta then its separation parameter). 5, with leaves of kTreeLeaf, by
+/// measurement (issue 16, session 16; bench/scaling.cpp --gravity): at 10,000
+/// bodies 0.84 (grid) and 0.93 (Gaussian cluster) of the Barnes-Hut walk's
+/// time (theta 0.5), at about its error (2.6e-4 against 2.9e-4 on the grid,
+/// 1.05e-4 against 9.9e-5 on the cluster).
+inline constexpr int kTreeOrder = 5;
+/// Largest number of bodies in a leaf (the FMM's balance of near field and
+/// translations; the Barnes-Hut walk's own default is 64).
+inline constexpr std::uint32_t kTreeLeaf = 48;
+/// The resolver sums with the FMM (the settings above) from this many masses
+/// and with the Barnes-Hut walk (kWalkTheta, kWalkLeaf) below: the walk was
+/// 1.4 to 1.9 times faster at 300 to 1,000 bodies, the two even near 3,000,
+/// the FMM 0.84 (grid) to 0.93 (cluster) of it at 10,000 (bench/scaling.cpp
+/// --gravity, session 16, load 13).
+inline constexpr std::size_t kFmmFromMasses = 4000;
+inline constexpr double kWalkTheta = 0.5;
+inline constexpr std::uint32_t kWalkLeaf = 64;
 
 /// Accelerations at every source from all the others, with the Barnes-Hut
 /// tree at opening angle `theta` (or, with `order` from 1, the FMM); `tree`
 /// keeps its memory between calls. out[i] for source[i]; overwritten.
 void tree_accelerations(std::span<const Vec3> source, std::span<const double> mass, double G,
                         double softening, multipole::Tree& tree, std::span<Vec3> out,
-                        double theta = kTreeTheta, int order = kTreeOrder);
+                        double theta = kTreeTheta, int order = kTreeOrder,
+                        std::uint32_t leaf_size = kTreeLeaf);
 
 class NBodyGravity final : public Resolver {
  public:

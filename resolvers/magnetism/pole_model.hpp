@@ -94,12 +94,15 @@ inline constexpr std::size_t kSimdDirectPoles = 256;
 /// Default opening angle: the tree's at the default tolerance of 1e-3
 /// (theta_for_tolerance in magnetic_forces.hpp; docs/magnetism.md "Summation").
 inline constexpr double kDefaultTheta = 0.35;
-/// The FMM's defaults (Summation::Fmm): RMS relative force error 1e-4 to 3e-4
-/// on random magnets (1,000 to 10,000), but 5e-2 on a packed block of aligned
-/// bars, which needs theta 0.4 and order 6 for 5e-4 (bench/scaling.cpp
-/// --magnets; docs/magnetism.md "Fast summation").
-inline constexpr double kFmmTheta = 0.6;
-inline constexpr int kFmmOrder = 4;
+/// The FMM's defaults (Summation::Fmm): the fastest measured setting whose
+/// RMS relative force error on random magnets stays below 1e-3 from 400 to
+/// 10,000 magnets (2e-4 to 6e-4, leaves of 64; theta 0.8 and order 4 is 1.5x
+/// faster at 10,000 but 2.5e-3 at 2,000; session 16), but several percent on
+/// a packed block of aligned bars, which needs theta 0.4 and order 6 for
+/// 5e-4 (bench/scaling.cpp --magnets; docs/magnetism.md "Fast summation").
+/// Opt-in for that reason.
+inline constexpr double kFmmTheta = 0.7;
+inline constexpr int kFmmOrder = 5;
 
 struct SummationOptions {
   Summation method = Summation::Direct;

@@ -16,6 +16,7 @@
 #include "resolvers/common/multipole_tree.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
+#include "tests/resolvers/magnetism/magnet_layouts.hpp"
 
 namespace alloy::magnetism {
 namespace {
@@ -30,23 +31,17 @@ struct Bars {
   }
 };
 
-Vec3 random_direction(std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0, 1);
-  const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng), s = std::sqrt(1 - z * z);
-  return {s * std::cos(phi), s * std::sin(phi), z};
-}
+using layouts::random_direction;
 
-/// Kit bars at random in a cube of one bar per (0.15 m)^3.
-Bars random_bars(int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0, 1);
-  const double side = 0.15 * std::cbrt(double(n));
+/// The shared layouts (magnet_layouts.hpp) as poles.
+Bars as_bars(const std::vector<layouts::Bar>& placed) {
   Bars bars;
-  for (int i = 0; i < n; ++i) {
-    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
-    bars.add(c, random_direction(rng), 0.085, (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1));
-  }
+  for (const layouts::Bar& b : placed)
+    bars.add(b.centre, b.axis, layouts::kBarSeparation, b.strength);
   return bars;
+}
+Bars random_bars(int n, std::uint64_t seed) {
+  return as_bars(layouts::random_bars(std::size_t(n), seed));
 }
 
 /// Clusters of 40 bars (Gaussian, sigma 5 cm) a metre apart: dense lumps in
@@ -64,13 +59,8 @@ Bars clustered_bars(int clusters, std::uint64_t seed) {
   return bars;
 }
 
-/// Aligned bars touching end to end and side by side.
 Bars packed_bars(int nx, int ny, int nz) {
-  Bars bars;
-  for (int i = 0; i < nx; ++i)
-    for (int j = 0; j < ny; ++j)
-      for (int k = 0; k < nz; ++k) bars.add({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085, 100);
-  return bars;
+  return as_bars(layouts::packed_bars(nx, ny, nz));
 }
 
 std::vector<Vec3> bar_forces(const Bars& bars, const SummationOptions& o) {

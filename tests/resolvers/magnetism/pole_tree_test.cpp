@@ -14,6 +14,7 @@
 #include "resolvers/common/multipole_tree.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
 #include "resolvers/magnetism/pole_model.hpp"
+#include "tests/resolvers/magnetism/magnet_layouts.hpp"
 
 namespace alloy::magnetism {
 namespace {
@@ -32,32 +33,18 @@ struct Bars {
   }
 };
 
-/// n kit bars (pole separation 8.5 cm, 50 to 150 A*m, either sign) at uniform
-/// random places in a cube holding one bar per (0.15 m)^3, pointing anywhere.
-Bars random_bars(std::size_t n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0, 1);
-  const double side = 0.15 * std::cbrt(double(n));
+/// The shared layouts (tests/resolvers/magnetism/magnet_layouts.hpp) as poles.
+Bars as_bars(const std::vector<layouts::Bar>& placed) {
   Bars bars;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 c{side * u(rng), side * u(rng), side * u(rng)};
-    const double z = 2 * u(rng) - 1, phi = 2 * std::numbers::pi * u(rng);
-    const double s = std::sqrt(1 - z * z);
-    const double q = (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1);
-    bars.add(c, {s * std::cos(phi), s * std::sin(phi), z}, 0.085, q);
-  }
+  for (const layouts::Bar& b : placed)
+    bars.add(b.centre, b.axis, layouts::kBarSeparation, b.strength);
   return bars;
 }
-
-/// Bars 10 cm x 2 cm x 2 cm packed end to end and side by side (a block of
-/// nx x ny x nz), all magnetised along x like a stack of real magnets: the
-/// case where near poles nearly cancel and far ones add up.
+Bars random_bars(std::size_t n, std::uint64_t seed) {
+  return as_bars(layouts::random_bars(n, seed));
+}
 Bars packed_bars(int nx, int ny, int nz) {
-  Bars bars;
-  for (int i = 0; i < nx; ++i)
-    for (int j = 0; j < ny; ++j)
-      for (int k = 0; k < nz; ++k) bars.add({0.1 * i, 0.02 * j, 0.02 * k}, {1, 0, 0}, 0.085, 100);
-  return bars;
+  return as_bars(layouts::packed_bars(nx, ny, nz));
 }
 
 /// Force on each bar (sum over its two poles), N.
