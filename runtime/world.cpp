@@ -846,47 +846,148 @@ void World::refresh_outside(Outside& o) const {
     if (store_.id_at(slot).is_null() || (!frozen_.empty() && frozen_slot(slot))) continue;
     const int a = slot < area_of_slot_.size() ? area_of_slot_[slot] : -1;
     if (a >= 0 && listed_area(o.areas, a)) continue;
+    // A split object is in a global stage's scope only if every area its
+    // referents are in is: the stage then acts on all of them.
+    if (slot < split_.size() && std::any_of(split_[slot].begin(), split_[slot].end(), [&](int r) {
+          return r >= 0 && listed_area(o.areas, r);
+        }))
+      continue;
     sc.in_[slot] = 1;
     sc.slots_.push_back(slot);
   }
   ++sc.version_;
 }
 
-bool World::assign_areas() {
-  if (areas_.empty()) return false;
+const Column<Vec3>* World::position_column() const {
   const auto position = properties().find("position");
   const ColumnBase* pos = position ? store_.find_column(*position) : nullptr;
-  const auto* column = pos ? static_cast<const Column<Vec3>*>(pos) : nullptr;
+  return pos ? static_cast<const Column<Vec3>*>(pos) : nullptr;
+}
+
+bool World::place(std::uint32_t slot, int in, bool tell) {
+  int& was = area_of_slot_[slot];
+  if (in == was) return false;
+  if (was >= 0) areas_[std::size_t(was)].left.push_back(slot);
+  if (const ObjectId id = store_.id_at(slot); tell && id && (was >= 0 || in >= 0) && started_) {
+    auto name = [&](int a) {
+      return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name;
+    };
+    pending_.push_back(Event{
+        .type = "area_entered", .source = "world", .a = id, .text = name(was) + " -> " + name(in)});
+  }
+  was = in;
+  return true;
+}
+
+bool World::assign_areas() {
+  if (areas_.empty()) return false;
+  const Column<Vec3>* column = position_column();
   const std::size_t n = store_.slot_count();
   bool changed = area_of_slot_.size() != n;
   area_of_slot_.resize(n, -1);
   for (Area& a : areas_) a.left.clear();
+  // First the objects with a position, by where they are; then those without
+  // (joints, springs, wires), by the objects they refer to.
   for (std::uint32_t slot = 0; slot < n; ++slot) {
+    if (!column || store_.id_at(slot).is_null() || !column->has(slot)) continue;
     int in = -1;
-    if (column && !store_.id_at(slot).is_null() && column->has(slot))
-      for (std::size_t i = 0; i < areas_.size(); ++i)
-        if (areas_[i].def.contains((*column)[slot])) {
-          in = int(i);
-          break;
-        }
-    int& was = area_of_slot_[slot];
-    if (in == was) continue;
-    if (was >= 0) areas_[std::size_t(was)].left.push_back(slot);
-    if (const ObjectId id = store_.id_at(slot); id && (was >= 0 || in >= 0) && started_) {
-      auto name = [&](int a) {
-        return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name;
-      };
-      pending_.push_back(Event{.type = "area_entered",
-                               .source = "world",
-                               .a = id,
-                               .text = name(was) + " -> " + name(in)});
-    }
-    was = in;
-    changed = true;
+    for (std::size_t i = 0; i < areas_.size(); ++i)
+      if (areas_[i].def.contains((*column)[slot])) {
+        in = int(i);
+        break;
+      }
+    changed |= place(slot, in, true);
   }
+  changed |= assign_by_references(column);
   if (!changed) return false;
   refresh_area_scopes();
   return true;
+}
+
+std::vector<World::RefColumn> World::ref_columns() const {
+  std::vector<RefColumn> out;
+  for (PropertyId p = 0; p < properties().size(); ++p) {
+    const PropertyKind kind = properties().def(p).kind;
+    if (kind != PropertyKind::Ref && kind != PropertyKind::RefList) continue;
+    // Presence, not members(): the member lists may not be refreshed yet
+    // (at start, areas are assigned before the first refresh).
+    if (const ColumnBase* c = store_.find_column(p))
+      out.push_back({c, kind == PropertyKind::RefList});
+  }
+  return out;
+}
+
+void World::referent_areas(std::uint32_t slot, const Column<Vec3>* position,
+                           const std::vector<RefColumn>& refs, std::vector<int>& out) const {
+  out.clear();
+  const ObjectId self = store_.id_at(slot);
+  if (self.is_null() || !position) return;
+  auto note = [&](ObjectId r) {
+    // A referent without a position says nothing about where this object is;
+    // a frozen one is in no scope and holds nothing (a joint to it is dropped
+    // by the engine, as before areas knew references).
+    if (r == self || !store_.alive(r) || !position->has(r.index) ||
+        r.index >= area_of_slot_.size() || (!frozen_.empty() && frozen_slot(r.index)))
+      return;
+    const int a = area_of_slot_[r.index];
+    if (std::find(out.begin(), out.end(), a) == out.end()) out.push_back(a);
+  };
+  for (const RefColumn& c : refs) {
+    if (!c.column->has(slot)) continue;
+    if (c.list)
+      for (ObjectId r : static_cast<const Column<RefList>*>(c.column)->operator[](slot)) note(r);
+    else
+      note(static_cast<const Column<ObjectId>*>(c.column)->operator[](slot));
+  }
+  std::sort(out.begin(), out.end());
+}
+
+bool World::assign_by_references(const Column<Vec3>* position) {
+  const std::size_t n = area_of_slot_.size();
+  split_.resize(n);
+  bool changed = false;
+  const std::vector<RefColumn> refs = ref_columns();
+  std::vector<int> found;
+  auto name = [&](int a) {
+    return a < 0 ? std::string("(no area)") : areas_[std::size_t(a)].def.name;
+  };
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    const ObjectId id = store_.id_at(slot);
+    if (id && position && position->has(slot)) {  // placed by its position
+      changed |= !split_[slot].empty();
+      split_[slot].clear();
+      continue;
+    }
+    referent_areas(slot, position, refs, found);
+    const int in = found.size() == 1 ? found[0] : -1;
+    if (found.size() < 2) found.clear();
+    const bool was_split = !split_[slot].empty();
+    if (found != split_[slot]) {
+      changed = true;
+      if (id && started_) {
+        std::string text;
+        for (int a : found) text += (text.empty() ? "" : ", ") + name(a);
+        if (!found.empty())
+          pending_.push_back(Event{.type = "area_split", .source = "world", .a = id, .text = text});
+        else
+          pending_.push_back(Event{.type = "area_entered",
+                                   .source = "world",
+                                   .a = id,
+                                   .text = "(split) -> " + name(in)});
+      }
+      split_[slot] = found;
+    }
+    // A split's own event says where it went.
+    changed |= place(slot, in, !was_split && found.empty());
+  }
+  return changed;
+}
+
+std::vector<std::string> World::split_areas(ObjectId id) const {
+  std::vector<std::string> out;
+  if (!store_.alive(id) || id.index >= split_.size()) return out;
+  for (int a : split_[id.index]) out.push_back(a < 0 ? "" : areas_[std::size_t(a)].def.name);
+  return out;
 }
 
 void World::refresh_area_scopes() {
@@ -1457,6 +1558,18 @@ void World::restore_now(const Snapshot& s) {
   frozen_ = s.frozen;
   frozen_changed_ = true;
   area_of_slot_ = s.area_of_slot;
+  // Which position-less objects are split follows from the areas above and
+  // the references restored: recomputed, not saved (the format is unchanged).
+  split_.assign(area_of_slot_.size(), {});
+  if (const Column<Vec3>* position = position_column()) {
+    const std::vector<RefColumn> refs = ref_columns();
+    std::vector<int> found;
+    for (std::uint32_t slot = 0; slot < area_of_slot_.size(); ++slot)
+      if (store_.id_at(slot) && !position->has(slot)) {
+        referent_areas(slot, position, refs, found);
+        if (found.size() > 1) split_[slot] = found;
+      }
+  }
   refresh_live();
   refresh_area_scopes();
   pending_.clear();

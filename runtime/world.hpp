@@ -279,6 +279,17 @@ class World {
   /// The area an object is in, or "" (none). Updated after each advance (where
   /// the resolvers left it) and at the start of each step (where edits put it).
   std::string area_of(ObjectId id) const;
+  /// An object without a position (a joint, a spring, a wire) is scoped by
+  /// the objects it refers to (its Ref and RefList properties) that have a
+  /// position and are not frozen: in their area when they are all in one,
+  /// in none when it refers to none. When they lie in different areas it is
+  /// split: in no area, and in a global stage's scope only if that stage acts
+  /// on all of them, so no stage that differs between those areas acts on it
+  /// (a joint between bodies on two engines is suspended until they are on
+  /// one again). Its referents' areas, ascending ("" for none), while split;
+  /// empty otherwise. Events: "area_split" (a: the object, text: the areas)
+  /// when it splits, "area_entered" ("(split) -> area") when it is whole again.
+  std::vector<std::string> split_areas(ObjectId id) const;
   /// Replaces plugin `from` with `to` (another implementation of the same
   /// kind) in `area`, or globally when `area` is empty, between steps. The new
   /// stage builds its state from the properties, so nothing is lost; the
@@ -403,6 +414,26 @@ class World {
     Scope scope;
   };
   bool assign_areas();
+  /// Puts the object in `slot` in area `in` (-1: none), noting the slot in
+  /// the area it left; tells an "area_entered" event if `tell`. Returns
+  /// whether it moved.
+  bool place(std::uint32_t slot, int in, bool tell);
+  /// A Ref or RefList column with members (list: a RefList).
+  struct RefColumn {
+    const ColumnBase* column;
+    bool list;
+  };
+  std::vector<RefColumn> ref_columns() const;
+  /// The areas (ascending, -1: none) of the positioned, unfrozen objects
+  /// that the position-less object in `slot` refers to through `refs`, into `out`.
+  void referent_areas(std::uint32_t slot, const Column<Vec3>* position,
+                      const std::vector<RefColumn>& refs, std::vector<int>& out) const;
+  /// The second pass of assign_areas: every object without a position takes
+  /// the area of its referents (split_ when they are in several). Returns
+  /// whether an area or a split changed.
+  bool assign_by_references(const Column<Vec3>* position);
+  /// The position column, or null while no object has had a position.
+  const Column<Vec3>* position_column() const;
   void refresh_area_scopes();
   void refresh_live();
   void rescope();
@@ -445,6 +476,9 @@ class World {
   std::vector<Slot*> resolvers_, derived_, interactions_;
   std::vector<Area> areas_;
   std::vector<int> area_of_slot_;  // area index per object slot, -1 for none
+  // Per slot: the areas (ascending, -1: none) of a split position-less
+  // object's referents (split_areas()); empty for every other object.
+  std::vector<std::vector<int>> split_;
   std::map<std::string, Outside, std::less<>>
       outside_;                                 // scopes of global stages kept out of areas
   std::vector<std::string> disabled_;           // global plugins swapped out

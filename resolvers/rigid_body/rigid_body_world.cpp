@@ -137,9 +137,11 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
   };
   std::vector<PendingHinge> pending;
   // kOther: a rigid body outside this engine's scope, which another area's
-  // engine holds. A joint that joins a body of ours to another engine's is
-  // refused, naming both; one whose bodies are all another engine's too,
-  // since that engine never sees the joint (it has no position, so no area).
+  // engine holds. The world scopes a joint by the bodies it joins (a joint
+  // has no position): it is in our scope only when every body it joins that
+  // has a position is, and suspended while they are on two engines. So a
+  // body of another engine here is one without a position (in no area),
+  // joined to one of ours that is in an area: refused, naming both.
   constexpr std::int32_t kWorld = -1, kGone = -2, kOther = -3;
   for (std::uint32_t s : joint.members()) {
     const ObjectId jid = store.id_at(s);
@@ -163,21 +165,12 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
       auto named = [&](const ColumnView<ObjectId>& c) {
         return c.has(s) && !c[s].is_null() ? "'" + store.describe(c[s]) + "'" : "the play area";
       };
-      if (a >= 0 || b >= 0) {
-        const ObjectId other = a == kOther ? body_a[s] : body_b[s];
-        throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
-                                    store.describe(other) +
-                                    "' is simulated by another engine (an area's): a joint's "
-                                    "two bodies must be on one engine");
-      }
-      // Both bodies another engine's (an area's): a joint has no position,
-      // so it belongs to the whole world and the area's engine never sees
-      // it. Refused rather than dropped, until joints follow their bodies
-      // into areas.
-      throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) +
-                                  ", which another engine (an area's) simulates: a joint "
-                                  "inside an area with its own rigid-body engine is not "
-                                  "simulated yet (a joint belongs to the whole world)");
+      const ObjectId other = a == kOther ? body_a[s] : body_b[s];
+      throw InputError(where, "joins " + named(body_a) + " to " + named(body_b) + ", but '" +
+                                  store.describe(other) +
+                                  "' is simulated by another engine (it has no position, so it "
+                                  "is in no area): a joint follows its bodies into areas by "
+                                  "their positions; give it one");
     }
     if (JointType(joint[s].index) == JointType::Fixed) {
       if (a >= 0 && b >= 0)

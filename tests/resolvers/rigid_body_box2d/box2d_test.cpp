@@ -471,38 +471,7 @@ TEST(Box2D, AnAreasSwapReplacesItsContactStagesBothWays) {
   EXPECT_EQ(s->area_of(st.boxes.back()), "right");
 }
 
-std::string joint_refusal(bool a_in_box2d) {
-  // Area "right" (x from 1 to 3) is Box2D's, the rest ODE's; a hinge joins a
-  // box on each side.
-  Sim s(with_area({"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"}));
-  const ObjectId left = add_box(*s, {0.5, 1, 0}, {0.2, 0.2, 0.2}, 1, {}, "left_box");
-  const ObjectId right = add_box(*s, {1.5, 1, 0}, {0.2, 0.2, 0.2}, 1, {}, "right_box");
-  if (a_in_box2d)
-    add_hinge(*s, right, left, {1, 1, 0}, {0, 0, 1}, "link");
-  else
-    add_hinge(*s, left, right, {1, 1, 0}, {0, 0, 1}, "link");
-  try {
-    s.run_for(0.1);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-TEST(Box2D, AJointBetweenAreasOnTwoEnginesIsRefusedNamingItAndBothBodies) {
-  const std::string b = joint_refusal(true);
-  std::printf("box2d joint across engines (body_a on Box2D): %s\n", b.c_str());
-  EXPECT_NE(b.find("'link': joins 'right_box' to 'left_box', but 'right_box' is simulated by "
-                   "another engine"),
-            std::string::npos)
-      << b;
-  const std::string o = joint_refusal(false);
-  std::printf("box2d joint across engines (body_a on ODE): %s\n", o.c_str());
-  EXPECT_NE(o.find("'link': joins 'left_box' to 'right_box', but 'right_box' is simulated by "
-                   "another engine"),
-            std::string::npos)
-      << o;
-}
+// Joints inside a Box2D area and across two engines: area_joints_test.cpp.
 
 TEST(Box2D, ARestoreRebuildsFromPropertiesAndTheContinuationIsMeasured) {
   // Box2D keeps warm-start impulses and contact memory that properties do not
@@ -588,25 +557,6 @@ TEST(Box2D, BodiesOutsideTheMassBoundsAndOffPlaneEditsAreRefusedNotMadeNaN) {
   s->set(box, "orientation", Quat::from_axis_angle({1, 0, 0}, 0.5));
   s.run_for(0.1);
   EXPECT_TRUE(s->frozen(box));
-}
-
-TEST(Box2D, AHingeInsideABox2DAreaIsRefusedNotDropped) {
-  // Area "right" runs Box2D; a bar hinged to the play area inside it. A
-  // joint has no position, so it belongs to the whole world, and the area's
-  // engine never sees it: refused by name rather than silently dropped (the
-  // bar would fall freely), until joints follow their bodies into areas.
-  Sim s(with_area({"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"}));
-  const ObjectId bar = add_box(*s, {2.2, 1, 0}, {0.4, 0.04, 0.04}, 1, {}, "bar");
-  add_hinge(*s, bar, {}, {2, 1, 0}, {0, 0, 1}, "pivot");
-  try {
-    s.run_for(0.1);
-    ADD_FAILURE() << "a hinge the area's engine cannot see was taken";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("'pivot': joins 'bar' to the play area, which another "
-                                         "engine (an area's) simulates"),
-              std::string::npos)
-        << e.what();
-  }
 }
 
 TEST(Box2D, ItsContactSetAloneBringsItsEngineAndAMixIsRefused) {
