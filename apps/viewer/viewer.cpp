@@ -518,6 +518,35 @@ void Viewer::on_drag(Vec2 at) {
   if (!r.ok) note(r.message, true);
 }
 
+void Viewer::on_draw(Vec2 at) {
+  World* w = world();
+  if (!w || !drawing_ || !w->store().alive(drawing_)) return;
+  const Vec2 d = at - draw_from_;
+  const double reach = length(d);
+  // A click (or a hand's tremor) keeps the palette's size.
+  if (!drawn_ && reach * camera_.scale < 6) return;
+  drawn_ = true;
+  const auto p = read_part(*w, drawing_);
+  if (!p) return;
+  EditResult r;
+  if (p->shape == Shape2D::Disk) {
+    // About its centre (a pinned wheel keeps its pin).
+    const double radius = std::max(reach, 0.002);
+    r = editor_.resize(drawing_, {2 * radius, 2 * radius});
+  } else {
+    // A bar from the press to the mouse: its length and direction; its
+    // thickness stays the palette's.
+    const double thick = p->shape == Shape2D::Capsule ? 2 * p->radius : 2 * p->half.y;
+    r = editor_.resize(drawing_, {std::max(reach, std::max(thick, 0.004)), thick});
+    const Vec2 mid = draw_from_ + d * 0.5;
+    const double z = w->value<Vec3>(drawing_, "position").value_or(Vec3{}).z;
+    if (r.ok) r = editor_.set_property(drawing_, "position", Vec3{mid.x, mid.y, z});
+    if (r.ok && reach > 0)
+      r = editor_.set_property(drawing_, "orientation", Quat::from_angle_z(std::atan2(d.y, d.x)));
+  }
+  if (!r.ok) note(r.message, true);
+}
+
 void Viewer::note(const std::string& message, bool error) {
   if (message.empty()) return;
   log_.push_back(message);
@@ -1003,6 +1032,7 @@ void Viewer::handle(const SDL_Event& e) {
       if (editor_.carrying())
         editor_.carry_to(snap_ ? editor_.snapped(at, kSnapGrid, 8 / camera_.scale) : at);
       if (resizing_) on_drag(at);
+      if (drawing_) on_draw(at);
       hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
       break;
     }
@@ -1068,8 +1098,18 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
   }
   switch (tool_) {
     case Tool::Place: {
-      if (placing_ >= 0 && placing_ < int(palette_entries().size()))
-        drop_part(palette_entries()[std::size_t(placing_)], at);
+      if (placing_ >= 0 && placing_ < int(palette_entries().size())) {
+        const PaletteEntry& entry = palette_entries()[std::size_t(placing_)];
+        // Bars, disks and fixed shapes can be drawn to any size: held and
+        // dragged, the part just put down follows the mouse (Viewer::on_draw),
+        // all one edit with the drop.
+        if (drop_part(entry, at).ok &&
+            (entry.group == "bars" || entry.group == "disks" || entry.group == "fixed")) {
+          drawing_ = selected_;
+          draw_from_ = at;
+          drawn_ = false;
+        }
+      }
       place_drag_ = false;
       if (!(mod & KMOD_SHIFT)) {
         tool_ = Tool::Hand;
@@ -1206,6 +1246,14 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
 void Viewer::on_release(Vec2 at, Uint8 button) {
   panning_ = false;
   if (button != SDL_BUTTON_LEFT) return;
+  if (drawing_) {
+    on_draw(at);
+    // Made whole as after a resize, so that a redo of the drop (a restore of
+    // the synced world) matches what the next step sees.
+    if (World* w = world(); w && drawn_) History::sync(*w);
+    drawing_ = {};
+    return;
+  }
   if (band_) {
     band_ = false;
     // Every part the band holds joins the selection (a second band adds).
@@ -1934,6 +1982,7 @@ void Viewer::panel_help() {
       {"N or .", "one step"},
       {"drag a part", "move it (Q / E or the wheel turn it)"},
       {"click a switch", "open or close it"},
+      {"palette bar or disk", "click to put it down; press and drag to draw it to any size"},
       {"W", "wire tool: a part's end, then another part's end"},
       {"H", "hinge tool: where two parts overlap"},
       {"J", "glue tool: where two parts overlap or touch"},
@@ -2170,6 +2219,7 @@ void Viewer::panel_palette() {
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
   ImGui::TextDisabled("drag onto the board, or click then click");
+  ImGui::TextDisabled("bars, disks: press and drag to size");
   std::string group;
   const float bw = (kLeftWidth - 20 - 6) / 2;
   int in_row = 0;

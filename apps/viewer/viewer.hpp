@@ -314,7 +314,13 @@ class Viewer {
   ObjectId string_start_;
   Vec2 string_start_at_;
   bool string_started_ = false;
-  ObjectId resizing_;      // the part whose handle is held
+  ObjectId resizing_;   // the part whose handle is held
+  ObjectId drawing_;    // a bar or disk just put down, drawn to size while the press is held
+  Vec2 draw_from_;      // where its press was, m
+  bool drawn_ = false;  // the drag went far enough to size it
+  /// Sizes the part being drawn by the drag from draw_from_ to `at`: a bar
+  /// from the press to the mouse, a disk of the drag's radius about the press.
+  void on_draw(Vec2 at);
   std::string fields_of_;  // inspector: the object whose fields are being typed in
 
   // What happened.

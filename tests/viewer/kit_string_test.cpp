@@ -351,6 +351,63 @@ TEST(ViewerSave, SaveAsAsksBeforeReplacingAnotherFileAndNewThenSaveAsksForAPath)
   EXPECT_TRUE(bool(saved.world().find("steel_bar")));
 }
 
+// --- drawing a part to size -------------------------------------------------------------
+
+TEST(ViewerDraw, ABarIsDrawnFromPressToReleaseAndADiskToItsRadiusInOneUndoableEdit) {
+  auto v = new_board();
+  World& w = *v->world();
+  v->frame();
+  const std::uint64_t empty = hash(*v);
+  // A bar from (-0.1, 0.3) to (0.1, 0.4): 22.4 cm long, at 26.6 degrees.
+  v->add_script(parse_script(R"(1 palette steel bar
+2 move -0.1 0.3
+3 press -0.1 0.3
+4 move 0 0.35
+5 move 0.1 0.4
+6 release 0.1 0.4
+)",
+                             "draw"));
+  for (int i = 0; i < 8; ++i) v->frame();
+  const ObjectId bar = w.find("steel_bar");
+  ASSERT_TRUE(bool(bar)) << messages(*v);
+  const auto p = read_part(w, bar);
+  ASSERT_TRUE(p.has_value());
+  const double px = 1 / v->camera().scale;  // a click lands on a whole pixel
+  EXPECT_NEAR(2 * p->half.x, std::hypot(0.2, 0.1), 3 * px);
+  EXPECT_NEAR(2 * p->half.y, 0.01, 1e-9);  // the palette's thickness
+  EXPECT_NEAR(p->angle, std::atan2(0.1, 0.2), 0.03);
+  EXPECT_NEAR(p->centre.x, 0, 2 * px);
+  EXPECT_NEAR(p->centre.y, 0.35, 2 * px);
+  // Its mass follows its volume (steel: 7850 kg/m^3, 1 cm square).
+  EXPECT_NEAR(w.value<double>(bar, "mass").value_or(0), 7850 * 2 * p->half.x * 0.01 * 0.01,
+              1e-9);
+  EXPECT_EQ(v->history().undo_depth(), 1u) << "the drop and its drawing are one edit";
+  const std::uint64_t drawn = hash(*v);
+  key(*v, SDLK_z, KMOD_LCTRL);
+  EXPECT_EQ(hash(*v), empty);
+  key(*v, SDLK_y, KMOD_LCTRL);
+  EXPECT_EQ(hash(*v), drawn);
+  // A disk dragged 6 cm from its centre; a click alone keeps the palette's size.
+  v->add_script(parse_script(R"(1 palette steel disk
+2 move 0.3 0.3
+3 press 0.3 0.3
+4 move 0.36 0.3
+5 release 0.36 0.3
+7 palette steel bar
+8 move -0.3 0.5
+9 press -0.3 0.5
+10 release -0.3 0.5
+)",
+                             "disk"));
+  for (int i = 0; i < 12; ++i) v->frame();
+  const auto disk = read_part(w, w.find("steel_disk"));
+  ASSERT_TRUE(disk.has_value()) << messages(*v);
+  EXPECT_NEAR(disk->radius, 0.06, 2 * px);
+  const auto clicked = read_part(w, w.find("steel_bar_2"));
+  ASSERT_TRUE(clicked.has_value()) << messages(*v);
+  EXPECT_NEAR(2 * clicked->half.x, 0.15, 1e-9);
+}
+
 // --- held modifiers in scripts ------------------------------------------------------------
 
 TEST(ViewerScript, KeydownShiftHoldsShiftThroughAPressSoARubberBandSelects) {
