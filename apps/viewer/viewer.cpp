@@ -2218,8 +2218,12 @@ void Viewer::panel_palette() {
   ImGui::Begin("Parts", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
+  // One line: the buttons' places are what tests/viewer/xvfb_mouse_test.sh clicks.
   ImGui::TextDisabled("drag onto the board, or click then click");
-  ImGui::TextDisabled("bars, disks: press and drag to size");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "bars, disks and fixed shapes: press on the board and drag to draw one "
+        "to any size");
   std::string group;
   const float bw = (kLeftWidth - 20 - 6) / 2;
   int in_row = 0;
