@@ -708,68 +708,63 @@ EditResult Editor::glue_at(Vec2 at, double margin, ObjectId* made) {
 }
 
 EditResult Editor::string_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, double slack,
-                                  std::vector<ObjectId>* made) {
+                                  ObjectId* made) {
   if (!world_ || !world_->store().alive(a))
     return EditResult::refused("a string starts on a part: click a part first");
   if (b && !world_->store().alive(b)) return EditResult::refused("no part at the string's end");
   if (a == b) return EditResult::refused("a string from a part to itself holds nothing");
+  if (!world_->properties().find("spring_slack"))
+    return EditResult::refused("no string plugin is registered (rigid_body_from_springs)");
   const double span = length(at_b - at_a);
+  if (span < 0.005)
+    return EditResult::refused("the ends are too close for a string (5 mm at least)");
   const double total = span * std::max(1.0, slack);
-  if (span < 2 * kLinkLength)
-    return EditResult::refused("the ends are too close for a string (at least 5 cm apart)");
+  // As stiff as the step allows on these parts, so that it barely stretches:
+  // (h w)^2 = kStringFigure with w^2 = k / m, m the parts' reduced mass (a
+  // fixed part counts as infinitely heavy), and a damper of a sixth of the
+  // critical one for the stretch's own bounce; under the springs' limit of 1.
+  auto inverse_mass = [&](ObjectId part) {
+    if (!part) return 0.0;
+    if (world_->value<bool>(part, "static").value_or(false) ||
+        world_->value<bool>(part, "pinned").value_or(false))
+      return 0.0;
+    const double m = world_->value<double>(part, "mass").value_or(0);
+    return m > 0 ? 1 / m : 0.0;
+  };
+  const double inv = inverse_mass(a) + inverse_mass(b), h = world_->dt();
+  double k = kStringMaxStiffness, c = 0;
+  if (inv > 0 && h > 0) {
+    k = std::min(kStringMaxStiffness, kStringFigure / (h * h * inv));
+    c = std::sqrt(k / inv) / 3;  // a sixth of the critical 2 sqrt(k m)
+  }
   return guarded([&] {
-    // Links in two straight runs that meet below the middle: the string's
-    // length is `total`, so with slack it hangs in a V from the start.
-    int n = std::clamp(int(std::lround(total / kLinkLength)), 2, 14);
-    n += n % 2;
-    const double seg = total / n;
-    const double sag = std::sqrt(std::max(0.0, total * total / 4 - span * span / 4));
-    const Vec2 mid = (at_a + at_b) * 0.5 + Vec2{0, -sag};
-    const double z = world_->value<Vec3>(a, "position").value_or(Vec3{}).z;
-    const double density = 7850;  // steel: links light enough to hang, heavy enough to stay stiff
-    const std::string base = unique_name("string");
-    std::vector<ObjectId> out, links;
+    auto local = [&](ObjectId part, Vec2 at) {
+      const Vec3 centre = world_->value<Vec3>(part, "position").value_or(Vec3{});
+      const Quat q = world_->value<Quat>(part, "orientation").value_or(Quat{});
+      const Quat inverse{q.w, -q.x, -q.y, -q.z};
+      return alloy::rotate(inverse, Vec3{at.x, at.y, centre.z} - centre);
+    };
+    const ObjectId st = world_->create(unique_name("string"));
     try {
-      Vec2 prev = at_a;
-      for (int k = 0; k < n; ++k) {
-        const Vec2 from = k < n / 2 ? at_a : mid, to = k < n / 2 ? mid : at_b;
-        const int i = k < n / 2 ? k : k - n / 2;
-        const Vec2 dir = (to - from) * (1.0 / std::max(1e-12, length(to - from)));
-        const Vec2 p0 = from + dir * (seg * i), p1 = from + dir * (seg * (i + 1));
-        const Vec2 c = (p0 + p1) * 0.5;
-        const ObjectId l = world_->create(base + "_" + std::to_string(k + 1));
-        out.push_back(l);
-        links.push_back(l);
-        const PropertyId shape = world_->properties().id("shape");
-        world_->set(l, shape, world_->properties().enum_value(shape, "box").value_or(EnumValue{}));
-        world_->set(l, "size", Vec3{seg, kLinkWidth, kLinkWidth});
-        world_->set(l, "position", Vec3{c.x, c.y, z});
-        world_->set(l, "orientation", Quat::from_angle_z(std::atan2(dir.y, dir.x)));
-        world_->set(l, "density", density);
-        world_->set(l, "mass", density * seg * kLinkWidth * kLinkWidth);
-        world_->set(l, "friction", 0.4);
-        world_->set(l, "restitution", 0.1);
-        world_->set(l, "planar", true);
-        ObjectId h;
-        make_joint("hinge", l, k == 0 ? a : links[std::size_t(k) - 1], prev, &h);
-        out.push_back(h);
-        prev = p1;
-      }
-      ObjectId h;
-      const EditResult last = make_joint("hinge", links.back(), b, at_b, &h);
-      if (!last.ok) throw std::runtime_error(last.message);
-      out.push_back(h);
+      world_->set(st, "spring_a", a);
+      world_->set(st, "spring_anchor_a", local(a, at_a));
+      if (b) world_->set(st, "spring_b", b);
+      const double z = world_->value<Vec3>(a, "position").value_or(Vec3{}).z;
+      world_->set(st, "spring_anchor_b", b ? local(b, at_b) : Vec3{at_b.x, at_b.y, z});
+      world_->set(st, "spring_stiffness", k);
+      world_->set(st, "spring_rest_length", total);
+      world_->set(st, "spring_damping", c);
+      world_->set(st, "spring_slack", true);
+      world_->check(st);
     } catch (...) {
-      for (auto it = out.rbegin(); it != out.rend(); ++it)
-        if (world_->store().alive(*it)) world_->destroy(*it);
+      world_->destroy(st);
       throw;
     }
-    if (made) *made = out;
+    if (made) *made = st;
     char cm[32];
-    std::snprintf(cm, sizeof cm, "%.0f cm", total * 100);
-    return EditResult{true, "a " + std::string(cm) + " string of " + std::to_string(n) +
-                                " links from " + world_->describe(a) + " to " +
-                                (b ? world_->describe(b) : std::string("the board"))};
+    std::snprintf(cm, sizeof cm, "%.1f cm", total * 100);
+    return EditResult{true, "a " + std::string(cm) + " string from " + world_->describe(a) +
+                                " to " + (b ? world_->describe(b) : std::string("the board"))};
   });
 }
 

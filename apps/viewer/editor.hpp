@@ -114,11 +114,13 @@ class Editor {
   /// alone is fixed to the board).
   EditResult glue_at(Vec2 at, double margin = 0, ObjectId* made = nullptr);
   /// A string from part `a` at `at_a` to part `b` at `at_b` (b null: the
-  /// board at `at_b`): a chain of short light links hinged end to end, the
-  /// first hinged to a and the last to b. `slack` > 1 makes it longer than
-  /// the distance (it sags). `made`: the links and hinges.
+  /// board at `at_b`): one object, a spring that only pulls (`spring_slack`,
+  /// resolvers/rigid_body/rigid_body_from_springs.hpp), as long as the
+  /// distance times `slack` (>= 1; longer, it hangs slack). Its stiffness is
+  /// the most the step allows on these parts (kStringFigure), so it barely
+  /// stretches; the inspector edits it. `made`: it.
   EditResult string_between(ObjectId a, Vec2 at_a, ObjectId b, Vec2 at_b, double slack = 1.0,
-                            std::vector<ObjectId>* made = nullptr);
+                            ObjectId* made = nullptr);
   /// A spring with a damper from part `a` at `at_a` to part `b` at `at_b`
   /// (b null: the board at `at_b`), its rest length the distance between the
   /// two points: it holds them as they are and pulls or pushes when they move.
@@ -130,8 +132,10 @@ class Editor {
   /// (118 g) hanging from one sags 6 cm and swings at about 2 Hz, dying out
   /// in a few seconds; stable at 1/240 s on parts down to 4 g.
   static constexpr double kSpringStiffness = 20, kSpringDamping = 0.05;
-  /// A string's links: 4 mm steel, each about this long, m.
-  static constexpr double kLinkLength = 0.025, kLinkWidth = 0.004;
+  /// A new string's (h w)^2 (the springs accept up to 1 with the damper's
+  /// share; the tool's damper adds 2 h c / m = 2 sqrt(kStringFigure) / 3),
+  /// and its stiffness when both ends are fixed or the parts very heavy, N/m.
+  static constexpr double kStringFigure = 0.25, kStringMaxStiffness = 20000;
   /// The joint whose pivot lies within `margin` of `point` (m), or null.
   ObjectId pick_joint(Vec2 point, double margin) const;
   /// The spring whose line passes within `margin` of `point` (m), or null;

@@ -16,7 +16,8 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
       {"release", ScriptEvent::Kind::Release},       {"rpress", ScriptEvent::Kind::RightPress},
       {"rrelease", ScriptEvent::Kind::RightRelease}, {"key", ScriptEvent::Kind::Key},
       {"wheel", ScriptEvent::Kind::Wheel},           {"text", ScriptEvent::Kind::Text},
-      {"palette", ScriptEvent::Kind::Palette},       {"set", ScriptEvent::Kind::Set}};
+      {"palette", ScriptEvent::Kind::Palette},       {"set", ScriptEvent::Kind::Set},
+      {"keydown", ScriptEvent::Kind::ModifierDown},  {"keyup", ScriptEvent::Kind::ModifierUp}};
   std::vector<ScriptEvent> out;
   std::istringstream in(text);
   int n = 0;
@@ -34,8 +35,8 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
     if (!(ls >> kind) || !kinds.count(kind))
       throw InputError(
           ErrorLocation{file, n, ""},
-          "expected an event: press, move, release, rpress, rrelease, key, wheel, text, palette "
-          "or set");
+          "expected an event: press, move, release, rpress, rrelease, key, keydown, keyup, wheel, "
+          "text, palette or set");
     e.kind = kinds.at(kind);
     bool ok = true;
     switch (e.kind) {
@@ -69,6 +70,15 @@ std::vector<ScriptEvent> parse_script(const std::string& text, const std::string
         break;
       case ScriptEvent::Kind::Wheel:
         ok = bool(ls >> e.wheel);
+        break;
+      case ScriptEvent::Kind::ModifierDown:
+      case ScriptEvent::Kind::ModifierUp:
+        // Only modifiers are held: any other key is pressed and let go by `key`.
+        ok = bool(ls >> e.key);
+        if (ok && e.key != "shift" && e.key != "ctrl" && e.key != "alt")
+          throw InputError(ErrorLocation{file, n, ""},
+                           "'" + kind + "' holds a modifier: shift, ctrl or alt, not '" + e.key +
+                               "' (press other keys with 'key')");
         break;
       default:
         ok = bool(ls >> e.at.x >> e.at.y);

@@ -10,6 +10,10 @@
 //   30       key        space                a key by its SDL name: space, p, r, w, Delete, ...
 //   40       wheel      1                    mouse wheel notches (turns a carried part)
 //   50       key        ctrl+z               with modifiers: ctrl+, shift+ (ctrl+shift+s)
+//   52       keydown    shift                holds a modifier (shift, ctrl or alt) down from this
+//                                            frame until its keyup: a press, drag or key between
+//                                            them has it (shift+click, a shift-drag's rubber band)
+//   58       keyup      shift
 //   60       text       lever.lua            types text into the field that has the focus
 //   70       palette    steel bar            picks a palette entry by its label (as a click on
 //                                            its button): the next press puts it there
@@ -39,12 +43,15 @@ struct ScriptEvent {
     Wheel,
     Text,
     Palette,
-    Set
+    Set,
+    ModifierDown,
+    ModifierUp
   };
   int frame = 0;
   Kind kind = Kind::Move;
   Vec2 at;                           ///< mouse events, m
-  std::string key;                   ///< Key: SDL key name; Text: the text typed; Set: property
+  std::string key;                   ///< Key: SDL key name; Text: the text typed; Set: property;
+                                     ///< ModifierDown / ModifierUp: shift, ctrl or alt
   std::string value;                 ///< Set: the value as typed
   bool ctrl = false, shift = false;  ///< Key: held with it
   int wheel = 0;                     ///< Wheel: notches

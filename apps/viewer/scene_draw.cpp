@@ -485,7 +485,7 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
     }
   }
 
-  // Springs: a zigzag coil between the two ends, with a fixed number of
+  // Springs: a zigzag coil between the two ends (a string: a plain line), with a fixed number of
   // turns so that it bunches as it closes; a dark dot at an end on the board.
   if (const auto k = world.properties().find("spring_stiffness")) {
     for (const ObjectId sp : carriers(world.store(), *k)) {
@@ -498,6 +498,29 @@ void draw_world(ImDrawList* dl, World& world, const Camera& cam, const DrawOptio
       const float ux = dx / len, uy = dy / len;  // along, then across: (-uy, ux)
       const bool chosen = sp == hl.selected;
       const ImU32 ink = chosen ? colour::kSelected : IM_COL32(70, 70, 80, 255);
+      if (world.value<bool>(sp, "spring_slack").value_or(false)) {
+        // A string: straight when taut; slack, it hangs in a curve whose
+        // length is its own (a parabola's sag from the spare length).
+        const double rest = world.value<double>(sp, "spring_rest_length").value_or(0);
+        const double span = length(ends->b - ends->a);
+        const double sag = rest > span ? std::sqrt(3.0 / 8 * span * (rest - span)) : 0;
+        const Vec2 mid = (ends->a + ends->b) * 0.5 + Vec2{0, -sag};
+        std::vector<ImVec2> line;
+        for (int i = 0; i <= 16; ++i) {
+          const double t = i / 16.0;
+          // A quadratic Bezier through the mid point: control at 2 mid - (a + b) / 2.
+          const Vec2 ctl = mid * 2.0 - (ends->a + ends->b) * 0.5;
+          const Vec2 p =
+              ends->a * ((1 - t) * (1 - t)) + ctl * (2 * t * (1 - t)) + ends->b * (t * t);
+          line.push_back(iv(cam.to_screen(p)));
+        }
+        dl->AddPolyline(line.data(), int(line.size()), IM_COL32(255, 255, 255, 150), 0,
+                        chosen ? 4.5f : 3.5f);
+        dl->AddPolyline(line.data(), int(line.size()), chosen ? ink : IM_COL32(150, 95, 40, 255), 0,
+                        chosen ? 3.0f : 1.8f);
+        for (const ImVec2 end : {a, b}) dl->AddCircleFilled(end, 2.5f, ink, 8);
+        continue;
+      }
       constexpr int kTurns = 8;
       const float lead = std::min(8.0f, len * 0.15f), width = 6;
       std::vector<ImVec2> zig{a, {a.x + ux * lead, a.y + uy * lead}};

@@ -185,7 +185,7 @@ std::string write_scene(const World& world, const SceneMeta& meta) {
 
   const WorldDef& def = world.def();
   std::ostringstream out;
-  out << "-- Saved by `alloy view`" << (meta.origin.empty() ? "" : " from " + meta.origin)
+  out << kSavedHeader << (meta.origin.empty() ? "" : " from " + meta.origin)
       << " at t = " << number(world.time()) << " s (step " << world.step_count() << ").\n"
       << "-- Every object is written property by property, as it was at that moment.\n\n";
   out << "world {\n";

@@ -18,6 +18,11 @@ struct SceneMeta {
   std::string origin;       ///< where the world came from, for the header comment
 };
 
+/// How every scene the writer writes begins (its first line's start): how
+/// the viewer tells its own files, which Save writes over, from scenes
+/// written by hand, which it saves beside.
+inline constexpr const char* kSavedHeader = "-- Saved by `alloy view`";
+
 /// The scene as Lua text. Objects without a name that another object refers
 /// to are named "_<slot>" so that the reference can be written.
 std::string write_scene(const World& world, const SceneMeta& meta);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 #include <ostream>
 #include <sstream>
@@ -117,9 +118,7 @@ Viewer::Viewer(ViewerOptions options) : opt_(std::move(options)) {
   time_scale_ = std::clamp(opt_.time_scale, 1.0 / 64, 64.0);
   init_sdl();
   init_imgui();
-  save_path_ = (opt_.scene.has_extension() ? opt_.scene.stem() : opt_.scene.filename()).string() +
-               "_saved.lua";
-  if (save_path_ == "_saved.lua") save_path_ = "scene_saved.lua";
+  save_path_ = save_path_for(opt_.scene).string();
   if (opt_.scene.empty())
     new_board();
   else
@@ -318,6 +317,24 @@ kit.floor { name = "floor", at = { 0, -0.01 }, size = { 1.0, 0.02 } }
 
 }  // namespace
 
+bool Viewer::written_by_viewer(const fs::path& file) {
+  std::ifstream in(file);
+  std::string first;
+  return in && std::getline(in, first) && first.rfind(kSavedHeader, 0) == 0;
+}
+
+fs::path Viewer::save_path_for(const fs::path& scene) {
+  if (scene.empty()) return "scene_saved.lua";
+  // A folder named with a trailing slash has an empty file name: its own name.
+  const fs::path whole = scene.has_filename() ? scene : scene.parent_path();
+  std::error_code ec;
+  if (whole.extension() == ".lua" && !fs::is_directory(whole, ec) && written_by_viewer(whole))
+    return whole;
+  const std::string name =
+      (whole.extension() == ".lua" ? whole.stem() : whole.filename()).string() + "_saved.lua";
+  return whole.has_parent_path() ? whole.parent_path() / name : fs::path(name);
+}
+
 void Viewer::new_board() {
   const fs::path dir = fs::temp_directory_path() / ("alloy_view_" + std::to_string(::getpid()));
   std::error_code ec;
@@ -360,8 +377,7 @@ bool Viewer::open(const fs::path& path) {
   }
   history_.clear();
   untitled_ = false;
-  save_path_ =
-      path.extension() == ".lua" ? path.string() : (path.filename().string() + "_saved.lua");
+  save_path_ = save_path_for(path).string();
   fitted_ = false;
   if (load_error_.empty()) note("opened " + path.string());
   return load_error_.empty();
@@ -440,10 +456,22 @@ void Viewer::popup_enter() {
     case Popup::SaveAs: {
       const std::string path = path_buf_;
       if (path.empty()) return;
+      std::error_code ec;
+      // Another file that is there already is replaced only when the player
+      // says so (the board's own file is what Save writes anyway).
+      if (fs::exists(path, ec) && !fs::equivalent(path, save_path_, ec)) {
+        pending_save_ = path;
+        ask(Popup::ConfirmOverwrite);
+        return;
+      }
       popup_ = Popup::None;
       save(path);
       return;
     }
+    case Popup::ConfirmOverwrite:
+      popup_ = Popup::None;
+      save(pending_save_);
+      return;
     case Popup::ConfirmNew:
       popup_ = Popup::None;
       new_board();
@@ -487,6 +515,35 @@ void Viewer::on_drag(Vec2 at) {
   size = {std::max(size.x, 0.004), std::max(size.y, 0.004)};
   if (p->shape == Shape2D::Capsule) size.x = std::max(size.x, size.y);
   const EditResult r = editor_.resize(resizing_, size);
+  if (!r.ok) note(r.message, true);
+}
+
+void Viewer::on_draw(Vec2 at) {
+  World* w = world();
+  if (!w || !drawing_ || !w->store().alive(drawing_)) return;
+  const Vec2 d = at - draw_from_;
+  const double reach = length(d);
+  // A click (or a hand's tremor) keeps the palette's size.
+  if (!drawn_ && reach * camera_.scale < 6) return;
+  drawn_ = true;
+  const auto p = read_part(*w, drawing_);
+  if (!p) return;
+  EditResult r;
+  if (p->shape == Shape2D::Disk) {
+    // About its centre (a pinned wheel keeps its pin).
+    const double radius = std::max(reach, 0.002);
+    r = editor_.resize(drawing_, {2 * radius, 2 * radius});
+  } else {
+    // A bar from the press to the mouse: its length and direction; its
+    // thickness stays the palette's.
+    const double thick = p->shape == Shape2D::Capsule ? 2 * p->radius : 2 * p->half.y;
+    r = editor_.resize(drawing_, {std::max(reach, std::max(thick, 0.004)), thick});
+    const Vec2 mid = draw_from_ + d * 0.5;
+    const double z = w->value<Vec3>(drawing_, "position").value_or(Vec3{}).z;
+    if (r.ok) r = editor_.set_property(drawing_, "position", Vec3{mid.x, mid.y, z});
+    if (r.ok && reach > 0)
+      r = editor_.set_property(drawing_, "orientation", Quat::from_angle_z(std::atan2(d.y, d.x)));
+  }
   if (!r.ok) note(r.message, true);
 }
 
@@ -789,6 +846,15 @@ void Viewer::pump_script() {
           push_key(k, Uint16((e.ctrl ? KMOD_LCTRL : 0) | (e.shift ? KMOD_LSHIFT : 0)));
         break;
       }
+      case ScriptEvent::Kind::ModifierDown:
+      case ScriptEvent::Kind::ModifierUp: {
+        // Held in SDL's keyboard state, which every press, drag and key
+        // reads (SDL_GetModState), as a hand holding Shift would be.
+        const int m = e.key == "shift" ? KMOD_LSHIFT : e.key == "ctrl" ? KMOD_LCTRL : KMOD_LALT;
+        const int now = SDL_GetModState();
+        SDL_SetModState(SDL_Keymod(e.kind == ScriptEvent::Kind::ModifierDown ? now | m : now & ~m));
+        break;
+      }
       case ScriptEvent::Kind::Text: {
         // SDL carries text in pieces of at most 31 bytes.
         for (std::size_t at = 0; at < e.key.size(); at += 31) {
@@ -966,6 +1032,7 @@ void Viewer::handle(const SDL_Event& e) {
       if (editor_.carrying())
         editor_.carry_to(snap_ ? editor_.snapped(at, kSnapGrid, 8 / camera_.scale) : at);
       if (resizing_) on_drag(at);
+      if (drawing_) on_draw(at);
       hovered_ = over_panel(mouse_x_, mouse_y_) ? ObjectId{} : editor_.pick(at, 4 / camera_.scale);
       break;
     }
@@ -1031,8 +1098,18 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
   }
   switch (tool_) {
     case Tool::Place: {
-      if (placing_ >= 0 && placing_ < int(palette_entries().size()))
-        drop_part(palette_entries()[std::size_t(placing_)], at);
+      if (placing_ >= 0 && placing_ < int(palette_entries().size())) {
+        const PaletteEntry& entry = palette_entries()[std::size_t(placing_)];
+        // Bars, disks and fixed shapes can be drawn to any size: held and
+        // dragged, the part just put down follows the mouse (Viewer::on_draw),
+        // all one edit with the drop.
+        if (drop_part(entry, at).ok &&
+            (entry.group == "bars" || entry.group == "disks" || entry.group == "fixed")) {
+          drawing_ = selected_;
+          draw_from_ = at;
+          drawn_ = false;
+        }
+      }
       place_drag_ = false;
       if (!(mod & KMOD_SHIFT)) {
         tool_ = Tool::Hand;
@@ -1089,17 +1166,16 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
         string_started_ = true;
         break;
       }
-      std::vector<ObjectId> made;
       ObjectId made_spring;
       const ObjectId from = string_start_;
       const Vec2 from_at = string_start_at_;
       const ObjectId to = part == from ? ObjectId{} : part;
       const EditResult r = edit(spring ? "spring" : "string", [&] {
         return spring ? editor_.spring_between(from, from_at, to, at, &made_spring)
-                      : editor_.string_between(from, from_at, to, at, 1.0, &made);
+                      : editor_.string_between(from, from_at, to, at, 1.0, &made_spring);
       });
       note(r.message, !r.ok);
-      if (r.ok && spring) selected_ = made_spring;
+      if (r.ok) selected_ = made_spring;
       string_started_ = false;
       string_start_ = {};
       if (r.ok && !(mod & KMOD_SHIFT)) set_tool(Tool::Hand);
@@ -1170,6 +1246,14 @@ void Viewer::on_press(Vec2 at, Uint8 button, Uint16 mod) {
 void Viewer::on_release(Vec2 at, Uint8 button) {
   panning_ = false;
   if (button != SDL_BUTTON_LEFT) return;
+  if (drawing_) {
+    on_draw(at);
+    // Made whole as after a resize, so that a redo of the drop (a restore of
+    // the synced world) matches what the next step sees.
+    if (World* w = world(); w && drawn_) History::sync(*w);
+    drawing_ = {};
+    return;
+  }
   if (band_) {
     band_ = false;
     // Every part the band holds joins the selection (a second band adds).
@@ -1898,10 +1982,11 @@ void Viewer::panel_help() {
       {"N or .", "one step"},
       {"drag a part", "move it (Q / E or the wheel turn it)"},
       {"click a switch", "open or close it"},
+      {"palette bar or disk", "click to put it down; press and drag to draw it to any size"},
       {"W", "wire tool: a part's end, then another part's end"},
       {"H", "hinge tool: where two parts overlap"},
       {"J", "glue tool: where two parts overlap or touch"},
-      {"T", "string tool: a part, then another part or the board"},
+      {"T", "string tool: a part, then another part or the board (it pulls, never pushes)"},
       {"K", "spring tool: a part, then another part or the board (a spring with a damper)"},
       {"P", "pin the part under the mouse to the board"},
       {"Delete", "remove the selected part, joint, spring or wire (click a wire to select it)"},
@@ -1988,7 +2073,7 @@ void Viewer::panel_toolbar() {
        "click where two parts overlap: an axle through both (one part: through it and the board)"},
       {"Glue J", Tool::Glue, "click where two parts overlap or touch: they move as one"},
       {"String T", Tool::String,
-       "click a part, then another part or the board: a chain of small links"},
+       "click a part, then another part or the board: a string, taut as it is made; it only pulls"},
       {"Spring K", Tool::Spring,
        "click a part, then another part or the board: a spring with a damper, at rest as it is"},
   };
@@ -2067,10 +2152,11 @@ void Viewer::file_popups() {
   SDL_GetWindowSize(window_, &win_w, &win_h);
   ImGui::SetNextWindowPos({float(win_w) / 2, float(win_h) / 3}, ImGuiCond_Always, {0.5f, 0.5f});
   ImGui::SetNextWindowSize({std::min(520.0f, float(win_w) - 40), 0});
-  const char* title = popup_ == Popup::Open         ? "Open a scene"
-                      : popup_ == Popup::SaveAs     ? "Save as"
-                      : popup_ == Popup::ConfirmNew ? "New board"
-                                                    : "Open";
+  const char* title = popup_ == Popup::Open               ? "Open a scene"
+                      : popup_ == Popup::SaveAs           ? "Save as"
+                      : popup_ == Popup::ConfirmNew       ? "New board"
+                      : popup_ == Popup::ConfirmOverwrite ? "Replace a file"
+                                                          : "Open";
   ImGui::Begin(title, nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
@@ -2100,6 +2186,13 @@ void Viewer::file_popups() {
                            "the edits since the last save will be asked about");
     }
     if (ImGui::Button(popup_ == Popup::Open ? "Open (Enter)" : "Save (Enter)")) popup_enter();
+  } else if (popup_ == Popup::ConfirmOverwrite) {
+    ImGui::TextWrapped("%s is there already%s. Replace it with this board?", pending_save_.c_str(),
+                       written_by_viewer(pending_save_)
+                           ? ""
+                           : " (written by hand: its Lua would be lost, the board's objects "
+                             "written instead)");
+    if (ImGui::Button("Yes, replace it (Enter)")) popup_enter();
   } else {
     ImGui::TextUnformatted(popup_ == Popup::ConfirmNew
                                ? "Start a new board? The edits since the last save are lost."
@@ -2125,7 +2218,12 @@ void Viewer::panel_palette() {
   ImGui::Begin("Parts", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   remember_panel();
+  // One line: the buttons' places are what tests/viewer/xvfb_mouse_test.sh clicks.
   ImGui::TextDisabled("drag onto the board, or click then click");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "bars, disks and fixed shapes: press on the board and drag to draw one "
+        "to any size");
   std::string group;
   const float bw = (kLeftWidth - 20 - 6) / 2;
   int in_row = 0;
@@ -2204,13 +2302,18 @@ void Viewer::panel_inspector() {
     ImGui::SameLine();
     ImGui::TextDisabled("%s", joint_kind->index == 0 ? "hinge (an axle)" : "glue");
   } else if (const auto ends = spring_ends(*w, id)) {
+    const bool string = (*w).value<bool>(id, "spring_slack").value_or(false);
     ImGui::SameLine();
-    ImGui::TextDisabled("spring with a damper");
+    ImGui::TextDisabled(string ? "string (pulls only when taut)" : "spring with a damper");
     const double len = length(ends->b - ends->a);
     const double k = (*w).value<double>(id, "spring_stiffness").value_or(0);
     const double rest = (*w).value<double>(id, "spring_rest_length").value_or(0);
-    ImGui::Text("length %.2f cm (rest %.2f cm)", len * 100, rest * 100);
-    ImGui::Text("pulls with %.3g N", k * (len - rest));
+    ImGui::Text(string ? "ends %.2f cm apart (length %.2f cm)" : "length %.2f cm (rest %.2f cm)",
+                len * 100, rest * 100);
+    if (string && len <= rest)
+      ImGui::Text("slack: pulls with nothing");
+    else
+      ImGui::Text("pulls with %.3g N", k * (len - rest));
   } else if ((*w).value<ObjectId>(id, "wire_from")) {
     ImGui::SameLine();
     ImGui::TextDisabled("wire");

@@ -147,8 +147,21 @@ class Viewer {
   /// Loads another scene file or mod folder; false (with the reason in
   /// messages, the present world kept) if it cannot.
   bool open(const std::filesystem::path& path);
-  /// Where Save writes (Save as changes it).
+  /// Where Save writes (Save as changes it): a scene file the viewer wrote is
+  /// saved over; any other scene file or mod folder is saved next to it, as
+  /// `<its name>_saved.lua` in the same folder (a scene written by hand is
+  /// never overwritten by Save).
   const std::string& save_path() const { return save_path_; }
+  /// Where Save writes for a board opened from `scene` (see save_path).
+  static std::filesystem::path save_path_for(const std::filesystem::path& scene);
+  /// True if `file` begins as the scene writer begins what it writes.
+  static bool written_by_viewer(const std::filesystem::path& file);
+  /// The file a Save as waits to overwrite until the player says yes ("" none).
+  const std::string& asking_to_overwrite() const {
+    return popup_ == Popup::ConfirmOverwrite ? pending_save_ : kNone;
+  }
+  /// A Save as popup is open, waiting for a path.
+  bool asking_for_path() const { return popup_ == Popup::SaveAs; }
   /// True for a New board that has not been saved yet.
   bool untitled() const { return untitled_; }
   /// Undo / redo the last edit (Ctrl+Z, Ctrl+Y); false if there was none.
@@ -287,7 +300,9 @@ class Viewer {
   // Files and history.
   History history_;
   std::uint64_t synced_changes_ = 0;
-  enum class Popup { None, Open, SaveAs, ConfirmNew, ConfirmOpen };
+  enum class Popup { None, Open, SaveAs, ConfirmNew, ConfirmOpen, ConfirmOverwrite };
+  std::string pending_save_;  // Save as: the existing file to overwrite once confirmed
+  static inline const std::string kNone;
   Popup popup_ = Popup::None;
   bool popup_fresh_ = false;  // opened this frame: focus its text field
   char path_buf_[512] = {};
@@ -299,7 +314,13 @@ class Viewer {
   ObjectId string_start_;
   Vec2 string_start_at_;
   bool string_started_ = false;
-  ObjectId resizing_;      // the part whose handle is held
+  ObjectId resizing_;   // the part whose handle is held
+  ObjectId drawing_;    // a bar or disk just put down, drawn to size while the press is held
+  Vec2 draw_from_;      // where its press was, m
+  bool drawn_ = false;  // the drag went far enough to size it
+  /// Sizes the part being drawn by the drag from draw_from_ to `at`: a bar
+  /// from the press to the mouse, a disk of the drag's radius about the press.
+  void on_draw(Vec2 at);
   std::string fields_of_;  // inspector: the object whose fields are being typed in
 
   // What happened.

@@ -83,6 +83,10 @@ std::vector<PropertyDef> spring_properties() {
        .unit = "N s/m",
        .doc = "spring: the damper's force per m/s of stretching (c)",
        .min = 0.0},
+      {.name = "spring_slack",
+       .kind = PropertyKind::Bool,
+       .doc = "spring: true makes it a string: it pulls only while longer than its rest length "
+              "and never pushes (shorter, it is slack and does nothing)"},
   };
 }
 
@@ -112,6 +116,7 @@ struct SpringColumns {
         anchor_b(world.column<Vec3>("spring_anchor_b")),
         rest(world.column<double>("spring_rest_length")),
         damping(world.column<double>("spring_damping")),
+        slack(world.column<std::uint8_t>("spring_slack")),
         position(world.column<Vec3>("position")),
         orientation(world.column<Quat>("orientation")),
         velocity(world.column<Vec3>("velocity")),
@@ -148,6 +153,7 @@ struct SpringColumns {
   ColumnView<ObjectId> part_a, part_b;
   ColumnView<Vec3> anchor_a, anchor_b;
   ColumnView<double> rest, damping;
+  ColumnView<std::uint8_t> slack;
   ColumnView<Vec3> position;
   ColumnView<Quat> orientation;
   ColumnView<Vec3> velocity, spin;
@@ -155,6 +161,13 @@ struct SpringColumns {
   ColumnView<std::uint8_t> is_static, pinned;
   const PropertyStore& store;
 };
+
+/// The energy a spring stores at length L: a string (slack) stores none while
+/// it is not stretched.
+double stored_energy(double k, double rest, double length, bool slack) {
+  if (slack && length <= rest) return 0;
+  return 0.5 * k * (length - rest) * (length - rest);
+}
 
 }  // namespace
 
@@ -174,9 +187,8 @@ void RigidBodyFromSprings::close_books(const WorldView& world) {
     // Its two parts, along the stretch the ends made (the force is along n).
     const Vec3 n = h.length > 0 ? (h.at_a - h.at_b) / h.length : Vec3{};
     const double stretch = dot(n, da - db);
-    const double stored_before = 0.5 * h.stiffness * (h.length - h.rest) * (h.length - h.rest);
-    const double l1 = length(a1 - b1);
-    const double stored_after = 0.5 * h.stiffness * (l1 - h.rest) * (l1 - h.rest);
+    const double stored_before = stored_energy(h.stiffness, h.rest, h.length, h.slack);
+    const double stored_after = stored_energy(h.stiffness, h.rest, length(a1 - b1), h.slack);
     given_ += work;
     heat_ += h.damper * stretch;
     // The elastic part gave -elastic * stretch; what the store lost beyond
@@ -197,8 +209,8 @@ void RigidBodyFromSprings::report_energy(const WorldView& world, EnergyReport& o
     const auto a = col.end_of(a_id, col.anchor_a.value_or(s, {}));
     const auto b = col.end_of(col.part_b.value_or(s, ObjectId{}), col.anchor_b.value_or(s, {}));
     if (a.part.is_null() && b.part.is_null()) continue;
-    const double stretch = length(a.at - b.at) - col.rest.value_or(s, 0);
-    stored += 0.5 * col.stiffness[s] * stretch * stretch;
+    stored += stored_energy(col.stiffness[s], col.rest.value_or(s, 0), length(a.at - b.at),
+                            col.slack.value_or(s, 0) != 0);
   }
   out.store("spring energy", stored);
   out.sink("damper heat", std::exchange(heat_, 0.0));
@@ -228,7 +240,14 @@ void RigidBodyFromSprings::apply(const WorldView& world) {
     if (!(L > 1e-12)) continue;
     const Vec3 n = d / L;
     const double rest = col.rest.value_or(s, 0);
-    const double elastic = k * (L - rest), damper = c * dot(a.v - b.v, n);
+    double elastic = k * (L - rest), damper = c * dot(a.v - b.v, n);
+    const bool slack = col.slack.value_or(s, 0) != 0;
+    if (slack) {
+      // A string: nothing while it is not stretched, and its damper cannot
+      // make it push (a string closing fast on a stretch goes slack sooner).
+      if (elastic <= 0) elastic = 0, damper = 0;
+      if (elastic + damper < 0) damper = -elastic;
+    }
     const Vec3 f = -(elastic + damper) * n;
     if (!a.part.is_null()) target_.add_force(a.part, f, a.at);
     if (!b.part.is_null()) target_.add_force(b.part, -f, b.at);
@@ -244,7 +263,8 @@ void RigidBodyFromSprings::apply(const WorldView& world) {
                      .damper = damper,
                      .stiffness = k,
                      .rest = rest,
-                     .length = L});
+                     .length = L,
+                     .slack = slack});
   }
 }
 
@@ -254,7 +274,7 @@ void register_rigid_body_from_springs(PluginRegistry& registry) {
               .kind = StageKind::Interaction,
               .reads = {"position", "orientation", "velocity", "angular_velocity", "mass", "static",
                         "pinned", "spring_a", "spring_b", "spring_anchor_a", "spring_anchor_b",
-                        "spring_stiffness", "spring_rest_length", "spring_damping"},
+                        "spring_stiffness", "spring_rest_length", "spring_damping", "spring_slack"},
               .needs = {"spring_stiffness"},
               .target = "rigid_body",
               .doc = "springs with dampers between two parts (or a part and the board)"};

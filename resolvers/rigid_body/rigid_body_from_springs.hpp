@@ -6,7 +6,9 @@
 //   F = -(k (L - L0) + c dL/dt) n        on part a at its anchor, -F on part b,
 //
 // where L is the anchors' distance, n the unit vector from b's anchor to a's,
-// and dL/dt the anchors' relative speed along n. Nothing here knows the rigid
+// and dL/dt the anchors' relative speed along n. With `spring_slack` true it is
+// a string: the force is a pull only, k (L - L0) + c dL/dt held at 0 or more,
+// and nothing at all while L <= L0. Nothing here knows the rigid
 // body's engine, so it works on any resolver that takes forces at points.
 //
 // The force is explicit: it is worked out from the state at the start of the
@@ -36,7 +38,7 @@
 //
 // Contract:
 //   reads    position, orientation, velocity, angular_velocity, mass, static,
-//            pinned, spring_* (below)
+//            pinned, spring_* (below; spring_slack optional)
 //   target   rigid_body (add_force at a world point)
 //   needs    spring_stiffness
 // The spring keeps no physical state of its own: everything is in its
@@ -90,6 +92,7 @@ class RigidBodyFromSprings final : public Interaction {
     double elastic = 0;                          ///< k (L - L0) at the start (tension > 0), N
     double damper = 0;                           ///< c dL/dt at the start, N
     double stiffness = 0, rest = 0, length = 0;  ///< k, L0, L at the start
+    bool slack = false;                          ///< a string: it stores nothing unstretched
   };
   /// Books the held forces along their ends' moves since they were worked out.
   void close_books(const WorldView& world);

@@ -242,7 +242,7 @@ TEST(ViewerEditor, AStringHangsABallFromAPostAndHoldsIt) {
   key(*v, SDLK_t);
   click(*v, {0.0, 0.39});
   click(*v, {0.0, 0.21});
-  ASSERT_TRUE(bool(w.find("string_1"))) << v->messages().back();
+  ASSERT_TRUE(bool(w.find("string"))) << v->messages().back();
   v->set_paused(false);
   for (int i = 0; i < 60; ++i) v->frame();
   // Without the string the ball would have fallen to the floor (y = 0.02).

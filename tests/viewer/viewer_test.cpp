@@ -272,17 +272,23 @@ TEST(Viewer, PauseStepAndTimeScale) {
   EXPECT_LE(v.world()->step_count(), 8u);
 }
 
-TEST(Viewer, CtrlSSavesTheSceneWhole) {
-  const fs::path dir = test::temp_dir();
-  const fs::path cwd = fs::current_path();
-  fs::current_path(dir);
+TEST(Viewer, CtrlSSavesTheSceneWholeBesideItsFolder) {
+  // A copy of the mod folder, opened from another working directory: Save
+  // writes beside the folder, nothing into the working directory.
+  const fs::path dir = test::temp_dir(), cwd = dir / "cwd";
+  fs::create_directories(cwd);
+  fs::copy(kDemo, dir / "rigid_demo",
+           fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  const fs::path was = fs::current_path();
+  fs::current_path(cwd);
   {
-    Viewer v(test::headless(kDemo));
+    Viewer v(test::headless(dir / "rigid_demo"));
     v.frame();
     v.push_key(SDLK_s, KMOD_CTRL);
     v.frame();
   }
-  fs::current_path(cwd);
+  fs::current_path(was);
+  EXPECT_TRUE(fs::is_empty(cwd));
   ASSERT_TRUE(fs::exists(dir / "rigid_demo_saved.lua"));
   auto saved = test::load(dir / "rigid_demo_saved.lua");
   EXPECT_TRUE(bool(saved.world().find("pendulum")));

@@ -56,8 +56,7 @@ export DISPLAY=":$n"
 wait_for "the X server on :$n" xdotool getdisplaygeometry
 
 # An empty board from a file, so that Save writes without a name to type:
-# board.lua -> board_saved.lua, in the viewer's working directory (which is
-# $dir: the viewer saves there, not beside the file).
+# board.lua (written by hand) -> board_saved.lua beside it, in $dir.
 printf 'world { name = "board" }\n' >"$dir/board.lua"
 case $alloy in /*) ;; *) alloy=$(pwd)/$alloy ;; esac
 cd "$dir" || fail "cd $dir"

@@ -84,6 +84,35 @@ joints.spring = {
   end,
 }
 
+-- kit.rope, not kit.string: the hoist's drum string (mods/hoist) owns that name.
+joints.rope = {
+  doc = "a string or rope from a point of part a to a point of part b (or of the play area): it pulls only when taut",
+  args = {
+    { "a", "object", required = true, doc = "the part at its first end" },
+    { "b", "object", doc = "the part at its other end; absent: the play area" },
+    { "at_a", "vec", doc = "its end on a, from a's centre in a's own frame {x, y}, m; default: the centre" },
+    { "at_b", "vec", doc = "its end on b, from b's centre in b's frame; with no b, a point of the play area, m" },
+    { "length", "positive", required = true, doc = "its length, m: longer than the ends' distance, it hangs slack" },
+    -- A string is a stiff spring that cannot push: a little stretch under
+    -- load (a 37 g ball: 1.2 mm), stable at 1/240 s on parts down to 10 g.
+    { "stiffness", "positive", default = 300, doc = "N/m of stretch past its length" },
+    { "damping", "nonnegative", default = 0.2, doc = "of its stretching, N s/m" },
+  },
+  build = function(a, kit)
+    if not a.b and not a.at_b then
+      kit.fail(a.name, "kit.rope needs 'b' or 'at_b' (a point of the play area) for its other end")
+    end
+    -- rigid_body_from_springs makes it a string (spring_slack) and refuses
+    -- one too stiff for the step on light parts (by name).
+    return {
+      spring_a = a.a, spring_b = a.b,
+      spring_anchor_a = a.at_a or { 0, 0 }, spring_anchor_b = a.at_b or { 0, 0 },
+      spring_stiffness = a.stiffness, spring_rest_length = a.length, spring_damping = a.damping,
+      spring_slack = true,
+    }
+  end,
+}
+
 -- The kit's own: other mods use these parts through `require "kit"`.
 return alloy.per_mod(function(mod)
   if mod == "kit" then return joints end
