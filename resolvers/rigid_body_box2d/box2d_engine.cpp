@@ -708,11 +708,29 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
   }
   const double h = dt / n;
-  auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
+  auto part_for = [&](std::uint32_t slot, std::uint32_t gen) -> const Impl::Part* {
     if (slot >= m.part_of_slot.size() || m.part_of_slot[slot] < 0) return nullptr;
     if (gen != 0 && store_.id_at(slot).generation != gen) return nullptr;
-    Impl::Body& b = m.bodies[m.parts[std::size_t(m.part_of_slot[slot])].body];
-    return b.dynamic ? &b : nullptr;
+    const Impl::Part& part = m.parts[std::size_t(m.part_of_slot[slot])];
+    return m.bodies[part.body].dynamic ? &part : nullptr;
+  };
+  auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
+    const Impl::Part* part = part_for(slot, gen);
+    return part ? &m.bodies[part->body] : nullptr;
+  };
+  // A force on a part acts at the part's centre, as on ODE's engine: on a
+  // body of several glued parts (the motor's rotor: a hub and eight magnet
+  // spokes) that is off the body's centre of mass, and the force turns the
+  // body. Box2D's ApplyForceToCenter would drop that torque (it did until
+  // session 16: the magnets' pull on the spokes turned ODE's rotor and not
+  // Box2D's, which ran 44 % slow). A part that is its body's centre of mass
+  // (a body of one part) keeps ApplyForceToCenter, bit for bit.
+  auto push = [&](const Impl::Part& part, b2Body* b, b2Vec2 f) {
+    const bool awake = !config_.sleep;  // as `wake` below
+    if (part.local == b->GetLocalCenter())
+      b->ApplyForceToCenter(f, awake);
+    else
+      b->ApplyForce(f, b->GetWorldPoint(part.local), awake);
   };
   if (config_.sleep) {
     // A sleeper wakes when the load on it changes (a magnet switched on), not
@@ -741,11 +759,12 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   const bool wake = !config_.sleep;
   for (int k = 0; k < n; ++k) {
     for (const LoadCommand& c : loads_) {
-      Impl::Body* b = body_of(c.slot, c.generation);
-      if (!b) continue;
+      const Impl::Part* part = part_for(c.slot, c.generation);
+      if (!part) continue;
+      Impl::Body* b = &m.bodies[part->body];
       switch (c.kind) {
         case Load::Force:
-          b->b->ApplyForceToCenter(b2Vec2(float(c.value.x * s), float(c.value.y * s)), wake);
+          push(*part, b->b, b2Vec2(float(c.value.x * s), float(c.value.y * s)));
           break;
         case Load::ForceAtPoint:
           b->b->ApplyForce(b2Vec2(float(c.value.x * s), float(c.value.y * s)),
@@ -758,10 +777,11 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
     const double tau = k * h;
     for (const RatedLoad& r : rated_) {
-      Impl::Body* b = body_of(r.slot, r.generation);
-      if (!b) continue;
+      const Impl::Part* part = part_for(r.slot, r.generation);
+      if (!part) continue;
+      Impl::Body* b = &m.bodies[part->body];
       const Vec3 f = r.force + r.force_rate * tau, t = r.torque + r.torque_rate * tau;
-      b->b->ApplyForceToCenter(b2Vec2(float(f.x * s), float(f.y * s)), wake);
+      push(*part, b->b, b2Vec2(float(f.x * s), float(f.y * s)));
       b->b->ApplyTorque(float(t.z * s * s), wake);
     }
     for (auto& body : m.bodies) {
