@@ -28,6 +28,7 @@
 // (whose ratio is the "overhead" section). Goal: <= 1.02.
 //
 //   build/bench/alloy_bench_engines [--quick] [--out DIR] [--docs FILE] [--no-progress]
+//                                   [--overhead-only]
 //
 // Writes docs/bench/engines.csv and the "engines" section of
 // docs/performance.md. Quick mode (ctest) runs small sizes and checks that
@@ -378,7 +379,8 @@ const Point* cheapest_within(const std::vector<Point>& pts, const std::string& s
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bench::Options o = bench::Options::parse(argc, argv, "alloy_bench_engines");
+  const bench::Options o =
+      bench::Options::parse(argc, argv, "alloy_bench_engines", {"--overhead-only"});
   const bool quick = o.quick;
   // Sizes: the in full; small ones for CI.
   const Layout pile = quick ? pile_layout(10, 10) : pile_layout(50, 20);
@@ -417,6 +419,13 @@ int main(int argc, char** argv) {
   };
   const Overhead oh = measure_overhead(pile, settle, rounds, per_round, progress);
   std::printf("harness / raw Box2D: %.4f\n", oh.ratio);
+  if (o.flag("--overhead-only")) {
+    // The harness ratio alone (a few seconds), for work on the harness: the
+    // raw and harness CPU ms a step, printed; nothing written.
+    std::printf("raw %.4f ms/step, harness %.4f ms/step, %zu stages, drift %.3g m\n",
+                1e3 * oh.raw_s / oh.steps, 1e3 * oh.harness_s / oh.steps, oh.stages, oh.drift);
+    return 0;
+  }
   for (Engine e : kEngines)
     for (const auto& scene : kit_scenes) {
       double ref = NAN, v = NAN;
