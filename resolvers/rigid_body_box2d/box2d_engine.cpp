@@ -881,52 +881,43 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     });
     m.last_keys = keys;
   }
-  struct Raw {
-    ObjectId a, b;
-    ContactPoint p;
-    double speed;
-  };
-  static thread_local std::vector<Raw> raw;
-  raw.clear();
-  for (const std::uint32_t k : order) {
-    b2Contact* c = keys[k].c;
-    const Impl::Part& pa = m.part_of(c->GetFixtureA());
-    const Impl::Part& pb = m.part_of(c->GetFixtureB());
-    const bool a_is_A = pa.id < pb.id;
-    b2WorldManifold wm;
-    c->GetWorldManifold(&wm);
-    const int np = c->GetManifold()->pointCount;
-    const double speed = m.approach(c, wm, np, a_is_A);
-    // ContactPoint's normal points from b towards a; Box2D's from A to B.
-    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
-    for (int i = 0; i < np; ++i)
-      raw.push_back({keys[k].a, keys[k].b,
-                     ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
-                                  .normal = {nn.x, nn.y, 0},
-                                  .depth = std::max(0.0, -double(wm.separations[i]) / s)},
-                     speed});
-  }
+  // Pairs and points are written in that order directly; a pair's approach
+  // speed is the largest at its points now or at its beginning (PreSolve's).
   if (m.pre_speeds.size() > 1)
     std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
               [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
   pairs_.clear(), points_.clear();
   std::size_t ps = 0;
-  for (const Raw& r : raw) {
-    if (pairs_.empty() || pairs_.back().a != r.a || pairs_.back().b != r.b) {
+  for (const std::uint32_t k : order) {
+    const Impl::ContactKey& key = keys[k];
+    b2Contact* c = key.c;
+    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);
+    const int np = c->GetManifold()->pointCount;
+    const double speed = m.approach(c, wm, np, a_is_A);
+    if (pairs_.empty() || pairs_.back().a != key.a || pairs_.back().b != key.b) {
       Box2DPair& p = pairs_.emplace_back();
-      p.a = r.a, p.b = r.b, p.first = std::uint32_t(points_.size());
+      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points_.size());
       while (ps < m.pre_speeds.size() &&
-             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, r.a, r.b))
+             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
         ++ps;
       for (std::size_t q = ps;
-           q < m.pre_speeds.size() && m.pre_speeds[q].a == r.a && m.pre_speeds[q].b == r.b; ++q)
+           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
         p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
     }
     Box2DPair& p = pairs_.back();
-    points_.push_back(r.p);
-    ++p.count;
-    p.depth = std::max(p.depth, r.p.depth);
-    p.normal_speed = std::max(p.normal_speed, r.speed);
+    // ContactPoint's normal points from b towards a; Box2D's from A to B.
+    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
+    for (int i = 0; i < np; ++i) {
+      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
+      points_.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
+                                     .normal = {nn.x, nn.y, 0},
+                                     .depth = depth});
+      ++p.count;
+      p.depth = std::max(p.depth, depth);
+      p.normal_speed = std::max(p.normal_speed, speed);
+    }
   }
   impulses_.clear();
   impulses_computed_ = m.want_impulses;
