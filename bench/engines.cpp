@@ -169,8 +169,7 @@ class RawBox2DPile {
     b2BodyDef gd;
     gd.position.Set(float(l.floor.position.x * s_), float(l.floor.position.y * s_));
     b2Body* ground = world_.CreateBody(&gd);
-    b2PolygonShape gs;
-    gs.SetAsBox(float(l.floor.size.x / 2 * s_), float(l.floor.size.y / 2 * s_));
+    b2PolygonShape gs = box(l.floor.size);
     b2FixtureDef gf;
     gf.shape = &gs;
     gf.friction = float(l.friction);
@@ -180,8 +179,7 @@ class RawBox2DPile {
       bd.type = b2_dynamicBody;
       bd.position.Set(float(b.position.x * s_), float(b.position.y * s_));
       b2Body* body = world_.CreateBody(&bd);
-      b2PolygonShape shape;
-      shape.SetAsBox(float(b.size.x / 2 * s_), float(b.size.y / 2 * s_));
+      b2PolygonShape shape = box(b.size);
       b2FixtureDef fd;
       fd.shape = &shape;
       fd.friction = float(l.friction);
@@ -190,6 +188,18 @@ class RawBox2DPile {
       bodies_.push_back(body);
     }
     poses_.resize(bodies_.size());
+  }
+  /// A box whose skin (b2_polygonRadius) lies inside its size, as
+  /// rigid_body.box2d builds it, so that both piles have the same geometry
+  /// (a plain SetAsBox stands 1 mm proud at scale 10, and the raw pile spread
+  /// 3.4 cm from the harness's).
+  b2PolygonShape box(Vec3 size) const {
+    const float hx = float(size.x / 2 * s_), hy = float(size.y / 2 * s_);
+    const float skin = std::min(b2_polygonRadius, 0.5f * std::min(hx, hy));
+    b2PolygonShape shape;
+    shape.SetAsBox(hx - skin, hy - skin);
+    shape.m_radius = skin;
+    return shape;
   }
   void step() {
     world_.Step(dt_, vi_, pi_);

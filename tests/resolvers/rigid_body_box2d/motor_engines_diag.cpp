@@ -11,7 +11,7 @@
 // with the bearing's Coulomb torque at its cap while the rotor turns (checked:
 // the rotor does not stop in the window). Not a test: a measuring tool.
 //
-//   motor_engines_diag ENGINE [T0 T1] [object.property=value ...] [--csv FILE]
+//   motor_engines_diag ENGINE [T0 T1] [object.property=value ...] [--dt H] [--csv FILE]
 //
 // ENGINE is rigid_body or rigid_body.box2d; the overrides are set before the
 // first step (numbers only), e.g. slider.friction=0 bearing.joint_friction=0.
@@ -46,7 +46,8 @@ bool has(World& w, ObjectId o, const char* p) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s ENGINE [T0 T1] [object.property=value ...] [--csv FILE]\n",
+    std::fprintf(stderr,
+                 "usage: %s ENGINE [T0 T1] [object.property=value ...] [--dt H] [--csv FILE]\n",
                  argv[0]);
     return 2;
   }
@@ -69,6 +70,10 @@ int main(int argc, char** argv) {
     const std::string arg = argv[a];
     if (arg == "--csv" && a + 1 < argc) {
       csv = std::fopen(argv[++a], "w");
+      continue;
+    }
+    if (arg == "--dt" && a + 1 < argc) {
+      world.set_dt(std::atof(argv[++a]));
       continue;
     }
     const auto dot = arg.find('.'), eq = arg.find('=');
