@@ -3,6 +3,7 @@
 #include <box2d/box2d.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -166,6 +167,17 @@ struct Box2DEngine::Impl : b2ContactListener {
   std::vector<Hinge> hinges;
   std::vector<PreSpeed> pre_speeds;
   std::vector<PairImpulse> step_impulses;
+  /// A touching contact, its parts' ids in order, and its place in Box2D's list.
+  struct ContactKey {
+    ObjectId a, b;
+    b2Contact* c;
+    std::uint32_t seq;
+  };
+  std::vector<ContactKey> contact_keys, last_keys;  // this step's, and the last sorted ones
+  std::vector<std::uint32_t> contact_order;         // into contact_keys, by (a, b, seq)
+  /// Versions of position, orientation, velocity and angular_velocity after
+  /// the last write-back (none after a build: the parts are compared then).
+  std::array<std::uint64_t, 4> written_versions{~0ull, ~0ull, ~0ull, ~0ull};
 
   Part& part_of(b2Fixture* f) { return parts[f->GetUserData().pointer]; }
 
@@ -187,11 +199,13 @@ struct Box2DEngine::Impl : b2ContactListener {
   void PreSolve(b2Contact* c, const b2Manifold* old) override {
     const Part& pa = part_of(c->GetFixtureA());
     const Part& pb = part_of(c->GetFixtureB());
-    // The same mixing as rigid_body_from_collisions for ODE.
-    c->SetFriction(float(std::sqrt(pa.friction * pb.friction)));
-    c->SetRestitution(float(std::clamp(std::max(pa.restitution, pb.restitution), 0.0, 1.0)));
-    c->SetRestitutionThreshold(float(bounce * s));
     if (old->pointCount == 0) {
+      // The same mixing as rigid_body_from_collisions for ODE, set when the
+      // contact begins to touch: Box2D keeps a contact's values until it is
+      // destroyed, and a change of the materials rebuilds the world.
+      c->SetFriction(float(std::sqrt(pa.friction * pb.friction)));
+      c->SetRestitution(float(std::clamp(std::max(pa.restitution, pb.restitution), 0.0, 1.0)));
+      c->SetRestitutionThreshold(float(bounce * s));
       // Just began: the impact speed, before the solver removes it.
       b2WorldManifold wm;
       c->GetWorldManifold(&wm);
@@ -260,6 +274,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world->SetAllowSleeping(config_.sleep);
   m.world->SetContactListener(&m);
   m.parts.clear();
+  m.written_versions.fill(~0ull);
   m.bodies.clear();
   m.hinges.clear();
   b2BodyDef gd;
@@ -643,7 +658,19 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   const auto ang_in = access.column<Vec3>("angular_velocity");
   // Edits from outside between steps (the viewer, a timeline, a scene's
   // script): a part whose pose or velocity is not what we wrote moves its body there.
+  // Only looked for when one of the four columns was written since our write
+  // (every write bumps its column's version): a world where only this engine
+  // moves things skips the comparison of every part.
+  auto motion_versions = [&] {
+    std::array<std::uint64_t, 4> v{};
+    std::size_t i = 0;
+    for (const char* n : {"position", "orientation", "velocity", "angular_velocity"})
+      v[i++] = access.store().column(access.property(n)).version();
+    return v;
+  };
+  const bool maybe_edited = motion_versions() != m.written_versions;
   for (const Impl::Part& part : m.parts) {
+    if (!maybe_edited) break;
     Impl::Body& body = m.bodies[part.body];
     if (!body.dynamic) continue;
     const std::uint32_t slot = part.id.index;
@@ -685,6 +712,12 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     for (std::size_t bi = 0; bi < m.bodies.size(); ++bi) {
       Impl::Body& body = m.bodies[bi];
       if (!body.dynamic) continue;
+      {  // the usual case, without the square root: well within n substeps' reach
+        const double v2 = double(body.b->GetLinearVelocity().LengthSquared()) * dt * dt,
+                     w = double(body.b->GetAngularVelocity()) * dt, reach = 0.99 * n;
+        if (v2 < reach * reach * max_move * max_move && w * w < reach * reach * max_turn * max_turn)
+          continue;
+      }
       const double v = double(body.b->GetLinearVelocity().Length()) * dt;
       const double w = std::abs(double(body.b->GetAngularVelocity())) * dt;
       const double need = std::ceil(std::max(v / max_move, w / max_turn));
@@ -708,11 +741,29 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
   }
   const double h = dt / n;
-  auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
+  auto part_for = [&](std::uint32_t slot, std::uint32_t gen) -> const Impl::Part* {
     if (slot >= m.part_of_slot.size() || m.part_of_slot[slot] < 0) return nullptr;
     if (gen != 0 && store_.id_at(slot).generation != gen) return nullptr;
-    Impl::Body& b = m.bodies[m.parts[std::size_t(m.part_of_slot[slot])].body];
-    return b.dynamic ? &b : nullptr;
+    const Impl::Part& part = m.parts[std::size_t(m.part_of_slot[slot])];
+    return m.bodies[part.body].dynamic ? &part : nullptr;
+  };
+  auto body_of = [&](std::uint32_t slot, std::uint32_t gen) -> Impl::Body* {
+    const Impl::Part* part = part_for(slot, gen);
+    return part ? &m.bodies[part->body] : nullptr;
+  };
+  // A force on a part acts at the part's centre, as on ODE's engine: on a
+  // body of several glued parts (the motor's rotor: a hub and eight magnet
+  // spokes) that is off the body's centre of mass, and the force turns the
+  // body. Box2D's ApplyForceToCenter would drop that torque (it did until
+  // session 16: the magnets' pull on the spokes turned ODE's rotor and not
+  // Box2D's, which ran 44 % slow). A part that is its body's centre of mass
+  // (a body of one part) keeps ApplyForceToCenter, bit for bit.
+  auto push = [&](const Impl::Part& part, b2Body* b, b2Vec2 f) {
+    const bool awake = !config_.sleep;  // as `wake` below
+    if (part.local == b->GetLocalCenter())
+      b->ApplyForceToCenter(f, awake);
+    else
+      b->ApplyForce(f, b->GetWorldPoint(part.local), awake);
   };
   if (config_.sleep) {
     // A sleeper wakes when the load on it changes (a magnet switched on), not
@@ -741,11 +792,12 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   const bool wake = !config_.sleep;
   for (int k = 0; k < n; ++k) {
     for (const LoadCommand& c : loads_) {
-      Impl::Body* b = body_of(c.slot, c.generation);
-      if (!b) continue;
+      const Impl::Part* part = part_for(c.slot, c.generation);
+      if (!part) continue;
+      Impl::Body* b = &m.bodies[part->body];
       switch (c.kind) {
         case Load::Force:
-          b->b->ApplyForceToCenter(b2Vec2(float(c.value.x * s), float(c.value.y * s)), wake);
+          push(*part, b->b, b2Vec2(float(c.value.x * s), float(c.value.y * s)));
           break;
         case Load::ForceAtPoint:
           b->b->ApplyForce(b2Vec2(float(c.value.x * s), float(c.value.y * s)),
@@ -758,10 +810,11 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
     const double tau = k * h;
     for (const RatedLoad& r : rated_) {
-      Impl::Body* b = body_of(r.slot, r.generation);
-      if (!b) continue;
+      const Impl::Part* part = part_for(r.slot, r.generation);
+      if (!part) continue;
+      Impl::Body* b = &m.bodies[part->body];
       const Vec3 f = r.force + r.force_rate * tau, t = r.torque + r.torque_rate * tau;
-      b->b->ApplyForceToCenter(b2Vec2(float(f.x * s), float(f.y * s)), wake);
+      push(*part, b->b, b2Vec2(float(f.x * s), float(f.y * s)));
       b->b->ApplyTorque(float(t.z * s * s), wake);
     }
     for (auto& body : m.bodies) {
@@ -803,54 +856,68 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     anchor.set(hj.id.index, {a.x / s, a.y / s, 0});
   }
 
-  // The contacts after the step, for collisions.box2d.
-  struct Raw {
-    ObjectId a, b;
-    ContactPoint p;
-    double speed;
-  };
-  static thread_local std::vector<Raw> raw;
-  raw.clear();
+  // The contacts after the step, for collisions.box2d, sorted by (a, b) and,
+  // within a pair, in Box2D's list order (a capsule's fixtures make several
+  // contacts per pair). The touching contacts are sorted as small keys, not
+  // their points, and a step whose touching contacts are those of the step
+  // before, in the same order (a pile at rest), reuses that step's order.
+  auto& keys = m.contact_keys;
+  keys.clear();
   for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
     if (!c->IsTouching() || !c->IsEnabled()) continue;
-    const Impl::Part& pa = m.part_of(c->GetFixtureA());
-    const Impl::Part& pb = m.part_of(c->GetFixtureB());
-    const bool a_is_A = pa.id < pb.id;
+    const ObjectId a = m.part_of(c->GetFixtureA()).id, b = m.part_of(c->GetFixtureB()).id;
+    keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size())});
+  }
+  auto& order = m.contact_order;
+  if (keys.size() != m.last_keys.size() ||
+      !std::equal(keys.begin(), keys.end(), m.last_keys.begin(), [](const auto& x, const auto& y) {
+        return x.c == y.c && x.a == y.a && x.b == y.b;
+      })) {
+    order.resize(keys.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+      const auto &kx = keys[x], &ky = keys[y];
+      return pair_less(kx.a, kx.b, ky.a, ky.b) || (kx.a == ky.a && kx.b == ky.b && kx.seq < ky.seq);
+    });
+    m.last_keys = keys;
+  }
+  // Pairs and points are written in that order directly; a pair's approach
+  // speed is the largest at its points now or at its beginning (PreSolve's).
+  if (m.pre_speeds.size() > 1)
+    std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
+              [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
+  pairs_.clear(), points_.clear();
+  std::size_t ps = 0;
+  for (const std::uint32_t k : order) {
+    const Impl::ContactKey& key = keys[k];
+    b2Contact* c = key.c;
+    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
     b2WorldManifold wm;
     c->GetWorldManifold(&wm);
     const int np = c->GetManifold()->pointCount;
     const double speed = m.approach(c, wm, np, a_is_A);
-    // ContactPoint's normal points from b towards a; Box2D's from A to B.
-    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
-    for (int i = 0; i < np; ++i)
-      raw.push_back({std::min(pa.id, pb.id), std::max(pa.id, pb.id),
-                     ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
-                                  .normal = {nn.x, nn.y, 0},
-                                  .depth = std::max(0.0, -double(wm.separations[i]) / s)},
-                     speed});
-  }
-  std::stable_sort(raw.begin(), raw.end(),
-                   [](const Raw& x, const Raw& y) { return pair_less(x.a, x.b, y.a, y.b); });
-  std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
-            [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
-  pairs_.clear(), points_.clear();
-  std::size_t ps = 0;
-  for (const Raw& r : raw) {
-    if (pairs_.empty() || pairs_.back().a != r.a || pairs_.back().b != r.b) {
+    if (pairs_.empty() || pairs_.back().a != key.a || pairs_.back().b != key.b) {
       Box2DPair& p = pairs_.emplace_back();
-      p.a = r.a, p.b = r.b, p.first = std::uint32_t(points_.size());
+      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points_.size());
       while (ps < m.pre_speeds.size() &&
-             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, r.a, r.b))
+             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
         ++ps;
       for (std::size_t q = ps;
-           q < m.pre_speeds.size() && m.pre_speeds[q].a == r.a && m.pre_speeds[q].b == r.b; ++q)
+           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
         p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
     }
     Box2DPair& p = pairs_.back();
-    points_.push_back(r.p);
-    ++p.count;
-    p.depth = std::max(p.depth, r.p.depth);
-    p.normal_speed = std::max(p.normal_speed, r.speed);
+    // ContactPoint's normal points from b towards a; Box2D's from A to B.
+    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
+    for (int i = 0; i < np; ++i) {
+      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
+      points_.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
+                                     .normal = {nn.x, nn.y, 0},
+                                     .depth = depth});
+      ++p.count;
+      p.depth = std::max(p.depth, depth);
+      p.normal_speed = std::max(p.normal_speed, speed);
+    }
   }
   impulses_.clear();
   impulses_computed_ = m.want_impulses;
@@ -868,6 +935,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
   }
   note_versions(access);
+  m.written_versions = motion_versions();
   ++state_version_;
 }
 
