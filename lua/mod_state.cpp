@@ -96,8 +96,17 @@ int sink_print(lua_State* L) {
                     bytes_text(sink->limit).c_str());
 }
 
+/// The longest name a mod may give a plugin, a property, an interaction
+/// function or a setting, and the most interaction functions one resolver
+/// may declare: a listing (`alloy plugins`), an error message or a save
+/// stays readable, and a mod cannot make the host hold 100,000-character
+/// names or thousands of bindings (docs/security.md).
+constexpr std::size_t kMaxNameLength = 64;
+constexpr std::size_t kMaxFunctions = 64;
+
 bool valid_name(const std::string& s, bool dots) {
-  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
+  if (s.empty() || s.size() > kMaxNameLength || std::isdigit(static_cast<unsigned char>(s[0])))
+    return false;
   return std::all_of(s.begin(), s.end(), [&](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || (dots && c == '.');
   });
@@ -214,12 +223,25 @@ struct Collector {
     return out;
   }
 
+  /// A name longer than kMaxNameLength is refused by its length (and
+  /// shown cut short: the name itself may be 100,000 characters).
+  void check_length(lua_State* L, const std::string& what, const std::string& name) {
+    if (name.size() <= kMaxNameLength) return;
+    std::string shown = name.substr(0, 24);
+    for (char& c : shown)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.') c = '?';
+    throw InputError(here(L),
+                     what + ": the name '" + shown + "...' is " + std::to_string(name.size()) +
+                         " characters long; names are at most " + std::to_string(kMaxNameLength));
+  }
+
   /// The string keys of the table in field `key`, sorted; the values stay on the Lua side.
   std::vector<std::string> keys_of(lua_State* L, int t, const char* key, const std::string& what) {
     lua_getfield(L, t, key);
     std::vector<std::string> out;
     if (lua_istable(L, -1)) {
       for (lua_pushnil(L); lua_next(L, -2); lua_pop(L, 1)) {
+        if (lua_type(L, -2) == LUA_TSTRING) check_length(L, what, lua_tostring(L, -2));
         if (lua_type(L, -2) != LUA_TSTRING || !valid_name(lua_tostring(L, -2), false))
           throw InputError(here(L), what + ": the keys of '" + key + "' must be names");
         out.emplace_back(lua_tostring(L, -2));
@@ -239,6 +261,7 @@ struct Collector {
                  what);
     PropertyDef def;
     def.name = string_field(L, 1, "name", what).value_or("");
+    check_length(L, what, def.name);
     if (!valid_name(def.name, false))
       throw InputError(here(L),
                        what + " needs a name made of letters, digits and _ (name = \"mana\")");
@@ -292,6 +315,7 @@ struct Collector {
     d.where = here(L);
     d.info.kind = kind;
     d.info.name = string_field(L, 1, "name", what).value_or("");
+    check_length(L, what, d.info.name);
     if (!valid_name(d.info.name, true))
       throw InputError(d.where, what + " needs a name made of letters, digits, _ and . (name = \"" +
                                     mod.name() + ".thing\")");
@@ -310,7 +334,12 @@ struct Collector {
     d.settings = keys_of(L, 1, "settings", what);
 
     if (kind == StageKind::Resolver) {
-      for (const auto& f : keys_of(L, 1, "functions", what)) {
+      const std::vector<std::string> functions = keys_of(L, 1, "functions", what);
+      if (functions.size() > kMaxFunctions)
+        throw InputError(d.where, what + " declares " + std::to_string(functions.size()) +
+                                      " interaction functions; a resolver may declare at most " +
+                                      std::to_string(kMaxFunctions));
+      for (const auto& f : functions) {
         lua_getfield(L, 1, "functions");
         lua_getfield(L, -1, f.c_str());
         FunctionDecl fd{f, {}};

@@ -774,6 +774,40 @@ std::string native_property_table(const PluginRegistry& registry) {
   return t.str();
 }
 
+/// A mod's text made safe for a terminal: control characters (C0, DEL and
+/// the UTF-8 encoded C1 range, which some terminals obey as escape
+/// sequences) are printed as \n, \t, \r or \xHH,
+/// so that a mod can neither forge lines of the listing nor move the
+/// cursor, clear the screen or retitle the window (docs/security.md).
+std::string printable(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  auto hex = [&](unsigned char c) {
+    static constexpr char kDigits[] = "0123456789abcdef";
+    out += "\\x";
+    out += kDigits[c >> 4];
+    out += kDigits[c & 15];
+  };
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c < 0x20 || c == 0x7f) {
+      hex(c);
+    } else if (c == 0xc2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) >= 0x80 &&
+               static_cast<unsigned char>(s[i + 1]) <= 0x9f) {
+      hex(c), hex(static_cast<unsigned char>(s[++i]));  // U+0080..U+009F: C1 controls
+    } else {
+      out += char(c);
+    }
+  }
+  return out;
+}
+
 /// `alloy plugins [PATH] [--json]`: every registered plugin, native and
 /// from mods. PATH (a scene or a mod folder) is loaded as `alloy run` and
 /// `alloy check` load it, so that its mods' plugins and properties are
@@ -815,35 +849,44 @@ int list_plugins(const std::string& path, bool json, bool doc_table, std::ostrea
   for (const auto& name : registry.order())
     all.push_back(plugin_json(registry, *registry.find(name)));
   if (json) {
-    out << all.dump(2) << "\n";
+    // Every character outside ASCII as \uXXXX: JSON escapes C0 controls
+    // itself, and this keeps the C1 ones (U+009B is a one-character CSI)
+    // off a terminal the listing is printed on.
+    out << all.dump(2, ' ', true) << "\n";
     return kExitOk;
   }
+  // Text output: every string a mod gave is passed through printable().
+  auto text = [](const nlohmann::json& j) { return printable(j.get<std::string>()); };
+  auto list = [](const nlohmann::json& j) {
+    std::vector<std::string> v = j.get<std::vector<std::string>>();
+    for (auto& x : v) x = printable(x);
+    return v;
+  };
   for (const auto& p : all) {
-    out << p["name"].get<std::string>() << " (" << p["kind"].get<std::string>();
-    if (p["origin"] == "mod") out << ", mod '" << p["mod"].get<std::string>() << "'";
+    out << text(p["name"]) << " (" << text(p["kind"]);
+    if (p["origin"] == "mod") out << ", mod '" << text(p["mod"]) << "'";
     out << ")";
-    if (!p["target"].get<std::string>().empty()) out << " -> " << p["target"].get<std::string>();
-    if (!p["doc"].get<std::string>().empty()) out << ": " << p["doc"].get<std::string>();
+    if (!p["target"].get<std::string>().empty()) out << " -> " << text(p["target"]);
+    if (!p["doc"].get<std::string>().empty()) out << ": " << text(p["doc"]);
     out << "\n";
     std::vector<std::string> owns;
-    for (const auto& o : p["owns"]) owns.push_back(o["name"].get<std::string>());
+    for (const auto& o : p["owns"]) owns.push_back(text(o["name"]));
     const std::pair<const char*, std::vector<std::string>> lists[] = {
         {"owns", owns},
-        {"reads", p["reads"].get<std::vector<std::string>>()},
-        {"writes", p["writes"].get<std::vector<std::string>>()},
-        {"needs", p["needs"].get<std::vector<std::string>>()},
-        {"derived", p["derived"].get<std::vector<std::string>>()},
-        {"resolvers", p["resolvers"].get<std::vector<std::string>>()}};
-    for (const auto& [label, list] : lists)
-      if (!list.empty()) out << "  " << label << ": " << joined(list) << "\n";
+        {"reads", list(p["reads"])},
+        {"writes", list(p["writes"])},
+        {"needs", list(p["needs"])},
+        {"derived", list(p["derived"])},
+        {"resolvers", list(p["resolvers"])}};
+    for (const auto& [label, items] : lists)
+      if (!items.empty()) out << "  " << label << ": " << joined(items) << "\n";
     if (!p["provides"].get<std::string>().empty())
-      out << "  provides: " << p["provides"].get<std::string>() << "\n";
+      out << "  provides: " << text(p["provides"]) << "\n";
     if (p["contacts"].get<bool>()) out << "  a contact set (Lua reads it with w:contacts)\n";
     for (const auto& f : p["functions"]) {
-      out << "  function " << f["name"].get<std::string>() << "(";
-      const auto args = f["args"].get<std::vector<std::string>>();
-      out << joined(args) << ")";
-      if (f.contains("doc")) out << ": " << f["doc"].get<std::string>();
+      out << "  function " << text(f["name"]) << "(";
+      out << joined(list(f["args"])) << ")";
+      if (f.contains("doc")) out << ": " << text(f["doc"]);
       out << "\n";
     }
   }

@@ -425,8 +425,12 @@ struct CollisionSet::Impl {
     if (s1 > s2) std::swap(s1, s2), std::swap(g1, g2);
     if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2)))
       return;
+    if (m.pair_count[s1] >= limits::contact_pairs_per_part &&
+        m.pair_count[s2] >= limits::contact_pairs_per_part)
+      return m.leave_out(s1, s2);
     const int n = collide_parts(g1, g2, int(m.buffer.size()), m.buffer.data());
     if (n <= 0) return;
+    m.pair_count[s1] += m.geoms[s2].movable, m.pair_count[s2] += m.geoms[s1].movable;
     ContactPair& pair = m.pairs->emplace_back();
     pair.a = m.geoms[s1].id;
     pair.b = m.geoms[s2].id;
@@ -441,6 +445,20 @@ struct CollisionSet::Impl {
       const double closing = dot(m2.at(p.position) - m1.at(p.position), p.normal);
       pair.normal_speed = std::max(pair.normal_speed, closing);
     }
+  }
+
+  // --- the bound on pairs (limits::contact_pairs_per_part) --------------------------
+  // A pair whose two parts each touch that many moving parts already is left
+  // out before its narrow phase: its parts pass through each other.
+  std::vector<std::uint32_t> pair_count;   // by slot: pairs kept with a moving part
+  std::size_t left_out = 0;                // pairs left out this update
+  std::vector<std::uint32_t> left_out_of;  // by slot: pairs of it left out this update
+  bool limited_before = false;             // the last update left pairs out
+
+  void leave_out(std::uint32_t s1, std::uint32_t s2) {
+    if (left_out_of.size() < geoms.size()) left_out_of.resize(geoms.size(), 0);
+    ++left_out_of[s1], ++left_out_of[s2];
+    ++left_out;
   }
 
   // --- continuous detection -----------------------------------------------------
@@ -773,6 +791,8 @@ void CollisionSet::update(const WorldView& world) {
     m.pairs = &current_;
     m.points = &points_;
     m.grid = m.gather();
+    m.pair_count.assign(m.geoms.size(), 0);
+    m.left_out = 0;
     if (m.grid) {
       m.collide_grid();
     } else {  // a part beyond the grid's range: ODE's collide reports it (engine_failed)
@@ -792,6 +812,7 @@ void CollisionSet::update(const WorldView& world) {
     throw;
   }
   m.sort_pairs(current_);
+  report_left_out(world);
 
   // A repeated update is of the step the saved run's last update was (the
   // set may have been skipped since, while nothing it reads changed).
@@ -825,6 +846,35 @@ void CollisionSet::engine_failed(const WorldView& world, const std::string& what
               " no part in collisions until back within it";
   e.text += " (this step's contacts are the last step's)";
   world.emit(std::move(e));
+}
+
+void CollisionSet::report_left_out(const WorldView& world) {
+  // One event when pairs begin to be left out (not one a step while a heap
+  // lasts), naming the part with the most pairs left out.
+  Impl& m = *impl_;
+  const bool limited = m.left_out > 0;
+  if (limited && !m.limited_before) {
+    std::uint32_t worst = 0;
+    for (std::uint32_t s = 0; s < m.left_out_of.size(); ++s)
+      if (m.left_out_of[s] > m.left_out_of[worst]) worst = s;
+    const PropertyStore& store = world.store();
+    const ObjectId id = m.geoms[worst].id;
+    world.emit(Event{
+        .type = "contact_limit",
+        .a = id,
+        .values = {{"per_part", double(limits::contact_pairs_per_part)},
+                   {"left_out", double(m.left_out)},
+                   {"of_part", double(m.left_out_of[worst])}},
+        .text = "collisions: " + std::to_string(m.left_out) +
+                " pairs of overlapping parts were left out, each of whose parts touched " +
+                std::to_string(limits::contact_pairs_per_part) +
+                " moving parts already (the limit); they pass through each other. '" +
+                store.describe(id) + "' is in " + std::to_string(m.left_out_of[worst]) +
+                " of them: parts placed through each other in a heap? (reported when it begins; "
+                "docs/security.md)"});
+  }
+  m.limited_before = limited;
+  if (limited) std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
 }
 
 void CollisionSet::sweep(const WorldView& world) {

@@ -106,6 +106,9 @@ class CollisionSet final : public ContactSet {
   bool restored_ = false;
 
   void sweep(const WorldView& world);
+  /// The "contact_limit" event when this update began to leave pairs out
+  /// (limits::contact_pairs).
+  void report_left_out(const WorldView& world);
   /// ODE failed inside the update (see collisions.cpp): reported, not fatal.
   void engine_failed(const WorldView& world, const std::string& what);
 };

@@ -2,6 +2,7 @@
 // contract with the Lua kit and the viewer: keep them exactly.
 #pragma once
 
+#include <cstdint>
 #include <string_view>
 #include <vector>
 
@@ -45,6 +46,17 @@ inline constexpr double min_mass = 1e-9, max_mass = 1e12;
 inline constexpr double min_inertia = 1e-24;
 /// A part's dimensions (size, radius, length), m: within the extent.
 inline constexpr double max_dimension = extent;
+/// Contact pairs a part keeps a step: a pair of overlapping parts is left
+/// out (before its narrow phase or its contact is made) when each of its two
+/// parts already touches this many moving parts, so a step holds at most
+/// this many pairs a part. Parts that do not overlap touch few others (a
+/// disk among packed disks 6, a sphere among packed spheres 12), and a part
+/// touching many (a tray of marbles) keeps them all while its partners touch
+/// few. A heap of parts placed through each other (n parts at one spot make
+/// n^2 / 2 pairs: 500,000 for 1,000) would cost the engines seconds and
+/// gigabytes a step; its pairs past the limit are left out, with an event
+/// naming the parts (docs/security.md).
+inline constexpr std::uint32_t contact_pairs_per_part = 32;
 }  // namespace limits
 
 /// Body properties: pose, velocity, mass and shape (see the doc line of each).

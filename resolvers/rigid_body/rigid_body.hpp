@@ -29,6 +29,7 @@
 
 #include "resolvers/rigid_body/contact.hpp"
 #include "resolvers/rigid_body/engine.hpp"
+#include "resolvers/rigid_body/load_screen.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
 
@@ -264,27 +265,6 @@ class RigidBodyResolver final : public RigidBodyEngine {
                    const std::string& text, std::vector<std::pair<std::string, double>> values);
   void engine_failed(ResolverAccess& access, const std::string& what);
 
-  /// Which stage queued which loads: marks where the stage running at queue
-  /// time (World::running_stage) changed, so that a refused load names the
-  /// stage (and through it the mod) that gave it. One pointer compare a load.
-  class SourceMarks {
-   public:
-    void note(std::size_t at, const std::string* stage) {
-      if (marks_.empty() || marks_.back().stage != stage) mark(at, stage);
-    }
-    /// The name of the stage that queued load `i`, or "" (outside any stage).
-    const std::string& name_of(std::size_t i) const;
-    void clear() { marks_.clear(); }
-
-   private:
-    struct Mark {
-      std::size_t from;
-      const std::string* stage;  // compared, never read: names_ keeps the name
-      std::string name;
-    };
-    void mark(std::size_t at, const std::string* stage);
-    std::vector<Mark> marks_;
-  };
   // The parts of advance().
   void apply_loads();
   void apply_rated_loads(double tau);
@@ -329,6 +309,7 @@ class RigidBodyResolver final : public RigidBodyEngine {
   };
   LoadQueue forces_;
   SourceMarks load_sources_, rated_sources_;  // of forces_ and rated_loads_
+  LoadScreen screen_;                         // screen_loads' sums, kept for their storage
 
   /// The energy books (report_energy): sums since the last report, J. Kept
   /// only once a ledger asked (books_on_): they cost three passes over the

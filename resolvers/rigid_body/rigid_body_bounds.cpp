@@ -81,35 +81,17 @@ void RigidBodyResolver::Impl::measure_bodies() {
   }
 }
 
-void RigidBodyResolver::SourceMarks::mark(std::size_t at, const std::string* stage) {
-  marks_.push_back({at, stage, stage ? *stage : std::string()});
-}
-
-const std::string& RigidBodyResolver::SourceMarks::name_of(std::size_t i) const {
-  static const std::string none;
-  auto it = std::upper_bound(marks_.begin(), marks_.end(), i,
-                             [](std::size_t x, const Mark& m) { return x < m.from; });
-  return it == marks_.begin() ? none : std::prev(it)->name;
-}
-
 void RigidBodyResolver::screen_loads(ResolverAccess& access, double dt) {
-  // The loads queued on a body for the window may change its velocity by at
-  // most limits::speed and its angular velocity by limits::angular_speed:
-  // sum |F| dt / m and sum |torque| dt / I_min over its loads. Magnitudes are
-  // summed, not vectors, so that neither the order of the sum nor +-huge
-  // loads that cancel can overflow ODE's accumulators.
+  // The shared screen (load_screen.hpp): each load's share of its body's
+  // change of velocity, |F| dt / m and |torque| dt / I_min.
   Impl& m = *impl_;
   const std::size_t nb = m.bodies.size();
   strongest_source_.assign(nb, nullptr);
   if (forces_.size() == 0 && rated_loads_.empty()) return;
-  std::vector<double> dv(nb, 0.0), dw(nb, 0.0), worst(nb, -1.0);
-  std::vector<std::size_t> culprit(nb,
-                                   0);  // the load that does most: i < forces_.size(), else rated
-  auto add = [&](std::uint32_t b, double v, double w, std::size_t i) {
-    v *= dt * m.inv_mass[b], w *= dt * m.inv_inertia[b];
-    dv[b] += v, dw[b] += w;
-    const double score = std::max(v / limits::speed, w / limits::angular_speed);
-    if (!(score <= worst[b])) worst[b] = score, culprit[b] = i;  // NaN counts as the worst
+  LoadScreen& screen = screen_;
+  screen.begin(nb);
+  auto add = [&](std::uint32_t b, double f, double t, std::size_t i) {
+    screen.add(b, f * dt * m.inv_mass[b], t * dt * m.inv_inertia[b], i);
   };
   const LoadCommand* loads = forces_.begin();
   for (std::size_t i = 0; i < forces_.size(); ++i) {
@@ -123,7 +105,10 @@ void RigidBodyResolver::screen_loads(ResolverAccess& access, double dt) {
         break;
       case Load::ForceAtPoint: {
         const Vec3 x = to_vec3(dBodyGetPosition(m.bodies[p->body].id));
-        add(p->body, f, length(cross(c.point - x, c.value)), i);
+        add(p->body, f,
+            LoadScreen::point_within_extent(c.point) ? length(cross(c.point - x, c.value))
+                                                     : HUGE_VAL,
+            i);
         break;
       }
       case Load::Torque:
@@ -140,42 +125,26 @@ void RigidBodyResolver::screen_loads(ResolverAccess& access, double dt) {
         length(c.torque) + length(c.torque_rate) * dt + (p->identity ? 0 : length(p->offset) * f),
         forces_.size() + j);
   }
-  static constexpr const char* kName[] = {"add_force", "add_force_at", "add_torque"};
+  auto source_of = [&](std::size_t i) {
+    return i < forces_.size() ? &load_sources_.name_of(i)
+                              : &rated_sources_.name_of(i - forces_.size());
+  };
   for (std::uint32_t b = 0; b < nb; ++b) {
-    // A stage is named as the body's pusher if its load alone changes the
-    // speed by 1 % of the limit in a step (1 km/s): gravity's 0.04 m/s is not.
-    if (!(worst[b] < 0.01))
-      strongest_source_[b] = culprit[b] < forces_.size()
-                                 ? &load_sources_.name_of(culprit[b])
-                                 : &rated_sources_.name_of(culprit[b] - forces_.size());
-    if (dv[b] <= limits::speed && dw[b] <= limits::angular_speed) continue;
-    const std::size_t i = culprit[b];
+    if (const std::size_t i = screen.pusher(b); i != LoadScreen::npos)
+      strongest_source_[b] = source_of(i);
+    if (!screen.breaks(b)) continue;
+    const std::size_t i = screen.culprit(b);
     std::string what;
     std::vector<std::pair<std::string, double>> values;
-    const std::string* source;
     if (i < forces_.size()) {
-      const LoadCommand& c = loads[i];
-      source = &load_sources_.name_of(i);
-      what = std::string(kName[int(c.kind)]) + " " + vector_text(c.value) +
-             (c.kind == Load::Torque ? " N m" : " N");
-      if (c.kind == Load::ForceAtPoint) what += " at " + vector_text(c.point) + " m";
-      values = components(c.value);
+      what = LoadScreen::describe(loads[i]);
+      values = LoadScreen::components(loads[i].value);
     } else {
       const RatedLoad& c = rated_loads_[i - forces_.size()];
-      source = &rated_sources_.name_of(i - forces_.size());
-      what = "add_load " + vector_text(c.force) + " N, " + vector_text(c.torque) + " N m";
-      values = components(c.force);
+      what = LoadScreen::describe_rated(c.force, c.torque);
+      values = LoadScreen::components(c.force);
     }
-    const bool linear = !(dv[b] <= limits::speed);
-    const std::string change = linear ? "its speed by " + number(dv[b]) + " m/s (the limit is " +
-                                            number(limits::speed) + " m/s)"
-                                      : "its angular speed by " + number(dw[b]) +
-                                            " rad/s (the limit is " +
-                                            number(limits::angular_speed) + " rad/s)";
-    refuse_body(access, b, *source,
-                "queued " + what + " on it: its loads would change " + change + " in one step of " +
-                    number(dt) + " s; they were refused",
-                std::move(values));
+    refuse_body(access, b, *source_of(i), screen.refusal(b, what, dt), std::move(values));
   }
 }
 

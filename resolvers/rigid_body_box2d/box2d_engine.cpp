@@ -126,7 +126,7 @@ Box2DConfig Box2DConfig::from(const PluginSettings& s) {
 
 // --- Box2D's world and the tables ----------------------------------------------------
 
-struct Box2DEngine::Impl : b2ContactListener {
+struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   /// A part: which body carries it and where in the body's frame.
   struct Part {
     ObjectId id;
@@ -180,6 +180,28 @@ struct Box2DEngine::Impl : b2ContactListener {
   std::array<std::uint64_t, 4> written_versions{~0ull, ~0ull, ~0ull, ~0ull};
 
   Part& part_of(b2Fixture* f) { return parts[f->GetUserData().pointer]; }
+
+  // The bound on contact pairs (limits::contact_pairs_per_part): Box2D asks
+  // before it makes a contact for a new pair of overlapping fixtures; when
+  // both bodies already have that many contacts with moving bodies, the pair
+  // is left out (its parts pass through each other) and counted.
+  std::size_t left_out = 0;
+  std::vector<std::uint32_t> left_out_of;  // by index into parts
+  static bool crowded(const b2Body* b) {
+    std::uint32_t n = 0;
+    for (const b2ContactEdge* e = b->GetContactList(); e; e = e->next)
+      if (e->other->GetType() == b2_dynamicBody && ++n >= rigid::limits::contact_pairs_per_part)
+        return true;
+    return false;
+  }
+  bool ShouldCollide(b2Fixture* a, b2Fixture* b) override {
+    if (!b2ContactFilter::ShouldCollide(a, b)) return false;
+    if (!crowded(a->GetBody()) || !crowded(b->GetBody())) return true;
+    left_out_of.resize(parts.size(), 0);
+    ++left_out_of[a->GetUserData().pointer], ++left_out_of[b->GetUserData().pointer];
+    ++left_out;
+    return false;
+  }
 
   double approach(b2Contact* c, const b2WorldManifold& wm, int n, bool a_is_A) const {
     // Normal speed of a towards b at the points, SI.
@@ -273,6 +295,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world = std::make_unique<b2World>(b2Vec2(0, 0));  // gravity comes as loads
   m.world->SetAllowSleeping(config_.sleep);
   m.world->SetContactListener(&m);
+  m.world->SetContactFilter(&m);
   m.parts.clear();
   m.written_versions.fill(~0ull);
   m.bodies.clear();
@@ -308,8 +331,10 @@ void Box2DEngine::build(ResolverAccess& access) {
   auto mass_out = access.writer<double>("mass");
 
   auto refuse = [&](ObjectId id, const std::string& why) {
-    throw InputError("rigid_body.box2d: '" + store_.describe(id) + "' " + why +
-                     " (Box2D simulates the z = 0 plane only; use the ODE rigid_body for it)");
+    // Named by the object, so that the scene loader adds its file and line.
+    throw InputError(ErrorLocation{"", 0, store_.describe(id)},
+                     "rigid_body.box2d: '" + store_.describe(id) + "' " + why +
+                         " (Box2D simulates the z = 0 plane only; use the ODE rigid_body for it)");
   };
 
   // Parts: every object with a shape, in the plane.
@@ -358,12 +383,13 @@ void Box2DEngine::build(ResolverAccess& access) {
   // A joint whose body_b is ours and body_a another engine's (an area's):
   // neither engine can hold it.
   auto refuse_across = [&](std::uint32_t slot, const char* what) {
-    throw InputError("rigid_body.box2d: joint '" + store_.describe(store_.id_at(slot)) + "' (" +
-                     what + ") joins '" + store_.describe(body_a.value_or(slot, {})) + "' to '" +
-                     store_.describe(body_b.value_or(slot, {})) + "', but '" +
-                     store_.describe(body_a.value_or(slot, {})) +
-                     "' is simulated by another engine (an area's): a joint's two bodies must "
-                     "be on one engine");
+    throw InputError(ErrorLocation{"", 0, store_.describe(store_.id_at(slot))},
+                     "rigid_body.box2d: joint '" + store_.describe(store_.id_at(slot)) + "' (" +
+                         what + ") joins '" + store_.describe(body_a.value_or(slot, {})) +
+                         "' to '" + store_.describe(body_b.value_or(slot, {})) + "', but '" +
+                         store_.describe(body_a.value_or(slot, {})) +
+                         "' is simulated by another engine (an area's): a joint's two bodies must "
+                         "be on one engine");
   };
   for (std::uint32_t slot : joint.members()) {
     if (JointType(joint[slot].index) != JointType::Fixed) continue;
@@ -376,11 +402,12 @@ void Box2DEngine::build(ResolverAccess& access) {
       glued_to_world[std::size_t(a)] = 1;
     else if (b < 0)
       throw InputError(
+          ErrorLocation{"", 0, store_.describe(store_.id_at(slot))},
           "rigid_body.box2d: joint '" + store_.describe(store_.id_at(slot)) + "' glues '" +
-          store_.describe(store_.id_at(std::uint32_t(m.parts[std::size_t(a)].id.index))) +
-          "' to '" + store_.describe(bid) +
-          "', which another engine simulates (a joint lives in body_a's engine, and "
-          "both its bodies must be there)");
+              store_.describe(store_.id_at(std::uint32_t(m.parts[std::size_t(a)].id.index))) +
+              "' to '" + store_.describe(bid) +
+              "', which another engine simulates (a joint lives in body_a's engine, and "
+              "both its bodies must be there)");
     else
       root[find(std::uint32_t(a))] = find(std::uint32_t(b));
   }
@@ -503,7 +530,8 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (!m.bodies[bi].dynamic) continue;
     const Acc& a = acc[bi];
     if (!(a.m > 0))
-      throw InputError("rigid_body.box2d: '" + store_.describe(a.first) + "' has no mass");
+      throw InputError(ErrorLocation{"", 0, store_.describe(a.first)},
+                       "rigid_body.box2d: '" + store_.describe(a.first) + "' has no mass");
     // The same bounds as ODE's engine (rigid_body_bounds.cpp), for the same
     // reason, and sharper here: Box2D inverts mass and inertia in single
     // precision. A body outside them is refused (frozen, an out_of_bounds
@@ -546,11 +574,12 @@ void Box2DEngine::build(ResolverAccess& access) {
     if (a < 0 && b >= 0) refuse_across(slot, "hinge");
     if (a < 0) continue;  // lives with body_a's engine
     if (!bid.is_null() && b < 0)
-      throw InputError("rigid_body.box2d: hinge '" + store_.describe(jid) + "' joins '" +
-                       store_.describe(m.parts[std::size_t(a)].id) + "' to '" +
-                       store_.describe(bid) +
-                       "', which another engine simulates (a joint lives in body_a's engine, and "
-                       "both its bodies must be there)");
+      throw InputError(
+          ErrorLocation{"", 0, store_.describe(jid)},
+          "rigid_body.box2d: hinge '" + store_.describe(jid) + "' joins '" +
+              store_.describe(m.parts[std::size_t(a)].id) + "' to '" + store_.describe(bid) +
+              "', which another engine simulates (a joint lives in body_a's engine, and "
+              "both its bodies must be there)");
     const Vec3 ax = axis.value_or(slot, {0, 0, 1});
     const double an = std::sqrt(dot(ax, ax));
     if (std::abs(ax.x) > kResidueTilt * an || std::abs(ax.y) > kResidueTilt * an)
@@ -610,6 +639,7 @@ void Box2DEngine::build(ResolverAccess& access) {
 
 void Box2DEngine::queue(ObjectId part, Vec3 value, Vec3 point, Load kind) {
   store_.check_alive(part);
+  load_sources_.note(loads_.size(), world_.running_stage());
   loads_.push_back({part.index, part.generation, value, point, kind});
 }
 void Box2DEngine::add_force(ObjectId part, Vec3 force) {
@@ -619,6 +649,7 @@ void Box2DEngine::add_force(ObjectId part, Vec3 force, Vec3 point) {
   queue(part, force, point, Load::ForceAtPoint);
 }
 void Box2DEngine::add_force(std::uint32_t slot, Vec3 force) {
+  load_sources_.note(loads_.size(), world_.running_stage());
   loads_.push_back({slot, 0, force, {}, Load::Force});
 }
 void Box2DEngine::add_torque(ObjectId part, Vec3 torque) {
@@ -627,10 +658,14 @@ void Box2DEngine::add_torque(ObjectId part, Vec3 torque) {
 void Box2DEngine::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate,
                            Vec3 torque_rate) {
   store_.check_alive(part);
+  rated_sources_.note(rated_.size(), world_.running_stage());
   rated_.push_back({part.index, part.generation, force, torque, force_rate, torque_rate});
 }
 std::span<rigid::RigidBodyEngine::LoadCommand> Box2DEngine::open_loads(std::size_t n) {
-  if (open_ == ~std::size_t(0)) open_ = loads_.size();
+  if (open_ == ~std::size_t(0)) {
+    open_ = loads_.size();
+    load_sources_.note(open_, world_.running_stage());
+  }
   loads_.resize(open_ + n);
   return std::span<LoadCommand>(loads_).subspan(open_, n);
 }
@@ -638,6 +673,161 @@ void Box2DEngine::close_loads(std::size_t used) {
   if (open_ == ~std::size_t(0)) return;
   loads_.resize(open_ + std::min(used, loads_.size() - open_));
   open_ = ~std::size_t(0);
+}
+
+// --- the screen of loads (shared with ODE: load_screen.hpp) ----------------------------
+
+void Box2DEngine::screen_loads(ResolverAccess& access, double dt) {
+  Impl& m = *impl_;
+  if (loads_.empty() && rated_.empty()) return;
+  const double s = m.s;
+  // What Box2D applies: forces in the plane, torques about z. Each load's
+  // share of its body's change of velocity, in SI (Box2D's mass is in kg, its
+  // inertia in kg (s m)^2, about the body's origin).
+  auto inv_mass = [&](std::uint32_t bi) {
+    const double mass = m.bodies[bi].b->GetMass();
+    return mass > 0 ? 1 / mass : 0.0;
+  };
+  auto inv_inertia = [&](std::uint32_t bi) {
+    const b2Body* b = m.bodies[bi].b;
+    const double lc = double(b2Dot(b->GetLocalCenter(), b->GetLocalCenter()));
+    const double I = (double(b->GetInertia()) - b->GetMass() * lc) / (s * s);
+    return 1 / std::max(I, rigid::limits::min_inertia);
+  };
+  auto body_index = [&](std::uint32_t slot, std::uint32_t gen) -> std::int64_t {
+    if (slot >= m.part_of_slot.size() || m.part_of_slot[slot] < 0) return -1;
+    if (gen != 0 && store_.id_at(slot).generation != gen) return -1;
+    const std::uint32_t b = m.parts[std::size_t(m.part_of_slot[slot])].body;
+    return m.bodies[b].dynamic ? std::int64_t(b) : -1;
+  };
+  auto planar = [](Vec3 v) { return std::hypot(v.x, v.y); };
+  // Out of the plane, dropped: reported once per stage and kind when it is
+  // more than round-off of the load in the plane (1e-6 of it, and 1e-12 N or
+  // N m): a mod written for 3D whose push Box2D cannot give.
+  auto dropped = [&](double off, double in, std::size_t i, const char* kind, std::uint32_t slot) {
+    if (!(off > 1e-12 && off > 1e-6 * in) && !std::isnan(off)) return;
+    const bool rated = i >= loads_.size();
+    const std::string& stage =
+        rated ? rated_sources_.name_of(i - loads_.size()) : load_sources_.name_of(i);
+    const std::pair<std::string, std::string> key{stage, kind};
+    if (std::find(dropped_reported_.begin(), dropped_reported_.end(), key) !=
+        dropped_reported_.end())
+      return;
+    dropped_reported_.push_back(key);
+    std::string source =
+        stage.empty() ? std::string("a load from outside any stage") : "stage '" + stage + "'";
+    if (const PluginDef* d = world_.plugin_def(stage); d && !d->info.owner.empty())
+      source = "mod '" + d->info.owner + "' (stage '" + stage + "')";
+    const ObjectId id = store_.id_at(slot);
+    const std::string what =
+        rated ? rigid::LoadScreen::describe_rated(rated_[i - loads_.size()].force,
+                                                  rated_[i - loads_.size()].torque)
+              : rigid::LoadScreen::describe(loads_[i]);
+    access.emit(Event{
+        .type = "load_dropped",
+        .a = id,
+        .values = {{"dropped", off}},
+        .text = source + " queued " + what + " on '" + store_.describe(id) + "': its " + kind +
+                " was dropped (Box2D simulates the z = 0 plane only; further such loads from "
+                "this stage are dropped without a word)"});
+  };
+  screen_.begin(m.bodies.size());
+  for (std::size_t i = 0; i < loads_.size(); ++i) {
+    const LoadCommand& c = loads_[i];
+    const std::int64_t b = body_index(c.slot, c.generation);
+    if (b < 0) continue;
+    const auto bi = std::uint32_t(b);
+    const double f = planar(c.value);
+    switch (c.kind) {
+      case Load::Force:
+        screen_.add(bi, f * dt * inv_mass(bi), 0, i);
+        dropped(std::abs(c.value.z), f, i, "force along z", c.slot);
+        break;
+      case Load::ForceAtPoint: {
+        const b2Vec2 wc = m.bodies[bi].b->GetWorldCenter();
+        const Vec3 r = c.point - Vec3{wc.x / s, wc.y / s, 0};
+        const double t = rigid::LoadScreen::point_within_extent(c.point)
+                             ? std::abs(r.x * c.value.y - r.y * c.value.x)
+                             : HUGE_VAL;
+        screen_.add(bi, f * dt * inv_mass(bi), t * dt * inv_inertia(bi), i);
+        // Torque about x and y: a force along z anywhere, or one in the plane
+        // at a point off it.
+        dropped(std::max(std::abs(c.value.z), planar(cross(r, c.value))), f, i,
+                "force along z or torque about x and y", c.slot);
+        break;
+      }
+      case Load::Torque:
+        screen_.add(bi, 0, std::abs(c.value.z) * dt * inv_inertia(bi), i);
+        dropped(planar(c.value), std::abs(c.value.z), i, "torque about x and y", c.slot);
+        break;
+    }
+  }
+  for (std::size_t j = 0; j < rated_.size(); ++j) {
+    const RatedLoad& r = rated_[j];
+    const std::int64_t b = body_index(r.slot, r.generation);
+    if (b < 0) continue;
+    const auto bi = std::uint32_t(b);
+    const double f = planar(r.force) + planar(r.force_rate) * dt;
+    const double t = std::abs(r.torque.z) + std::abs(r.torque_rate.z) * dt;
+    screen_.add(bi, f * dt * inv_mass(bi), t * dt * inv_inertia(bi), loads_.size() + j);
+    const double off = std::max({std::abs(r.force.z), std::abs(r.force_rate.z) * dt,
+                                 planar(r.torque), planar(r.torque_rate) * dt});
+    dropped(off, std::max(f, t), loads_.size() + j, "force along z or torque about x and y",
+            r.slot);
+  }
+  for (std::uint32_t bi = 0; bi < m.bodies.size(); ++bi) {
+    if (!screen_.breaks(bi)) continue;
+    const std::size_t i = screen_.culprit(bi);
+    const bool rated = i >= loads_.size();
+    const std::string& source =
+        rated ? rated_sources_.name_of(i - loads_.size()) : load_sources_.name_of(i);
+    const std::string what =
+        rated ? rigid::LoadScreen::describe_rated(rated_[i - loads_.size()].force,
+                                                  rated_[i - loads_.size()].torque)
+              : rigid::LoadScreen::describe(loads_[i]);
+    const auto values =
+        rigid::LoadScreen::components(rated ? rated_[i - loads_.size()].force : loads_[i].value);
+    const std::string text = screen_.refusal(bi, what, dt);
+    // Refused as ODE refuses it: every part frozen with the event, the body
+    // held still and static until the next step's rebuild drops it; its
+    // loads are not applied (body_of skips a body that is not dynamic).
+    for (const Impl::Part& part : m.parts)
+      if (part.body == bi) access.refuse(part.id.index, source, text, values);
+    Impl::Body& body = m.bodies[bi];
+    body.b->SetLinearVelocity(b2Vec2(0, 0));
+    body.b->SetAngularVelocity(0);
+    body.b->SetType(b2_staticBody);
+    body.dynamic = false;
+    dirty_ = true;
+  }
+}
+
+void Box2DEngine::report_left_out(ResolverAccess& access) {
+  // One event when pairs begin to be left out (not one a step while a heap
+  // lasts), naming the part with the most pairs left out.
+  Impl& m = *impl_;
+  const bool limited = m.left_out > 0;
+  if (limited && !limited_before_) {
+    std::size_t worst = 0;
+    for (std::size_t k = 0; k < m.left_out_of.size(); ++k)
+      if (m.left_out_of[k] > m.left_out_of[worst]) worst = k;
+    const ObjectId id = worst < m.parts.size() ? m.parts[worst].id : ObjectId{};
+    access.emit(Event{
+        .type = "contact_limit",
+        .a = id,
+        .values = {{"per_part", double(rigid::limits::contact_pairs_per_part)},
+                   {"left_out", double(m.left_out)},
+                   {"of_part", double(m.left_out_of[worst])}},
+        .text = "rigid_body.box2d: " + std::to_string(m.left_out) +
+                " pairs of overlapping parts were left out, each of whose bodies touched " +
+                std::to_string(rigid::limits::contact_pairs_per_part) +
+                " moving bodies already (the limit); they pass through each other. '" +
+                store_.describe(id) + "' is in " + std::to_string(m.left_out_of[worst]) +
+                " of them: parts placed through each other in a heap? (reported when it begins; "
+                "docs/security.md)"});
+  }
+  limited_before_ = limited;
+  if (limited) std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
 }
 
 // --- the step -------------------------------------------------------------------------
@@ -699,6 +889,8 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     b->SetAwake(true);
   }
 
+  screen_loads(access, dt);
+  m.left_out = 0;
   m.want_impulses = *impulse_demand_ > 0;
   m.step_impulses.clear();
   m.pre_speeds.clear();
@@ -830,7 +1022,10 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   }
   loads_.clear();
   rated_.clear();
+  load_sources_.clear();
+  rated_sources_.clear();
   open_ = ~std::size_t(0);
+  report_left_out(access);
 
   // Write the parts back.
   for (Impl::Part& part : m.parts) {

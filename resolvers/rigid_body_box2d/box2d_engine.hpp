@@ -32,9 +32,11 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "resolvers/rigid_body/engine.hpp"
+#include "resolvers/rigid_body/load_screen.hpp"
 #include "runtime/contact_set.hpp"
 #include "runtime/world.hpp"
 
@@ -109,6 +111,13 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
 
  private:
   void queue(ObjectId part, Vec3 value, Vec3 point, Load kind);
+  /// The load screen shared with ODE (load_screen.hpp), and an event for
+  /// loads or parts of loads the plane drops (a force along z, a torque about
+  /// x or y), once per stage and kind of load.
+  void screen_loads(ResolverAccess& access, double dt);
+  /// The "contact_limit" event when Box2D began to leave pairs out
+  /// (limits::contact_pairs).
+  void report_left_out(ResolverAccess& access);
   bool edited_since_write(const WorldView& view) const;
   void note_versions(const WorldView& view);
 
@@ -123,6 +132,11 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
     Vec3 force, torque, force_rate, torque_rate;
   };
   std::vector<RatedLoad> rated_;
+  rigid::SourceMarks load_sources_, rated_sources_;  // of loads_ and rated_
+  rigid::LoadScreen screen_;
+  /// (stage, kind) pairs whose out-of-plane loads were reported.
+  std::vector<std::pair<std::string, std::string>> dropped_reported_;
+  bool limited_before_ = false;  // the last advance left contact pairs out
   std::vector<Box2DPair> pairs_;
   std::vector<ContactPoint> points_;
   std::vector<PairImpulse> impulses_;

@@ -1,0 +1,206 @@
+// Guards that both rigid-body engines share (the adversary's F14 and F15,
+// docs/security.md): the bound on contact pairs a step (a heap of parts
+// placed through each other must not cost seconds and gigabytes), and the
+// screen of queued loads on Box2D (ODE's: load_screen.hpp), with the event
+// for loads the plane drops.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "resolvers/rigid_body/engine.hpp"
+#include "resolvers/rigid_body/properties.hpp"
+#include "runtime/contact_set.hpp"
+#include "tests/scenes/rigid_scenes.hpp"
+
+namespace alloy::scenes {
+namespace {
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+struct Engine {
+  const char* name;
+  const char* rigid_body;
+  const char* collisions;
+};
+const Engine kEngines[] = {{"ode", "rigid_body", "collisions"},
+                           {"box2d", "rigid_body.box2d", "collisions.box2d"}};
+
+WorldDef on(const Engine& e) {
+  WorldDef def;
+  def.dt = 1.0 / 240;
+  if (std::string(e.rigid_body) != "rigid_body")
+    def.use = {{"rigid_body", e.rigid_body}, {"collisions", e.collisions}};
+  return def;
+}
+
+class ContactLimit : public ::testing::TestWithParam<Engine> {};
+
+/// n spheres of 5 cm within 1 mm of one spot (the adversary's heap1000,
+/// smaller): n^2 / 2 pairs overlap.
+std::vector<ObjectId> heap(World& w, int n) {
+  std::vector<ObjectId> parts;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.399963 * i, r = 1e-3 * std::sqrt((i + 0.5) / n);  // a sunflower
+    parts.push_back(add_sphere(w, {r * std::cos(a), 0.3 + r * std::sin(a), 0}, 0.05, 0.1,
+                               "g" + std::to_string(i)));
+  }
+  return parts;
+}
+
+TEST_P(ContactLimit, AHeapOfPartsThroughEachOtherIsBoundedAndNamed) {
+  // 200 parts: 19,900 overlapping pairs; a pair is kept while one of its
+  // parts touches fewer than 32 moving parts.
+  const Engine& e = GetParam();
+  Sim s(on(e));
+  add_floor(*s);
+  const std::vector<ObjectId> parts = heap(*s, 200);
+  std::vector<Event> limits;
+  s->add_observer([&](const Event& ev) {
+    if (ev.type == "contact_limit") limits.push_back(ev);
+  });
+  s->start();
+  const auto& set = dynamic_cast<const ContactSet&>(*s->stage(e.collisions));
+  const std::size_t limit = rigid::limits::contact_pairs_per_part * 201;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::size_t most = 0;
+  for (int i = 0; i < 3; ++i) {
+    s->step();
+    most = std::max(most, set.touching().size());
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("%s: heap of 200: %.3f s for 3 steps, at most %zu touching pairs (bound %zu)\n",
+              e.name, seconds, most, limit);
+  EXPECT_LE(most, limit);
+  // Reported once, when it began, naming a part of the heap and the limit.
+  ASSERT_EQ(limits.size(), 1u);
+  EXPECT_LE(limits[0].step, 1u);  // at the start (the set primes itself) or step 1
+  EXPECT_NE(std::find(parts.begin(), parts.end(), limits[0].a), parts.end());
+  EXPECT_EQ(limits[0].value("per_part"), 32.0);
+  EXPECT_GT(limits[0].value("left_out"), 0.0);
+  EXPECT_TRUE(contains(limits[0].text, "parts placed through each other in a heap?"))
+      << limits[0].text;
+  EXPECT_TRUE(contains(limits[0].text, "'" + s->describe(limits[0].a) + "' is in "))
+      << limits[0].text;
+}
+
+TEST_P(ContactLimit, ThePartsOfAPackedBedStayFarBelowIt) {
+  // 900 spheres touching in a 30 x 30 square on the floor: no pair is left out.
+  const Engine& e = GetParam();
+  Sim s(on(e));
+  add_floor(*s);
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j)
+      add_sphere(*s, {0.1 * i, 0.05 + 0.0999 * j, 0}, 0.05, 0.1, "d" + std::to_string(30 * i + j));
+  int reported = 0;
+  s->add_observer([&](const Event& ev) { reported += ev.type == "contact_limit"; });
+  s->run(3);
+  EXPECT_EQ(reported, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Engines, ContactLimit, ::testing::ValuesIn(kEngines),
+                         [](const ::testing::TestParamInfo<Engine>& info) {
+                           return std::string(info.param.name);
+                         });
+
+// --- the load screen on Box2D ----------------------------------------------------------
+
+struct Box2DWorld {
+  Sim s{on(kEngines[1])};
+  ObjectId ball, witness;
+  std::vector<Event> events;
+  Box2DWorld() {
+    ball = add_sphere(*s, {0, 10, 0}, 0.05, 1.0, "ball");
+    witness = add_sphere(*s, {5, 10, 0}, 0.05, 1.0, "witness");
+    s->add_observer([&](const Event& e) {
+      if (e.type != "contact_began" && e.type != "contact_ended") events.push_back(e);
+    });
+    s->start();
+  }
+  rigid::RigidBodyEngine& engine() {
+    return dynamic_cast<rigid::RigidBodyEngine&>(*s->stage("rigid_body.box2d"));
+  }
+  std::vector<Event> of_type(const std::string& t) const {
+    std::vector<Event> out;
+    for (const Event& e : events)
+      if (e.type == t) out.push_back(e);
+    return out;
+  }
+};
+
+TEST(Box2DLoadScreen, AHugeForceIsRefusedBeforeTheStepAsOnOde) {
+  Box2DWorld w;
+  w.engine().add_force(w.ball, {1e9, 0, 0});
+  w.s->step();
+  const auto refused = w.of_type("out_of_bounds");
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_EQ(refused[0].a, w.ball);
+  EXPECT_TRUE(contains(refused[0].text,
+                       "queued add_force {1e+09, 0, 0} N on it: its loads would change its speed "
+                       "by 4.16667e+06 m/s (the limit is 100000 m/s)"))
+      << refused[0].text;
+  EXPECT_TRUE(w.s->frozen(w.ball));
+  // It never moved; the witness fell as it would alone.
+  EXPECT_NEAR(w.s.position(w.ball).x, 0.0, 1e-12);
+  w.s->run(9);
+  EXPECT_FALSE(w.s->frozen(w.witness));
+  EXPECT_NEAR(w.s.velocity(w.witness).y, -9.81 * 10 / 240, 1e-4);
+}
+
+TEST(Box2DLoadScreen, AHugeTorqueAndAForceAtAPointBeyondTheWorldAreRefused) {
+  Box2DWorld w;
+  w.engine().add_torque(w.ball, {0, 0, 1e12});
+  // No force at all, but at 1e300 m: single precision makes inf of the
+  // point and NaN of the torque about it.
+  w.engine().add_force(w.witness, {0, 0, 0}, {1e300, 0, 0});
+  w.s->step();
+  const auto refused = w.of_type("out_of_bounds");
+  ASSERT_EQ(refused.size(), 2u);
+  EXPECT_TRUE(contains(refused[0].text + refused[1].text,
+                       "queued add_torque {0, 0, 1e+12} N m on it: its loads would change its "
+                       "angular speed"));
+  EXPECT_TRUE(contains(refused[0].text + refused[1].text,
+                       "queued add_force_at {0, 0, 0} N at {1e+300, 0, 0} m"));
+  EXPECT_TRUE(w.of_type("non_finite").empty());
+}
+
+TEST(Box2DLoadScreen, LoadsThePlaneDropsAreReportedOncePerStageAndKind) {
+  Box2DWorld w;
+  for (int i = 0; i < 10; ++i) {
+    w.engine().add_torque(w.ball, {100, 0, 0});           // about x: dropped
+    w.engine().add_force(w.ball, {0, 0, 1000});           // along z: dropped
+    w.engine().add_force(w.ball, {0, 1, 0}, {0, 10, 5});  // a lever along z: dropped
+    w.engine().add_torque(w.witness, {0, 0, 1e-3});       // about z: applied
+    w.engine().add_force(w.witness, {1e-3, 0, 1e-15});    // round-off along z: not reported
+    w.s->step();
+  }
+  const auto dropped = w.of_type("load_dropped");
+  ASSERT_EQ(dropped.size(), 3u);
+  std::string all;
+  for (const Event& e : dropped) {
+    all += e.text + "\n";
+    EXPECT_EQ(e.a, w.ball);
+    EXPECT_EQ(e.step, 1u);  // once, not once a step
+  }
+  EXPECT_TRUE(contains(all,
+                       "a load from outside any stage queued add_torque {100, 0, 0} N m on "
+                       "'ball': its torque about x and y was dropped (Box2D simulates the "
+                       "z = 0 plane only"))
+      << all;
+  EXPECT_TRUE(contains(all, "add_force {0, 0, 1000} N on 'ball': its force along z")) << all;
+  EXPECT_TRUE(contains(all,
+                       "add_force_at {0, 1, 0} N at {0, 10, 5} m on 'ball': its force along z or "
+                       "torque about x and y was dropped"))
+      << all;
+  EXPECT_TRUE(w.of_type("out_of_bounds").empty());
+  EXPECT_GT(w.s->value<Vec3>(w.witness, "angular_velocity")->z, 0.0);
+}
+
+}  // namespace
+}  // namespace alloy::scenes
