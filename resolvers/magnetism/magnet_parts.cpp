@@ -191,7 +191,15 @@ std::optional<PartBulk> part_bulk(const MagnetColumns& c, std::uint32_t slot) {
 
 std::optional<double> pole_separation(const MagnetColumns& c, std::uint32_t slot) {
   if (c.pole_separation.has(slot)) return c.pole_separation[slot];
-  if (auto b = part_bulk(c, slot)) return kMagneticLengthRatio * b->length;
+  if (auto b = part_bulk(c, slot)) {
+    // Soft iron's induced poles lie on its faces (a uniformly magnetised
+    // body's pole density is M.n on its surface), where a gap to a coil or a
+    // magnet is measured: 0.85 L, a bar magnet's effective length, put them
+    // 0.075 L inside each face and made the pull across a few millimetres
+    // too weak to lift the kit's armature (docs/magnetism.md "Soft iron").
+    const bool iron = c.magnet.has(slot) && c.kind(slot) == MagnetKind::SoftIron;
+    return (iron ? kInducedLengthRatio : kMagneticLengthRatio) * b->length;
+  }
   return std::nullopt;
 }
 

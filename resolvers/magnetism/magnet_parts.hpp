@@ -14,7 +14,8 @@
 //                  along x of diameter core_diameter), which the field of the
 //                  other parts magnetises along the coil's axis
 //
-// All kinds: pole_separation (default 0.85 x the part's length along x).
+// All kinds: pole_separation (default 0.85 x the part's length along x; soft
+// iron's: its length, its poles on its faces).
 // Geometry (position, orientation, shape, size, radius, length) belongs to the
 // rigid body; these names and meanings are the rigid body's.
 #pragma once
@@ -118,7 +119,8 @@ double chord(const PartBulk& bulk, Vec3 u);
 std::optional<PartBulk> part_bulk(const MagnetColumns& c, std::uint32_t slot);
 
 /// Distance between the part's two poles, m: `pole_separation` if carried,
-/// else kMagneticLengthRatio times the shape's length; nullopt if neither.
+/// else kMagneticLengthRatio times the shape's length (soft iron: kInducedLengthRatio);
+/// nullopt if neither.
 std::optional<double> pole_separation(const MagnetColumns& c, std::uint32_t slot);
 
 /// Pole strength per ampere-turn of an electromagnet, m: `coil_factor` if
@@ -135,7 +137,7 @@ struct SoftIronModel {
   double volume = 0;      ///< of the iron, m^3
   double saturation = 0;  ///< largest moment, A*m^2
   /// Pole separation of a moment along the local unit direction u, m: the
-  /// chord along u scaled like the x axis's (0.85 by default). Unused for a
+  /// chord along u scaled like the x axis's (1: the faces, by default). Unused for a
   /// coil's core, whose moment stays on the coil's axis.
   double separation_along(Vec3 u) const { return chord_scale * chord(bulk, u); }
   PartBulk bulk;

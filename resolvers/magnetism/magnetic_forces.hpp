@@ -61,6 +61,14 @@ namespace alloy::magnetism {
 double theta_for_tolerance(double tolerance);
 inline constexpr double kDefaultTolerance = 1e-3;
 
+/// The co-energy of a saturating induced moment over m . H at the same field,
+/// given |m| / m_sat (the saturation curve m = m_sat tanh(u / m_sat) of
+/// saturate_moment): 1/2 for linear iron (|m| << m_sat), rising to 1 as the
+/// iron saturates (a saturated moment no longer grows with H, so all of
+/// m . H is co-energy). Soft iron's store in the energy books is this times
+/// the induced moment's interaction with the permanent magnets.
+double iron_coenergy_ratio(double moment_over_saturation);
+
 /// One magnetic part, as the derived set publishes it.
 struct MagneticBody {
   ObjectId id;  ///< the object
@@ -93,11 +101,15 @@ class MagneticForces : public DerivedSet {
   /// The work the forces between parts that are not coils did on the parts
   /// since the last report, at the pole strengths of the last report (the
   /// strengths the forces of the step were computed with): transfer
-  /// "magnetism", given to the rigid body. The permanent magnets' share is
-  /// minus the change of their interaction energy (a store). Soft iron's
-  /// share has no store: the model's induced iron is magnetised by no
-  /// circuit's work, so what it does is reported as a source (docs/energy.md).
-  /// The work of a coil's field is the EMF's: electricity books it.
+  /// "magnetism", given to the rigid body. Each pole's strength is split into
+  /// its fixed share (a magnet's, a coil's own current's) and its induced
+  /// share (soft iron's, a cored coil's core beyond its own current's). The
+  /// permanent magnets' pairs are minus the change of their interaction
+  /// energy (a store). Pairs with an induced share draw on soft iron's store,
+  /// its co-energy in the magnets' field (-1/2 m.B for linear iron); what the
+  /// store does not explain (iron on iron magnetised by a coil, the model's
+  /// own error) is a source (docs/energy.md). The work of a coil's own share
+  /// is the EMF's: electricity books it.
   void report_energy(const WorldView& view, EnergyReport& out) override;
 
   /// Every magnetic part with a position, in slot order.
@@ -131,12 +143,25 @@ class MagneticForces : public DerivedSet {
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody
+  // Per body: the share of its pole strength the field induced (soft iron's
+  // whole strength, a cored coil's core beyond its own current's share), A*m.
+  std::vector<double> induced_share_;
+  // Per body with induced iron: |moment| / saturation moment (0 if none).
+  std::vector<double> induced_ratio_;
+  double reported_iron_store_ = 0;
   int induction_iterations_ = 0;
   bool induction_converged_ = true;
   std::uint64_t updates_ = 0;
   // The poles at the last report_energy, their parts, and whether each part
   // is a permanent magnet (1), soft iron (2) or a coil (0).
+  /// A pole's strength in its fixed share (a permanent magnet's or a coil's
+  /// own) and its induced share, for the energy books.
+  struct Share {
+    double fixed = 0, induced = 0;
+    bool permanent = false;  ///< the fixed share is a permanent magnet's
+  };
   std::vector<Pole> reported_poles_;
+  std::vector<Share> reported_shares_;
   std::vector<ObjectId> reported_bodies_;
   std::vector<std::uint8_t> reported_kinds_;
   bool reported_ = false;

@@ -36,6 +36,11 @@ inline constexpr double kIronSaturationMagnetization = 1.71e6;
 /// Effective poles of a bar magnet sit about L/12 inside its ends, so the
 /// default pole separation is this fraction of the bar's length.
 inline constexpr double kMagneticLengthRatio = 0.85;
+/// Soft iron's induced poles sit on its faces: a uniformly magnetised body's
+/// pole density is M.n on its surface, and the field of a nearby pole draws
+/// it to the near face. Its far field is the same either way (the moment is
+/// solved first and spread over the separation).
+inline constexpr double kInducedLengthRatio = 1.0;
 
 /// One point pole.
 struct Pole {

@@ -259,6 +259,7 @@ TEST(EnergyBooks, BouncingBallLosesOneMinusESquaredAtEachBounce) {
 struct SceneBooks {
   EnergyBalance balance;
   double battery = 0, heat = 0, magnetism_mismatch = 0, coils_work = 0;
+  double iron_work = 0;  ///< what magnetic_forces' pairs with an induced share did, J
 };
 
 SceneBooks scene_books(const char* scene, double dt, double seconds) {
@@ -277,6 +278,7 @@ SceneBooks scene_books(const char* scene, double dt, double seconds) {
   for (const EnergyAccount& a : books.accounts())
     if (a.kind == EnergyKind::Transfer && a.name == "magnetism") out.magnetism_mismatch += a.total;
   out.coils_work = -total(books, "electricity", "magnetism");
+  out.iron_work = -total(books, "magnetic_forces", "magnetism");
   std::printf(
       "%s, %.0f s at 1/%.0f s: battery %.4f J, heat %.4f J, EMF's work %.5f J, magnetism "
       "mismatch %+.2e J, residue %+.2e J = %.4f %% of %.4f J moved\n%s",
@@ -347,13 +349,74 @@ TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
   // docs/magnetism.md "An opened loop"). Residue at 1/240 s: 0.075 % of the
   // energy moved with session 14's air-cored coil (0.1 % asked); 0.171 % with
   // the pull left unbooked. Since the coil's iron core is live (session 15)
-  // it is 0.132 %: the induced iron's pull at an interruption has no store of
-  // its own in magnetic_forces yet, so the bound is 0.15 %, above the goal.
+  // it was 0.132 %, with the work of the core's induced share on the
+  // armature booked by no one (0.044 J in 10 s). Session 16 books it
+  // (magnetic_forces' "soft iron's work beyond its store": iron on iron
+  // where a coil magnetises both has no store while the EMF is paid at held
+  // strengths) and the residue shows the coupling's whole mismatch: 0.177 %
+  // (0.093 % at 1/120 s, 0.161 % at 1/480 s: it does not fall with the
+  // step; it is the interrupter's jump, docs/energy.md); with the iron's
+  // poles on its faces and the coil 6 mm up, 0.136, 0.135 and 0.156 %.
+  // Bound 0.2 %.
   const SceneBooks d = scene_books("mods/doorbell", 1.0 / 240, 10);
   EXPECT_GT(d.battery, 1.0);
   EXPECT_LT(std::abs(d.balance.unexplained()), 1e-5 * d.balance.moved);
   EXPECT_NEAR(d.balance.residue(), -d.balance.transfers, 1e-5 * d.balance.moved);
-  EXPECT_LT(d.balance.fraction(), 1.5e-3);
+  EXPECT_LT(d.balance.fraction(), 2e-3);
+  // The core's induced share pulls the armature: booked (0.042 J; with the
+  // cored coil's share left out of the books, 0).
+  EXPECT_GT(d.iron_work, 0.02);
+}
+
+TEST(EnergyBooks, IronsPullComesOutOfItsStore) {
+  // An iron bar hung on a hinge swings onto a pinned magnet's end, with no
+  // coil and no gravity (tests/energy/scenes/iron_swing.lua). The bar's
+  // induced poles are set by the field, so before session 16 no store held
+  // the work the magnet's pull does on it: all of it was booked as a source.
+  // Now soft iron's co-energy in the magnets' field (-1/2 m.B, less as it
+  // saturates) is magnetic_forces' store, and only what it does not explain
+  // (the pole model's own error: the moment follows the mean field of its
+  // samples, the force acts on the poles' line) is a source. Measured at
+  // 1/240 s: over the approach from 15 mm (14 steps, before the contact)
+  // 0.18 of 5.19 mJ (3.5 %); over the whole swing, with the last
+  // millimetres in which the bar's face pole comes within a softening of
+  // the magnet's, 6.7 of 18.1 mJ (5.5 to 5.9 of 16.8 to 17.2 mJ at 1/480,
+  // 1/960 and 1/1920 s: the model's near field, not the step). With the store's 1/2 taken out
+  // (m.B, a rigid moment's energy) the approach's source is as large as
+  // its work, of the other sign.
+  auto books_of = [](std::uint64_t steps) {
+    PluginRegistry registry;
+    register_native_plugins(registry);
+    lua::LoadOptions load;
+    load.mod_paths.push_back(test::source("mods"));
+    lua::LoadedScene loaded =
+        lua::load_scene(test::source("tests/energy/scenes/iron_swing.lua"), registry, load);
+    EnergyLedger books;
+    run_books(*loaded.world, books, steps);
+    return books;
+  };
+  struct Figures {
+    double given, store, beyond;
+  };
+  auto figures = [](const EnergyLedger& books, const char* what) {
+    const Figures f{
+        -total(books, "magnetic_forces", "magnetism"),
+        total(books, "magnetic_forces", "soft iron's field (co-energy in the magnets' field)"),
+        total(books, "magnetic_forces", "soft iron's work beyond its store")};
+    std::printf(
+        "iron swing, %s at 1/240 s: pull's work %.6f J, store's change %.6f J, beyond %+.2e J\n",
+        what, f.given, f.store, f.beyond);
+    EXPECT_LT(std::abs(books.total().unexplained()), 1e-6 * books.total().moved);
+    return f;
+  };
+  const EnergyLedger approach_books = books_of(14), swing_books = books_of(240);
+  const Figures approach = figures(approach_books, "the approach");
+  EXPECT_GT(approach.given, 3e-3) << "the magnet pulls the bar in";
+  EXPECT_NEAR(approach.store, -approach.given, 0.05 * approach.given) << "out of the iron's store";
+  EXPECT_LT(std::abs(approach.beyond), 0.05 * approach.given);
+  const Figures swing = figures(swing_books, "1 s");
+  EXPECT_GT(-swing.store, 0.6 * swing.given);
+  EXPECT_LT(-swing.store, swing.given);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 namespace alloy::magnetism {
 namespace {
@@ -36,6 +37,49 @@ TEST(MagnetismPoleModel, PairForceIsCoulombsLawFarFromTheSofteningLength) {
   EXPECT_LT(pole_pair_force(2.0, {0, 0, 0}, -3.0, {0.1, 0, 0}, eps).x, 0);
   // mu0 / 4 pi is 1e-7 N/A^2 to 1e-9 (CODATA 2018).
   EXPECT_NEAR(kMu0Over4Pi, 1e-7, 1e-16);
+}
+
+TEST(MagnetismPoleModel, CylindersOnAxisFieldAgainstTheClosedForm) {
+  // A uniformly magnetised cylinder (Br 1.2 T, radius R = 5 mm, length 20 mm)
+  // has the on-axis field B(z) = Br/2 [(z+L)/sqrt((z+L)^2+R^2) - z/sqrt(z^2+R^2)]
+  // at z beyond its north face. The pole model carries its moment M pi R^2 L
+  // on two poles d apart, softened by eps. Measured ratios model / closed
+  // form at z = 0.2, 0.5, 1, 2, 5, 10 R:
+  //   d = 0.85 L, eps = 5 mm (the default): 0.23 0.37 0.54 0.74 0.92 0.97
+  //   d = 0.85 L, eps = R/2:                1.02 1.00 0.94 0.93 0.97 0.99
+  //   d = L (soft iron's), eps = R/2:       0.79 1.29 1.24 1.09 1.02 1.01
+  // The default softening understates the field within a radius of the face
+  // by up to 4x; a softening of half the face's radius would hold the whole
+  // axis to 7 % (a per-part softening: docs/magnetism.md "Soft iron",
+  // left for a later session); every choice is the point pole's far away.
+  constexpr double kBr = 1.2, R = 0.005, L = 0.02;
+  const double m = kBr / kMu0 * std::numbers::pi * R * R * L;  // A m^2
+  auto closed = [&](double z) {
+    return kBr / 2 *
+           ((z + L) / std::sqrt((z + L) * (z + L) + R * R) - z / std::sqrt(z * z + R * R));
+  };
+  auto model = [&](double z, double d, double eps) {
+    const std::vector<Pole> poles = {{{L / 2 - (L - d) / 2, 0, 0}, m / d, 0},
+                                     {{-L / 2 + (L - d) / 2, 0, 0}, -m / d, 0}};
+    const Vec3 at{L / 2 + z, 0, 0};
+    const std::uint32_t none = kNoBody;
+    Vec3 h;
+    pole_fields(poles, eps, std::span(&at, 1), std::span(&none, 1), std::span(&h, 1));
+    return kMu0 * h.x / closed(z);
+  };
+  const double zs[] = {0.2, 0.5, 1, 2, 5, 10};
+  const double expected[3][6] = {{0.23, 0.37, 0.54, 0.74, 0.92, 0.97},
+                                 {1.02, 1.00, 0.94, 0.93, 0.97, 0.99},
+                                 {0.79, 1.29, 1.24, 1.09, 1.02, 1.01}};
+  const double settings[3][2] = {{kMagneticLengthRatio * L, 0.005},
+                                 {kMagneticLengthRatio * L, R / 2},
+                                 {kInducedLengthRatio * L, R / 2}};
+  for (int c = 0; c < 3; ++c)
+    for (int i = 0; i < 6; ++i)
+      EXPECT_NEAR(model(zs[i] * R, settings[c][0], settings[c][1]), expected[c][i], 0.006)
+          << "case " << c << " at z = " << zs[i] << " R";
+  // Far away, the dipole: within 0.5 % at 40 R whatever the settings.
+  for (const auto& s : settings) EXPECT_NEAR(model(40 * R, s[0], s[1]), 1.0, 5e-3);
 }
 
 TEST(MagnetismPoleModel, SofteningKeepsTouchingPolesFinite) {
