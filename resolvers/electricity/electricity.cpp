@@ -626,11 +626,11 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   }
   if (config_.rates) write_current_rates(access);
   // The command magnetism_from_electricity will send from this advance's
-  // end: the current predicted 1.5 steps on along its rate (with rates),
+  // end: the current predicted one step on along its rate (with rates),
   // else the current (docs/magnetism.md "The coupling's timing").
   for (Coil& c : coils_) {
     const double di = c.inductance > 0 ? c.v_l / c.inductance : 0.0;
-    const double command = config_.rates ? c.current + 1.5 * access.dt() * di : c.current;
+    const double command = config_.rates ? c.current + access.dt() * di : c.current;
     c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
   }
   write_outputs(access);
