@@ -1,5 +1,6 @@
 #include "resolvers/electricity/electricity_from_magnetism.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -30,11 +31,23 @@ ElectricityFromMagnetism::Motion ElectricityFromMagnetism::motion(ObjectId id, s
   // changes smoothly, and the difference is the acceleration of the last
   // step. A velocity that changes once in n steps (the rigid body every n-th
   // step) or was never seen gives none.
+  Vec3 a{}, alpha{};
+  bool rated = false;
   if (changed && before.changed) {
-    const Vec3 a = (v - before.velocity) / dt, alpha = (w - before.spin) / dt;
-    if (is_finite(a) && is_finite(alpha)) m.acceleration = a, m.angular = alpha;
+    a = (v - before.velocity) / dt, alpha = (w - before.spin) / dt;
+    rated = is_finite(a) && is_finite(alpha);
   }
-  if (!again) earlier = latest, latest = Seen{id, step, v, w, changed};
+  // ... and only if it is close to the step before's: a contact's impulse,
+  // a hand's push or a part resting on another changes the velocity in one
+  // step by what no smooth motion does, and extrapolating that jump over
+  // the coming step would induce an EMF the motion never has. Then (and in
+  // the step after the jump) the EMF keeps the present velocity.
+  auto close = [](Vec3 now, Vec3 last) {
+    return length(now - last) <= 0.5 * std::max(length(now), length(last));
+  };
+  if (rated && before.rated && close(a, before.acceleration) && close(alpha, before.angular))
+    m.acceleration = a, m.angular = alpha;
+  if (!again) earlier = latest, latest = Seen{id, step, v, w, changed, rated, a, alpha};
   return m;
 }
 
@@ -49,7 +62,9 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
       out.put(seen->id.index), out.put(seen->id.generation), out.put(seen->step);
       out.put(seen->velocity.x), out.put(seen->velocity.y), out.put(seen->velocity.z);
       out.put(seen->spin.x), out.put(seen->spin.y), out.put(seen->spin.z);
-      out.put(std::uint8_t(seen->changed));
+      out.put(seen->acceleration.x), out.put(seen->acceleration.y), out.put(seen->acceleration.z);
+      out.put(seen->angular.x), out.put(seen->angular.y), out.put(seen->angular.z);
+      out.put(std::uint8_t(seen->changed)), out.put(std::uint8_t(seen->rated));
     }
   }
   return true;
@@ -68,7 +83,12 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
       seen.velocity.z = in.get<double>();
       seen.spin.x = in.get<double>(), seen.spin.y = in.get<double>(),
       seen.spin.z = in.get<double>();
+      seen.acceleration.x = in.get<double>(), seen.acceleration.y = in.get<double>();
+      seen.acceleration.z = in.get<double>();
+      seen.angular.x = in.get<double>(), seen.angular.y = in.get<double>();
+      seen.angular.z = in.get<double>();
       seen.changed = in.get<std::uint8_t>() != 0;
+      seen.rated = in.get<std::uint8_t>() != 0;
     }
     const std::uint32_t slot = pair[0].id.index;
     // A slot far beyond any store is a damaged save, not a reason to
@@ -91,6 +111,9 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   const PropertyStore& store = world.store();
   const double dt = world.dt();
   const std::uint64_t step = world.step();
+  // induction_order 1 (the default): the parts move on with their present
+  // velocity, as in sessions 14-15 (header).
+  const bool second = target_.config().induction_order == 2;
 
   // Every pole moves with its part: v + w x (pole - centre), the centre being
   // the midpoint of the part's two poles. Over the coming step the part
@@ -107,7 +130,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     const std::uint32_t slot = b.id.index;
     const Vec3 v = velocity.value_or(slot, Vec3{}), w = spin.value_or(slot, Vec3{});
     if (!is_finite(v) || !is_finite(w)) continue;
-    const Motion m = motion(b.id, step, dt, v, w);
+    const Motion m = second ? motion(b.id, step, dt, v, w) : Motion{v, w, {}, {}};
     const Vec3 v_step = v + m.acceleration * dt, w_step = w + m.angular * dt;
     const Vec3 v_end = v + m.acceleration * (1.5 * dt), w_end = w + m.angular * (1.5 * dt);
     const Vec3 centre = (poles[b.first_pole].position + poles[b.first_pole + 1].position) * 0.5;
@@ -116,7 +139,8 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       const Vec3 arm = poles[i].position - centre;
       pole_velocity_[i] = v + cross(w, arm);
       moved_poles_[i].position = poles[i].position + (v_step + cross(w_step, arm)) * dt;
-      pole_velocity_end_[i] = v_end + cross(w_end, moved_poles_[i].position - centre_end);
+      pole_velocity_end_[i] =
+          second ? v_end + cross(w_end, moved_poles_[i].position - centre_end) : pole_velocity_[i];
     }
   }
 
@@ -148,7 +172,8 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       // while the parts' displacement over that step is the one the
       // force's work is booked along (docs/magnetism.md "The coupling's
       // timing").
-      const Motion m = motion(id, step, dt, coil.velocity, coil.angular_velocity);
+      const Motion m = second ? motion(id, step, dt, coil.velocity, coil.angular_velocity)
+                              : Motion{coil.velocity, coil.angular_velocity, {}, {}};
       CoilGeometry moved = coil;
       moved.centre = coil.centre + (coil.velocity + m.acceleration * dt) * dt;
       moved.axis = coil.axis + cross(coil.angular_velocity + m.angular * dt, coil.axis) * dt;

@@ -20,9 +20,10 @@
 // the last step (a = (v_n - v_(n-1)) / dt, kept here and saved with the
 // stage) and the parts move on with v + a dt over the step, ending at
 // v + 1.5 a dt: second order. The estimate is used only when the velocity
-// changed in each of the last two steps (the rigid body advanced in both):
+// changed in each of the last two steps (the rigid body advanced in both:
 // with `every = {rigid_body = n}` the velocity jumps once in n steps and the
-// EMF keeps the present velocity, as before.
+// EMF keeps the present velocity, as before) and the acceleration is within
+// half of the step before's (not a contact's impulse or a hand's push).
 //
 // Contract:
 //   reads    the magnetic_forces derived set (its poles), magnet, turns,
@@ -87,6 +88,9 @@ class ElectricityFromMagnetism : public Interaction {
     Vec3 velocity;           ///< m/s
     Vec3 spin;               ///< rad/s
     bool changed = false;    ///< the velocity differed from the apply one step before
+    bool rated = false;      ///< changed in this step and the one before: `acceleration` is set
+    Vec3 acceleration;       ///< (velocity - the step before's) / dt, m/s^2 (when rated)
+    Vec3 angular;            ///< the same of the spin, rad/s^2
   };
   /// A part's motion over the coming step, as the EMF takes it.
   struct Motion {

@@ -31,15 +31,14 @@ void MagnetismFromElectricity::apply(const WorldView& world) {
   // the step's start (its positions are those of Stormer-Verlet, second
   // order, with the force of that instant), so when electricity publishes
   // its currents' rates (its setting `rates`) the command is the current
-  // predicted one step on, I + dt dI/dt: the current at t + dt. A lead of
-  // 1.5 steps (the step's mean current, sessions 14-15) matched each
-  // step's books term by term but put the kick half a step late: first
-  // order in the motion, and in the books once the rigid body's own
-  // integration term is counted (measured: docs/magnetism.md). Without
-  // rates the force's current is one step old.
+  // predicted one step on, I + dt dI/dt: the current at t + dt (electricity's
+  // induction_order 2). The default (1) leads by 1.5 steps, the step's mean
+  // current: it matches each step's books term by term but puts the kick
+  // half a step late, first order in the motion (docs/magnetism.md).
+  // Without rates the force's current is one step old.
   if (const auto id = world.properties().find(prop::kCurrentRate)) {
     const auto rate = world.column<double>(*id);
-    const double lead = world.dt();
+    const double lead = (induction_order_ == 2 ? 1.0 : 1.5) * world.dt();
     for (std::uint32_t slot : magnet.members()) {
       if (MagnetKind(magnet[slot].index) != MagnetKind::Electromagnet) continue;
       const double i = current.value_or(slot, 0.0), di = rate.value_or(slot, 0.0);
