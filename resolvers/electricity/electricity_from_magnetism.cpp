@@ -55,6 +55,9 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
   // Field by field (no padding bytes): the slots that hold a record.
   std::uint64_t n = 0;
   for (std::size_t s = 0; s < latest_.size(); ++s) n += !latest_[s].id.is_null();
+  // None (induction_order 1 keeps none): no state, so the worlds of order 1
+  // hash as they did before the history existed.
+  if (n == 0) return false;
   out.put(n);
   for (std::size_t s = 0; s < latest_.size(); ++s) {
     if (latest_[s].id.is_null()) continue;
