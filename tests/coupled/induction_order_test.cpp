@@ -1,9 +1,11 @@
 // The induction coupling's order (issue 13): a magnet on a spring through a
 // shorted coil is an eddy-damped oscillator whose decay rate has a closed
 // form, and the work-precision scene of a magnet flown through a closed coil
-// must converge at second order in the step (it was 0.7 before the EMF took
-// the parts' velocity at the step's end and the force the current of the
-// rigid body's kick: docs/magnetism.md "The coupling's timing").
+// must converge at second order in the step, with electricity's setting
+// induction_order = 2 (the EMF takes the parts' velocity at the step's end,
+// the force the current of the rigid body's kick; order 1, the default, is
+// first order: 0.7 on the flown magnet). docs/electricity.md "The
+// coupling's order".
 #include <gtest/gtest.h>
 
 #include <cmath>
