@@ -88,13 +88,9 @@ std::vector<PropertyDef> electricity_property_defs() {
 // --- settings ------------------------------------------------------------------
 
 const std::vector<std::string>& ElectricityConfig::keys() {
-  static const std::vector<std::string> k = {"powered_threshold",
-                                             "contact_resistance",
-                                             "wire_resistance",
-                                             "internal_resistance",
-                                             "substeps",
-                                             "dense_limit",
-                                             "rates"};
+  static const std::vector<std::string> k = {
+      "powered_threshold", "contact_resistance", "wire_resistance", "internal_resistance",
+      "substeps",          "dense_limit",        "rates",           "induction_order"};
   return k;
 }
 
@@ -108,6 +104,7 @@ ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
   c.substeps = int(s.integer("substeps", c.substeps));
   c.dense_limit = s.integer("dense_limit", c.dense_limit);
   c.rates = s.boolean("rates", c.rates);
+  c.induction_order = int(s.integer("induction_order", c.induction_order));
   auto non_negative = [&](const char* key, double v) {
     if (!(v >= 0) || !std::isfinite(v))
       throw InputError(
@@ -117,6 +114,9 @@ ElectricityConfig ElectricityConfig::from(const PluginSettings& s) {
   non_negative("contact_resistance", c.contact_resistance);
   non_negative("wire_resistance", c.wire_resistance);
   non_negative("internal_resistance", c.internal_resistance);
+  if (c.induction_order != 1 && c.induction_order != 2)
+    throw InputError(s.where, "electricity setting 'induction_order' must be 1 or 2, not " +
+                                  std::to_string(c.induction_order));
   if (c.substeps < 1 || c.substeps > 1000)
     throw InputError(s.where, "electricity setting 'substeps' must be between 1 and 1000");
   if (c.dense_limit < 0)
@@ -626,11 +626,13 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   }
   if (config_.rates) write_current_rates(access);
   // The command magnetism_from_electricity will send from this advance's
-  // end: the current predicted 1.5 steps on along its rate (with rates),
+  // end: the current predicted 1.5 steps on along its rate (one step with
+  // induction_order 2) (with rates),
   // else the current (docs/magnetism.md "The coupling's timing").
   for (Coil& c : coils_) {
     const double di = c.inductance > 0 ? c.v_l / c.inductance : 0.0;
-    const double command = config_.rates ? c.current + 1.5 * access.dt() * di : c.current;
+    const double lead = config_.induction_order == 2 ? 1.0 : 1.5;
+    const double command = config_.rates ? c.current + lead * access.dt() * di : c.current;
     c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
   }
   write_outputs(access);

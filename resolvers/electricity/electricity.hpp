@@ -140,6 +140,14 @@ struct ElectricityConfig {
   /// current with it for the step whose force it makes (the magnet-coil
   /// coupling's energy balance, docs/magnetism.md); see the header.
   bool rates = true;
+  /// The induction coupling's timing (docs/magnetism.md "The coupling's
+  /// timing"): 1 (the default, sessions 14-15) commands the force's current
+  /// predicted 1.5 steps on and moves the parts on with their present
+  /// velocity for the EMF: first order (the work-precision row's 0.7). 2
+  /// commands the current of the rigid body's kick (one step on) and moves
+  /// the parts on with the acceleration of their last step: second order.
+  /// Read by electricity_from_magnetism and magnetism_from_electricity too.
+  int induction_order = 1;
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static ElectricityConfig from(const PluginSettings& settings);

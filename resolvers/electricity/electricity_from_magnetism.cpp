@@ -1,6 +1,8 @@
 #include "resolvers/electricity/electricity_from_magnetism.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "resolvers/electricity/electricity.hpp"
 
@@ -12,6 +14,96 @@ const ElectricityFromMagnetism::CoilFlux* ElectricityFromMagnetism::find(ObjectI
   return nullptr;
 }
 
+ElectricityFromMagnetism::Motion ElectricityFromMagnetism::motion(ObjectId id, std::uint64_t step,
+                                                                  double dt, Vec3 v, Vec3 w) {
+  const std::uint32_t slot = id.index;
+  if (latest_.size() <= slot) latest_.resize(slot + 1), earlier_.resize(slot + 1);
+  Seen& latest = latest_[slot];
+  Seen& earlier = earlier_[slot];
+  // The apply one step before this one: `latest` unless this step was seen
+  // already (then `earlier`, and nothing is recorded again).
+  const bool again = latest.id == id && latest.step == step;
+  const Seen& before = again ? earlier : latest;
+  Motion m{v, w, {}, {}};
+  const bool usable = before.id == id && before.step + 1 == step && dt > 0;
+  const bool changed = usable && (v != before.velocity || w != before.spin);
+  // Two steps in a row in which the rigid body moved the part: its velocity
+  // changes smoothly, and the difference is the acceleration of the last
+  // step. A velocity that changes once in n steps (the rigid body every n-th
+  // step) or was never seen gives none.
+  Vec3 a{}, alpha{};
+  bool rated = false;
+  if (changed && before.changed) {
+    a = (v - before.velocity) / dt, alpha = (w - before.spin) / dt;
+    rated = is_finite(a) && is_finite(alpha);
+  }
+  // ... and only if it is close to the step before's: a contact's impulse,
+  // a hand's push or a part resting on another changes the velocity in one
+  // step by what no smooth motion does, and extrapolating that jump over
+  // the coming step would induce an EMF the motion never has. Then (and in
+  // the step after the jump) the EMF keeps the present velocity.
+  auto close = [](Vec3 now, Vec3 last) {
+    return length(now - last) <= 0.5 * std::max(length(now), length(last));
+  };
+  if (rated && before.rated && close(a, before.acceleration) && close(alpha, before.angular))
+    m.acceleration = a, m.angular = alpha;
+  if (!again) earlier = latest, latest = Seen{id, step, v, w, changed, rated, a, alpha};
+  return m;
+}
+
+bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
+  // Field by field (no padding bytes): the slots that hold a record.
+  std::uint64_t n = 0;
+  for (std::size_t s = 0; s < latest_.size(); ++s) n += !latest_[s].id.is_null();
+  // None (induction_order 1 keeps none): no state, so the worlds of order 1
+  // hash as they did before the history existed.
+  if (n == 0) return false;
+  out.put(n);
+  for (std::size_t s = 0; s < latest_.size(); ++s) {
+    if (latest_[s].id.is_null()) continue;
+    for (const Seen* seen : {&latest_[s], &earlier_[s]}) {
+      out.put(seen->id.index), out.put(seen->id.generation), out.put(seen->step);
+      out.put(seen->velocity.x), out.put(seen->velocity.y), out.put(seen->velocity.z);
+      out.put(seen->spin.x), out.put(seen->spin.y), out.put(seen->spin.z);
+      out.put(seen->acceleration.x), out.put(seen->acceleration.y), out.put(seen->acceleration.z);
+      out.put(seen->angular.x), out.put(seen->angular.y), out.put(seen->angular.z);
+      out.put(std::uint8_t(seen->changed)), out.put(std::uint8_t(seen->rated));
+    }
+  }
+  return true;
+}
+
+void ElectricityFromMagnetism::restore_state(StateReader& in) {
+  latest_.clear(), earlier_.clear();
+  const auto n = in.get<std::uint64_t>();
+  for (std::uint64_t k = 0; k < n; ++k) {
+    Seen pair[2];
+    for (Seen& seen : pair) {
+      seen.id.index = in.get<decltype(seen.id.index)>();
+      seen.id.generation = in.get<decltype(seen.id.generation)>();
+      seen.step = in.get<std::uint64_t>();
+      seen.velocity.x = in.get<double>(), seen.velocity.y = in.get<double>();
+      seen.velocity.z = in.get<double>();
+      seen.spin.x = in.get<double>(), seen.spin.y = in.get<double>(),
+      seen.spin.z = in.get<double>();
+      seen.acceleration.x = in.get<double>(), seen.acceleration.y = in.get<double>();
+      seen.acceleration.z = in.get<double>();
+      seen.angular.x = in.get<double>(), seen.angular.y = in.get<double>();
+      seen.angular.z = in.get<double>();
+      seen.changed = in.get<std::uint8_t>() != 0;
+      seen.rated = in.get<std::uint8_t>() != 0;
+    }
+    const std::uint32_t slot = pair[0].id.index;
+    // A slot far beyond any store is a damaged save, not a reason to
+    // allocate gigabytes.
+    if (slot >= (std::uint32_t(1) << 28))
+      throw InputError("the saved state of stage 'electricity_from_magnetism' is damaged: slot " +
+                       std::to_string(slot));
+    if (latest_.size() <= slot) latest_.resize(slot + 1), earlier_.resize(slot + 1);
+    latest_[slot] = pair[0], earlier_[slot] = pair[1];
+  }
+}
+
 void ElectricityFromMagnetism::apply(const WorldView& world) {
   coils_.clear();
   if (!ids_) ids_ = MagnetColumns::Ids::resolve(world);
@@ -20,27 +112,40 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   const auto velocity = velocity_.column<Vec3>(world);
   const auto spin = spin_.column<Vec3>(world);
   const PropertyStore& store = world.store();
+  const double dt = world.dt();
+  const std::uint64_t step = world.step();
+  // induction_order 1 (the default): the parts move on with their present
+  // velocity, as in sessions 14-15 (header).
+  const bool second = target_.config().induction_order == 2;
 
   // Every pole moves with its part: v + w x (pole - centre), the centre being
-  // the midpoint of the part's two poles.
+  // the midpoint of the part's two poles. Over the coming step the part
+  // moves with v + a dt (the rigid body's next velocity) and ends it with
+  // v + 1.5 a dt (header: the half-step lag), the poles moved on to
+  // where that motion takes them.
   const auto poles = forces_.poles();
   const auto bodies = forces_.bodies();
   pole_velocity_.assign(poles.size(), Vec3{});
+  pole_velocity_end_.assign(poles.size(), Vec3{});
+  moved_poles_.assign(poles.begin(), poles.end());
   for (const MagneticBody& b : bodies) {
     if (b.pole_count != 2 || !store.alive(b.id)) continue;
     const std::uint32_t slot = b.id.index;
     const Vec3 v = velocity.value_or(slot, Vec3{}), w = spin.value_or(slot, Vec3{});
     if (!is_finite(v) || !is_finite(w)) continue;
+    const Motion m = second ? motion(b.id, step, dt, v, w) : Motion{v, w, {}, {}};
+    const Vec3 v_step = v + m.acceleration * dt, w_step = w + m.angular * dt;
+    const Vec3 v_end = v + m.acceleration * (1.5 * dt), w_end = w + m.angular * (1.5 * dt);
     const Vec3 centre = (poles[b.first_pole].position + poles[b.first_pole + 1].position) * 0.5;
-    for (std::uint32_t i = b.first_pole; i < b.first_pole + 2; ++i)
-      pole_velocity_[i] = v + cross(w, poles[i].position - centre);
+    const Vec3 centre_end = centre + v_step * dt;
+    for (std::uint32_t i = b.first_pole; i < b.first_pole + 2; ++i) {
+      const Vec3 arm = poles[i].position - centre;
+      pole_velocity_[i] = v + cross(w, arm);
+      moved_poles_[i].position = poles[i].position + (v_step + cross(w_step, arm)) * dt;
+      pole_velocity_end_[i] =
+          second ? v_end + cross(w_end, moved_poles_[i].position - centre_end) : pole_velocity_[i];
+    }
   }
-
-  // The poles at the end of the coming step, moved on with their velocity.
-  const double dt = world.dt();
-  moved_poles_.assign(poles.begin(), poles.end());
-  for (std::size_t i = 0; i < moved_poles_.size(); ++i)
-    moved_poles_[i].position = poles[i].position + pole_velocity_[i] * dt;
 
   std::vector<CoilGeometry> geometry;  // the coils with a usable geometry, for the mutual part
   std::vector<ObjectId> geometry_id;
@@ -70,11 +175,15 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       // while the parts' displacement over that step is the one the
       // force's work is booked along (docs/magnetism.md "The coupling's
       // timing").
+      const Motion m = second ? motion(id, step, dt, coil.velocity, coil.angular_velocity)
+                              : Motion{coil.velocity, coil.angular_velocity, {}, {}};
       CoilGeometry moved = coil;
-      moved.centre = coil.centre + coil.velocity * dt;
-      moved.axis = coil.axis + cross(coil.angular_velocity, coil.axis) * dt;
+      moved.centre = coil.centre + (coil.velocity + m.acceleration * dt) * dt;
+      moved.axis = coil.axis + cross(coil.angular_velocity + m.angular * dt, coil.axis) * dt;
       moved.axis = moved.axis / length(moved.axis);
-      f_end = coil_flux(moved_poles_, pole_velocity_, forces_.softening(), moved);
+      moved.velocity = coil.velocity + m.acceleration * (1.5 * dt);
+      moved.angular_velocity = coil.angular_velocity + m.angular * (1.5 * dt);
+      f_end = coil_flux(moved_poles_, pole_velocity_end_, forces_.softening(), moved);
       if (coil.linkage != 0) geometry.push_back(coil), geometry_id.push_back(id);
     }
     if (!std::isfinite(f.flux) || !std::isfinite(f.rate)) f = {};

@@ -10,6 +10,21 @@
 // generator: the work the coil's field does on the parts is the energy the
 // EMF takes from the circuit (Lenz).
 //
+// The EMF is queued for the end of the coming step, the parts moved on to
+// it (docs/magnetism.md "The coupling's timing"). The rigid body's velocity
+// after its step is the one that moved the parts over it (semi-implicit
+// Euler): the velocity half a step back, not the present one. Held for the
+// coming step it puts the EMF 1.5 steps behind the motion, an error of
+// 1.5 dt a in every velocity, first order in the step (the induction row's
+// order 0.7). So each part's acceleration is estimated from its velocity of
+// the last step (a = (v_n - v_(n-1)) / dt, kept here and saved with the
+// stage) and the parts move on with v + a dt over the step, ending at
+// v + 1.5 a dt: second order. The estimate is used only when the velocity
+// changed in each of the last two steps (the rigid body advanced in both:
+// with `every = {rigid_body = n}` the velocity jumps once in n steps and the
+// EMF keeps the present velocity, as before) and the acceleration is within
+// half of the step before's (not a contact's impulse or a hand's push).
+//
 // Contract:
 //   reads    the magnetic_forces derived set (its poles), magnet, turns,
 //            coil_factor, pole_separation, inductance, position, orientation,
@@ -46,6 +61,9 @@ class ElectricityFromMagnetism : public Interaction {
   ElectricityFromMagnetism(electricity::ElectricityResolver& target, const MagneticForces& forces)
       : target_(target), forces_(forces) {}
   void apply(const WorldView& world) override;
+  /// The velocities of the last two applies (the acceleration's history).
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   /// One coil's flux linkage and rate as of the last apply.
   struct CoilFlux {
@@ -63,13 +81,38 @@ class ElectricityFromMagnetism : public Interaction {
   };
   const std::vector<CoilPair>& mutual_inductances() const { return mutuals_; }
 
+  /// A part's velocity as one apply saw it.
+  struct Seen {
+    ObjectId id;             ///< the part (null: none recorded in this slot)
+    std::uint64_t step = 0;  ///< WorldView::step() of that apply
+    Vec3 velocity;           ///< m/s
+    Vec3 spin;               ///< rad/s
+    bool changed = false;    ///< the velocity differed from the apply one step before
+    bool rated = false;      ///< changed in this step and the one before: `acceleration` is set
+    Vec3 acceleration;       ///< (velocity - the step before's) / dt, m/s^2 (when rated)
+    Vec3 angular;            ///< the same of the spin, rad/s^2
+  };
+  /// A part's motion over the coming step, as the EMF takes it.
+  struct Motion {
+    Vec3 velocity, spin;         ///< now (the rigid body's, after its step)
+    Vec3 acceleration, angular;  ///< estimated from the last step (0 without history)
+  };
+  /// The motion of `slot` (its velocity `v`, spin `w` now) at step `step`:
+  /// records it (once per step; a second apply in the same step, the
+  /// priming after a restore, reads the same history) and estimates the
+  /// acceleration from the step before.
+  Motion motion(ObjectId id, std::uint64_t step, double dt, Vec3 v, Vec3 w);
+
  private:
   electricity::ElectricityResolver& target_;
   const MagneticForces& forces_;
   std::vector<CoilFlux> coils_;
   std::vector<CoilPair> mutuals_;
   std::vector<Vec3> pole_velocity_;
-  std::vector<Pole> moved_poles_;  // the poles one step on (scratch)
+  std::vector<Vec3> pole_velocity_end_;  // the poles' velocities one step on (scratch)
+  std::vector<Pole> moved_poles_;        // the poles one step on (scratch)
+  // Per slot: the last apply's velocities and the ones of the apply before.
+  std::vector<Seen> latest_, earlier_;
   std::optional<MagnetColumns::Ids> ids_;
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};
 };

@@ -26,17 +26,19 @@ void MagnetismFromElectricity::apply(const WorldView& world) {
   // The coupling's timing (docs/magnetism.md): the current read now (the
   // end of electricity's last advance, t) becomes the coil's pole strength
   // at the end of magnetism's next advance (t + dt), and the force of that
-  // pole strength is held over the rigid body's step after it, from t + dt
-  // to t + 2 dt, while electricity pays the EMF of that motion with its
-  // mean current over the same step, the current at t + 1.5 dt. When
-  // electricity publishes its currents' rates (its setting `rates`), the
-  // command is that current, predicted along the rate: then the force on
-  // the parts and the EMF's work on the circuit use the same current to
-  // second order, and the energy one side gives is the energy the other
-  // takes. Without rates the force's current is 1.5 steps old.
+  // pole strength is the rigid body's kick at t + dt, held over its step
+  // from t + dt to t + 2 dt. Semi-implicit Euler kicks with the force at
+  // the step's start (its positions are those of Stormer-Verlet, second
+  // order, with the force of that instant), so when electricity publishes
+  // its currents' rates (its setting `rates`) the command is the current
+  // predicted one step on, I + dt dI/dt: the current at t + dt (electricity's
+  // induction_order 2). The default (1) leads by 1.5 steps, the step's mean
+  // current: it matches each step's books term by term but puts the kick
+  // half a step late, first order in the motion (docs/magnetism.md).
+  // Without rates the force's current is one step old.
   if (const auto id = world.properties().find(prop::kCurrentRate)) {
     const auto rate = world.column<double>(*id);
-    const double lead = 1.5 * world.dt();
+    const double lead = (induction_order_ == 2 ? 1.0 : 1.5) * world.dt();
     for (std::uint32_t slot : magnet.members()) {
       if (MagnetKind(magnet[slot].index) != MagnetKind::Electromagnet) continue;
       const double i = current.value_or(slot, 0.0), di = rate.value_or(slot, 0.0);

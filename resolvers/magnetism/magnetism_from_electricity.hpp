@@ -13,8 +13,8 @@
 //            that carries no current (not wired) is commanded 0 A.
 #pragma once
 
-#include "resolvers/magnetism/magnetism_resolver.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
+#include "resolvers/magnetism/magnetism_resolver.hpp"
 #include "runtime/property_ref.hpp"
 #include "runtime/stage.hpp"
 
@@ -25,11 +25,15 @@ class MagnetismFromElectricity : public Interaction {
   /// Plugin name.
   static constexpr const char* kName = "magnetism_from_electricity";
 
-  explicit MagnetismFromElectricity(MagnetismResolver& target) : target_(target) {}
+  /// `induction_order`: electricity's setting of that name (1 or 2), which
+  /// sets the current's lead (1.5 or 1 step; docs/magnetism.md).
+  explicit MagnetismFromElectricity(MagnetismResolver& target, int induction_order = 1)
+      : target_(target), induction_order_(induction_order) {}
   void apply(const WorldView& world) override;
 
  private:
   MagnetismResolver& target_;
+  int induction_order_ = 1;
   PropertyRef magnet_{prop::kMagnet}, current_{prop::kCurrent};
 };
 

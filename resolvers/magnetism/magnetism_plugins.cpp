@@ -110,7 +110,14 @@ void register_magnetism_resolver(PluginRegistry& registry) {
                .doc = "a coil's current makes it a magnet at the next step"},
       .create =
           [](PluginContext& ctx) {
-            return std::make_unique<MagnetismFromElectricity>(ctx.target<MagnetismResolver>());
+            // Electricity's induction_order sets the current's lead (its own
+            // resolver validates the value).
+            int order = 1;
+            const auto& settings = ctx.world().def().settings;
+            if (const auto it = settings.find("electricity"); it != settings.end())
+              order = int(it->second.integer("induction_order", 1));
+            return std::make_unique<MagnetismFromElectricity>(ctx.target<MagnetismResolver>(),
+                                                              order);
           },
   });
 }

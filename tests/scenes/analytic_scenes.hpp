@@ -21,6 +21,7 @@ struct Method {
   int iterations = 40;     ///< QuickStep iterations
   int rigid_substeps = 1;  ///< rigid_body `substeps` (ignored when the resolver has no such key)
   int electricity_substeps = 4;  ///< electricity `substeps`
+  int induction_order = 1;       ///< electricity `induction_order` (1 or 2)
   bool joint_projection = true;  ///< rigid_body `joint_projection` (false: ODE's hinges alone)
   /// The plugin that provides `rigid_body`: ODE's "rigid_body" or "rigid_body.box2d" (which
   /// brings its own contact set; the ODE settings above are then unused).
