@@ -25,10 +25,11 @@ local defaults = {
   -- The cores amplify the coils' own field; the spokes do not magnetise
   -- them (core_pulled = false). With them pulled the lamp glows brighter
   -- (17.5 mW against 9.8 mW at 6 s) and the rotor still turns, but the
-  -- coupling's books do not close as the step shrinks (mismatch 1.95 % of
-  -- the energy moved at 1/240 s, 1.61 % at 1/480 s; with inert cores 3.3 %
-  -- and 0.97 %): the soft iron's magnetisation has no store in
-  -- magnetic_forces yet (docs/motor.md, "Iron cores").
+  -- coupling's books do not close as the step shrinks: soft iron has had a
+  -- store in magnetic_forces since session 16, but its strengths are held
+  -- over a step, and the work beyond the store (-0.135, -0.079, -0.044 J at
+  -- 1/120, 1/240, 1/480 s over 10 s) falls only as the step (docs/motor.md,
+  -- "Iron cores"; docs/energy.md).
   core_pulled = false,
   -- The bearing: dry friction (N m) and a light oil's viscous drag (N m s;
   -- 0.1 Pa s in the motor's bush: a hundredth of the motor's grease, so the
