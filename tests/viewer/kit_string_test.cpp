@@ -163,40 +163,19 @@ TEST(KitString, ASlackStringExertsNothingAndATautOneCatchesTheBall) {
     EXPECT_LT(free.back(), 0.0);
     EXPECT_GT(lowest, 1 - 0.5 - 0.1);
     EXPECT_LT(lowest, 1 - 0.5);
-    std::printf("%s: after 1 s the free ball is at y = %.4f m; the one on the string fell to "
-                "%.4f m at the lowest\n",
-                engine ? engine : "ODE", free.back(), lowest);
+    std::printf(
+        "%s: after 1 s the free ball is at y = %.4f m; the one on the string fell to "
+        "%.4f m at the lowest\n",
+        engine ? engine : "ODE", free.back(), lowest);
   }
 }
 
 // --- in the viewer -------------------------------------------------------------------
 
-std::unique_ptr<Viewer> new_board() {
-  ViewerOptions o = test::headless("");
-  o.paused = true;
-  auto v = std::make_unique<Viewer>(o);
-  v->frame();
-  return v;
-}
-
-const PaletteEntry& entry(const std::string& label) {
-  for (const PaletteEntry& e : palette_entries())
-    if (e.label == label) return e;
-  ADD_FAILURE() << "no palette entry " << label;
-  return palette_entries().front();
-}
-
-void key(Viewer& v, SDL_Keycode k, Uint16 mod = KMOD_NONE) {
-  v.push_key(k, mod);
-  v.frame();
-}
-
-void click(Viewer& v, Vec2 at) {
-  v.push_mouse(SDL_MOUSEMOTION, at);
-  v.push_mouse(SDL_MOUSEBUTTONDOWN, at);
-  v.push_mouse(SDL_MOUSEBUTTONUP, at);
-  v.frame();
-}
+using test::click;
+using test::entry;
+using test::key;
+using test::new_board;
 
 std::string messages(Viewer& v) {
   std::string s;
@@ -379,8 +358,7 @@ TEST(ViewerDraw, ABarIsDrawnFromPressToReleaseAndADiskToItsRadiusInOneUndoableEd
   EXPECT_NEAR(p->centre.x, 0, 2 * px);
   EXPECT_NEAR(p->centre.y, 0.35, 2 * px);
   // Its mass follows its volume (steel: 7850 kg/m^3, 1 cm square).
-  EXPECT_NEAR(w.value<double>(bar, "mass").value_or(0), 7850 * 2 * p->half.x * 0.01 * 0.01,
-              1e-9);
+  EXPECT_NEAR(w.value<double>(bar, "mass").value_or(0), 7850 * 2 * p->half.x * 0.01 * 0.01, 1e-9);
   EXPECT_EQ(v->history().undo_depth(), 1u) << "the drop and its drawing are one edit";
   const std::uint64_t drawn = hash(*v);
   key(*v, SDLK_z, KMOD_LCTRL);

@@ -23,31 +23,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::unique_ptr<Viewer> new_board() {
-  ViewerOptions o = test::headless("");
-  o.paused = true;
-  auto v = std::make_unique<Viewer>(o);
-  v->frame();
-  return v;
-}
+using test::click;
+using test::entry;
+using test::key;
+using test::new_board;
 
-const PaletteEntry& entry(const std::string& label) {
-  for (const PaletteEntry& e : palette_entries())
-    if (e.label == label) return e;
-  ADD_FAILURE() << "no palette entry " << label;
-  return palette_entries().front();
-}
-
-void key(Viewer& v, SDL_Keycode k, Uint16 mod = KMOD_NONE) {
-  v.push_key(k, mod);
-  v.frame();
-}
-void click(Viewer& v, Vec2 at) {
-  v.push_mouse(SDL_MOUSEMOTION, at);
-  v.push_mouse(SDL_MOUSEBUTTONDOWN, at);
-  v.push_mouse(SDL_MOUSEBUTTONUP, at);
-  v.frame();
-}
 /// Runs script lines (frames counted from now) to their end.
 void run_script(Viewer& v, const std::string& lines) {
   v.add_script(parse_script(lines, "test.script"));

@@ -64,4 +64,35 @@ inline Vec2 position_of(World& w, const std::string& name) {
   return xy(std::get<Vec3>(w.get(id, "position")));
 }
 
+/// A headless viewer on a new board, paused (no step between edits).
+inline std::unique_ptr<Viewer> new_board() {
+  ViewerOptions o = headless("");
+  o.paused = true;
+  auto v = std::make_unique<Viewer>(o);
+  v->frame();
+  return v;
+}
+
+/// The palette's entry with this label (a test failure if there is none).
+inline const PaletteEntry& entry(const std::string& label) {
+  for (const PaletteEntry& e : palette_entries())
+    if (e.label == label) return e;
+  ADD_FAILURE() << "no palette entry " << label;
+  return palette_entries().front();
+}
+
+/// A key press (with modifiers), then one frame.
+inline void key(Viewer& v, SDL_Keycode k, Uint16 mod = KMOD_NONE) {
+  v.push_key(k, mod);
+  v.frame();
+}
+
+/// A click without a move between press and release, then one frame.
+inline void click(Viewer& v, Vec2 at) {
+  v.push_mouse(SDL_MOUSEMOTION, at);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, at);
+  v.push_mouse(SDL_MOUSEBUTTONUP, at);
+  v.frame();
+}
+
 }  // namespace alloy::viewer::test

@@ -127,6 +127,23 @@ electric.resistor = {
   end,
 }
 
+electric.junction = {
+  doc = "a brass terminal block lying along its x axis: its two ends are joined by a brass bar, "
+    .. "so every wire that ends on it meets the others at one node",
+  args = mount_args({
+    { "at", "vec", required = true, doc = "centre {x, y}, m" },
+    -- A two-way brass terminal strip (20 x 10 x 10 mm, ~8 g): a fraction of
+    -- a milliohm from end to end.
+    { "resistance", "nonnegative", default = 0.0005, doc = "ohm, between its two ends" },
+    { "size", "extent", default = { 0.02, 0.01 }, doc = "{length, height} in the plane, m" },
+    { "depth", "positive", default = 0.01, doc = "out of the plane, m" },
+    { "mass", "positive", default = 0.008, doc = "kg (used when pinned)" },
+  }),
+  build = function(a)
+    return two_terminal(a, { resistance = a.resistance }, a.mass)
+  end,
+}
+
 electric.capacitor = {
   doc = "a capacitor lying along its x axis: terminal 0 at its -x end, terminal 1 at its +x end; "
     .. "`charge` is on terminal 0's plate and is kept while the circuit around it changes",

@@ -7,7 +7,7 @@ assert(kit.material("rubber").restitution > kit.material("copper").restitution, 
 local names = table.concat(kit.materials(), ",")
 assert(names == "brass,bronze,copper,felt,iron,rubber,steel,wood", names)
 local parts = table.concat(kit.parts(), ",")
-assert(parts == "armature,bar,battery,bell,capacitor,coil,contact,cylinder,disk,floor,glue,hinge,lamp,magnet,photocell,pin,resistor,rope,spring,switch,wall,wire", parts)
+assert(parts == "armature,bar,battery,bell,capacitor,coil,contact,cylinder,disk,floor,glue,hinge,junction,lamp,magnet,photocell,pin,resistor,rope,spring,switch,wall,wire", parts)
 
 -- The kit is read-only for everyone who requires it.
 assert(not pcall(function() kit.bar = nil end), "kit must be read-only")
