@@ -278,6 +278,26 @@ void Fmm::upward() {
     mneg_[i] = (deg_[i % nt] & 1) ? -mult_[i] : mult_[i];
 }
 
+// The translations below are unrolled whole for speed. Under the address
+// sanitizer that straight-line code, instrumented, took clang more than
+// twenty minutes and 2 GB to compile (fmm.cpp alone), so a sanitizer build
+// leaves the loops to the compiler: the same operations in the same order,
+// so the same bits.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ALLOY_FMM_SANITIZED 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define ALLOY_FMM_SANITIZED 1
+#endif
+#if defined(ALLOY_FMM_SANITIZED)
+#define ALLOY_UNROLL(n)
+#else
+#define ALLOY_UNROLL_TEXT(x) #x
+#define ALLOY_UNROLL(n) _Pragma(ALLOY_UNROLL_TEXT(GCC unroll n))
+#endif
+
 // The multi-indices of order P as compile-time tables, in the order
 // make_tables() numbers them (total degree up, then a down, then b down), so
 // that the translations below unroll into straight-line code with constant
@@ -337,13 +357,13 @@ void derivatives_fixed(Vec3 r, double eps2, double* __restrict dpos, double* __r
   double aux[T.N][P + 1];
   const double inv_s2 = 1.0 / (dot(r, r) + eps2);
   aux[0][0] = std::sqrt(inv_s2);
-#pragma GCC unroll 16
+ALLOY_UNROLL(16)
   for (int j = 1; j <= P; ++j) aux[0][j] = -(2 * j - 1) * aux[0][j - 1] * inv_s2;
   const double xyz[3] = {r.x, r.y, r.z};
-#pragma GCC unroll 200
+ALLOY_UNROLL(200)
   for (int t = 1; t < T.N; ++t) {
     const double X = xyz[T.axis[t]];
-#pragma GCC unroll 16
+ALLOY_UNROLL(16)
     for (int j = 0; j < P; ++j) {
       if (j > P - T.deg[t]) continue;  // a constant once unrolled
       const double back2 =
@@ -351,7 +371,7 @@ void derivatives_fixed(Vec3 r, double eps2, double* __restrict dpos, double* __r
       aux[t][j] = X * aux[T.prev[t]][j + 1] + back2;
     }
   }
-#pragma GCC unroll 200
+ALLOY_UNROLL(200)
   for (int t = 0; t < T.N; ++t) {
     dpos[T.off[t]] = aux[t][0];
     dneg[T.off[t]] = (T.deg[t] & 1) ? -aux[t][0] : aux[t][0];
@@ -382,7 +402,7 @@ constexpr Pairs<P> make_pairs() {
 template <int P>
 void contract_fixed(const double* __restrict mn, const double* __restrict d, double* __restrict u) {
   static constexpr Pairs<P> L = make_pairs<P>();
-#pragma GCC unroll 1024
+ALLOY_UNROLL(1024)
   for (int i = 0; i < int(L.e.size()); ++i) u[L.e[i][0]] += mn[L.e[i][1]] * d[L.e[i][2]];
 }
 
@@ -456,13 +476,13 @@ template <int P, class V, int W>
   V root{};
   for (int l = 0; l < W; ++l) set_lane(root, l, std::sqrt(lane(inv_s2, l)));
   aux[0][0] = root;
-#pragma GCC unroll 16
+ALLOY_UNROLL(16)
   for (int j = 1; j <= P; ++j) aux[0][j] = -double(2 * j - 1) * aux[0][j - 1] * inv_s2;
   const V xyz[3] = {x, y, z};
-#pragma GCC unroll 200
+ALLOY_UNROLL(200)
   for (int t = 1; t < T.N; ++t) {
     const V X = xyz[T.axis[t]];
-#pragma GCC unroll 16
+ALLOY_UNROLL(16)
     for (int j = 0; j < P; ++j) {
       if (j > P - T.deg[t]) continue;  // a constant once unrolled
       if (T.prev2[t] >= 0)
@@ -473,7 +493,7 @@ template <int P, class V, int W>
     }
   }
   V d[(P + 1) * (P + 1) * (P + 1)];
-#pragma GCC unroll 200
+ALLOY_UNROLL(200)
   for (int t = 0; t < T.N; ++t) d[T.off[t]] = aux[t][0];
   V ma[T.N], mb[T.N], ua[T.N], ub[T.N];
   for (int k = 0; k < T.N; ++k) {
@@ -481,7 +501,7 @@ template <int P, class V, int W>
       set_lane(ma[k], l, in.plain_a[l][k]), set_lane(mb[k], l, in.neg_b[l][k]);
     ua[k] = V{}, ub[k] = V{};
   }
-#pragma GCC unroll 1024
+ALLOY_UNROLL(1024)
   for (int i = 0; i < int(L.e.size()); ++i) {
     ua[L.e[i][0]] += mb[L.e[i][1]] * d[L.e[i][2]];
     ub[L.e[i][0]] += ma[L.e[i][1]] * d[L.e[i][2]];
