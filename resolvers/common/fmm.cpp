@@ -357,13 +357,13 @@ void derivatives_fixed(Vec3 r, double eps2, double* __restrict dpos, double* __r
   double aux[T.N][P + 1];
   const double inv_s2 = 1.0 / (dot(r, r) + eps2);
   aux[0][0] = std::sqrt(inv_s2);
-ALLOY_UNROLL(16)
+  ALLOY_UNROLL(16)
   for (int j = 1; j <= P; ++j) aux[0][j] = -(2 * j - 1) * aux[0][j - 1] * inv_s2;
   const double xyz[3] = {r.x, r.y, r.z};
-ALLOY_UNROLL(200)
+  ALLOY_UNROLL(200)
   for (int t = 1; t < T.N; ++t) {
     const double X = xyz[T.axis[t]];
-ALLOY_UNROLL(16)
+    ALLOY_UNROLL(16)
     for (int j = 0; j < P; ++j) {
       if (j > P - T.deg[t]) continue;  // a constant once unrolled
       const double back2 =
@@ -371,7 +371,7 @@ ALLOY_UNROLL(16)
       aux[t][j] = X * aux[T.prev[t]][j + 1] + back2;
     }
   }
-ALLOY_UNROLL(200)
+  ALLOY_UNROLL(200)
   for (int t = 0; t < T.N; ++t) {
     dpos[T.off[t]] = aux[t][0];
     dneg[T.off[t]] = (T.deg[t] & 1) ? -aux[t][0] : aux[t][0];
@@ -402,7 +402,7 @@ constexpr Pairs<P> make_pairs() {
 template <int P>
 void contract_fixed(const double* __restrict mn, const double* __restrict d, double* __restrict u) {
   static constexpr Pairs<P> L = make_pairs<P>();
-ALLOY_UNROLL(1024)
+  ALLOY_UNROLL(1024)
   for (int i = 0; i < int(L.e.size()); ++i) u[L.e[i][0]] += mn[L.e[i][1]] * d[L.e[i][2]];
 }
 
@@ -476,13 +476,13 @@ template <int P, class V, int W>
   V root{};
   for (int l = 0; l < W; ++l) set_lane(root, l, std::sqrt(lane(inv_s2, l)));
   aux[0][0] = root;
-ALLOY_UNROLL(16)
+  ALLOY_UNROLL(16)
   for (int j = 1; j <= P; ++j) aux[0][j] = -double(2 * j - 1) * aux[0][j - 1] * inv_s2;
   const V xyz[3] = {x, y, z};
-ALLOY_UNROLL(200)
+  ALLOY_UNROLL(200)
   for (int t = 1; t < T.N; ++t) {
     const V X = xyz[T.axis[t]];
-ALLOY_UNROLL(16)
+    ALLOY_UNROLL(16)
     for (int j = 0; j < P; ++j) {
       if (j > P - T.deg[t]) continue;  // a constant once unrolled
       if (T.prev2[t] >= 0)
@@ -493,7 +493,7 @@ ALLOY_UNROLL(16)
     }
   }
   V d[(P + 1) * (P + 1) * (P + 1)];
-ALLOY_UNROLL(200)
+  ALLOY_UNROLL(200)
   for (int t = 0; t < T.N; ++t) d[T.off[t]] = aux[t][0];
   V ma[T.N], mb[T.N], ua[T.N], ub[T.N];
   for (int k = 0; k < T.N; ++k) {
@@ -501,7 +501,7 @@ ALLOY_UNROLL(200)
       set_lane(ma[k], l, in.plain_a[l][k]), set_lane(mb[k], l, in.neg_b[l][k]);
     ua[k] = V{}, ub[k] = V{};
   }
-ALLOY_UNROLL(1024)
+  ALLOY_UNROLL(1024)
   for (int i = 0; i < int(L.e.size()); ++i) {
     ua[L.e[i][0]] += mb[L.e[i][1]] * d[L.e[i][2]];
     ub[L.e[i][0]] += ma[L.e[i][1]] * d[L.e[i][2]];
