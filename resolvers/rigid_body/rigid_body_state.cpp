@@ -268,11 +268,11 @@ void RigidBodyResolver::restore_state(StateReader& in) {
   impulses_ = in.get_vector<PairImpulse>();
   for (std::size_t i = 0; i < impulses_.size(); ++i) {
     const PairImpulse& p = impulses_[i];
-    // Merged by pair into the contacts (ContactSet::publish): sorted, distinct.
+    // Merged by pair into the contacts (ContactSet::publish): in pair order,
+    // as advance sorts them (equal neighbours are left as advance leaves them).
     if (!(p.a < p.b) || !finite(p.impulse) || !(p.normal_impulse >= 0) ||
         !std::isfinite(p.normal_impulse) ||
-        (i > 0 &&
-         !(impulses_[i - 1].a < p.a || (impulses_[i - 1].a == p.a && impulses_[i - 1].b < p.b))))
+        (i > 0 && pair_less(p.a, p.b, impulses_[i - 1].a, impulses_[i - 1].b)))
       refuse("a contact impulse is not finite or the pairs are out of order");
   }
   impulses_computed_ = in.get<std::uint8_t>() != 0;
