@@ -8,7 +8,6 @@
 
 namespace alloy::rigid {
 
-namespace {
 std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
@@ -17,7 +16,6 @@ std::string number(double v) {
 std::string vector_text(Vec3 v) {
   return "{" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "}";
 }
-}  // namespace
 
 void SourceMarks::mark(std::size_t at, const std::string* stage) {
   marks_.push_back({at, stage, stage ? *stage : std::string()});

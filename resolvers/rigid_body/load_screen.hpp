@@ -26,6 +26,11 @@
 
 namespace alloy::rigid {
 
+/// A number in a refusal's text, as printf's %g writes it.
+std::string number(double v);
+/// A vector in a refusal's text: "{x, y, z}".
+std::string vector_text(Vec3 v);
+
 /// Which stage queued which loads: marks where the stage running at queue
 /// time (World::running_stage) changed, so that a refused load names the
 /// stage (and through it the mod) that gave it. One pointer compare a load.

@@ -33,14 +33,6 @@ double smallest_moment(const dMatrix3 I) {
   return q + 2 * p * std::cos(std::acos(r) / 3 + 2 * std::numbers::pi / 3);
 }
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-std::string vector_text(Vec3 v) {
-  return "{" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "}";
-}
 std::vector<std::pair<std::string, double>> components(Vec3 v) {
   return {{"x", v.x}, {"y", v.y}, {"z", v.z}};
 }
