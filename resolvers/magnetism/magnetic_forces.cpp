@@ -159,6 +159,29 @@ void MagneticForces::update(const WorldView& world) {
     return out;
   };
 
+  // A free iron part's pole pair follows its induced moment, not the part, so
+  // the pair's forces in a non-uniform field have a moment about the centre
+  // that no turning of the part can change: a sphere on a frictionless pin
+  // spun up for ever (its energy in the field does not depend on how it is
+  // turned, so the torque must vanish), and a capsule about its own axis
+  // likewise. The torque about every axis the part is symmetric about is
+  // dropped; a box keeps the pair's torque (its chords, and so its energy,
+  // do depend on how it is turned).
+  auto keep_symmetric = [&](std::uint32_t b, const Frame& f, Vec3 torque) {
+    if (iron_of[b] < 0) return torque;
+    const SoftIronModel& m = models[std::size_t(iron_of[b])];
+    if (m.axial_only) return torque;
+    switch (m.bulk.shape) {
+      case PartBulk::Shape::Sphere:
+        return Vec3{};
+      case PartBulk::Shape::Capsule:
+        return torque - dot(torque, f.axes[0]) * f.axes[0];
+      case PartBulk::Shape::Box:
+      default:
+        return torque;
+    }
+  };
+
   // 2. The moments the field induces in the iron, consistently with one another.
   const std::vector<Pole> fixed = fixed_poles(frames, fixed_strength);
   const std::vector<InducedPart> parts = induced_parts(frames);
@@ -203,6 +226,7 @@ void MagneticForces::update(const WorldView& world) {
       body.force += pole_force[i];
       body.torque += cross(poles_[i].position - frames[b].centre, pole_force[i]);
     }
+    body.torque = keep_symmetric(b, frames[b], body.torque);
     if (!is_finite(body.force) || !is_finite(body.torque)) {
       world.emit({.type = "magnetic_force_nonfinite",
                   .a = body.id,
@@ -285,6 +309,7 @@ void MagneticForces::update(const WorldView& world) {
       f += force_moved[i];
       t += cross(poles_moved[i].position - moved[b].centre, force_moved[i]);
     }
+    t = keep_symmetric(b, moved[b], t);
     const Vec3 df = (f - body.force) / kRateTime, dt = (t - body.torque) / kRateTime;
     if (is_finite(df) && is_finite(dt)) body.force_rate = df, body.torque_rate = dt;
   }
