@@ -726,7 +726,38 @@ void ElectricityResolver::book_substep(double trap, double hs) {
   for (std::size_t n = 0; n < nc; ++n) books_.emf0[n] = coils_[n].series_emf;
 }
 
-void ElectricityResolver::report_energy(const WorldView&, EnergyReport& out) {
+void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out) {
+  if (h_ == 0) {
+    // Not advanced yet, so nothing is built; but a scene (or a save) may
+    // start with a charged capacitor or a coil carrying current, which the
+    // first advance takes up from the properties. The stores open at that
+    // level, read the way the network will read it, or the ledger would see
+    // the energy appear from nothing at the first step.
+    const auto emf = view.column<double>(prop::kEmf);
+    const auto inductance = view.column<double>(prop::kInductance);
+    const auto capacitance = view.column<double>(prop::kCapacitance);
+    const auto wire_from = view.column<ObjectId>(prop::kWireFrom);
+    const auto wire_to = view.column<ObjectId>(prop::kWireTo);
+    const auto current = current_id_.column<double>(view);
+    const auto charge = charge_id_.column<double>(view);
+    auto part = [&](std::uint32_t s) {
+      return !emf.has(s) && !wire_from.has(s) && !wire_to.has(s);
+    };
+    double fields = 0, charges = 0;
+    for (std::uint32_t s : inductance.members())
+      if (part(s)) {
+        const double i = current.value_or(s, 0.0);
+        fields += 0.5 * inductance[s] * i * i;
+      }
+    for (std::uint32_t s : capacitance.members())
+      if (part(s) && !inductance.has(s) && capacitance[s] >= kMinCapacitance) {
+        const double q = charge.value_or(s, 0.0);
+        charges += q * q / (2 * capacitance[s]);
+      }
+    out.store("coil fields (1/2 L I^2)", fields);
+    out.store("capacitors (q^2 / 2C)", charges);
+    return;
+  }
   out.source("battery work", std::exchange(books_.battery, 0.0));
   out.sink("heat (I^2 R)", std::exchange(books_.heat, 0.0));
   out.sink("switching (guard steps, opened coils)", std::exchange(books_.switching, 0.0));

@@ -167,6 +167,48 @@ TEST(EnergyBooks, RlRiseHeatMatchesTheClosedForm) {
   EXPECT_LT(books.total().fraction(), 1e-9);
 }
 
+TEST(EnergyBooks, PresetChargeAndCurrentOpenTheStoresAtTheirLevel) {
+  // A scene that starts with a coil carrying 2 A (0.06 H, 1/2 L I^2 = 0.12 J)
+  // shorted by 1 Ohm, and a capacitor holding 10 mC (10 mF: q^2/2C = 5 mJ)
+  // across 2 Ohm: both discharge into heat, and the books must open with
+  // that energy stored. Before, the stores opened at 0 (nothing is built
+  // before the first advance), so the whole 0.125 J looked created: a
+  // residue of 100 % of the energy moved.
+  PluginRegistry registry;
+  electricity::register_electricity_resolver(registry);
+  WorldDef d;
+  d.dt = 1.0 / 240;
+  World w(registry, d);
+  const ObjectId coil = w.create("coil");
+  w.set(coil, "inductance", 0.06);
+  w.set(coil, "resistance", 0.0);
+  w.set(coil, "current", 2.0);
+  const ObjectId r1 = w.create("r1");
+  w.set(r1, "conductive", true);
+  w.set(r1, "resistance", 1.0);
+  join(w, "w1", coil, 1, r1, 0);
+  join(w, "w2", r1, 1, coil, 0);
+  const ObjectId cap = w.create("cap");
+  w.set(cap, "capacitance", 1e-2);
+  w.set(cap, "plate_charge", 1e-2);
+  const ObjectId r2 = w.create("r2");
+  w.set(r2, "conductive", true);
+  w.set(r2, "resistance", 2.0);
+  join(w, "w3", cap, 1, r2, 0);
+  join(w, "w4", r2, 1, cap, 0);
+  EnergyLedger books;
+  run_books(w, books, 240);  // 1 s: 17 L/R, 50 RC
+  const double heat = total(books, "electricity", "heat (I^2 R)");
+  const double field = total(books, "electricity", "coil fields (1/2 L I^2)");
+  const double charge = total(books, "electricity", "capacitors (q^2 / 2C)");
+  std::printf("preset stores, 1 s: heat %.6f J, field %.6f J, capacitor %.6f J, residue %.2e\n",
+              heat, field, charge, books.total().residue());
+  EXPECT_NEAR(field, -0.12, 1e-6);
+  EXPECT_NEAR(charge, -0.005, 1e-6);
+  EXPECT_NEAR(heat, 0.125, 1e-4);
+  EXPECT_LT(books.total().fraction(), 1e-9);
+}
+
 TEST(EnergyBooks, LeftOutAccountsLeaveAResidue) {
   // Broken on purpose: the RC's books without the heat, without the
   // capacitor, without the battery. Each leaves a residue far above the
