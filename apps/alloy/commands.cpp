@@ -716,14 +716,29 @@ nlohmann::json plugin_json(const PluginRegistry& registry, const PluginDef& d) {
   if (!d.info.owner.empty()) j["mod"] = d.info.owner;
   j["doc"] = d.info.doc;
   nlohmann::json owns = nlohmann::json::array();
+  // A mod owns its properties as a whole: a mod's stage is listed as owning
+  // those of them it writes, and the mod's first stage those that none of its
+  // stages writes (a mod's inputs: magic's `rune`), so that every property
+  // appears once with its kind, unit and doc.
+  auto writes = [](const PluginDef& x, const std::string& name) {
+    return std::find(x.info.writes.begin(), x.info.writes.end(), name) != x.info.writes.end();
+  };
+  const PluginDef* first_of_mod = nullptr;
+  std::vector<const PluginDef*> mod_stages;
+  if (!d.info.owner.empty())
+    for (const auto& n : registry.order())
+      if (const PluginDef* x = registry.find(n); x && x->info.owner == d.info.owner) {
+        if (!first_of_mod) first_of_mod = x;
+        mod_stages.push_back(x);
+      }
   for (const auto& name : props.names()) {
     const PropertyDef& p = props.def(props.id(name));
-    // A mod owns its properties as a whole: a mod's resolver is listed as
-    // owning those of them it writes.
-    const bool mine =
-        p.owner == d.info.name ||
-        (p.owner_is_mod && !d.info.owner.empty() && p.owner == d.info.owner &&
-         std::find(d.info.writes.begin(), d.info.writes.end(), p.name) != d.info.writes.end());
+    bool mine = p.owner == d.info.name;
+    if (!mine && p.owner_is_mod && !d.info.owner.empty() && p.owner == d.info.owner)
+      mine = writes(d, p.name) ||
+             (first_of_mod == &d &&
+              std::none_of(mod_stages.begin(), mod_stages.end(),
+                           [&](const PluginDef* x) { return writes(*x, p.name); }));
     if (!mine) continue;
     nlohmann::json pj{{"name", p.name}, {"kind", std::string(to_string(p.kind))}};
     if (!p.unit.empty()) pj["unit"] = p.unit;

@@ -137,6 +137,18 @@ TEST(AlloyPlugins, AModsPluginsAreListedWithTheirFunctions) {
   EXPECT_EQ((*mana)["functions"][0]["name"], "link");
   EXPECT_EQ((*mana)["functions"][0]["args"], nlohmann::json::array({"object"}));
   EXPECT_TRUE(has_name((*mana)["owns"], "mana"));
+  // A property none of the mod's stages writes (the rune carved in a stone,
+  // an input) is listed too, once, with its kind and values: before, it
+  // appeared only as a name in reads and needs.
+  int runes = 0;
+  for (const auto& p : all)
+    for (const auto& o : p["owns"])
+      if (o["name"] == "rune") {
+        ++runes;
+        EXPECT_EQ(o["kind"], "enum");
+        EXPECT_EQ(o["values"], nlohmann::json::array({"source", "conduit", "lift"}));
+      }
+  EXPECT_EQ(runes, 1);
   EXPECT_NE(plugin(all, "rigid_body"), nullptr);  // the natives are there too
 }
 
