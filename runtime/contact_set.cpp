@@ -37,6 +37,14 @@ std::span<const ContactPair> ContactSet::ongoing() const {
   return ongoing_;
 }
 
+void ContactSet::carry_over(const ContactSet& from) {
+  current_ = from.current_;
+  points_ = from.points_;
+  previous_.clear(), previous_points_.clear();
+  clear_changes();
+  step_ = from.step_;
+}
+
 void ContactSet::begin_update() {
   std::swap(previous_, current_);
   current_.clear();

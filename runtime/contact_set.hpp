@@ -123,6 +123,14 @@ class ContactSet : public DerivedSet {
   /// Whether a and b touch (in either order), and the pair if so.
   const ContactPair* find(ObjectId a, ObjectId b) const;
 
+  /// Takes over the pairs and points of the set this one replaces (a swap of
+  /// engines), before this one's first update: that update then reports as
+  /// ended the pairs that no longer touch, as ongoing (with their began step
+  /// and total impulse) those that still do, and as began only new ones, as if
+  /// one engine had run throughout. Without it a swap re-announced every
+  /// resting pair as began and never ended the old engine's pairs, so that a
+  /// circuit closed through a contact stayed closed for good.
+  void carry_over(const ContactSet& from);
   /// Declares that the caller reads the pairs' impulses: they are computed
   /// from the rigid body's next advance on while it is held.
   virtual ImpulseDemand demand_impulses() const = 0;

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <set>
 
+#include "runtime/contact_set.hpp"
+
 namespace alloy {
 
 /// An active stage and what the scheduler keeps about it.
@@ -193,6 +195,15 @@ World::World(PluginRegistry& plugins, WorldDef def)
       if (other.def.name == a.name) throw InputError("two areas are called '" + a.name + "'");
     for (const auto& p : a.plugins)
       if (!plugins_.find(p)) throw InputError("area '" + a.name + "': unknown plugin '" + p + "'");
+    // One provider of a thing per scope, as globally: two rigid-body engines
+    // listed in one area would both move its bodies.
+    for (std::size_t i = 0; i < a.plugins.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j) {
+        const std::string& what = plugins_.find(a.plugins[i])->info.provides;
+        if (!what.empty() && what == plugins_.find(a.plugins[j])->info.provides)
+          throw InputError("area '" + a.name + "': '" + a.plugins[j] + "' and '" + a.plugins[i] +
+                           "' both provide '" + what + "'; list one");
+      }
     areas_.push_back(Area{a, {}, {}});
   }
   for (const auto& [what, name] : def_.use) {
@@ -386,9 +397,21 @@ World::Slot* World::dependency(const Slot& of, std::string_view plugin) const {
   auto match = [&](const Slot& s) {
     return s.info.name == plugin || (!exact && s.info.provides == plugin);
   };
-  if (of.area >= 0)
+  if (of.area >= 0) {
     for (const auto& s : slots_)
       if (s->area == of.area && match(*s)) return s.get();
+    // An area that lists its own provider but has not made it yet (nothing in
+    // the area needed it so far) does not fall back on the global one: that
+    // one leaves the area's objects out, so an area's gravity made before its
+    // engine queued every pull on an engine that did not hold the bodies (a
+    // ball rolling onto a table in an area with only static parts at load
+    // flew on with no gravity and no friction). The stage waits for the
+    // area's own instance instead.
+    for (const auto& name : areas_[std::size_t(of.area)].def.plugins)
+      if (const PluginDef* d = plugins_.find(name);
+          d && (d->info.name == plugin || (!exact && d->info.provides == plugin)))
+        return nullptr;
+  }
   for (const auto& s : slots_)
     if (s->area < 0 && match(*s)) return s.get();
   return nullptr;
@@ -697,11 +720,32 @@ bool World::chosen_globally(const PluginDef& def) const {
   return false;
 }
 
+bool World::follows_area_provider(const PluginDef& def, int area) const {
+  const StageInfo& info = def.info;
+  if (info.kind != StageKind::Interaction || info.target.empty() || !chosen_globally(def))
+    return false;
+  const auto& list = areas_[std::size_t(area)].def.plugins;
+  if (listed(list, info.name)) return false;
+  // A target named exactly (ODE's contact joints name ODE) follows only that
+  // engine; otherwise any provider of the target the area lists.
+  const bool exact = listed(info.exact, info.target);
+  for (const auto& name : list)
+    if (const PluginDef* d = plugins_.find(name);
+        d && (d->info.name == info.target || (!exact && d->info.provides == info.target)))
+      return true;
+  return false;
+}
+
 const Scope* World::global_scope(const PluginDef& def) {
   // A global stage leaves alone the areas that have their own instance of it
-  // or their own provider of what it provides.
+  // or their own provider of what it provides, and those where it follows the
+  // area's own provider of its target (an instance of its own there).
   std::vector<int> excluded;
-  for (std::size_t i = 0; i < areas_.size(); ++i)
+  for (std::size_t i = 0; i < areas_.size(); ++i) {
+    if (follows_area_provider(def, int(i))) {
+      excluded.push_back(int(i));
+      continue;
+    }
     for (const auto& p : areas_[i].def.plugins) {
       const PluginDef* d = plugins_.find(p);
       if (p == def.info.name ||
@@ -710,6 +754,7 @@ const Scope* World::global_scope(const PluginDef& def) {
         break;
       }
     }
+  }
   if (excluded.empty()) return frozen_.empty() ? nullptr : &live_;
   Outside& o = outside_[def.info.name];
   o.areas = std::move(excluded);
@@ -727,7 +772,9 @@ bool World::needed_in(const PluginDef& def, int area) const {
     if (!chosen_globally(def)) return false;
     if (auto it = outside_.find(info.name); it != outside_.end()) scope = &it->second.scope;
   } else {
-    if (!listed(areas_[std::size_t(area)].def.plugins, info.name)) return false;
+    if (!listed(areas_[std::size_t(area)].def.plugins, info.name) &&
+        !follows_area_provider(def, area))
+      return false;
     scope = &areas_[std::size_t(area)].scope;
   }
   if (!info.target.empty() && !dependency(probe, info.target)) return false;
@@ -807,6 +854,18 @@ void World::instantiate(const PluginDef& def, int area) {
       break;
     case StageKind::Derived:
       slot->derived = dynamic_cast<DerivedSet*>(slot->stage.get());
+      if (auto* set = dynamic_cast<ContactSet*>(slot->derived); set && !retired_.empty())
+        for (auto r = retired_.begin(); r != retired_.end(); ++r)
+          if (r->area == area && r->provides == slot->info.provides) {
+            set->carry_over(dynamic_cast<const ContactSet&>(*r->stage));
+            // Not primed: its first update comes after the new engine's
+            // first advance. Before it, an engine that finds contacts only
+            // while it steps (Box2D) has none, and would end every pair it
+            // was handed, to begin them again a step later.
+            slot->primed = true;
+            retired_.erase(r);
+            break;
+          }
       break;
     case StageKind::Interaction:
       slot->interaction = dynamic_cast<Interaction*>(slot->stage.get());
@@ -1149,6 +1208,26 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     throw InputError("swap: '" + std::string(from) + "' is a " +
                      std::string(to_string(f->info.kind)) + " and '" + std::string(to) + "' a " +
                      std::string(to_string(t->info.kind)));
+  // A swap replaces one implementation of a thing by another: gravity swapped
+  // for a rigid body would run two engines on the same bodies (each moved
+  // them, at twice their speed), so the two must provide the same thing.
+  const auto provided = [](const PluginDef& d) -> const std::string& {
+    return d.info.provides.empty() ? d.info.name : d.info.provides;
+  };
+  if (provided(*f) != provided(*t))
+    throw InputError("swap: '" + std::string(from) + "' provides '" + provided(*f) + "' and '" +
+                     std::string(to) + "' provides '" + provided(*t) +
+                     "'; a swap replaces one provider of a thing by another");
+  // And the one swapped out must be the one running there (else the event
+  // would say a swap happened that changed nothing, or the new one would run
+  // beside the old).
+  if (area.empty() && !f->info.provides.empty() && !chosen_globally(*f)) {
+    const auto chosen = def_.use.find(f->info.provides);
+    throw InputError("swap: '" + std::string(from) + "' does not run here" +
+                     (chosen != def_.use.end()
+                          ? " ('" + chosen->second + "' is the " + f->info.provides + ")"
+                          : std::string()));
+  }
   // A stage written against an engine (Box2D's contact set) swapped in where
   // that engine does not run would stay out, and bodies would fall through
   // one another unseen: refused, saying what to swap instead.
@@ -1238,6 +1317,16 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     }
     list = std::move(kept);
   }
+  // The contact sets going out hand their pairs to the ones coming in (at
+  // their creation, in sync_structure), so that the swap itself begins and
+  // ends no contact.
+  retired_.clear();
+  if (started_)
+    for (Slot* s : old)
+      if (s->derived && dynamic_cast<ContactSet*>(s->derived)) {
+        s->derived = nullptr;
+        retired_.push_back({s->area, s->info.provides, std::move(s->stage)});
+      }
   // Removing one slot may remove another (a dependent): look each up again.
   for (Slot* s : old)
     if (std::any_of(slots_.begin(), slots_.end(), [&](const auto& x) { return x.get() == s; }))
@@ -1257,6 +1346,7 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     synced_ = false;
     sync_structure();  // instantiate the new stage and its dependents, build, prime
   }
+  retired_.clear();
 }
 
 std::vector<std::string> World::plugin_changed(std::string_view plugin) {

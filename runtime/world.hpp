@@ -448,6 +448,10 @@ class World {
   bool chosen_globally(const PluginDef& def) const;
   const Scope* global_scope(const PluginDef& def);
   bool needed_in(const PluginDef& def, int area) const;
+  /// Whether a global interaction the area does not list acts there all the
+  /// same, on the area's own provider of its target (the area replaces the
+  /// engine, not the forces on its bodies).
+  bool follows_area_provider(const PluginDef& def, int area) const;
   Slot* find_slot(std::string_view instance) const;
   Slot* dependency(const Slot& of, std::string_view plugin) const;
   void remove_with_dependents(Slot* s);
@@ -480,10 +484,18 @@ class World {
   // object's referents (split_areas()); empty for every other object.
   std::vector<std::vector<int>> split_;
   std::map<std::string, Outside, std::less<>>
-      outside_;                                 // scopes of global stages kept out of areas
-  std::vector<std::string> disabled_;           // global plugins swapped out
-  std::vector<std::string> enabled_;            // global plugins swapped in beyond def_.plugins
-  std::vector<ScheduledSwap> swaps_;            // sorted by time
+      outside_;                        // scopes of global stages kept out of areas
+  std::vector<std::string> disabled_;  // global plugins swapped out
+  std::vector<std::string> enabled_;   // global plugins swapped in beyond def_.plugins
+  std::vector<ScheduledSwap> swaps_;   // sorted by time
+  // During a swap: the contact sets swapped out (area, what they provided,
+  // the stage), kept alive until their replacements have taken their pairs.
+  struct Retired {
+    int area;
+    std::string provides;
+    std::unique_ptr<Stage> stage;
+  };
+  std::vector<Retired> retired_;
   std::vector<ScheduledInput> inputs_;          // sorted by time, stable
   bool impulses_demanded_ = false;              // demand_impulses()
   std::vector<ImpulseDemand> impulse_demands_;  // held for this step's advance

@@ -13,7 +13,10 @@ namespace {
 class Tagger : public Resolver {
  public:
   explicit Tagger(double value) : value_(value) {}
-  void build(ResolverAccess& a) override { ++builds; tag(a); }
+  void build(ResolverAccess& a) override {
+    ++builds;
+    tag(a);
+  }
   void advance(ResolverAccess& a, double) override { tag(a); }
   void on_scope_exit(ResolverAccess& a, std::span<const std::uint32_t> left) override {
     auto t = a.writer<double>("tag");
@@ -86,8 +89,12 @@ class Poker : public Interaction {
 };
 
 PluginDef tagger(const std::string& name, double value) {
-  return {.info = {.name = name, .kind = StageKind::Resolver, .reads = {"position"}, .writes = {"tag"},
-                   .needs = {"position"}, .provides = "tag"},
+  return {.info = {.name = name,
+                   .kind = StageKind::Resolver,
+                   .reads = {"position"},
+                   .writes = {"tag"},
+                   .needs = {"position"},
+                   .provides = "tag"},
           .create = [value](PluginContext&) { return std::make_unique<Tagger>(value); }};
 }
 
@@ -103,8 +110,8 @@ class AreasTest : public ::testing::Test {
   }
   WorldDef def_with_left_area() {
     WorldDef def;
-    def.areas.push_back(AreaDef{.name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5},
-                                .plugins = {"tag.two"}});
+    def.areas.push_back(AreaDef{
+        .name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5}, .plugins = {"tag.two"}});
     return def;
   }
   ObjectId body(World& w, const std::string& name, double x) {
@@ -147,8 +154,8 @@ TEST_F(AreasTest, AnObjectCrossingABorderKeepsItsPropertiesAndChangesResolver) {
   EXPECT_EQ(crossings[0].a, a);
   EXPECT_EQ(crossings[0].text, "left -> (no area)");
   EXPECT_EQ(w.area_of(a), "");
-  EXPECT_EQ(tag(w, a), 1);                                // the global provider took it over
-  EXPECT_EQ(std::get<double>(w.get(a, "mass")), 1.0);     // every property kept
+  EXPECT_EQ(tag(w, a), 1);                             // the global provider took it over
+  EXPECT_EQ(std::get<double>(w.get(a, "mass")), 1.0);  // every property kept
   EXPECT_EQ(left.exited, (std::vector<std::uint32_t>{a.index}));
   w.set(a, "position", Vec3{-1, 0, 0});
   w.step();
@@ -158,17 +165,22 @@ TEST_F(AreasTest, AnObjectCrossingABorderKeepsItsPropertiesAndChangesResolver) {
 TEST_F(AreasTest, AResolverErasesWhatItWroteForObjectsThatLeftBeforeTheNewProviderWrites) {
   // tag.two (registered before tag.erase) takes the object over in "right": its
   // build must come after tag.erase's exit, or the object would be left untagged.
-  registry.add({.info = {.name = "tag.erase", .kind = StageKind::Resolver, .reads = {"position"},
-                         .writes = {"tag"}, .needs = {"position"}, .provides = "tag"},
+  registry.add({.info = {.name = "tag.erase",
+                         .kind = StageKind::Resolver,
+                         .reads = {"position"},
+                         .writes = {"tag"},
+                         .needs = {"position"},
+                         .provides = "tag"},
                 .create = [](PluginContext&) { return std::make_unique<Eraser>(); }});
-  registry.add({.info = {.name = "idle", .kind = StageKind::Resolver, .needs = {"nothing carries this"}},
-                .create = [](PluginContext&) { return std::make_unique<Eraser>(); }});
+  registry.add(
+      {.info = {.name = "idle", .kind = StageKind::Resolver, .needs = {"nothing carries this"}},
+       .create = [](PluginContext&) { return std::make_unique<Eraser>(); }});
   WorldDef def;
   def.plugins = {"idle"};  // no global provider: outside the areas nothing writes tag
-  def.areas.push_back(AreaDef{.name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5},
-                              .plugins = {"tag.erase"}});
-  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
-                              .plugins = {"tag.two"}});
+  def.areas.push_back(AreaDef{
+      .name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5}, .plugins = {"tag.erase"}});
+  def.areas.push_back(AreaDef{
+      .name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5}, .plugins = {"tag.two"}});
   World w(registry, def);
   const ObjectId a = body(w, "a", -3), b = body(w, "b", -2);
   w.step();
@@ -184,12 +196,15 @@ TEST_F(AreasTest, AResolverErasesWhatItWroteForObjectsThatLeftBeforeTheNewProvid
 }
 
 TEST_F(AreasTest, ABodyMovedAcrossABorderIsHandedOverInTheStepItCrossed) {
-  registry.add({.info = {.name = "mover", .kind = StageKind::Resolver, .writes = {"position"}, .needs = {"position"}},
+  registry.add({.info = {.name = "mover",
+                         .kind = StageKind::Resolver,
+                         .writes = {"position"},
+                         .needs = {"position"}},
                 .create = [](PluginContext&) { return std::make_unique<Mover>(); }});
   WorldDef def;
   def.dt = 0.25;
-  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
-                              .plugins = {"tag.two"}});
+  def.areas.push_back(AreaDef{
+      .name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5}, .plugins = {"tag.two"}});
   World w(registry, def);
   const ObjectId a = body(w, "a", -0.625);
   w.step();  // to -0.375
@@ -205,16 +220,25 @@ TEST_F(AreasTest, AnInteractionCreatedWhenABodyCrossesQueuesOncePerStep) {
   // The counter and its poker exist in "right" only once a body is there. The
   // body crosses during an advance: the new poker must queue once for the
   // next advance, not once when it is created and again in the same step.
-  registry.add({.info = {.name = "mover", .kind = StageKind::Resolver, .writes = {"position"}, .needs = {"position"}},
+  registry.add({.info = {.name = "mover",
+                         .kind = StageKind::Resolver,
+                         .writes = {"position"},
+                         .needs = {"position"}},
                 .create = [](PluginContext&) { return std::make_unique<Mover>(); }});
   registry.add({.info = {.name = "counter", .kind = StageKind::Resolver, .needs = {"position"}},
                 .create = [](PluginContext&) { return std::make_unique<Counter>(); }});
-  registry.add({.info = {.name = "poker", .kind = StageKind::Interaction, .needs = {"position"}, .target = "counter"},
-                .create = [](PluginContext& c) { return std::make_unique<Poker>(c.target<Counter>()); }});
+  registry.add(
+      {.info = {.name = "poker",
+                .kind = StageKind::Interaction,
+                .needs = {"position"},
+                .target = "counter"},
+       .create = [](PluginContext& c) { return std::make_unique<Poker>(c.target<Counter>()); }});
   WorldDef def;
   def.dt = 0.25;
   def.plugins = {"mover"};  // globally; the counter and poker only in "right"
-  def.areas.push_back(AreaDef{.name = "right", .center = {5, 0, 0}, .half_extents = {5, 5, 5},
+  def.areas.push_back(AreaDef{.name = "right",
+                              .center = {5, 0, 0},
+                              .half_extents = {5, 5, 5},
                               .plugins = {"counter", "poker"}});
   World w(registry, def);
   body(w, "a", -0.375);
@@ -239,11 +263,14 @@ TEST_F(AreasTest, ScopedViewsListOnlyTheAreasObjects) {
 }
 
 TEST_F(AreasTest, AResolverOfAnAreaCannotWriteOutsideIt) {
-  registry.add({.info = {.name = "trespasser", .kind = StageKind::Resolver, .writes = {"tag"}, .needs = {"position"}},
+  registry.add({.info = {.name = "trespasser",
+                         .kind = StageKind::Resolver,
+                         .writes = {"tag"},
+                         .needs = {"position"}},
                 .create = [](PluginContext&) { return std::make_unique<Trespasser>(); }});
   WorldDef def;
-  def.areas.push_back(AreaDef{.name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5},
-                              .plugins = {"trespasser"}});
+  def.areas.push_back(AreaDef{
+      .name = "left", .center = {-5, 0, 0}, .half_extents = {5, 5, 5}, .plugins = {"trespasser"}});
   def.plugins = {"trespasser"};
   World w(registry, def);
   body(w, "inside", -3);
@@ -300,6 +327,42 @@ TEST_F(AreasTest, BadAreasAreRefused) {
   twice.areas = {AreaDef{.name = "x"}, AreaDef{.name = "x"}};
   EXPECT_THROW(World(registry, twice), InputError);
   EXPECT_THROW(World(registry, WorldDef{.use = {{"tag", "nothing"}}}), InputError);
+  // Two providers of one thing in one area would both act on its objects.
+  WorldDef both;
+  both.areas = {AreaDef{.name = "x", .plugins = {"tag.two", "tag.three"}}};
+  EXPECT_THROW(World(registry, both), InputError);
+}
+
+TEST_F(AreasTest, ASwapReplacesAProviderOnlyByAnotherOfTheSameThing) {
+  // An adversary swapped gravity for the Box2D engine: both rigid-body
+  // engines then moved every body (at twice its speed), and the swap was
+  // reported as done. A swap must stay within one thing, from the one running.
+  registry.properties().add({.name = "colour", .kind = PropertyKind::Number});
+  registry.add({.info = {.name = "paint",
+                         .kind = StageKind::Resolver,
+                         .reads = {"position"},
+                         .writes = {"colour"},
+                         .needs = {"position"},
+                         .provides = "colour"},
+                .create = [](PluginContext&) { return std::make_unique<Counter>(); }});
+  World w(registry, def_with_left_area());
+  body(w, "b", 3);
+  w.run(1);
+  try {
+    w.swap("", "tag.one", "paint");
+    ADD_FAILURE() << "a swap across two things was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'tag.one' provides 'tag' and 'paint' provides 'colour'"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(w.has_stage("tag.one"));
+  // tag.three does not run globally (tag.one does): nothing to swap out.
+  EXPECT_THROW(w.swap("", "tag.three", "tag.two"), InputError);
+  EXPECT_TRUE(w.has_stage("tag.one"));
+  EXPECT_FALSE(w.has_stage("tag.two"));
+  w.swap("", "tag.one", "tag.three");  // within one thing: done
+  EXPECT_TRUE(w.has_stage("tag.three"));
 }
 
 TEST_F(AreasTest, AWorldWithoutAreasPaysNothingForThem) {
