@@ -10,6 +10,10 @@ world {
   settings = {
     ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
     rigid_body = { solver = "step" },
+    -- Second-order induction (the EMF from the motion's present velocity and
+    -- acceleration, docs/electricity.md "Induction"), named here so that the
+    -- figures in docs/motor.md are the ones this scene runs with.
+    electricity = { induction_order = 2 },
   },
 }
 

@@ -12,6 +12,10 @@ world {
     -- contact) it gives QuickStep's speed to 0.02 % in two thirds of the
     -- time (docs/performance.md, "Coupled scenes").
     rigid_body = { solver = "step" },
+    -- Second-order induction (the EMF from the motion's present velocity and
+    -- acceleration, docs/electricity.md "Induction"), named here so that the
+    -- figures in docs/motor.md are the ones this scene runs with.
+    electricity = { induction_order = 2 },
   },
 }
 

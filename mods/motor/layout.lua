@@ -71,7 +71,10 @@ local defaults = {
   -- core (about 5 times the coil's own NI / L here) cogs the rotor into
   -- detents 22.5 degrees from where the bias magnet holds it, which are the
   -- commutation's dead points, and the rotor stalls (docs/motor.md, "Iron
-  -- cores"). A retune that runs with pulled cores is not found yet.
+  -- cores"). A retune that runs with pulled cores is not found yet: session
+  -- 17 searched the bias magnet, the coils' gap and their spacing; some
+  -- variants run from the bundled start, none starts from every put-down
+  -- (docs/motor.md, "Iron cores", the table and why).
   core_pulled = false,
   -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
   -- below the axle, north up; it pulls a south spoke to the bottom, which

@@ -518,7 +518,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   // coupling sources known (docs/electricity.md "Mutual inductance").
   take_mutual_inductances(access);
   std::vector<std::uint32_t> coupled;  // coil indices
-  Eigen::MatrixXd mutual_m, transfer;
+  Eigen::MatrixXd mutual_m;
   if (!mutual_.empty()) {
     std::vector<std::int32_t> index(nc, -1);
     for (const Mutual& m : mutual_)
@@ -528,20 +528,36 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     mutual_m = Eigen::MatrixXd::Zero(k, k);
     for (const Mutual& m : mutual_)
       mutual_m(index[m.a], index[m.b]) = mutual_m(index[m.b], index[m.a]) = m.m;
-    transfer = Eigen::MatrixXd::Zero(k, k);
-    // Unit responses go to scratch vectors: potential_ and branch_current_
-    // stay the last substep's (the energy books start from them).
-    std::vector<double> unit(e_.size(), 0.0), unit_potential(potential_.size()),
-        unit_current(branch_current_.size());
-    for (std::size_t col = 0; col < k; ++col) {
-      unit.assign(e_.size(), 0.0);
-      unit[nb + coupled[col]] = 1.0;
-      solver_.solve(unit, unit_potential, unit_current);
-      for (std::size_t row = 0; row < k; ++row)
-        if (branch_on_loop_[nb + coupled[row]])
-          transfer(row, col) = unit_current[nb + coupled[row]];
+    // The unit responses depend on the factorisation and the coupled set
+    // alone: solved again only after a network build (a commutation, a new
+    // step) or when other coils are coupled. Same solves, same bits.
+    if (transfer_build_ != network_builds_ || transfer_coupled_ != coupled) {
+      transfer_.assign(k * k, 0.0);
+      // Unit responses go to scratch vectors: potential_ and branch_current_
+      // stay the last substep's (the energy books start from them).
+      std::vector<double> unit(e_.size(), 0.0), unit_potential(potential_.size()),
+          unit_current(branch_current_.size());
+      for (std::size_t col = 0; col < k; ++col) {
+        unit.assign(e_.size(), 0.0);
+        unit[nb + coupled[col]] = 1.0;
+        solver_.solve(unit, unit_potential, unit_current);
+        for (std::size_t row = 0; row < k; ++row)
+          if (branch_on_loop_[nb + coupled[row]])
+            transfer_[col * k + row] = unit_current[nb + coupled[row]];
+      }
+      transfer_build_ = network_builds_, transfer_coupled_ = coupled;
     }
   }
+  const Eigen::Map<const Eigen::MatrixXd> transfer(transfer_.data(), Eigen::Index(coupled.size()),
+                                                   Eigen::Index(coupled.size()));
+  // (1 + (2/h) T M) is the same in every substep of the advance (h, T and M
+  // are held): factorised once here, not once a substep.
+  Eigen::PartialPivLU<Eigen::MatrixXd> coupled_system;
+  if (!coupled.empty())
+    coupled_system.compute(
+        Eigen::MatrixXd::Identity(Eigen::Index(coupled.size()), Eigen::Index(coupled.size())) +
+        (2 / h) * transfer * mutual_m);
+  free_potential_.resize(potential_.size()), free_current_.resize(branch_current_.size());
 
   // Each substep is one trapezoidal step over h, or, as the guard after a
   // discontinuity, two backward-Euler steps over h/2 (same impedances, so the
@@ -565,14 +581,11 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       for (std::size_t a = 0; a < k; ++a) before[a] = coils_[coupled[a]].current;
       const Eigen::VectorXd known = (2 / h) * (mutual_m * before);
       for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += known[a];
-      std::vector<double> free_potential(potential_.size()), free_current(branch_current_.size());
-      solver_.solve(e_, free_potential, free_current);
+      solver_.solve(e_, free_potential_, free_current_);
       Eigen::VectorXd i0(k);
       for (std::size_t a = 0; a < k; ++a)
-        i0[a] = branch_on_loop_[nb + coupled[a]] ? free_current[nb + coupled[a]] : 0.0;
-      const Eigen::MatrixXd system =
-          Eigen::MatrixXd::Identity(k, k) + (2 / h) * transfer * mutual_m;
-      after = system.partialPivLu().solve(i0);
+        i0[a] = branch_on_loop_[nb + coupled[a]] ? free_current_[nb + coupled[a]] : 0.0;
+      after = coupled_system.solve(i0);
       const Eigen::VectorXd coupling = -(2 / h) * (mutual_m * after);
       for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += coupling[a];
     }
@@ -591,7 +604,8 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       ++solves_;
     }
     // The mutual part of each coupled coil's inductive voltage.
-    std::vector<double> mutual_v(k > 0 ? nc : 0, 0.0);
+    std::vector<double>& mutual_v = mutual_v_;
+    mutual_v.assign(k > 0 ? nc : 0, 0.0);
     for (std::size_t a = 0; a < k; ++a)
       for (std::size_t b = 0; b < k; ++b)
         if (a != b) mutual_v[coupled[a]] += 2 / h * mutual_m(a, b) * (after[b] - before[b]);

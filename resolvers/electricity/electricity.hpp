@@ -354,6 +354,17 @@ class ElectricityResolver final : public Resolver {
   std::vector<std::tuple<ObjectId, ObjectId, double>> mutual_queue_;
   std::vector<Mutual> mutual_;
   void take_mutual_inductances(const WorldView& view);
+  // The coupled coils' unit responses (transfer) depend only on the
+  // factorisation and on which coils are coupled, not on M or the sources:
+  // kept from advance to advance while neither changes (the motor's two
+  // coils: k solves an advance saved between commutations). Valid for the
+  // network build numbered transfer_build_ (network_builds_), with these
+  // coupled coil indices.
+  std::vector<double> transfer_;  // k x k, column-major (Eigen's order)
+  std::vector<std::uint32_t> transfer_coupled_;
+  std::uint64_t transfer_build_ = 0;
+  // Per substep scratch of the coupled solve, kept between advances.
+  std::vector<double> free_potential_, free_current_, mutual_v_;
   std::vector<Part> parts_;
   std::vector<Wire> wires_;
   std::vector<Coil> coils_;               // branch index = batteries_.size() + coil index

@@ -352,8 +352,13 @@ TEST(EnergyBooks, MotorsBooksCloseAndTheResidueShrinksWithTheStep) {
     EXPECT_GT(m->coils_work, 0.05);
     EXPECT_LT(std::abs(m->balance.unexplained()), 3e-3 * m->balance.moved);
   }
-  EXPECT_LT(coarse.balance.fraction(), 2e-3);
-  EXPECT_LT(fine.balance.fraction(), 1e-3);
+  // The motor scene names induction_order = 2 since session 17: its residue
+  // is then 0.80 % at 1/240 s and 0.19 % at 1/480 s (second order, but
+  // larger at the scene's step; session 16's close note). Bounds were 2e-3
+  // and 1e-3; the order-2 coupling's books are the order2 helper's to close.
+  EXPECT_LT(coarse.balance.fraction(), 1e-2);
+  EXPECT_LT(fine.balance.fraction(), 2.5e-3);
+  EXPECT_LT(fine.balance.fraction(), 0.5 * coarse.balance.fraction());
 }
 
 TEST(EnergyBooks, GeneratorsBooksCloseAsTheStepShrinks) {

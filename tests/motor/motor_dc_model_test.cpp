@@ -41,9 +41,13 @@ TEST(MotorDcModel, SpeedFollowsTheModelFittedFromTheMechanicsAlone) {
     EXPECT_NEAR(p.speed, f.speed(p.emf, p.load), 0.05 * p.speed);
     // The circuit agrees: the back-EMF k w is what the battery has left
     // after the loop's drop, with the k the rotor's speeds give. Measured
-    // 5 to 9 % above it: (V - I R) / w also holds the coil's inductive drop,
-    // L I / (a spoke's passage) at each hand-over, about 0.03 V s here.
-    EXPECT_GT(k_electrical, f.k) << p.emf << " V, " << p.load << " N m";
+    // 5 to 9 % above it with induction_order 1: (V - I R) / w also holds the
+    // coil's inductive drop, L I / (a spoke's passage) at each hand-over.
+    // With order 2 (the scene's since session 17) the EMF is no longer 1.5
+    // steps late, the fit's k rises to 1.124 V s and (V - I R) / w is -0.4 %
+    // to +1.6 % of it (1.120 to 1.142 V s): the lower bound, which was f.k,
+    // is 2 % under it.
+    EXPECT_GT(k_electrical, 0.98 * f.k) << p.emf << " V, " << p.load << " N m";
     EXPECT_LT(k_electrical, 1.10 * f.k) << p.emf << " V, " << p.load << " N m";
   }
   // The R the speeds give is the loop's resistance, coil and all.

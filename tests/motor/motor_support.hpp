@@ -281,7 +281,9 @@ inline Lift run_lift(double mass, double emf) {
   const fs::path f = fs::temp_directory_path() / ("alloy_hoist_" + std::to_string(::getpid()) +
                                                   "_" + std::to_string(n++) + ".lua");
   std::ofstream(f) << "world { dt = 1 / 240, seconds = 8, settings = { [\"gravity.uniform\"] = "
-                      "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" } } }\n"
+                      "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" }, "
+                      // as mods/hoist/scene.lua names it (session 17)
+                      "electricity = { induction_order = 2 } } }\n"
                       "local h = require \"hoist.layout\" { load_mass = "
                    << mass << ", emf = " << emf
                    << " }\nat(h.slider_release, \"slider\", { pinned = false })\n";

@@ -123,7 +123,11 @@ TEST(Motor, TurnsAnticlockwiseAtASteadySpeedFromFrame200) {
   const Steadiness s = expect_turns_steadily(r, 4, 0.10);
   // Measured (docs/motor.md): 4.19 rad/s, set by the back-EMF.
   EXPECT_NEAR(s.mean, kSpeed, kSpeedTolerance);
-  EXPECT_LT(s.spread(), 0.01);
+  // With induction_order = 2 (the scene names it since session 17) the rotor
+  // still gains its last 1.2 % in the first turn from frame 200: per turn
+  // 4.185, 4.236, 4.235, 4.237, 4.236 rad/s (spread 1.21 %; 0.04 % from the
+  // second turn on). With order 1 it was 4.186 to 4.189 (0.09 %). Was 1 %.
+  EXPECT_LT(s.spread(), 0.015);
 }
 
 TEST(Motor, TheTwoElectromagnetsTakeTurns) {

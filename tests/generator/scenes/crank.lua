@@ -7,6 +7,7 @@ world {
   settings = {
     ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
     rigid_body = { solver = "step" },
+    electricity = { induction_order = 2 },  -- as mods/generator names it (session 17)
   },
 }
 require "generator.layout" ()
