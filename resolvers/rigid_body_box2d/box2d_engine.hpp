@@ -106,6 +106,9 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   const Box2DConfig& config() const { return config_; }
   /// Full builds so far (build() and rebuilds after an edit from outside).
   std::uint64_t rebuild_count() const { return rebuilds_; }
+  /// Parts moved back by continuous detection (a tunnelled centre), in every
+  /// advance so far (box2d_engine.cpp, Impl::sweep).
+  std::uint64_t sweep_count() const;
 
   struct Impl;  // Box2D's world and the part <-> body tables (box2d_engine.cpp)
 
