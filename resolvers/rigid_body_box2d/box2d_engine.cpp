@@ -1,5 +1,6 @@
 #include "resolvers/rigid_body_box2d/box2d_engine.hpp"
 
+#include <box2d/b2_distance.h>
 #include <box2d/box2d.h>
 
 #include <algorithm>
@@ -195,13 +196,111 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
         return true;
     return false;
   }
+  std::uint64_t filter_calls = 0;  // pairs Box2D's broad phase put to the filter, in all
   bool ShouldCollide(b2Fixture* a, b2Fixture* b) override {
+    ++filter_calls;
     if (!b2ContactFilter::ShouldCollide(a, b)) return false;
     if (!crowded(a->GetBody()) || !crowded(b->GetBody())) return true;
     left_out_of.resize(parts.size(), 0);
     ++left_out_of[a->GetUserData().pointer], ++left_out_of[b->GetUserData().pointer];
     ++left_out;
     return false;
+  }
+
+  // --- parts buried in a heap (docs/security.md, F14) -------------------------------
+  // The bound on contact pairs above is asked after Box2D's broad phase has
+  // found a pair and AddPair has walked a body's contact list for it: a heap
+  // of n parts placed through each other still costs n^2 / 2 of those a step
+  // (3,000 parts: over 12 s). A part that deeply overlaps more than kCrowd
+  // moving parts' shapes (their cores closer than half the sum of their
+  // radii: a rounded box sunk past its skin, a disk past half its radius;
+  // resting parts overlap by Box2D's linear slop, 0.5 mm, not that) waits:
+  // its body is taken out of Box2D's world (b2Body::SetEnabled: no proxy in
+  // the broad phase, no contacts), held still, until the parts around it
+  // have moved apart and it is sunk into at most kWake of them. A heap keeps
+  // kCrowd + 1 parts in the world at its spot, each with every pair it
+  // touches (the contact limit leaves none out), and lets the others back a
+  // few at a time as they push apart.
+  static constexpr std::uint32_t kCrowd = rigid::limits::contact_pairs_per_part;
+  /// A waiting body comes back when it is sunk into at most this many: into
+  /// room the heap's parts have made by moving apart, not into the heap again
+  /// (at kCrowd, 1,000 parts came back into a mass where the contact limit
+  /// left pairs out, and steps took 1 s).
+  static constexpr std::uint32_t kWake = 4;
+  std::vector<std::uint32_t> dormant;  // bodies taken out, by index, in the order they went
+  std::size_t went_dormant = 0;        // since the last report (for the event)
+  bool waiting_reported = false;       // the event was sent and some still wait
+  std::uint32_t dormant_example = 0;   // a body that went, for the event
+  std::uint64_t crowd_tests = 0;       // shape tests made by crowded_body, in all
+  struct CrowdQuery final : b2QueryCallback {
+    const b2Body* self = nullptr;
+    const b2Fixture* mine = nullptr;
+    std::vector<const b2Body*>* seen = nullptr;
+    std::uint64_t* tests = nullptr;
+    std::uint32_t limit = kCrowd;
+    bool ReportFixture(b2Fixture* f) override {
+      const b2Body* b = f->GetBody();
+      if (b == self || b->GetType() != b2_dynamicBody || !b->IsEnabled()) return true;
+      if (std::find(seen->begin(), seen->end(), b) != seen->end()) return true;
+      b2DistanceInput in;
+      in.proxyA.Set(mine->GetShape(), 0);
+      in.proxyB.Set(f->GetShape(), 0);
+      in.transformA = self->GetTransform();
+      in.transformB = b->GetTransform();
+      in.useRadii = false;
+      b2SimplexCache cache;
+      cache.count = 0;
+      b2DistanceOutput out;
+      b2Distance(&out, &cache, &in);
+      ++*tests;
+      if (out.distance < 0.5f * (mine->GetShape()->m_radius + f->GetShape()->m_radius))
+        seen->push_back(b);
+      return seen->size() <= limit;  // enough: stop the query
+    }
+  };
+  std::vector<const b2Body*> crowd_seen;
+  /// Whether body `bi` deeply overlaps more than `limit` moving bodies in
+  /// the world (it may be out of it: its shapes are placed where it is).
+  bool crowded_body(std::uint32_t bi, std::uint32_t limit = kCrowd) {
+    const b2Body* b = bodies[bi].b;
+    crowd_seen.clear();
+    CrowdQuery q;
+    q.self = b, q.seen = &crowd_seen, q.tests = &crowd_tests, q.limit = limit;
+    for (const b2Fixture* f = b->GetFixtureList(); f && crowd_seen.size() <= limit;
+         f = f->GetNext()) {
+      b2AABB box;
+      f->GetShape()->ComputeAABB(&box, b->GetTransform(), 0);
+      q.mine = f;
+      world->QueryAABB(&q, box);
+    }
+    return crowd_seen.size() > limit;
+  }
+  void make_dormant(std::uint32_t bi) {
+    b2Body* b = bodies[bi].b;
+    b->SetLinearVelocity(b2Vec2(0, 0));
+    b->SetAngularVelocity(0);
+    b->SetEnabled(false);
+    dormant.push_back(bi);
+    if (went_dormant++ == 0) dormant_example = bi;
+  }
+  /// Takes out every moving body, in order, that is crowded by the bodies
+  /// still in (a heap of n keeps its last kCrowd + 1).
+  void settle_crowds() {
+    for (std::uint32_t bi = 0; bi < bodies.size(); ++bi)
+      if (bodies[bi].dynamic && bodies[bi].b->IsEnabled() && crowded_body(bi)) make_dormant(bi);
+  }
+  /// Puts back, in the order they went, the waiting bodies that are no
+  /// longer crowded (each one put back counts for the next).
+  void wake_uncrowded() {
+    std::size_t kept = 0;
+    for (const std::uint32_t bi : dormant) {
+      if (bodies[bi].dynamic && crowded_body(bi, kWake)) {
+        dormant[kept++] = bi;
+        continue;
+      }
+      bodies[bi].b->SetEnabled(true);
+    }
+    dormant.resize(kept);
   }
 
   // --- continuous detection, by ODE's rule (resolvers/rigid_body/collisions.hpp) ---
@@ -385,6 +484,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world->SetContactListener(&m);
   m.world->SetContactFilter(&m);
   m.parts.clear();
+  m.dormant.clear();
   m.written_versions.fill(~0ull);
   m.bodies.clear();
   m.hinges.clear();
@@ -710,6 +810,9 @@ void Box2DEngine::build(ResolverAccess& access) {
     m.hinges.push_back({jid, static_cast<b2RevoluteJoint*>(m.world->CreateJoint(&jd))});
   }
 
+  // Parts buried in a heap wait outside the world (Impl::settle_crowds).
+  m.settle_crowds();
+
   // What we wrote is what the properties hold now.
   for (Impl::Part& part : m.parts) {
     const std::uint32_t slot = part.id.index;
@@ -891,6 +994,34 @@ void Box2DEngine::screen_loads(ResolverAccess& access, double dt) {
   }
 }
 
+void Box2DEngine::report_waiting(ResolverAccess& access) {
+  // One event when parts begin to wait (not one a step while a heap
+  // empties), naming one of them; again after every waiting part came back.
+  Impl& m = *impl_;
+  const bool report = m.went_dormant > 0 && !m.waiting_reported;
+  const std::size_t went = m.went_dormant;
+  m.went_dormant = 0;
+  m.waiting_reported = !m.dormant.empty() && (m.waiting_reported || report);
+  if (!report) return;
+  ObjectId id;
+  for (const Impl::Part& part : m.parts)
+    if (part.body == m.dormant_example) {
+      id = part.id;
+      break;
+    }
+  access.emit(
+      Event{.type = "crowded",
+            .a = id,
+            .values = {{"went", double(went)},
+                       {"waiting", double(m.dormant.size())},
+                       {"limit", double(Impl::kCrowd)}},
+            .text = "rigid_body.box2d: " + std::to_string(went) +
+                    " bodies were taken out of the simulation, each sunk deep into more than " +
+                    std::to_string(Impl::kCrowd) + " moving bodies ('" + store_.describe(id) +
+                    "' among them): they wait, held still, until the parts around them have moved "
+                    "apart (parts placed through each other in a heap?; docs/security.md)"});
+}
+
 void Box2DEngine::report_left_out(ResolverAccess& access) {
   // One event when pairs begin to be left out (not one a step while a heap
   // lasts), naming the part with the most pairs left out.
@@ -977,7 +1108,15 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     b->SetAngularVelocity(float(w.z));
     b->SetAwake(true);
     part.pos = p;  // where a sweep starts from
+    // Carried into a heap (or a waiting body carried out of one: the next
+    // wake_uncrowded puts it back).
+    if (b->IsEnabled() && m.crowded_body(part.body)) m.make_dormant(part.body);
   }
+
+  // Parts that pass through each other under the contact limit may have
+  // buried some in a heap since; waiting parts whose spot cleared come back.
+  if (limited_before_) m.settle_crowds();
+  if (!m.dormant.empty()) m.wake_uncrowded();
 
   screen_loads(access, dt);
   m.left_out = 0;
@@ -1117,6 +1256,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   rated_sources_.clear();
   open_ = ~std::size_t(0);
   report_left_out(access);
+  report_waiting(access);
 
   // Write the parts back.
   for (Impl::Part& part : m.parts) {
@@ -1238,8 +1378,20 @@ std::size_t Box2DEngine::joint_count() const {
 }
 std::size_t Box2DEngine::awake_count() const {
   std::size_t n = 0;
-  for (const auto& b : impl_->bodies) n += b.dynamic && b.b->IsAwake();
+  for (const auto& b : impl_->bodies) n += b.dynamic && b.b->IsAwake() && b.b->IsEnabled();
   return n;
+}
+std::size_t Box2DEngine::waiting_count() const {
+  return impl_->dormant.size();
+}
+std::uint64_t Box2DEngine::pair_filter_calls() const {
+  return impl_->filter_calls;
+}
+std::uint64_t Box2DEngine::crowd_tests() const {
+  return impl_->crowd_tests;
+}
+std::size_t Box2DEngine::box2d_contact_count() const {
+  return impl_->world ? std::size_t(impl_->world->GetContactCount()) : 0;
 }
 
 // --- collisions.box2d ----------------------------------------------------------------
