@@ -1,5 +1,6 @@
 #include "resolvers/rigid_body_box2d/box2d_engine.hpp"
 
+#include <box2d/b2_distance.h>
 #include <box2d/box2d.h>
 
 #include <algorithm>
@@ -134,6 +135,7 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     b2Vec2 local;      // centre in the body's frame, scaled units
     double angle = 0;  // relative to the body
     double friction = 0.5, restitution = 0;
+    double inscribed = 0;  // radius of the largest disk inside the part, m (sweeps)
     // What we last wrote (to tell an edit from outside).
     Vec3 pos, vel, ang;
     Quat rot;
@@ -194,13 +196,188 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
         return true;
     return false;
   }
+  std::uint64_t filter_calls = 0;  // pairs Box2D's broad phase put to the filter, in all
   bool ShouldCollide(b2Fixture* a, b2Fixture* b) override {
+    ++filter_calls;
     if (!b2ContactFilter::ShouldCollide(a, b)) return false;
     if (!crowded(a->GetBody()) || !crowded(b->GetBody())) return true;
     left_out_of.resize(parts.size(), 0);
     ++left_out_of[a->GetUserData().pointer], ++left_out_of[b->GetUserData().pointer];
     ++left_out;
     return false;
+  }
+
+  // --- parts buried in a heap (docs/security.md, F14) -------------------------------
+  // The bound on contact pairs above is asked after Box2D's broad phase has
+  // found a pair and AddPair has walked a body's contact list for it: a heap
+  // of n parts placed through each other still costs n^2 / 2 of those a step
+  // (3,000 parts: over 12 s). A part that deeply overlaps more than kCrowd
+  // moving parts' shapes (their cores closer than half the sum of their
+  // radii: a rounded box sunk past its skin, a disk past half its radius;
+  // resting parts overlap by Box2D's linear slop, 0.5 mm, not that) waits:
+  // its body is taken out of Box2D's world (b2Body::SetEnabled: no proxy in
+  // the broad phase, no contacts), held still, until the parts around it
+  // have moved apart and it is sunk into at most kWake of them. A heap keeps
+  // kCrowd + 1 parts in the world at its spot, each with every pair it
+  // touches (the contact limit leaves none out), and lets the others back a
+  // few at a time as they push apart.
+  static constexpr std::uint32_t kCrowd = rigid::limits::contact_pairs_per_part;
+  /// A waiting body comes back when it is sunk into at most this many: into
+  /// room the heap's parts have made by moving apart, not into the heap again
+  /// (at kCrowd, 1,000 parts came back into a mass where the contact limit
+  /// left pairs out, and steps took 1 s).
+  static constexpr std::uint32_t kWake = 4;
+  std::vector<std::uint32_t> dormant;  // bodies taken out, by index, in the order they went
+  std::size_t went_dormant = 0;        // since the last report (for the event)
+  bool waiting_reported = false;       // the event was sent and some still wait
+  std::uint32_t dormant_example = 0;   // a body that went, for the event
+  std::uint64_t crowd_tests = 0;       // shape tests made by crowded_body, in all
+  struct CrowdQuery final : b2QueryCallback {
+    const b2Body* self = nullptr;
+    const b2Fixture* mine = nullptr;
+    std::vector<const b2Body*>* seen = nullptr;
+    std::uint64_t* tests = nullptr;
+    std::uint32_t limit = kCrowd;
+    bool ReportFixture(b2Fixture* f) override {
+      const b2Body* b = f->GetBody();
+      if (b == self || b->GetType() != b2_dynamicBody || !b->IsEnabled()) return true;
+      if (std::find(seen->begin(), seen->end(), b) != seen->end()) return true;
+      b2DistanceInput in;
+      in.proxyA.Set(mine->GetShape(), 0);
+      in.proxyB.Set(f->GetShape(), 0);
+      in.transformA = self->GetTransform();
+      in.transformB = b->GetTransform();
+      in.useRadii = false;
+      b2SimplexCache cache;
+      cache.count = 0;
+      b2DistanceOutput out;
+      b2Distance(&out, &cache, &in);
+      ++*tests;
+      if (out.distance < 0.5f * (mine->GetShape()->m_radius + f->GetShape()->m_radius))
+        seen->push_back(b);
+      return seen->size() <= limit;  // enough: stop the query
+    }
+  };
+  std::vector<const b2Body*> crowd_seen;
+  /// Whether body `bi` deeply overlaps more than `limit` moving bodies in
+  /// the world (it may be out of it: its shapes are placed where it is).
+  bool crowded_body(std::uint32_t bi, std::uint32_t limit = kCrowd) {
+    const b2Body* b = bodies[bi].b;
+    crowd_seen.clear();
+    CrowdQuery q;
+    q.self = b, q.seen = &crowd_seen, q.tests = &crowd_tests, q.limit = limit;
+    for (const b2Fixture* f = b->GetFixtureList(); f && crowd_seen.size() <= limit;
+         f = f->GetNext()) {
+      b2AABB box;
+      f->GetShape()->ComputeAABB(&box, b->GetTransform(), 0);
+      q.mine = f;
+      world->QueryAABB(&q, box);
+    }
+    return crowd_seen.size() > limit;
+  }
+  void make_dormant(std::uint32_t bi) {
+    b2Body* b = bodies[bi].b;
+    b->SetLinearVelocity(b2Vec2(0, 0));
+    b->SetAngularVelocity(0);
+    b->SetEnabled(false);
+    dormant.push_back(bi);
+    if (went_dormant++ == 0) dormant_example = bi;
+  }
+  /// Takes out every moving body, in order, that is crowded by the bodies
+  /// still in (a heap of n keeps its last kCrowd + 1).
+  void settle_crowds() {
+    for (std::uint32_t bi = 0; bi < bodies.size(); ++bi)
+      if (bodies[bi].dynamic && bodies[bi].b->IsEnabled() && crowded_body(bi)) make_dormant(bi);
+  }
+  /// Puts back, in the order they went, the waiting bodies that are no
+  /// longer crowded (each one put back counts for the next).
+  void wake_uncrowded() {
+    std::size_t kept = 0;
+    for (const std::uint32_t bi : dormant) {
+      if (bodies[bi].dynamic && crowded_body(bi, kWake)) {
+        dormant[kept++] = bi;
+        continue;
+      }
+      bodies[bi].b->SetEnabled(true);
+    }
+    dormant.resize(kept);
+  }
+
+  // --- continuous detection, by ODE's rule (resolvers/rigid_body/collisions.hpp) ---
+  // A part that moved more than half its inscribed radius in the step, along
+  // its velocity, is swept: a ray from its centre's previous position to its
+  // current one. If the centre crossed the surface of a static part (one it
+  // did not touch at the step before, not one hinged to it), the part
+  // tunnelled: its body goes back along the path to where the part, a disk of
+  // its inscribed radius, first touches that surface with Box2D's resting
+  // overlap, its velocity kept, and the next step's contact stops it. Unlike
+  // Box2D's time-of-impact sub-step this does nothing to a body that only
+  // sinks into a surface (the doorbell's hammer into its bell); like it, it
+  // moves a body that did tunnel without its joints' partners (the joints
+  // pull them together at the next step), and it looks at static parts only
+  // (ODE's looks at every part).
+  std::uint64_t sweeps = 0;  // parts moved back, in every advance so far
+  struct RayHit final : b2RayCastCallback {
+    Impl* m = nullptr;
+    const b2Body* self = nullptr;
+    ObjectId id;
+    std::span<const Box2DPair> touching;  // the step before's pairs, sorted
+    float fraction = 2;
+    b2Vec2 normal{0, 0};
+    const b2Fixture* fixture = nullptr;
+    float ReportFixture(b2Fixture* f, const b2Vec2&, const b2Vec2& n, float frac) override {
+      const b2Body* b = f->GetBody();
+      // Static surfaces only, as Box2D's time-of-impact sub-step did: a
+      // link of a swinging 50-link chain swept against its neighbours' neighbours
+      // was moved back without the links hinged to it and opened a joint by 4 cm.
+      if (b == self || f->IsSensor() || b->GetType() != b2_staticBody) return -1;
+      for (const b2JointEdge* e = self->GetJointList(); e; e = e->next)
+        if (e->other == b) return -1;
+      const ObjectId other = m->part_of(f).id;
+      const ObjectId a = std::min(id, other), c = std::max(id, other);
+      const auto at =
+          std::lower_bound(touching.begin(), touching.end(), a,
+                           [&](const Box2DPair& p, ObjectId) { return pair_less(p.a, p.b, a, c); });
+      if (at != touching.end() && at->a == a && at->b == c) return -1;
+      fraction = frac, normal = n, fixture = f;
+      return frac;  // the nearest surface
+    }
+  };
+  void sweep(double dt, std::span<const Box2DPair> touching) {
+    const double layer = double(b2_linearSlop) / s;
+    for (Part& part : parts) {
+      const Body& body = bodies[part.body];
+      if (!body.dynamic) continue;
+      b2Body* b = body.b;
+      const b2Vec2 c = b->GetWorldPoint(part.local);
+      const Vec3 to{c.x / s, c.y / s, 0}, d = to - part.pos;
+      const double len2 = dot(d, d);
+      if (!(len2 > 0.25 * part.inscribed * part.inscribed)) continue;  // the usual case
+      const double len = std::sqrt(len2);
+      // Only motion along the velocity: an edit that carries a part through
+      // a wall is not undone.
+      const b2Vec2 v = b->GetLinearVelocityFromWorldPoint(c);
+      const Vec3 step{v.x / s * dt, v.y / s * dt, 0};
+      if (length(d - step) > 0.5 * len) continue;
+      RayHit hit;
+      hit.m = this, hit.self = b, hit.id = part.id, hit.touching = touching;
+      world->RayCast(&hit, b2Vec2(float(part.pos.x * s), float(part.pos.y * s)), c);
+      if (!hit.fixture) continue;  // the centre crossed no surface: the discrete contact sees it
+      const Vec3 dir = d / len;
+      Vec3 n{hit.normal.x, hit.normal.y, 0};
+      if (dot(n, dir) > 0) n = Vec3{} - n;  // out of the surface, towards where the part came from
+      const double incidence = std::max(-dot(n, dir), 0.05);
+      // A polygon's ray stops at its core; its skin is outside that.
+      const double skin = hit.fixture->GetType() == b2Shape::e_polygon
+                              ? double(hit.fixture->GetShape()->m_radius) / s
+                              : 0.0;
+      const double along =
+          std::max(0.0, double(hit.fraction) * len - (part.inscribed + skin - layer) / incidence);
+      const Vec3 back = part.pos + dir * along - to;
+      b->SetTransform(b->GetPosition() + b2Vec2(float(back.x * s), float(back.y * s)),
+                      b->GetAngle());
+      ++sweeps;
+    }
   }
 
   double approach(b2Contact* c, const b2WorldManifold& wm, int n, bool a_is_A) const {
@@ -294,9 +471,20 @@ void Box2DEngine::build(ResolverAccess& access) {
   ++rebuilds_;
   m.world = std::make_unique<b2World>(b2Vec2(0, 0));  // gravity comes as loads
   m.world->SetAllowSleeping(config_.sleep);
+  // Box2D's own continuous collision is off: its time-of-impact sub-step
+  // moves a body that would sink more than 1.5 mm (3 linear slops) into a
+  // static part in one step back to the impact, solving that body's contacts
+  // but none of its joints. The doorbell's lever, struck into the bell, was
+  // moved so without the contact finger hinged to it: the finger's hinge
+  // passed its stop by 0.04 rad, the next step's joint solve threw the lever
+  // back at 10 rad/s, and the strikes came at 14 to 23 steps, not 16
+  // (docs/box2d.md, "The doorbell on both engines"). The engine sweeps fast
+  // parts itself instead, by ODE's rule (sweep() below).
+  m.world->SetContinuousPhysics(false);
   m.world->SetContactListener(&m);
   m.world->SetContactFilter(&m);
   m.parts.clear();
+  m.dormant.clear();
   m.written_versions.fill(~0ull);
   m.bodies.clear();
   m.hinges.clear();
@@ -463,6 +651,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     const Shape sh = Shape(shape[slot].index);
     const Vec3 sz = size.value_or(slot, {});
     const double r = radius.value_or(slot, 0), len = length.value_or(slot, 0);
+    part.inscribed = sh == Shape::Box ? 0.5 * std::min(sz.x, sz.y) : r;
     b2FixtureDef fd;
     fd.density = 0;  // masses are set below, from the part's mass or density
     fd.friction = float(part.friction);
@@ -620,6 +809,9 @@ void Box2DEngine::build(ResolverAccess& access) {
     }
     m.hinges.push_back({jid, static_cast<b2RevoluteJoint*>(m.world->CreateJoint(&jd))});
   }
+
+  // Parts buried in a heap wait outside the world (Impl::settle_crowds).
+  m.settle_crowds();
 
   // What we wrote is what the properties hold now.
   for (Impl::Part& part : m.parts) {
@@ -802,6 +994,34 @@ void Box2DEngine::screen_loads(ResolverAccess& access, double dt) {
   }
 }
 
+void Box2DEngine::report_waiting(ResolverAccess& access) {
+  // One event when parts begin to wait (not one a step while a heap
+  // empties), naming one of them; again after every waiting part came back.
+  Impl& m = *impl_;
+  const bool report = m.went_dormant > 0 && !m.waiting_reported;
+  const std::size_t went = m.went_dormant;
+  m.went_dormant = 0;
+  m.waiting_reported = !m.dormant.empty() && (m.waiting_reported || report);
+  if (!report) return;
+  ObjectId id;
+  for (const Impl::Part& part : m.parts)
+    if (part.body == m.dormant_example) {
+      id = part.id;
+      break;
+    }
+  access.emit(
+      Event{.type = "crowded",
+            .a = id,
+            .values = {{"went", double(went)},
+                       {"waiting", double(m.dormant.size())},
+                       {"limit", double(Impl::kCrowd)}},
+            .text = "rigid_body.box2d: " + std::to_string(went) +
+                    " bodies were taken out of the simulation, each sunk deep into more than " +
+                    std::to_string(Impl::kCrowd) + " moving bodies ('" + store_.describe(id) +
+                    "' among them): they wait, held still, until the parts around them have moved "
+                    "apart (parts placed through each other in a heap?; docs/security.md)"});
+}
+
 void Box2DEngine::report_left_out(ResolverAccess& access) {
   // One event when pairs begin to be left out (not one a step while a heap
   // lasts), naming the part with the most pairs left out.
@@ -859,7 +1079,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     return v;
   };
   const bool maybe_edited = motion_versions() != m.written_versions;
-  for (const Impl::Part& part : m.parts) {
+  for (Impl::Part& part : m.parts) {
     if (!maybe_edited) break;
     Impl::Body& body = m.bodies[part.body];
     if (!body.dynamic) continue;
@@ -887,7 +1107,16 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     b->SetLinearVelocity(b2Vec2(float(v.x * s - w.z * rc.y), float(v.y * s + w.z * rc.x)));
     b->SetAngularVelocity(float(w.z));
     b->SetAwake(true);
+    part.pos = p;  // where a sweep starts from
+    // Carried into a heap (or a waiting body carried out of one: the next
+    // wake_uncrowded puts it back).
+    if (b->IsEnabled() && m.crowded_body(part.body)) m.make_dormant(part.body);
   }
+
+  // Parts that pass through each other under the contact limit may have
+  // buried some in a heap since; waiting parts whose spot cleared come back.
+  if (limited_before_) m.settle_crowds();
+  if (!m.dormant.empty()) m.wake_uncrowded();
 
   screen_loads(access, dt);
   m.left_out = 0;
@@ -1020,12 +1249,14 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
     m.world->Step(float(h), config_.velocity_iterations, config_.position_iterations);
   }
+  m.sweep(dt, pairs_);
   loads_.clear();
   rated_.clear();
   load_sources_.clear();
   rated_sources_.clear();
   open_ = ~std::size_t(0);
   report_left_out(access);
+  report_waiting(access);
 
   // Write the parts back.
   for (Impl::Part& part : m.parts) {
@@ -1139,13 +1370,28 @@ std::size_t Box2DEngine::body_count() const {
   for (const auto& b : impl_->bodies) n += b.dynamic;
   return n;
 }
+std::uint64_t Box2DEngine::sweep_count() const {
+  return impl_->sweeps;
+}
 std::size_t Box2DEngine::joint_count() const {
   return impl_->hinges.size();
 }
 std::size_t Box2DEngine::awake_count() const {
   std::size_t n = 0;
-  for (const auto& b : impl_->bodies) n += b.dynamic && b.b->IsAwake();
+  for (const auto& b : impl_->bodies) n += b.dynamic && b.b->IsAwake() && b.b->IsEnabled();
   return n;
+}
+std::size_t Box2DEngine::waiting_count() const {
+  return impl_->dormant.size();
+}
+std::uint64_t Box2DEngine::pair_filter_calls() const {
+  return impl_->filter_calls;
+}
+std::uint64_t Box2DEngine::crowd_tests() const {
+  return impl_->crowd_tests;
+}
+std::size_t Box2DEngine::box2d_contact_count() const {
+  return impl_->world ? std::size_t(impl_->world->GetContactCount()) : 0;
 }
 
 // --- collisions.box2d ----------------------------------------------------------------

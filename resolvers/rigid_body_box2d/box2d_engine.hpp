@@ -106,6 +106,18 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   const Box2DConfig& config() const { return config_; }
   /// Full builds so far (build() and rebuilds after an edit from outside).
   std::uint64_t rebuild_count() const { return rebuilds_; }
+  /// Parts moved back by continuous detection (a tunnelled centre), in every
+  /// advance so far (box2d_engine.cpp, Impl::sweep).
+  std::uint64_t sweep_count() const;
+  /// Bodies waiting outside Box2D's world, each sunk deep into more than 64
+  /// moving bodies (a heap of parts placed through each other; docs/security.md).
+  std::size_t waiting_count() const;
+  /// Work counters for the heap guard's tests: pairs Box2D's broad phase put
+  /// to the contact filter (after its AddPair walk), shape tests the guard
+  /// made, in every advance so far; Box2D's contacts now.
+  std::uint64_t pair_filter_calls() const;
+  std::uint64_t crowd_tests() const;
+  std::size_t box2d_contact_count() const;
 
   struct Impl;  // Box2D's world and the part <-> body tables (box2d_engine.cpp)
 
@@ -118,6 +130,8 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   /// The "contact_limit" event when Box2D began to leave pairs out
   /// (limits::contact_pairs).
   void report_left_out(ResolverAccess& access);
+  /// The "crowded" event when bodies begin to wait (Impl::settle_crowds).
+  void report_waiting(ResolverAccess& access);
   bool edited_since_write(const WorldView& view) const;
   void note_versions(const WorldView& view);
 

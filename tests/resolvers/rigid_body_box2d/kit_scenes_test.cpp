@@ -6,6 +6,7 @@
 // prints its figures (docs/box2d.md, "The kit's scenes").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -111,6 +112,38 @@ Ringing ringing(const KitRun& r, double t0, double t1) {
   return out;
 }
 
+/// The intervals between strikes in [t0, t1), in steps, and their spread
+/// (longest less shortest) and how many are of the most common length.
+struct Steadiness {
+  std::vector<long> steps;
+  long spread = 0;
+  int at_mode = 0;
+  long mode = 0;
+};
+Steadiness steadiness(const KitRun& r, double t0, double t1) {
+  std::vector<double> t;
+  for (double s : r.strikes())
+    if (s >= t0 && s < t1) t.push_back(s);
+  Steadiness out;
+  for (std::size_t i = 1; i < t.size(); ++i)
+    out.steps.push_back(std::lround((t[i] - t[i - 1]) / r.dt));
+  if (out.steps.empty()) return out;
+  const auto [lo, hi] = std::minmax_element(out.steps.begin(), out.steps.end());
+  out.spread = *hi - *lo;
+  for (long v : out.steps) {
+    const int n = int(std::count(out.steps.begin(), out.steps.end(), v));
+    if (n > out.at_mode) out.at_mode = n, out.mode = v;
+  }
+  return out;
+}
+
+void print_steadiness(const char* what, const Steadiness& s) {
+  std::printf("doorbell %s: %zu intervals, %d of %ld steps, spread %ld steps:", what,
+              s.steps.size(), s.at_mode, s.mode, s.spread);
+  for (long v : s.steps) std::printf(" %ld", v);
+  std::printf("\n");
+}
+
 void print_strikes(const char* what, const KitRun& r) {
   std::printf("doorbell %s: %zu strikes, at", what, r.strikes().size());
   for (double t : r.strikes()) std::printf(" %.4f", t);
@@ -140,11 +173,27 @@ TEST(KitOnBox2D, DoorbellRingsOnBothEngines) {
   // acts at the part on Box2D too (35 strikes at 0.0665 s with that alone),
   // and soft iron's poles sit on its faces with the coil 6 mm up (35 at
   // 0.0680 s with that alone); with both, 34 at 0.0697 s, 4.5 % longer than
-  // ODE's. (Session 15: 33 strikes at 0.0712 s.)
+  // ODE's. (Session 15: 33 strikes at 0.0712 s.) Session 17: Box2D's
+  // time-of-impact sub-step is off (box2d_engine.cpp, build), 36 at 0.0661 s.
   EXPECT_EQ(a.count, 37);
   EXPECT_NEAR(a.period, 0.0667, 1e-4);
-  EXPECT_EQ(b.count, 34);
-  EXPECT_NEAR(b.period, 0.0697, 1e-4);
+  EXPECT_EQ(b.count, 36);
+  EXPECT_NEAR(b.period, 0.0661, 1e-4);
+  // One steady period. ODE: every interval 16 steps. Box2D: 32 of 35 at 16
+  // steps, the others 14, 14 and 15 (a landing's contact found a step late
+  // leaves the lever 0.7 mm deeper in its felt rest: docs/box2d.md). Until
+  // session 17 Box2D's intervals ran from 14 to 23 steps, 15 of 33 at 16:
+  // its time-of-impact sub-step moved the struck lever without the finger
+  // hinged to it, and the hinge's next solve threw the lever back.
+  const Steadiness sa = steadiness(ode, 0, kDoorbellSeconds),
+                   sb = steadiness(b2, 0, kDoorbellSeconds);
+  print_steadiness("on ODE", sa);
+  print_steadiness("on Box2D", sb);
+  EXPECT_EQ(sa.mode, 16);
+  EXPECT_EQ(sa.spread, 0);
+  EXPECT_EQ(sb.mode, 16);
+  EXPECT_EQ(sb.at_mode, 32);
+  EXPECT_EQ(sb.spread, 2);
   EXPECT_GT(b2.strikes().front(), 0.5) << "nothing rings before the switch bar is let go";
 }
 
@@ -199,9 +248,21 @@ TEST(KitOnBox2D, DoorbellSwappedMidRunBothWays) {
   EXPECT_EQ(ringing(to_b2, 0, at).count, 14);
   EXPECT_EQ(ringing(to_b2, at, kDoorbellSeconds).count, 23);
   EXPECT_NEAR(ringing(to_b2, at, kDoorbellSeconds).period, 0.0663, 1e-4);
-  EXPECT_EQ(ringing(to_ode, 0, at).count, 12);
-  EXPECT_EQ(ringing(to_ode, at, kDoorbellSeconds).count, 23);
-  EXPECT_NEAR(ringing(to_ode, at, kDoorbellSeconds).period, 0.0663, 1e-4);
+  // Session 17 (Box2D's time-of-impact sub-step off): 13 then 22 at 0.0667 s
+  // back to ODE.
+  EXPECT_EQ(ringing(to_ode, 0, at).count, 13);
+  EXPECT_EQ(ringing(to_ode, at, kDoorbellSeconds).count, 22);
+  EXPECT_NEAR(ringing(to_ode, at, kDoorbellSeconds).period, 0.0667, 1e-4);
+  // The spread of the intervals after the swap, in steps (from the first
+  // strike after it): ODE's own 0; Box2D's as from its start.
+  const Steadiness after_b2 = steadiness(to_b2, at, kDoorbellSeconds),
+                   after_ode = steadiness(to_ode, at, kDoorbellSeconds);
+  print_steadiness("after the swap to Box2D", after_b2);
+  print_steadiness("after the swap to ODE", after_ode);
+  EXPECT_EQ(after_ode.spread, 0);
+  EXPECT_EQ(after_b2.mode, 16);
+  EXPECT_EQ(after_b2.at_mode, 20);  // of 22; two of 15 steps (session 16: 16 to 19 steps)
+  EXPECT_EQ(after_b2.spread, 1);
 }
 
 TEST(KitOnBox2D, MotorSwappedMidRunBothWays) {
