@@ -92,6 +92,9 @@ inline constexpr const char* kSwitchClosed = "switch_closed";
 /// Plugin names.
 inline constexpr const char* kResolverName = "electricity";
 inline constexpr const char* kFromCollisionsName = "electricity_from_collisions";
+/// The induction coupling's order when a world does not set `induction_order`
+/// (ElectricityConfig::induction_order; magnetism_from_electricity reads it too).
+inline constexpr int kDefaultInductionOrder = 2;
 
 /// Event types.
 namespace event {
@@ -141,13 +144,14 @@ struct ElectricityConfig {
   /// coupling's energy balance, docs/magnetism.md); see the header.
   bool rates = true;
   /// The induction coupling's timing (docs/magnetism.md "The coupling's
-  /// timing"): 1 (the default, sessions 14-15) commands the force's current
-  /// predicted 1.5 steps on and moves the parts on with their present
-  /// velocity for the EMF: first order (the work-precision row's 0.7). 2
-  /// commands the current of the rigid body's kick (one step on) and moves
-  /// the parts on with the acceleration of their last step: second order.
-  /// Read by electricity_from_magnetism and magnetism_from_electricity too.
-  int induction_order = 1;
+  /// timing"): 2 (the default since session 17) commands the current of the
+  /// rigid body's kick (one step on) and moves the parts on with the
+  /// acceleration of their last step: second order. 1 (sessions 14-16)
+  /// commands the force's current predicted 1.5 steps on and moves the parts
+  /// on with their present velocity for the EMF: first order (the
+  /// work-precision row's 0.7). Read by electricity_from_magnetism and
+  /// magnetism_from_electricity too (kDefaultInductionOrder).
+  int induction_order = kDefaultInductionOrder;
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static ElectricityConfig from(const PluginSettings& settings);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "resolvers/electricity/electricity.hpp"
 
@@ -15,7 +16,8 @@ const ElectricityFromMagnetism::CoilFlux* ElectricityFromMagnetism::find(ObjectI
 }
 
 ElectricityFromMagnetism::Motion ElectricityFromMagnetism::motion(ObjectId id, std::uint64_t step,
-                                                                  double dt, Vec3 v, Vec3 w) {
+                                                                  double dt, Vec3 v, Vec3 w,
+                                                                  bool record) {
   const std::uint32_t slot = id.index;
   if (latest_.size() <= slot) latest_.resize(slot + 1), earlier_.resize(slot + 1);
   Seen& latest = latest_[slot];
@@ -47,7 +49,7 @@ ElectricityFromMagnetism::Motion ElectricityFromMagnetism::motion(ObjectId id, s
   };
   if (rated && before.rated && close(a, before.acceleration) && close(alpha, before.angular))
     m.acceleration = a, m.angular = alpha;
-  if (!again) earlier = latest, latest = Seen{id, step, v, w, changed, rated, a, alpha};
+  if (!again && record) earlier = latest, latest = Seen{id, step, v, w, changed, rated, a, alpha};
   return m;
 }
 
@@ -75,6 +77,7 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
 
 void ElectricityFromMagnetism::restore_state(StateReader& in) {
   latest_.clear(), earlier_.clear();
+  first_apply_ = false;  // the history goes on: the priming apply is a repeat
   const auto n = in.get<std::uint64_t>();
   for (std::uint64_t k = 0; k < n; ++k) {
     Seen pair[2];
@@ -114,9 +117,16 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   const PropertyStore& store = world.store();
   const double dt = world.dt();
   const std::uint64_t step = world.step();
-  // induction_order 1 (the default): the parts move on with their present
-  // velocity, as in sessions 14-15 (header).
+  // induction_order 1 (the default until session 16): the parts move on
+  // with their present velocity, as in sessions 14-16 (header).
   const bool second = target_.config().induction_order == 2;
+  // A stage's first apply (the priming of a stage just created: at the
+  // start, after a hot reload, after a restore) records no velocities. A
+  // stage created mid-run is primed before the next step's advance, one
+  // restored after the snapshot's step: a record from that apply would
+  // differ between the two, and a restored run would not go on bit for bit.
+  // (A restored history makes that apply a repeat, which records nothing.)
+  const bool record = !std::exchange(first_apply_, false);
 
   // Every pole moves with its part: v + w x (pole - centre), the centre being
   // the midpoint of the part's two poles. Over the coming step the part
@@ -133,7 +143,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     const std::uint32_t slot = b.id.index;
     const Vec3 v = velocity.value_or(slot, Vec3{}), w = spin.value_or(slot, Vec3{});
     if (!is_finite(v) || !is_finite(w)) continue;
-    const Motion m = second ? motion(b.id, step, dt, v, w) : Motion{v, w, {}, {}};
+    const Motion m = second ? motion(b.id, step, dt, v, w, record) : Motion{v, w, {}, {}};
     const Vec3 v_step = v + m.acceleration * dt, w_step = w + m.angular * dt;
     const Vec3 v_end = v + m.acceleration * (1.5 * dt), w_end = w + m.angular * (1.5 * dt);
     const Vec3 centre = (poles[b.first_pole].position + poles[b.first_pole + 1].position) * 0.5;
@@ -175,7 +185,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       // while the parts' displacement over that step is the one the
       // force's work is booked along (docs/magnetism.md "The coupling's
       // timing").
-      const Motion m = second ? motion(id, step, dt, coil.velocity, coil.angular_velocity)
+      const Motion m = second ? motion(id, step, dt, coil.velocity, coil.angular_velocity, record)
                               : Motion{coil.velocity, coil.angular_velocity, {}, {}};
       CoilGeometry moved = coil;
       moved.centre = coil.centre + (coil.velocity + m.acceleration * dt) * dt;

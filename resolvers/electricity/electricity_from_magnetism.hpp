@@ -100,8 +100,9 @@ class ElectricityFromMagnetism : public Interaction {
   /// The motion of `slot` (its velocity `v`, spin `w` now) at step `step`:
   /// records it (once per step; a second apply in the same step, the
   /// priming after a restore, reads the same history) and estimates the
-  /// acceleration from the step before.
-  Motion motion(ObjectId id, std::uint64_t step, double dt, Vec3 v, Vec3 w);
+  /// acceleration from the step before. `record` false: estimates only (a
+  /// fresh stage's priming apply).
+  Motion motion(ObjectId id, std::uint64_t step, double dt, Vec3 v, Vec3 w, bool record = true);
 
  private:
   electricity::ElectricityResolver& target_;
@@ -113,6 +114,7 @@ class ElectricityFromMagnetism : public Interaction {
   std::vector<Pole> moved_poles_;        // the poles one step on (scratch)
   // Per slot: the last apply's velocities and the ones of the apply before.
   std::vector<Seen> latest_, earlier_;
+  bool first_apply_ = true;  // no apply yet (nor a restored history)
   std::optional<MagnetColumns::Ids> ids_;
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};
 };

@@ -32,9 +32,9 @@ void MagnetismFromElectricity::apply(const WorldView& world) {
   // order, with the force of that instant), so when electricity publishes
   // its currents' rates (its setting `rates`) the command is the current
   // predicted one step on, I + dt dI/dt: the current at t + dt (electricity's
-  // induction_order 2). The default (1) leads by 1.5 steps, the step's mean
-  // current: it matches each step's books term by term but puts the kick
-  // half a step late, first order in the motion (docs/magnetism.md).
+  // induction_order 2, the default). Order 1 leads by 1.5 steps, the step's
+  // mean current: it matches each step's books term by term but puts the
+  // kick half a step late, first order in the motion (docs/magnetism.md).
   // Without rates the force's current is one step old.
   if (const auto id = world.properties().find(prop::kCurrentRate)) {
     const auto rate = world.column<double>(*id);

@@ -26,14 +26,15 @@ class MagnetismFromElectricity : public Interaction {
   static constexpr const char* kName = "magnetism_from_electricity";
 
   /// `induction_order`: electricity's setting of that name (1 or 2), which
-  /// sets the current's lead (1.5 or 1 step; docs/magnetism.md).
-  explicit MagnetismFromElectricity(MagnetismResolver& target, int induction_order = 1)
+  /// sets the current's lead (1.5 or 1 step; docs/magnetism.md). 2 is
+  /// electricity's default (electricity::kDefaultInductionOrder).
+  explicit MagnetismFromElectricity(MagnetismResolver& target, int induction_order = 2)
       : target_(target), induction_order_(induction_order) {}
   void apply(const WorldView& world) override;
 
  private:
   MagnetismResolver& target_;
-  int induction_order_ = 1;
+  int induction_order_ = 2;
   PropertyRef magnet_{prop::kMagnet}, current_{prop::kCurrent};
 };
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "resolvers/electricity/electricity.hpp"
 #include "resolvers/electricity/electricity_from_magnetism.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
 #include "resolvers/magnetism/magnetic_forces.hpp"
@@ -112,10 +113,10 @@ void register_magnetism_resolver(PluginRegistry& registry) {
           [](PluginContext& ctx) {
             // Electricity's induction_order sets the current's lead (its own
             // resolver validates the value).
-            int order = 1;
+            int order = electricity::kDefaultInductionOrder;
             const auto& settings = ctx.world().def().settings;
             if (const auto it = settings.find("electricity"); it != settings.end())
-              order = int(it->second.integer("induction_order", 1));
+              order = int(it->second.integer("induction_order", order));
             return std::make_unique<MagnetismFromElectricity>(ctx.target<MagnetismResolver>(),
                                                               order);
           },

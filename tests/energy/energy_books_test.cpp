@@ -342,9 +342,15 @@ TEST(EnergyBooks, MotorsBooksCloseAndTheResidueShrinksWithTheStep) {
   // ("An opened loop"). Over 10 s the residue is 0.155 % of the energy moved
   // at 1/240 s and 0.091 % at 1/480 s; it was 0.65 % and 0.040 % with that
   // pull left as the coupling's mismatch, 5.7 % at 1/240 s with the force
-  // 1.5 steps behind its current. What is left no longer falls at each
-  // halving: smooth-current prediction errors and the commutations' share
-  // have opposite signs.
+  // 1.5 steps behind its current. That was induction order 1, whose residue
+  // no longer fell at each halving (0.091 % at 1/480 s, 0.100 % at 1/960 s).
+  // Since session 17 the default is order 2 (the force's current is the
+  // kick's, one step on, not the step's mean the circuit pays the EMF with):
+  // the dynamics are second order and so is the residue, but from a larger
+  // start: 1.80, 0.80, 0.186 % at 1/120, 1/240, 1/480 s (0.053 % at 1/960 s,
+  // session 16), a mismatch that grows steadily through the run (the kick's
+  // current against the step's mean, (dt/2) dI/dt dPhi a step). Bounds 1 %
+  // and 0.25 % (were 0.2 % and 0.1 %), and the halving must cut it 2.5x.
   const SceneBooks coarse = scene_books("mods/motor", 1.0 / 240, 10);
   const SceneBooks fine = scene_books("mods/motor", 1.0 / 480, 10);
   for (const SceneBooks* m : {&coarse, &fine}) {
@@ -358,7 +364,7 @@ TEST(EnergyBooks, MotorsBooksCloseAndTheResidueShrinksWithTheStep) {
   // and 1e-3; the order-2 coupling's books are the order2 helper's to close.
   EXPECT_LT(coarse.balance.fraction(), 1e-2);
   EXPECT_LT(fine.balance.fraction(), 2.5e-3);
-  EXPECT_LT(fine.balance.fraction(), 0.5 * coarse.balance.fraction());
+  EXPECT_LT(fine.balance.fraction(), 0.4 * coarse.balance.fraction());
 }
 
 TEST(EnergyBooks, GeneratorsBooksCloseAsTheStepShrinks) {
@@ -404,15 +410,22 @@ TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
   // (0.093 % at 1/120 s, 0.161 % at 1/480 s: it does not fall with the
   // step; it is the interrupter's jump, docs/energy.md); with the iron's
   // poles on its faces and the coil 6 mm up, 0.136, 0.135 and 0.156 %.
-  // Bound 0.2 %.
+  // Session 17, induction order 2 the default and the pack's resistance
+  // 0.6 ohm (mods/doorbell/layout.lua): 0.340, 0.326 and 0.070 % at 1/120,
+  // 1/240 and 1/480 s. Bounds 0.4 % at 1/240 s (was 0.2 %) and, new, 0.1 %
+  // at 1/480 s, where order 1 never met it.
   const SceneBooks d = scene_books("mods/doorbell", 1.0 / 240, 10);
-  EXPECT_GT(d.battery, 1.0);
-  EXPECT_LT(std::abs(d.balance.unexplained()), 1e-5 * d.balance.moved);
-  EXPECT_NEAR(d.balance.residue(), -d.balance.transfers, 1e-5 * d.balance.moved);
-  EXPECT_LT(d.balance.fraction(), 2e-3);
-  // The core's induced share pulls the armature: booked (0.042 J; with the
-  // cored coil's share left out of the books, 0).
-  EXPECT_GT(d.iron_work, 0.02);
+  const SceneBooks fine = scene_books("mods/doorbell", 1.0 / 480, 10);
+  for (const SceneBooks* b : {&d, &fine}) {
+    EXPECT_GT(b->battery, 1.0);
+    EXPECT_LT(std::abs(b->balance.unexplained()), 1e-5 * b->balance.moved);
+    EXPECT_NEAR(b->balance.residue(), -b->balance.transfers, 1e-5 * b->balance.moved);
+    // The core's induced share pulls the armature: booked (0.042 J in
+    // session 16; with the cored coil's share left out of the books, 0).
+    EXPECT_GT(b->iron_work, 0.02);
+  }
+  EXPECT_LT(d.balance.fraction(), 4e-3);
+  EXPECT_LT(fine.balance.fraction(), 1e-3);
 }
 
 TEST(EnergyBooks, IronsPullComesOutOfItsStore) {

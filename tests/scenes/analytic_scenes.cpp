@@ -138,8 +138,9 @@ WorldDef world_def(double dt, const Method& m, bool gravity) {
     rb.set("substeps", std::int64_t(m.rigid_substeps));
   if (!m.joint_projection) rb.set("joint_projection", false);
   def.settings["electricity"].set("substeps", std::int64_t(m.electricity_substeps));
-  if (m.induction_order != 1)
-    def.settings["electricity"].set("induction_order", std::int64_t(m.induction_order));
+  // Always named: the engine's default (2 since session 17) is not this
+  // struct's (1, the sweeps' first-order rows).
+  def.settings["electricity"].set("induction_order", std::int64_t(m.induction_order));
   if (!gravity) def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
   if (m.engine != "rigid_body") def.use["rigid_body"] = m.engine;
   return def;
