@@ -39,6 +39,7 @@
 #include <span>
 #include <vector>
 
+#include "resolvers/common/fmm.hpp"
 #include "resolvers/common/multipole_tree.hpp"
 #include "runtime/stage.hpp"
 #include "runtime/world.hpp"
@@ -123,7 +124,11 @@ class NBodyGravity final : public Resolver {
   std::vector<Vec3> source_x_, target_x_, a_;
   std::vector<double> source_m_;
   std::vector<Vec3> source_a_;
-  multipole::Tree tree_;
+  /// From kTreeFromMasses: the masses gathered once, as the summation takes
+  /// them (no second copy per step).
+  std::vector<multipole::Source> sources_;
+  multipole::Tree tree_;  ///< the Barnes-Hut walk, below kFmmFromMasses
+  multipole::Fmm fmm_;    ///< the FMM, held directly (not through a Tree, which copies the sources)
 };
 
 }  // namespace alloy::gravity
