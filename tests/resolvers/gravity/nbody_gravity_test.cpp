@@ -163,6 +163,31 @@ TEST(NBodyAccelerations, DISABLED_FmmSettingsSweep) {
   }
 }
 
+TEST(NBodyAccelerations, TheStagesSettingsKeepTheErrorBoundOnFourLayouts) {
+  // Issue 16: the resolver's walk (below kFmmFromMasses) and FMM (from it)
+  // at their settings, on the grid, the Gaussian cluster, the uniform cube
+  // with uneven masses and the Plummer sphere, at both sides of the switch.
+  for (int n : {int(gravity::kTreeFromMasses) + 36, int(gravity::kFmmFromMasses) - 1,
+                int(gravity::kFmmFromMasses), 4000}) {
+    for (int kind = 0; kind < 4; ++kind) {
+      std::vector<Vec3> x;
+      std::vector<double> m;
+      layout(kind, n, 100 + kind, x, m);
+      std::vector<Vec3> exact(n), approx(n);
+      gravity::accelerations(x, x, m, 1.0, 0.0, exact);
+      multipole::Tree tree;
+      if (std::size_t(n) >= gravity::kFmmFromMasses)
+        gravity::tree_accelerations(x, m, 1.0, 0.0, tree, approx);
+      else
+        gravity::tree_accelerations(x, m, 1.0, 0.0, tree, approx, gravity::kWalkTheta, 0,
+                                    gravity::kWalkLeaf);
+      const double e = rms_relative(approx, exact);
+      EXPECT_LT(e, gravity::kErrorBound) << n << " bodies, layout " << kind;
+      EXPECT_GT(e, 0) << n << " bodies, layout " << kind;  // summed, not exact
+    }
+  }
+}
+
 TEST(NBodyAccelerations, TreeAgreesWithTheDirectSumOnAGridAndAClusterAndCoincidentBodies) {
   // Issue 16: from kTreeFromMasses masses the resolver sums with the tree.
   std::mt19937_64 rng(5);
