@@ -90,35 +90,46 @@ void NBodyGravity::compute(ResolverAccess& access) {
       masses(mass, density, masses_);
     else
       masses(all_mass, all_density, masses_);
-    source_x_.resize(masses_.size()), source_m_.resize(masses_.size());
-    for (std::size_t i = 0; i < masses_.size(); ++i) {
-      source_x_[i] = all_position.value_or(masses_[i], {});  // the rigid body's default too
-      source_m_[i] = all_mass[masses_[i]];
-    }
-    target_x_.resize(targets_.size()), a_.resize(targets_.size());
-    for (std::size_t i = 0; i < targets_.size(); ++i)
-      target_x_[i] = position.value_or(targets_[i], {});
+    a_.resize(targets_.size());
     if (masses_.size() >= kTreeFromMasses) {
       // Every target is a source (a non-static mass in scope): sum at the
-      // sources with the tree and pick the targets' values out.
+      // sources and pick the targets' values out. The masses are gathered
+      // straight into the summation's records, and its output is scaled by
+      // -G while it is picked out (the sum is m K(x - p), pointing away from
+      // the masses).
+      sources_.resize(masses_.size());
+      for (std::size_t i = 0; i < masses_.size(); ++i)
+        sources_[i] = {all_position.value_or(masses_[i], {}), all_mass[masses_[i]]};
       source_a_.resize(masses_.size());
       // The Barnes-Hut walk up to kFmmFromMasses, the FMM from there (each the
-      // faster where it is used, at no larger error: bench/scaling.cpp --gravity).
-      if (masses_.size() >= kFmmFromMasses)
-        tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_);
-      else
-        tree_accelerations(source_x_, source_m_, G_, softening_, tree_, source_a_, kWalkTheta, 0,
-                           kWalkLeaf);
+      // faster where it is used, within the bound: bench/scaling.cpp --gravity).
+      if (masses_.size() >= kFmmFromMasses) {
+        fmm_.build(sources_, softening_,
+                   {.theta = kTreeTheta, .order = kTreeOrder, .leaf_size = kTreeLeaf});
+        fmm_.evaluate_at_sources(source_a_);
+      } else {
+        tree_.build(sources_, softening_, {.theta = kWalkTheta, .leaf_size = kWalkLeaf});
+        tree_.evaluate_at_sources(source_a_);
+      }
       std::size_t k = 0;
       for (std::size_t i = 0; i < targets_.size(); ++i) {
         while (k < masses_.size() && masses_[k] < targets_[i]) ++k;
-        if (k < masses_.size() && masses_[k] == targets_[i])
-          a_[i] = source_a_[k];
-        else  // not among the sources (cannot happen with the lists above): sum it directly
-          accelerations(std::span(&target_x_[i], 1), source_x_, source_m_, G_, softening_,
-                        std::span(&a_[i], 1));
+        if (k < masses_.size() && masses_[k] == targets_[i]) {
+          a_[i] = source_a_[k] * -G_;
+        } else {  // not among the sources (cannot happen with the lists above): sum it directly
+          a_[i] =
+              multipole::direct_sum(sources_, softening_, position.value_or(targets_[i], {})) * -G_;
+        }
       }
     } else {
+      source_x_.resize(masses_.size()), source_m_.resize(masses_.size());
+      for (std::size_t i = 0; i < masses_.size(); ++i) {
+        source_x_[i] = all_position.value_or(masses_[i], {});  // the rigid body's default too
+        source_m_[i] = all_mass[masses_[i]];
+      }
+      target_x_.resize(targets_.size());
+      for (std::size_t i = 0; i < targets_.size(); ++i)
+        target_x_[i] = position.value_or(targets_[i], {});
       accelerations(target_x_, source_x_, source_m_, G_, softening_, a_);
     }
     ++evaluations_;

@@ -4,9 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdlib>
+#include <ctime>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "tests/scenes/rigid_scenes.hpp"
 
@@ -59,6 +63,129 @@ double rms_relative(const std::vector<Vec3>& approx, const std::vector<Vec3>& ex
     den += dot(exact[i], exact[i]);
   }
   return std::sqrt(num / den);
+}
+
+/// Layouts for the summation's checks and studies: 0 the bench's grid (1 m
+/// apart, 1,000 kg), 1 a Gaussian cluster (sigma n^(1/3) m, 1,000 kg), 2 a
+/// uniform cube with masses from 1 to 100 kg, 3 a Plummer sphere (scale
+/// n^(1/3) m, masses from 1 to 100 kg): a dense core in a sparse halo.
+void layout(int kind, int n, std::uint64_t seed, std::vector<Vec3>& x, std::vector<double>& m) {
+  std::mt19937_64 rng(seed);
+  const double scale = std::cbrt(double(n));
+  std::normal_distribution<double> g(0, scale);
+  std::uniform_real_distribution<double> u(0, 1), um(1, 100);
+  const int side = int(std::ceil(scale - 1e-9));
+  x.resize(n), m.resize(n);
+  for (int i = 0; i < n; ++i) {
+    if (kind == 0) {
+      x[i] = {1.0 * (i % side), 1.0 * (i / side % side), 1.0 * (i / (side * side))};
+    } else if (kind == 1) {
+      x[i] = {g(rng), g(rng), g(rng)};
+    } else if (kind == 2) {
+      x[i] = {scale * u(rng), scale * u(rng), scale * u(rng)};
+    } else {
+      // Plummer: r = a / sqrt(X^(-2/3) - 1), X uniform, capped at 20 a.
+      const double X = 0.001 + 0.998 * u(rng);
+      const double r = std::min(20.0, 1.0 / std::sqrt(std::pow(X, -2.0 / 3) - 1)) * scale;
+      const double z = 2 * u(rng) - 1, phi = 2 * kPi * u(rng), rho = std::sqrt(1 - z * z);
+      x[i] = {r * rho * std::cos(phi), r * rho * std::sin(phi), r * z};
+    }
+    m[i] = kind < 2 ? 1e3 : um(rng);
+  }
+}
+
+/// Comma-separated numbers from the environment variable `name`, or `fallback`.
+std::vector<double> env_list(const char* name, const char* fallback) {
+  const char* env = std::getenv(name);
+  const std::string list = env ? env : fallback;
+  std::vector<double> out;
+  for (std::size_t at = 0; at < list.size();) {
+    const std::size_t comma = std::min(list.find(',', at), list.size());
+    out.push_back(std::atof(list.substr(at, comma - at).c_str()));
+    at = comma + 1;
+  }
+  return out;
+}
+
+/// A study (--gtest_also_run_disabled_tests): the FMM's RMS relative
+/// acceleration error against the direct sum and its CPU time (the best of
+/// ALLOY_NBODY_REPS, default 3) at every (order, theta, leaf) of a grid, on
+/// the four layouts above, at the sizes in ALLOY_NBODY_SIZES (default
+/// 1000,3000,10000); order 0 is the Barnes-Hut walk, -1 the direct sum. ALLOY_NBODY_ORDERS,
+/// ALLOY_NBODY_THETAS and ALLOY_NBODY_LEAVES narrow the grid. One line per
+/// setting and size: the time summed over the layouts, the worst error, and
+/// each layout's. How kTreeTheta, kTreeOrder and kTreeLeaf were chosen
+/// (docs/gravity.md, "Many bodies").
+TEST(NBodyAccelerations, DISABLED_FmmSettingsSweep) {
+  const auto sizes = env_list("ALLOY_NBODY_SIZES", "1000,3000,10000");
+  const auto orders = env_list("ALLOY_NBODY_ORDERS", "0,1,2,3,4,5,6");
+  const auto thetas = env_list("ALLOY_NBODY_THETAS", "0.4,0.45,0.5,0.55,0.6,0.65,0.7,0.75,0.8");
+  const auto leaves = env_list("ALLOY_NBODY_LEAVES", "16,24,32,48,64");
+  const int reps = int(env_list("ALLOY_NBODY_REPS", "3")[0]);
+  auto cpu = [] { return double(std::clock()) / CLOCKS_PER_SEC; };
+  for (double size : sizes) {
+    const int n = int(size);
+    std::vector<std::vector<Vec3>> xs(4), exact(4);
+    std::vector<std::vector<double>> ms(4);
+    for (int k = 0; k < 4; ++k) {
+      layout(k, n, 11 + k, xs[k], ms[k]);
+      exact[k].resize(n);
+      gravity::accelerations(xs[k], xs[k], ms[k], 1.0, 0.0, exact[k]);
+    }
+    std::vector<Vec3> a(n);
+    multipole::Tree tree;
+    for (double order : orders)
+      for (double theta : thetas)
+        for (double leaf : leaves) {
+          double worst = 0, time = 0;
+          std::array<double, 4> err{}, ms_k{};
+          for (int k = 0; k < 4; ++k) {
+            double best = 1e30;
+            for (int rep = 0; rep < reps; ++rep) {
+              const double c0 = cpu();
+              if (order < 0)
+                gravity::accelerations(xs[k], xs[k], ms[k], 1.0, 0.0, a);
+              else
+                gravity::tree_accelerations(xs[k], ms[k], 1.0, 0.0, tree, a, theta, int(order),
+                                            std::uint32_t(leaf));
+              best = std::min(best, cpu() - c0);
+            }
+            time += best, ms_k[k] = 1e3 * best;
+            err[k] = rms_relative(a, exact[k]);
+            worst = std::max(worst, err[k]);
+          }
+          std::printf(
+              "n %6d order %d theta %.2f leaf %2u: %8.3f ms (4 layouts), worst error %.2e (grid "
+              "%.1e cluster %.1e cube %.1e plummer %.1e; ms %.2f %.2f %.2f %.2f)\n",
+              n, int(order), theta, unsigned(leaf), 1e3 * time, worst, err[0], err[1], err[2],
+              err[3], ms_k[0], ms_k[1], ms_k[2], ms_k[3]);
+        }
+  }
+}
+
+TEST(NBodyAccelerations, TheStagesSettingsKeepTheErrorBoundOnFourLayouts) {
+  // Issue 16: the resolver's walk (below kFmmFromMasses) and FMM (from it)
+  // at their settings, on the grid, the Gaussian cluster, the uniform cube
+  // with uneven masses and the Plummer sphere, at both sides of the switch.
+  for (int n : {int(gravity::kTreeFromMasses) + 36, int(gravity::kFmmFromMasses) - 1,
+                int(gravity::kFmmFromMasses), 4000}) {
+    for (int kind = 0; kind < 4; ++kind) {
+      std::vector<Vec3> x;
+      std::vector<double> m;
+      layout(kind, n, 100 + kind, x, m);
+      std::vector<Vec3> exact(n), approx(n);
+      gravity::accelerations(x, x, m, 1.0, 0.0, exact);
+      multipole::Tree tree;
+      if (std::size_t(n) >= gravity::kFmmFromMasses)
+        gravity::tree_accelerations(x, m, 1.0, 0.0, tree, approx);
+      else
+        gravity::tree_accelerations(x, m, 1.0, 0.0, tree, approx, gravity::kWalkTheta, 0,
+                                    gravity::kWalkLeaf);
+      const double e = rms_relative(approx, exact);
+      EXPECT_LT(e, gravity::kErrorBound) << n << " bodies, layout " << kind;
+      EXPECT_GT(e, 0) << n << " bodies, layout " << kind;  // summed, not exact
+    }
+  }
 }
 
 TEST(NBodyAccelerations, TreeAgreesWithTheDirectSumOnAGridAndAClusterAndCoincidentBodies) {
@@ -257,6 +384,41 @@ TEST(NBodyGravity, SettingsAreChecked) {
     Sim s(def);
     add_sphere(*s, {0, 1, 0}, 0.1, 1.0);
     EXPECT_THROW(s->start(), InputError) << key;
+  }
+}
+
+/// A study, not a check (run with --gtest_also_run_disabled_tests; under
+/// `perf record -g` for the profile): the bench's nbody scene (bench/scaling.cpp,
+/// n spheres of 1,000 kg on a grid 1 m apart; n from ALLOY_NBODY_N, default
+/// 10,000) stepped 3 times to warm up and 20 times timed (ALLOY_NBODY_STEPS); prints every stage's
+/// wall time per step and the loop's CPU / wall ratio.
+TEST(NBodyGravity, DISABLED_StageProfile) {
+  const char* env = std::getenv("ALLOY_NBODY_N");
+  const int n = env ? std::atoi(env) : 10000;
+  Sim s(nbody_world(gravity::kGravitationalConstant));
+  const int side = int(std::ceil(std::cbrt(double(n)) - 1e-9));
+  for (int i = 0; i < n; ++i)
+    add_sphere(*s, {1.0 * (i % side), 1.0 * (i / side % side), 1.0 * (i / (side * side))}, 0.05,
+               1e3);
+  s->start();
+  s->run(3);
+  std::vector<double> before;
+  for (const StageTiming& t : s->profile().stages) before.push_back(t.seconds);
+  const char* env_steps = std::getenv("ALLOY_NBODY_STEPS");
+  const int steps = env_steps ? std::atoi(env_steps) : 20;
+  const std::clock_t c0 = std::clock();
+  const double w0 = now_seconds();
+  s->run(steps);
+  const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC, wall = now_seconds() - w0;
+  std::printf("%d bodies, %d steps: CPU %.2f ms a step, wall %.2f ms (CPU / wall %.2f)\n", n, steps,
+              1e3 * cpu / steps, 1e3 * wall / steps, cpu / wall);
+  const auto& stages = s->profile().stages;
+  // A stage's CPU time is estimated as its wall time scaled by the loop's
+  // CPU / wall ratio (as bench/scaling.cpp does on a shared machine).
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    const double ms = 1e3 * (stages[i].seconds - (i < before.size() ? before[i] : 0)) / steps;
+    std::printf("  %-28s %8.3f ms a step (wall), %8.3f scaled to CPU\n", stages[i].name.c_str(), ms,
+                ms * cpu / wall);
   }
 }
 
