@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <numbers>
 #include <numeric>
+#include <utility>
 
 #include "resolvers/rigid_body/properties.hpp"
+#include "runtime/stage_state.hpp"
 
 namespace alloy::box2d {
 
@@ -661,6 +663,31 @@ void Box2DEngine::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_ra
   rated_sources_.note(rated_.size(), world_.running_stage());
   rated_.push_back({part.index, part.generation, force, torque, force_rate, torque_rate});
 }
+bool Box2DEngine::add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> parts) {
+  // Along z Box2D gives nothing: the per-part forces report it (load_dropped).
+  const double in_plane = std::hypot(g.x, g.y);
+  if (!std::isfinite(in_plane) || !(std::abs(g.z) <= 1e-12 || std::abs(g.z) <= 1e-6 * in_plane))
+    return false;
+  if (dirty_ || !impl_->world) return false;  // the parts are not known yet
+  uniform_parts_.assign(parts.begin(), parts.end());
+  if (!uniform_covers_all()) return false;
+  uniform_ = true;
+  uniform_g_ = {g.x, g.y, 0};
+  uniform_source_ = world_.running_stage();
+  return true;
+}
+
+bool Box2DEngine::uniform_covers_all() const {
+  const Impl& m = *impl_;
+  std::vector<char> covered(m.parts.size(), 0);
+  for (const std::uint32_t slot : uniform_parts_)
+    if (slot < m.part_of_slot.size() && m.part_of_slot[slot] >= 0)
+      covered[std::size_t(m.part_of_slot[slot])] = 1;
+  for (std::size_t i = 0; i < m.parts.size(); ++i)
+    if (!covered[i] && m.bodies[m.parts[i].body].dynamic) return false;
+  return true;
+}
+
 std::span<rigid::RigidBodyEngine::LoadCommand> Box2DEngine::open_loads(std::size_t n) {
   if (open_ == ~std::size_t(0)) {
     open_ = loads_.size();
@@ -830,6 +857,34 @@ void Box2DEngine::report_left_out(ResolverAccess& access) {
   if (limited) std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
 }
 
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+//
+// The bytes: a version and whether the last advance left contact pairs out.
+// Without it the first advance after a restore, which asks Box2D's filter
+// again for every overlapping pair of the rebuilt world, reported a heap's
+// `contact_limit` a second time.
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+}
+
+bool Box2DEngine::save_state(StateWriter& out) const {
+  out.put(kStateVersion);
+  out.put(std::uint8_t(limited_before_));
+  return true;
+}
+
+void Box2DEngine::restore_state(StateReader& in) {
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  const auto limited = in.get<std::uint8_t>();
+  if (limited > 1)
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' is damaged: a contact-limit flag of " + std::to_string(limited));
+  limited_before_ = limited != 0;
+}
+
 // --- the step -------------------------------------------------------------------------
 
 void Box2DEngine::advance(ResolverAccess& access, double dt) {
@@ -889,6 +944,22 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     b->SetAwake(true);
   }
 
+  // Uniform gravity as Box2D's world gravity, unless this advance's bodies
+  // are not all in the field (a rebuild above) or it is beyond what the
+  // screen lets a step give: then as the forces it stands for, screened.
+  b2Vec2 world_g(0, 0);
+  if (std::exchange(uniform_, false)) {
+    const double gn = std::hypot(uniform_g_.x, uniform_g_.y);
+    if (gn * dt <= rigid::limits::speed && uniform_covers_all()) {
+      world_g = b2Vec2(float(uniform_g_.x * s), float(uniform_g_.y * s));
+    } else {
+      const auto mass = access.column<double>("mass");
+      load_sources_.note(loads_.size(), uniform_source_);
+      for (const std::uint32_t slot : uniform_parts_)
+        if (mass.has(slot)) loads_.push_back({slot, 0, mass[slot] * uniform_g_, {}, Load::Force});
+    }
+  }
+  m.world->SetGravity(world_g);
   screen_loads(access, dt);
   m.left_out = 0;
   m.want_impulses = *impulse_demand_ > 0;

@@ -80,6 +80,12 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void advance(ResolverAccess& access, double dt) override;
   void on_structure_changed(const WorldView&) override { dirty_ = true; }
   std::uint64_t state_version() const override { return state_version_; }
+  /// Box2D's world is rebuilt from the properties at a restore (its warm
+  /// starts are not saved: docs/saves.md); what is saved is whether the last
+  /// advance left contact pairs out, so that a restored heap does not report
+  /// `contact_limit` again as if it had just begun.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   void add_force(ObjectId part, Vec3 force) override;
   void add_force(ObjectId part, Vec3 force, Vec3 point) override;
@@ -87,6 +93,13 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void add_torque(ObjectId part, Vec3 torque) override;
   /// Substep k of the window applies value + rate * k * dt / substeps.
   void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate) override;
+  /// Taken as Box2D's world gravity when every part of every moving body is
+  /// among `parts` and g lies in the plane (else false: the weights come as
+  /// forces, screened and reported as any load). Checked again at the advance
+  /// against the bodies it steps (a rebuild may bring parts outside the
+  /// field): if they are not all covered then, the weights are queued as
+  /// forces there.
+  bool add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> parts) override;
   std::span<LoadCommand> open_loads(std::size_t n) override;
   void close_loads(std::size_t used) override;
 
@@ -132,6 +145,14 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
     Vec3 force, torque, force_rate, torque_rate;
   };
   std::vector<RatedLoad> rated_;
+  // The uniform gravity of the next advance (add_uniform_gravity): g, the
+  // parts it weighs, and the stage that gave it (for a refusal's source).
+  bool uniform_ = false;
+  Vec3 uniform_g_;
+  std::vector<std::uint32_t> uniform_parts_;
+  const std::string* uniform_source_ = nullptr;
+  /// Whether every part of every moving body is in uniform_parts_.
+  bool uniform_covers_all() const;
   rigid::SourceMarks load_sources_, rated_sources_;  // of loads_ and rated_
   rigid::LoadScreen screen_;
   /// (stage, kind) pairs whose out-of-plane loads were reported.
