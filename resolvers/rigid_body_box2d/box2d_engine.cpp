@@ -148,6 +148,8 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     float torque = 0;
     b2Vec2 last_force{0, 0};
     float last_torque = 0;
+    bool written_asleep = false;  // asleep at the last write-back
+    bool still = false;           // and at this one: nothing to write
   };
   struct Hinge {
     ObjectId id;
@@ -177,6 +179,14 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   };
   std::vector<ContactKey> contact_keys, last_keys;  // this step's, and the last sorted ones
   std::vector<std::uint32_t> contact_order;         // into contact_keys, by (a, b, seq)
+  /// A contact began or ended touching since the keys were taken (Box2D's
+  /// BeginContact and EndContact; set by a build): while it is false, the
+  /// touching contacts are those of the keys, in the same list order (Box2D
+  /// prepends the contacts it makes, and a contact it destroys that touched
+  /// ends first), so the keys stand and the list is not walked again.
+  bool touch_changed = true;
+  void BeginContact(b2Contact*) override { touch_changed = true; }
+  void EndContact(b2Contact*) override { touch_changed = true; }
   /// Versions of position, orientation, velocity and angular_velocity after
   /// the last write-back (none after a build: the parts are compared then).
   std::array<std::uint64_t, 4> written_versions{~0ull, ~0ull, ~0ull, ~0ull};
@@ -221,9 +231,9 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   }
 
   void PreSolve(b2Contact* c, const b2Manifold* old) override {
-    const Part& pa = part_of(c->GetFixtureA());
-    const Part& pb = part_of(c->GetFixtureB());
-    if (old->pointCount == 0) {
+    if (old->pointCount == 0) {  // Box2D calls this for every touching contact a step
+      const Part& pa = part_of(c->GetFixtureA());
+      const Part& pb = part_of(c->GetFixtureB());
       // The same mixing as rigid_body_from_collisions for ODE, set when the
       // contact begins to touch: Box2D keeps a contact's values until it is
       // destroyed, and a change of the materials rebuilds the world.
@@ -278,15 +288,18 @@ const char* const kDefining[] = {"shape",      "size",           "radius",      
 }
 
 void Box2DEngine::note_versions(const WorldView& v) {
+  // The ids are looked up once (by name, a hash a property): a world's
+  // properties keep their ids.
+  if (defining_.empty())
+    for (const char* n : kDefining) defining_.push_back(v.property(n));
   versions_.clear();
-  for (const char* n : kDefining) versions_.push_back(v.store().column(v.property(n)).version());
+  for (const PropertyId p : defining_) versions_.push_back(v.store().column(p).version());
 }
 
 bool Box2DEngine::edited_since_write(const WorldView& v) const {
-  std::size_t i = 0;
-  for (const char* n : kDefining)
-    if (i >= versions_.size() || v.store().column(v.property(n)).version() != versions_[i++])
-      return true;
+  if (versions_.size() != defining_.size()) return true;
+  for (std::size_t i = 0; i < defining_.size(); ++i)
+    if (v.store().column(defining_[i]).version() != versions_[i]) return true;
   return false;
 }
 
@@ -298,6 +311,8 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world->SetAllowSleeping(config_.sleep);
   m.world->SetContactListener(&m);
   m.world->SetContactFilter(&m);
+  m.touch_changed = true;  // the keys point into the world just destroyed
+  m.contact_keys.clear(), m.last_keys.clear(), m.contact_order.clear();
   m.parts.clear();
   m.written_versions.fill(~0ull);
   m.bodies.clear();
@@ -631,7 +646,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     part.vel = velocity.value_or(slot, {});
     part.ang = angular.value_or(slot, {});
   }
-  pairs_.clear(), points_.clear(), impulses_.clear();
+  impulses_.clear();
   dirty_ = false;
   note_versions(access);
   ++state_version_;
@@ -906,11 +921,14 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   // Only looked for when one of the four columns was written since our write
   // (every write bumps its column's version): a world where only this engine
   // moves things skips the comparison of every part.
-  auto motion_versions = [&] {
-    std::array<std::uint64_t, 4> v{};
+  if (motion_[0] == kNoProperty) {
     std::size_t i = 0;
     for (const char* n : {"position", "orientation", "velocity", "angular_velocity"})
-      v[i++] = access.store().column(access.property(n)).version();
+      motion_[i++] = access.property(n);
+  }
+  auto motion_versions = [&] {
+    std::array<std::uint64_t, 4> v{};
+    for (std::size_t i = 0; i < 4; ++i) v[i] = access.store().column(motion_[i]).version();
     return v;
   };
   const bool maybe_edited = motion_versions() != m.written_versions;
@@ -1098,10 +1116,18 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   open_ = ~std::size_t(0);
   report_left_out(access);
 
-  // Write the parts back.
+  // Write the parts back: those of moving bodies, but not of a body that
+  // was asleep at the last write-back too (Box2D has not moved it since:
+  // what it would write is what the columns hold; the write at which it fell
+  // asleep is made, with its velocity zeroed by Box2D).
+  for (Impl::Body& body : m.bodies) {
+    const bool asleep = body.dynamic && !body.b->IsAwake();
+    body.still = asleep && body.written_asleep;
+    body.written_asleep = asleep;
+  }
   for (Impl::Part& part : m.parts) {
     const Impl::Body& body = m.bodies[part.body];
-    if (!body.dynamic) continue;
+    if (!body.dynamic || body.still) continue;
     const b2Body* b = body.b;
     const b2Vec2 c = b->GetWorldPoint(part.local);
     const b2Vec2 v = b->GetLinearVelocityFromWorldPoint(c);
@@ -1128,17 +1154,20 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   // their points, and a step whose touching contacts are those of the step
   // before, in the same order (a pile at rest), reuses that step's order.
   auto& keys = m.contact_keys;
-  keys.clear();
-  for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
-    if (!c->IsTouching() || !c->IsEnabled()) continue;
-    const ObjectId a = m.part_of(c->GetFixtureA()).id, b = m.part_of(c->GetFixtureB()).id;
-    keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size())});
-  }
   auto& order = m.contact_order;
-  if (keys.size() != m.last_keys.size() ||
-      !std::equal(keys.begin(), keys.end(), m.last_keys.begin(), [](const auto& x, const auto& y) {
-        return x.c == y.c && x.a == y.a && x.b == y.b;
-      })) {
+  if (m.touch_changed) {
+    keys.clear();
+    for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
+      if (!c->IsTouching() || !c->IsEnabled()) continue;
+      const ObjectId a = m.part_of(c->GetFixtureA()).id, b = m.part_of(c->GetFixtureB()).id;
+      keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size())});
+    }
+  }
+  if (m.touch_changed &&
+      (keys.size() != m.last_keys.size() ||
+       !std::equal(keys.begin(), keys.end(), m.last_keys.begin(), [](const auto& x, const auto& y) {
+         return x.c == y.c && x.a == y.a && x.b == y.b;
+       }))) {
     order.resize(keys.size());
     std::iota(order.begin(), order.end(), 0u);
     std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
@@ -1147,44 +1176,13 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     });
     m.last_keys = keys;
   }
-  // Pairs and points are written in that order directly; a pair's approach
-  // speed is the largest at its points now or at its beginning (PreSolve's).
+  m.touch_changed = false;
+  // The pairs' points are made when the contact set asks (touching_into),
+  // straight into its lists: the set is updated after every advance that
+  // changed something, and nothing touches Box2D's world in between.
   if (m.pre_speeds.size() > 1)
     std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
               [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
-  pairs_.clear(), points_.clear();
-  std::size_t ps = 0;
-  for (const std::uint32_t k : order) {
-    const Impl::ContactKey& key = keys[k];
-    b2Contact* c = key.c;
-    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
-    b2WorldManifold wm;
-    c->GetWorldManifold(&wm);
-    const int np = c->GetManifold()->pointCount;
-    const double speed = m.approach(c, wm, np, a_is_A);
-    if (pairs_.empty() || pairs_.back().a != key.a || pairs_.back().b != key.b) {
-      Box2DPair& p = pairs_.emplace_back();
-      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points_.size());
-      while (ps < m.pre_speeds.size() &&
-             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
-        ++ps;
-      for (std::size_t q = ps;
-           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
-        p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
-    }
-    Box2DPair& p = pairs_.back();
-    // ContactPoint's normal points from b towards a; Box2D's from A to B.
-    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
-    for (int i = 0; i < np; ++i) {
-      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
-      points_.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
-                                     .normal = {nn.x, nn.y, 0},
-                                     .depth = depth});
-      ++p.count;
-      p.depth = std::max(p.depth, depth);
-      p.normal_speed = std::max(p.normal_speed, speed);
-    }
-  }
   impulses_.clear();
   impulses_computed_ = m.want_impulses;
   if (m.want_impulses) {
@@ -1203,6 +1201,48 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   note_versions(access);
   m.written_versions = motion_versions();
   ++state_version_;
+}
+
+void Box2DEngine::touching_into(std::vector<ContactPair>& pairs,
+                                std::vector<ContactPoint>& points) const {
+  // Pairs and points are written in the order advance() left (by pair, then
+  // Box2D's list order); a pair's approach speed is the largest at its
+  // points now or at its beginning (PreSolve's).
+  Impl& m = *impl_;
+  const double s = m.s;
+  const auto& keys = m.contact_keys;
+  std::size_t ps = 0;
+  for (const std::uint32_t k : m.contact_order) {
+    const Impl::ContactKey& key = keys[k];
+    b2Contact* c = key.c;
+    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);
+    const int np = c->GetManifold()->pointCount;
+    const double speed = m.approach(c, wm, np, a_is_A);
+    if (pairs.empty() || pairs.back().a != key.a || pairs.back().b != key.b) {
+      ContactPair& p = pairs.emplace_back();
+      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points.size());
+      while (ps < m.pre_speeds.size() &&
+             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
+        ++ps;
+      for (std::size_t q = ps;
+           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
+        p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
+    }
+    ContactPair& p = pairs.back();
+    // ContactPoint's normal points from b towards a; Box2D's from A to B.
+    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
+    for (int i = 0; i < np; ++i) {
+      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
+      points.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
+                                    .normal = {nn.x, nn.y, 0},
+                                    .depth = depth});
+      ++p.count;
+      p.depth = std::max(p.depth, depth);
+      p.normal_speed = std::max(p.normal_speed, speed);
+    }
+  }
 }
 
 std::size_t Box2DEngine::body_count() const {
@@ -1227,14 +1267,7 @@ Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : 
 
 void Box2DContacts::update(const WorldView& world) {
   begin_update();
-  const auto pts = engine_.points();
-  points_.assign(pts.begin(), pts.end());
-  for (const Box2DPair& p : engine_.pairs()) {
-    ContactPair& c = current_.emplace_back();
-    c.a = p.a, c.b = p.b, c.first = p.first, c.count = p.count;
-    c.normal_speed = p.normal_speed;
-    c.depth = p.depth;
-  }
+  engine_.touching_into(current_, points_);
   publish(world, engine_.impulses(), engine_.impulses_computed(), world.step());
 }
 

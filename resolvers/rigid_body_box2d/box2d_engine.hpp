@@ -27,6 +27,7 @@
 // docs/box2d.md has the measurements behind the default.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -61,14 +62,6 @@ struct Box2DConfig {
 
   /// Reads and validates the plugin settings; InputError names the bad key.
   static Box2DConfig from(const PluginSettings& settings);
-};
-
-/// One pair's contacts as the last advance left them (for the contact set).
-struct Box2DPair {
-  ObjectId a, b;                       ///< a < b
-  std::uint32_t first = 0, count = 0;  ///< into points()
-  double normal_speed = 0;             ///< largest approach speed, m/s
-  double depth = 0;                    ///< deepest penetration, m
 };
 
 class Box2DEngine final : public rigid::RigidBodyEngine {
@@ -109,9 +102,10 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   std::size_t awake_count() const override;
 
   // --- published for collisions.box2d ---------------------------------------------
-  /// Pairs touching after the last advance, sorted by (a, b), and their points.
-  std::span<const Box2DPair> pairs() const { return pairs_; }
-  std::span<const ContactPoint> points() const { return points_; }
+  /// Appends the pairs touching after the last advance, sorted by (a, b), to
+  /// `pairs`, and their points to `points` (ContactSet's lists; the pairs'
+  /// first and count index `points`). Valid from one advance to the next.
+  void touching_into(std::vector<ContactPair>& pairs, std::vector<ContactPoint>& points) const;
   /// Impulses of the last advance per pair, sorted by (a, b); empty unless
   /// impulses_computed().
   std::span<const PairImpulse> impulses() const { return impulses_; }
@@ -158,13 +152,13 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   /// (stage, kind) pairs whose out-of-plane loads were reported.
   std::vector<std::pair<std::string, std::string>> dropped_reported_;
   bool limited_before_ = false;  // the last advance left contact pairs out
-  std::vector<Box2DPair> pairs_;
-  std::vector<ContactPoint> points_;
   std::vector<PairImpulse> impulses_;
   std::shared_ptr<std::size_t> impulse_demand_ = std::make_shared<std::size_t>(0);
   bool impulses_computed_ = false;
   bool dirty_ = true;
   std::vector<std::uint64_t> versions_;  // of the columns read, after our last write
+  std::vector<PropertyId> defining_;     // those columns (kDefining), looked up once
+  std::array<PropertyId, 4> motion_{kNoProperty, kNoProperty, kNoProperty, kNoProperty};
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
 };
