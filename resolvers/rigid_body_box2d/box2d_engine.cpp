@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <utility>
@@ -139,6 +140,9 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     // What we last wrote (to tell an edit from outside).
     Vec3 pos, vel, ang;
     Quat rot;
+    /// The angle `rot` was made from at the last write-back (NaN: none): a
+    /// part that has not turned since is not given a sine and cosine again.
+    double rot_angle = std::numeric_limits<double>::quiet_NaN();
   };
   struct Body {
     b2Body* b = nullptr;
@@ -687,7 +691,8 @@ bool Box2DEngine::add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> par
   uniform_parts_.assign(parts.begin(), parts.end());
   if (!uniform_covers_all()) return false;
   uniform_ = true;
-  uniform_g_ = {g.x, g.y, 0};
+  uniform_g_ = g;
+  uniform_at_ = loads_.size();
   uniform_source_ = world_.running_stage();
   return true;
 }
@@ -962,22 +967,23 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     b->SetAwake(true);
   }
 
-  // Uniform gravity as Box2D's world gravity, unless this advance's bodies
-  // are not all in the field (a rebuild above) or it is beyond what the
-  // screen lets a step give: then as the forces it stands for, screened.
-  b2Vec2 world_g(0, 0);
+  // Uniform gravity: each part's weight applied where the queue had it
+  // (uniform_at_), as the force rigid_body_from_gravity would have queued,
+  // so the bits are those of the queued forces; unless this advance's bodies
+  // are not all in the field (a rebuild above) or g is beyond what the screen
+  // lets a step give: then queued as those forces, and screened.
+  bool weigh = false;
+  const auto mass = access.column<double>("mass");
   if (std::exchange(uniform_, false)) {
     const double gn = std::hypot(uniform_g_.x, uniform_g_.y);
-    if (gn * dt <= rigid::limits::speed && uniform_covers_all()) {
-      world_g = b2Vec2(float(uniform_g_.x * s), float(uniform_g_.y * s));
+    if (gn * dt <= rigid::limits::speed && uniform_covers_all() && uniform_at_ <= loads_.size()) {
+      weigh = true;
     } else {
-      const auto mass = access.column<double>("mass");
       load_sources_.note(loads_.size(), uniform_source_);
       for (const std::uint32_t slot : uniform_parts_)
         if (mass.has(slot)) loads_.push_back({slot, 0, mass[slot] * uniform_g_, {}, Load::Force});
     }
   }
-  m.world->SetGravity(world_g);
   screen_loads(access, dt);
   m.left_out = 0;
   m.want_impulses = *impulse_demand_ > 0;
@@ -1051,13 +1057,24 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     // because the same load (its weight) is queued again; loads on a sleeper
     // are then given with wake = false, and Box2D drops them.
     for (auto& body : m.bodies) body.force = {0, 0}, body.torque = 0;
-    for (const LoadCommand& c : loads_)
+    auto sum_weights = [&] {
+      for (const std::uint32_t slot : uniform_parts_)
+        if (Impl::Body* b = body_of(slot, 0); b && mass.has(slot)) {
+          const Vec3 w = mass[slot] * uniform_g_;
+          b->force += b2Vec2(float(w.x), float(w.y));
+        }
+    };
+    for (std::size_t i = 0; i < loads_.size(); ++i) {
+      if (weigh && i == uniform_at_) sum_weights();
+      const LoadCommand& c = loads_[i];
       if (Impl::Body* b = body_of(c.slot, c.generation)) {
         if (c.kind == Load::Torque)
           b->torque += float(c.value.z);
         else
           b->force += b2Vec2(float(c.value.x), float(c.value.y));
       }
+    }
+    if (weigh && uniform_at_ == loads_.size()) sum_weights();
     for (const RatedLoad& r : rated_)
       if (Impl::Body* b = body_of(r.slot, r.generation))
         b->force += b2Vec2(float(r.force.x), float(r.force.y)), b->torque += float(r.torque.z);
@@ -1071,8 +1088,18 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
   }
   const bool wake = !config_.sleep;
+  auto apply_weights = [&] {
+    for (const std::uint32_t slot : uniform_parts_) {
+      const Impl::Part* part = part_for(slot, 0);
+      if (!part || !mass.has(slot)) continue;
+      const Vec3 w = mass[slot] * uniform_g_;
+      push(*part, m.bodies[part->body].b, b2Vec2(float(w.x * s), float(w.y * s)));
+    }
+  };
   for (int k = 0; k < n; ++k) {
-    for (const LoadCommand& c : loads_) {
+    for (std::size_t i = 0; i < loads_.size(); ++i) {
+      if (weigh && i == uniform_at_) apply_weights();
+      const LoadCommand& c = loads_[i];
       const Impl::Part* part = part_for(c.slot, c.generation);
       if (!part) continue;
       Impl::Body* b = &m.bodies[part->body];
@@ -1089,6 +1116,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
           break;
       }
     }
+    if (weigh && uniform_at_ == loads_.size()) apply_weights();
     const double tau = k * h;
     for (const RatedLoad& r : rated_) {
       const Impl::Part* part = part_for(r.slot, r.generation);
@@ -1134,7 +1162,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     const double angle = double(b->GetAngle()) + part.angle;
     const std::uint32_t slot = part.id.index;
     part.pos = {c.x / s, c.y / s, 0};
-    part.rot = Quat::from_angle_z(angle);
+    if (!(angle == part.rot_angle)) part.rot = Quat::from_angle_z(angle), part.rot_angle = angle;
     part.vel = {v.x / s, v.y / s, 0};
     part.ang = {0, 0, double(b->GetAngularVelocity())};
     position.set(slot, part.pos);
