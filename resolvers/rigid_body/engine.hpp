@@ -43,10 +43,10 @@ class RigidBodyEngine : public Resolver {
 
   /// Uniform gravity: the weight m g of every part in `parts` (the members
   /// of the `gravity` column, each with a mass), g the same for all, for the
-  /// next advance only (as a queued load). An engine with a world gravity of
-  /// its own (Box2D's) may take it whole, which saves a queued, screened and
-  /// applied force a body each step; it returns false when it cannot (then
-  /// the caller queues add_force(slot, m g) on each part, the default).
+  /// next advance only (as a queued load). An engine may take it whole
+  /// (Box2D's applies the weights itself, without a queued and screened
+  /// record a part); it returns false when it cannot (then the caller queues
+  /// add_force(slot, m g) on each part, the default).
   virtual bool add_uniform_gravity(Vec3 /*g*/, std::span<const std::uint32_t> /*parts*/) {
     return false;
   }
