@@ -688,6 +688,9 @@ bool Box2DEngine::add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> par
   if (!std::isfinite(in_plane) || !(std::abs(g.z) <= 1e-12 || std::abs(g.z) <= 1e-6 * in_plane))
     return false;
   if (dirty_ || !impl_->world) return false;  // the parts are not known yet
+  // One field taken a window: a second offer (another stage's gravity) comes
+  // as forces, and does not replace the first's parts.
+  if (uniform_) return false;
   uniform_parts_.assign(parts.begin(), parts.end());
   if (!uniform_covers_all()) return false;
   uniform_ = true;
