@@ -28,7 +28,11 @@
 // (whose ratio is the "overhead" section). Goal: <= 1.02.
 //
 //   build/bench/alloy_bench_engines [--quick] [--out DIR] [--docs FILE] [--no-progress]
-//                                   [--overhead-only]
+//                                   [--overhead-only | --pile-study]
+//
+// --overhead-only: the harness ratio alone (a few seconds). --pile-study: why
+// the Box2D pile sinks at 1/120 s (its settings varied, sink and sway over 2 s;
+// docs/performance.md).
 //
 // Writes docs/bench/engines.csv and the "engines" section of
 // docs/performance.md. Quick mode (ctest) runs small sizes and checks that
@@ -313,6 +317,48 @@ Point resting(const std::string& scene, const Layout& l, Engine e, double dt, do
   return p;
 }
 
+/// Why the resting pile moves on Box2D at a large step (`--pile-study`): the
+/// pile at 1/120 and 1/240 s under variations of rigid_body.box2d's
+/// settings, each printed with the RMS distance from rest, the mean sink (y)
+/// and the RMS sideways sway (x).
+void pile_study(const Layout& l) {
+  struct Variant {
+    const char* name;
+    std::vector<std::pair<const char*, double>> settings;
+  };
+  const Variant variants[] = {
+      {"defaults", {}},
+      {"position_iterations 3", {{"position_iterations", 3}}},
+      {"position_iterations 30", {{"position_iterations", 30}}},
+      {"velocity_iterations 8", {{"velocity_iterations", 8}}},
+      {"velocity_iterations 60", {{"velocity_iterations", 60}}},
+      {"substeps 2", {{"substeps", 2}}},
+      {"scale 5", {{"scale", 5}}},
+      {"scale 20", {{"scale", 20}}},
+      {"scale 20, position 30", {{"scale", 20}, {"position_iterations", 30}}}};
+  for (double dt : {1.0 / 120, 1.0 / 240})
+    for (const Variant& v : variants) {
+      WorldDef def = world_def(Engine::Box2D, dt);
+      for (const auto& [k, x] : v.settings) def.settings["rigid_body.box2d"].set(k, x);
+      Harness h(std::move(def));
+      const std::vector<ObjectId> ids = build(*h.world, l);
+      h.world->start();
+      double at = 0;
+      for (double t : {0.25, 0.5, 1.0, 2.0}) {
+        h.world->run(std::uint64_t(std::llround((t - at) / dt)));
+        at = t;
+        double sum = 0, sink = 0, sway = 0;
+        for (std::size_t i = 0; i < ids.size(); ++i) {
+          const Vec3 d = position(*h.world, ids[i]) - l.boxes[i].position;
+          sum += dot(d, d), sink += d.y, sway += d.x * d.x;
+        }
+        const double n = double(ids.size());
+        std::printf("pile 1/%.0f %-24s at %.2f s: RMS %.4g m, mean dy %.4g m, RMS dx %.4g m\n",
+                    1 / dt, v.name, t, std::sqrt(sum / n), sink / n, std::sqrt(sway / n));
+      }
+    }
+}
+
 /// The chain: `links` links, the last one's position after `seconds`.
 Point chain(int links, Engine e, double dt, double seconds, Vec3* end) {
   Harness h(world_def(e, dt));
@@ -390,7 +436,7 @@ const Point* cheapest_within(const std::vector<Point>& pts, const std::string& s
 
 int main(int argc, char** argv) {
   const bench::Options o =
-      bench::Options::parse(argc, argv, "alloy_bench_engines", {"--overhead-only"});
+      bench::Options::parse(argc, argv, "alloy_bench_engines", {"--overhead-only", "--pile-study"});
   const bool quick = o.quick;
   // Sizes: the issue's in full; small ones for CI.
   const Layout pile = quick ? pile_layout(10, 10) : pile_layout(50, 20);
@@ -427,8 +473,13 @@ int main(int argc, char** argv) {
     pts.push_back(p);
     progress.tick();
   };
+  if (o.flag("--pile-study")) {
+    pile_study(pile);
+    return 0;
+  }
   const Overhead oh = measure_overhead(pile, settle, rounds, per_round, progress);
-  std::printf("harness / raw Box2D: %.4f\n", oh.ratio);
+  std::printf("harness / raw Box2D: %.4f (goal <= 1.02: %s)\n", oh.ratio,
+              oh.ratio <= 1.02 ? "met" : "missed");
   if (o.flag("--overhead-only")) {
     // The harness ratio alone (a few seconds), for work on the harness: the
     // raw and harness CPU ms a step, printed; nothing written.
@@ -545,12 +596,21 @@ int main(int argc, char** argv) {
       oh.ratio <= 1.02 ? "met" : "missed", oh.drift);
   md += line;
   std::printf("\n%s", md.c_str());
-  std::printf("ratio harness/raw_box2d = %.4f (goal <= 1.02)\n", oh.ratio);
+  std::printf("ratio harness/raw_box2d = %.4f (goal <= 1.02: %s)\n", oh.ratio,
+              oh.ratio <= 1.02 ? "met" : "missed");
 
   // Checks: the box scenes run on both engines (a failed run is NaN) and
   // the resting pile stays within 2 cm of rest on both at 1/120 s and finer
   // (at 1/60 s ODE's sinks 3 cm) (Box2D lets each
   // contact sink by its linear slop, 0.5 mm at scale 10: 20 layers, 1 cm).
+  // Box2D's pile fails it at 1/120 s (2.6 cm at 0.5 s, all of it sinking:
+  // --pile-study): in its first quarter second each of a column's 20
+  // contacts compresses by about 2.3 mm, and Box2D's position solver, which
+  // stops once every contact is within three linear slops (1.5 mm), takes
+  // seconds to lift it back (1.3 cm at 2 s). Before session 15's skin fix
+  // the boxes stood 1 mm proud on every face, 2 mm a contact, which hid that
+  // sink (1.7 mm): the physics did not get worse. Two Box2D substeps at
+  // 1/120 s hold it within 6.3 mm (the setting `substeps`).
   // A kit scene that does not work on an engine is reported as "fails" in
   // the table, not checked here: the kit scenes on Box2D are issue 15's own
   // item, tested in tests/ (docs/box2d.md).

@@ -41,6 +41,16 @@ class RigidBodyEngine : public Resolver {
   virtual void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate,
                         Vec3 torque_rate) = 0;
 
+  /// Uniform gravity: the weight m g of every part in `parts` (the members
+  /// of the `gravity` column, each with a mass), g the same for all, for the
+  /// next advance only (as a queued load). An engine may take it whole
+  /// (Box2D's applies the weights itself, without a queued and screened
+  /// record a part); it returns false when it cannot (then the caller queues
+  /// add_force(slot, m g) on each part, the default).
+  virtual bool add_uniform_gravity(Vec3 /*g*/, std::span<const std::uint32_t> /*parts*/) {
+    return false;
+  }
+
   // --- in-place queueing, for bindings that write load records themselves ------
   /// A queued load as the queue holds it (add_force, add_force at a point,
   /// add_torque). The Lua stages' prelude writes these in place (its FFI

@@ -9,7 +9,20 @@ void RigidBodyFromGravity::apply(const WorldView& world) {
   }
   const auto gravity = world.column<Vec3>(gravity_);
   const auto mass = world.column<double>(mass_);
-  for (std::uint32_t s : gravity.members()) {
+  // One g for every member, each with a mass (gravity.uniform's field): the
+  // engine may take it as its world's gravity (add_uniform_gravity).
+  const auto members = gravity.members();
+  if (!members.empty()) {
+    const Vec3 g0 = gravity[members[0]];
+    bool uniform = true;
+    for (std::uint32_t s : members)
+      if (!(gravity[s] == g0) || !mass.has(s)) {
+        uniform = false;
+        break;
+      }
+    if (uniform && (g0 == Vec3{} || target_.add_uniform_gravity(g0, members))) return;
+  }
+  for (std::uint32_t s : members) {
     const Vec3 g = gravity[s];
     if (g == Vec3{} || !mass.has(s)) continue;
     target_.add_force(s, mass[s] * g);

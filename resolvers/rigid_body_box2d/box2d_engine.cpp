@@ -7,10 +7,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <numeric>
+#include <utility>
 
 #include "resolvers/rigid_body/properties.hpp"
+#include "runtime/stage_state.hpp"
 
 namespace alloy::box2d {
 
@@ -139,6 +142,9 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     // What we last wrote (to tell an edit from outside).
     Vec3 pos, vel, ang;
     Quat rot;
+    /// The angle `rot` was made from at the last write-back (NaN: none): a
+    /// part that has not turned since is not given a sine and cosine again.
+    double rot_angle = std::numeric_limits<double>::quiet_NaN();
   };
   struct Body {
     b2Body* b = nullptr;
@@ -148,6 +154,8 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     float torque = 0;
     b2Vec2 last_force{0, 0};
     float last_torque = 0;
+    bool written_asleep = false;  // asleep at the last write-back
+    bool still = false;           // and at this one: nothing to write
   };
   struct Hinge {
     ObjectId id;
@@ -177,6 +185,14 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   };
   std::vector<ContactKey> contact_keys, last_keys;  // this step's, and the last sorted ones
   std::vector<std::uint32_t> contact_order;         // into contact_keys, by (a, b, seq)
+  /// A contact began or ended touching since the keys were taken (Box2D's
+  /// BeginContact and EndContact; set by a build): while it is false, the
+  /// touching contacts are those of the keys, in the same list order (Box2D
+  /// prepends the contacts it makes, and a contact it destroys that touched
+  /// ends first), so the keys stand and the list is not walked again.
+  bool touch_changed = true;
+  void BeginContact(b2Contact*) override { touch_changed = true; }
+  void EndContact(b2Contact*) override { touch_changed = true; }
   /// Versions of position, orientation, velocity and angular_velocity after
   /// the last write-back (none after a build: the parts are compared then).
   std::array<std::uint64_t, 4> written_versions{~0ull, ~0ull, ~0ull, ~0ull};
@@ -396,9 +412,9 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   }
 
   void PreSolve(b2Contact* c, const b2Manifold* old) override {
-    const Part& pa = part_of(c->GetFixtureA());
-    const Part& pb = part_of(c->GetFixtureB());
-    if (old->pointCount == 0) {
+    if (old->pointCount == 0) {  // Box2D calls this for every touching contact a step
+      const Part& pa = part_of(c->GetFixtureA());
+      const Part& pb = part_of(c->GetFixtureB());
       // The same mixing as rigid_body_from_collisions for ODE, set when the
       // contact begins to touch: Box2D keeps a contact's values until it is
       // destroyed, and a change of the materials rebuilds the world.
@@ -453,15 +469,18 @@ const char* const kDefining[] = {"shape",      "size",           "radius",      
 }
 
 void Box2DEngine::note_versions(const WorldView& v) {
+  // The ids are looked up once (by name, a hash a property): a world's
+  // properties keep their ids.
+  if (defining_.empty())
+    for (const char* n : kDefining) defining_.push_back(v.property(n));
   versions_.clear();
-  for (const char* n : kDefining) versions_.push_back(v.store().column(v.property(n)).version());
+  for (const PropertyId p : defining_) versions_.push_back(v.store().column(p).version());
 }
 
 bool Box2DEngine::edited_since_write(const WorldView& v) const {
-  std::size_t i = 0;
-  for (const char* n : kDefining)
-    if (i >= versions_.size() || v.store().column(v.property(n)).version() != versions_[i++])
-      return true;
+  if (versions_.size() != defining_.size()) return true;
+  for (std::size_t i = 0; i < defining_.size(); ++i)
+    if (v.store().column(defining_[i]).version() != versions_[i]) return true;
   return false;
 }
 
@@ -483,6 +502,8 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world->SetContinuousPhysics(false);
   m.world->SetContactListener(&m);
   m.world->SetContactFilter(&m);
+  m.touch_changed = true;  // the keys point into the world just destroyed
+  m.contact_keys.clear(), m.last_keys.clear(), m.contact_order.clear();
   m.parts.clear();
   m.dormant.clear();
   m.written_versions.fill(~0ull);
@@ -821,7 +842,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     part.vel = velocity.value_or(slot, {});
     part.ang = angular.value_or(slot, {});
   }
-  pairs_.clear(), points_.clear(), impulses_.clear();
+  impulses_.clear();
   dirty_ = false;
   note_versions(access);
   ++state_version_;
@@ -853,6 +874,35 @@ void Box2DEngine::add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_ra
   rated_sources_.note(rated_.size(), world_.running_stage());
   rated_.push_back({part.index, part.generation, force, torque, force_rate, torque_rate});
 }
+bool Box2DEngine::add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> parts) {
+  // Along z Box2D gives nothing: the per-part forces report it (load_dropped).
+  const double in_plane = std::hypot(g.x, g.y);
+  if (!std::isfinite(in_plane) || !(std::abs(g.z) <= 1e-12 || std::abs(g.z) <= 1e-6 * in_plane))
+    return false;
+  if (dirty_ || !impl_->world) return false;  // the parts are not known yet
+  // One field taken a window: a second offer (another stage's gravity) comes
+  // as forces, and does not replace the first's parts.
+  if (uniform_) return false;
+  uniform_parts_.assign(parts.begin(), parts.end());
+  if (!uniform_covers_all()) return false;
+  uniform_ = true;
+  uniform_g_ = g;
+  uniform_at_ = loads_.size();
+  uniform_source_ = world_.running_stage();
+  return true;
+}
+
+bool Box2DEngine::uniform_covers_all() const {
+  const Impl& m = *impl_;
+  std::vector<char> covered(m.parts.size(), 0);
+  for (const std::uint32_t slot : uniform_parts_)
+    if (slot < m.part_of_slot.size() && m.part_of_slot[slot] >= 0)
+      covered[std::size_t(m.part_of_slot[slot])] = 1;
+  for (std::size_t i = 0; i < m.parts.size(); ++i)
+    if (!covered[i] && m.bodies[m.parts[i].body].dynamic) return false;
+  return true;
+}
+
 std::span<rigid::RigidBodyEngine::LoadCommand> Box2DEngine::open_loads(std::size_t n) {
   if (open_ == ~std::size_t(0)) {
     open_ = loads_.size();
@@ -1050,6 +1100,34 @@ void Box2DEngine::report_left_out(ResolverAccess& access) {
   if (limited) std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
 }
 
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+//
+// The bytes: a version and whether the last advance left contact pairs out.
+// Without it the first advance after a restore, which asks Box2D's filter
+// again for every overlapping pair of the rebuilt world, reported a heap's
+// `contact_limit` a second time.
+
+namespace {
+constexpr std::uint32_t kStateVersion = 1;
+}
+
+bool Box2DEngine::save_state(StateWriter& out) const {
+  out.put(kStateVersion);
+  out.put(std::uint8_t(limited_before_));
+  return true;
+}
+
+void Box2DEngine::restore_state(StateReader& in) {
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+  const auto limited = in.get<std::uint8_t>();
+  if (limited > 1)
+    throw InputError("the saved state of stage '" + in.stage() +
+                     "' is damaged: a contact-limit flag of " + std::to_string(limited));
+  limited_before_ = limited != 0;
+}
+
 // --- the step -------------------------------------------------------------------------
 
 void Box2DEngine::advance(ResolverAccess& access, double dt) {
@@ -1071,11 +1149,14 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   // Only looked for when one of the four columns was written since our write
   // (every write bumps its column's version): a world where only this engine
   // moves things skips the comparison of every part.
-  auto motion_versions = [&] {
-    std::array<std::uint64_t, 4> v{};
+  if (motion_[0] == kNoProperty) {
     std::size_t i = 0;
     for (const char* n : {"position", "orientation", "velocity", "angular_velocity"})
-      v[i++] = access.store().column(access.property(n)).version();
+      motion_[i++] = access.property(n);
+  }
+  auto motion_versions = [&] {
+    std::array<std::uint64_t, 4> v{};
+    for (std::size_t i = 0; i < 4; ++i) v[i] = access.store().column(motion_[i]).version();
     return v;
   };
   const bool maybe_edited = motion_versions() != m.written_versions;
@@ -1118,6 +1199,23 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   if (limited_before_) m.settle_crowds();
   if (!m.dormant.empty()) m.wake_uncrowded();
 
+  // Uniform gravity: each part's weight applied where the queue had it
+  // (uniform_at_), as the force rigid_body_from_gravity would have queued,
+  // so the bits are those of the queued forces; unless this advance's bodies
+  // are not all in the field (a rebuild above) or g is beyond what the screen
+  // lets a step give: then queued as those forces, and screened.
+  bool weigh = false;
+  const auto mass = access.column<double>("mass");
+  if (std::exchange(uniform_, false)) {
+    const double gn = std::hypot(uniform_g_.x, uniform_g_.y);
+    if (gn * dt <= rigid::limits::speed && uniform_covers_all() && uniform_at_ <= loads_.size()) {
+      weigh = true;
+    } else {
+      load_sources_.note(loads_.size(), uniform_source_);
+      for (const std::uint32_t slot : uniform_parts_)
+        if (mass.has(slot)) loads_.push_back({slot, 0, mass[slot] * uniform_g_, {}, Load::Force});
+    }
+  }
   screen_loads(access, dt);
   m.left_out = 0;
   m.want_impulses = *impulse_demand_ > 0;
@@ -1191,13 +1289,24 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     // because the same load (its weight) is queued again; loads on a sleeper
     // are then given with wake = false, and Box2D drops them.
     for (auto& body : m.bodies) body.force = {0, 0}, body.torque = 0;
-    for (const LoadCommand& c : loads_)
+    auto sum_weights = [&] {
+      for (const std::uint32_t slot : uniform_parts_)
+        if (Impl::Body* b = body_of(slot, 0); b && mass.has(slot)) {
+          const Vec3 w = mass[slot] * uniform_g_;
+          b->force += b2Vec2(float(w.x), float(w.y));
+        }
+    };
+    for (std::size_t i = 0; i < loads_.size(); ++i) {
+      if (weigh && i == uniform_at_) sum_weights();
+      const LoadCommand& c = loads_[i];
       if (Impl::Body* b = body_of(c.slot, c.generation)) {
         if (c.kind == Load::Torque)
           b->torque += float(c.value.z);
         else
           b->force += b2Vec2(float(c.value.x), float(c.value.y));
       }
+    }
+    if (weigh && uniform_at_ == loads_.size()) sum_weights();
     for (const RatedLoad& r : rated_)
       if (Impl::Body* b = body_of(r.slot, r.generation))
         b->force += b2Vec2(float(r.force.x), float(r.force.y)), b->torque += float(r.torque.z);
@@ -1211,8 +1320,18 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
   }
   const bool wake = !config_.sleep;
+  auto apply_weights = [&] {
+    for (const std::uint32_t slot : uniform_parts_) {
+      const Impl::Part* part = part_for(slot, 0);
+      if (!part || !mass.has(slot)) continue;
+      const Vec3 w = mass[slot] * uniform_g_;
+      push(*part, m.bodies[part->body].b, b2Vec2(float(w.x * s), float(w.y * s)));
+    }
+  };
   for (int k = 0; k < n; ++k) {
-    for (const LoadCommand& c : loads_) {
+    for (std::size_t i = 0; i < loads_.size(); ++i) {
+      if (weigh && i == uniform_at_) apply_weights();
+      const LoadCommand& c = loads_[i];
       const Impl::Part* part = part_for(c.slot, c.generation);
       if (!part) continue;
       Impl::Body* b = &m.bodies[part->body];
@@ -1229,6 +1348,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
           break;
       }
     }
+    if (weigh && uniform_at_ == loads_.size()) apply_weights();
     const double tau = k * h;
     for (const RatedLoad& r : rated_) {
       const Impl::Part* part = part_for(r.slot, r.generation);
@@ -1258,17 +1378,25 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   report_left_out(access);
   report_waiting(access);
 
-  // Write the parts back.
+  // Write the parts back: those of moving bodies, but not of a body that
+  // was asleep at the last write-back too (Box2D has not moved it since:
+  // what it would write is what the columns hold; the write at which it fell
+  // asleep is made, with its velocity zeroed by Box2D).
+  for (Impl::Body& body : m.bodies) {
+    const bool asleep = body.dynamic && !body.b->IsAwake();
+    body.still = asleep && body.written_asleep;
+    body.written_asleep = asleep;
+  }
   for (Impl::Part& part : m.parts) {
     const Impl::Body& body = m.bodies[part.body];
-    if (!body.dynamic) continue;
+    if (!body.dynamic || body.still) continue;
     const b2Body* b = body.b;
     const b2Vec2 c = b->GetWorldPoint(part.local);
     const b2Vec2 v = b->GetLinearVelocityFromWorldPoint(c);
     const double angle = double(b->GetAngle()) + part.angle;
     const std::uint32_t slot = part.id.index;
     part.pos = {c.x / s, c.y / s, 0};
-    part.rot = Quat::from_angle_z(angle);
+    if (!(angle == part.rot_angle)) part.rot = Quat::from_angle_z(angle), part.rot_angle = angle;
     part.vel = {v.x / s, v.y / s, 0};
     part.ang = {0, 0, double(b->GetAngularVelocity())};
     position.set(slot, part.pos);
@@ -1288,17 +1416,20 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   // their points, and a step whose touching contacts are those of the step
   // before, in the same order (a pile at rest), reuses that step's order.
   auto& keys = m.contact_keys;
-  keys.clear();
-  for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
-    if (!c->IsTouching() || !c->IsEnabled()) continue;
-    const ObjectId a = m.part_of(c->GetFixtureA()).id, b = m.part_of(c->GetFixtureB()).id;
-    keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size())});
-  }
   auto& order = m.contact_order;
-  if (keys.size() != m.last_keys.size() ||
-      !std::equal(keys.begin(), keys.end(), m.last_keys.begin(), [](const auto& x, const auto& y) {
-        return x.c == y.c && x.a == y.a && x.b == y.b;
-      })) {
+  if (m.touch_changed) {
+    keys.clear();
+    for (b2Contact* c = m.world->GetContactList(); c; c = c->GetNext()) {
+      if (!c->IsTouching() || !c->IsEnabled()) continue;
+      const ObjectId a = m.part_of(c->GetFixtureA()).id, b = m.part_of(c->GetFixtureB()).id;
+      keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size())});
+    }
+  }
+  if (m.touch_changed &&
+      (keys.size() != m.last_keys.size() ||
+       !std::equal(keys.begin(), keys.end(), m.last_keys.begin(), [](const auto& x, const auto& y) {
+         return x.c == y.c && x.a == y.a && x.b == y.b;
+       }))) {
     order.resize(keys.size());
     std::iota(order.begin(), order.end(), 0u);
     std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
@@ -1307,44 +1438,13 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     });
     m.last_keys = keys;
   }
-  // Pairs and points are written in that order directly; a pair's approach
-  // speed is the largest at its points now or at its beginning (PreSolve's).
+  m.touch_changed = false;
+  // The pairs' points are made when the contact set asks (touching_into),
+  // straight into its lists: the set is updated after every advance that
+  // changed something, and nothing touches Box2D's world in between.
   if (m.pre_speeds.size() > 1)
     std::sort(m.pre_speeds.begin(), m.pre_speeds.end(),
               [](const auto& x, const auto& y) { return pair_less(x.a, x.b, y.a, y.b); });
-  pairs_.clear(), points_.clear();
-  std::size_t ps = 0;
-  for (const std::uint32_t k : order) {
-    const Impl::ContactKey& key = keys[k];
-    b2Contact* c = key.c;
-    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
-    b2WorldManifold wm;
-    c->GetWorldManifold(&wm);
-    const int np = c->GetManifold()->pointCount;
-    const double speed = m.approach(c, wm, np, a_is_A);
-    if (pairs_.empty() || pairs_.back().a != key.a || pairs_.back().b != key.b) {
-      Box2DPair& p = pairs_.emplace_back();
-      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points_.size());
-      while (ps < m.pre_speeds.size() &&
-             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
-        ++ps;
-      for (std::size_t q = ps;
-           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
-        p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
-    }
-    Box2DPair& p = pairs_.back();
-    // ContactPoint's normal points from b towards a; Box2D's from A to B.
-    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
-    for (int i = 0; i < np; ++i) {
-      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
-      points_.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
-                                     .normal = {nn.x, nn.y, 0},
-                                     .depth = depth});
-      ++p.count;
-      p.depth = std::max(p.depth, depth);
-      p.normal_speed = std::max(p.normal_speed, speed);
-    }
-  }
   impulses_.clear();
   impulses_computed_ = m.want_impulses;
   if (m.want_impulses) {
@@ -1363,6 +1463,48 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   note_versions(access);
   m.written_versions = motion_versions();
   ++state_version_;
+}
+
+void Box2DEngine::touching_into(std::vector<ContactPair>& pairs,
+                                std::vector<ContactPoint>& points) const {
+  // Pairs and points are written in the order advance() left (by pair, then
+  // Box2D's list order); a pair's approach speed is the largest at its
+  // points now or at its beginning (PreSolve's).
+  Impl& m = *impl_;
+  const double s = m.s;
+  const auto& keys = m.contact_keys;
+  std::size_t ps = 0;
+  for (const std::uint32_t k : m.contact_order) {
+    const Impl::ContactKey& key = keys[k];
+    b2Contact* c = key.c;
+    const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);
+    const int np = c->GetManifold()->pointCount;
+    const double speed = m.approach(c, wm, np, a_is_A);
+    if (pairs.empty() || pairs.back().a != key.a || pairs.back().b != key.b) {
+      ContactPair& p = pairs.emplace_back();
+      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points.size());
+      while (ps < m.pre_speeds.size() &&
+             pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
+        ++ps;
+      for (std::size_t q = ps;
+           q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
+        p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
+    }
+    ContactPair& p = pairs.back();
+    // ContactPoint's normal points from b towards a; Box2D's from A to B.
+    const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
+    for (int i = 0; i < np; ++i) {
+      const double depth = std::max(0.0, -double(wm.separations[i]) / s);
+      points.push_back(ContactPoint{.position = {wm.points[i].x / s, wm.points[i].y / s, 0},
+                                    .normal = {nn.x, nn.y, 0},
+                                    .depth = depth});
+      ++p.count;
+      p.depth = std::max(p.depth, depth);
+      p.normal_speed = std::max(p.normal_speed, speed);
+    }
+  }
 }
 
 std::size_t Box2DEngine::body_count() const {
@@ -1402,14 +1544,7 @@ Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : 
 
 void Box2DContacts::update(const WorldView& world) {
   begin_update();
-  const auto pts = engine_.points();
-  points_.assign(pts.begin(), pts.end());
-  for (const Box2DPair& p : engine_.pairs()) {
-    ContactPair& c = current_.emplace_back();
-    c.a = p.a, c.b = p.b, c.first = p.first, c.count = p.count;
-    c.normal_speed = p.normal_speed;
-    c.depth = p.depth;
-  }
+  engine_.touching_into(current_, points_);
   publish(world, engine_.impulses(), engine_.impulses_computed(), world.step());
 }
 

@@ -27,6 +27,7 @@
 // docs/box2d.md has the measurements behind the default.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -63,14 +64,6 @@ struct Box2DConfig {
   static Box2DConfig from(const PluginSettings& settings);
 };
 
-/// One pair's contacts as the last advance left them (for the contact set).
-struct Box2DPair {
-  ObjectId a, b;                       ///< a < b
-  std::uint32_t first = 0, count = 0;  ///< into points()
-  double normal_speed = 0;             ///< largest approach speed, m/s
-  double depth = 0;                    ///< deepest penetration, m
-};
-
 class Box2DEngine final : public rigid::RigidBodyEngine {
  public:
   Box2DEngine(const World& world, Box2DConfig config);
@@ -80,6 +73,12 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void advance(ResolverAccess& access, double dt) override;
   void on_structure_changed(const WorldView&) override { dirty_ = true; }
   std::uint64_t state_version() const override { return state_version_; }
+  /// Box2D's world is rebuilt from the properties at a restore (its warm
+  /// starts are not saved: docs/saves.md); what is saved is whether the last
+  /// advance left contact pairs out, so that a restored heap does not report
+  /// `contact_limit` again as if it had just begun.
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
   void add_force(ObjectId part, Vec3 force) override;
   void add_force(ObjectId part, Vec3 force, Vec3 point) override;
@@ -87,6 +86,18 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void add_torque(ObjectId part, Vec3 torque) override;
   /// Substep k of the window applies value + rate * k * dt / substeps.
   void add_load(ObjectId part, Vec3 force, Vec3 torque, Vec3 force_rate, Vec3 torque_rate) override;
+  /// Taken whole when every part of every moving body is among `parts` and g
+  /// lies in the plane (else false: the weights come as forces, screened and
+  /// reported as any load). The advance then applies each part's weight m g
+  /// at the place in the queue where it was given, the same float operations
+  /// as the queued forces (bit for bit), without queueing or screening them
+  /// one by one (the screen checks |g| dt once). Not Box2D's world gravity:
+  /// Box2D forms m g in single precision and adds it after the other forces,
+  /// which changed the doorbell's 34 strikes to 3 s to 33 (rounding alone).
+  /// Checked again at the advance against the bodies it steps (a rebuild may
+  /// bring parts outside the field): if they are not all covered then, the
+  /// weights are queued as forces there.
+  bool add_uniform_gravity(Vec3 g, std::span<const std::uint32_t> parts) override;
   std::span<LoadCommand> open_loads(std::size_t n) override;
   void close_loads(std::size_t used) override;
 
@@ -96,9 +107,10 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   std::size_t awake_count() const override;
 
   // --- published for collisions.box2d ---------------------------------------------
-  /// Pairs touching after the last advance, sorted by (a, b), and their points.
-  std::span<const Box2DPair> pairs() const { return pairs_; }
-  std::span<const ContactPoint> points() const { return points_; }
+  /// Appends the pairs touching after the last advance, sorted by (a, b), to
+  /// `pairs`, and their points to `points` (ContactSet's lists; the pairs'
+  /// first and count index `points`). Valid from one advance to the next.
+  void touching_into(std::vector<ContactPair>& pairs, std::vector<ContactPoint>& points) const;
   /// Impulses of the last advance per pair, sorted by (a, b); empty unless
   /// impulses_computed().
   std::span<const PairImpulse> impulses() const { return impulses_; }
@@ -146,18 +158,27 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
     Vec3 force, torque, force_rate, torque_rate;
   };
   std::vector<RatedLoad> rated_;
+  // The uniform gravity of the next advance (add_uniform_gravity): g, the
+  // parts it weighs, and the stage that gave it (for a refusal's source).
+  bool uniform_ = false;
+  Vec3 uniform_g_;
+  std::size_t uniform_at_ = 0;  // where in loads_ the weights were given
+  std::vector<std::uint32_t> uniform_parts_;
+  const std::string* uniform_source_ = nullptr;
+  /// Whether every part of every moving body is in uniform_parts_.
+  bool uniform_covers_all() const;
   rigid::SourceMarks load_sources_, rated_sources_;  // of loads_ and rated_
   rigid::LoadScreen screen_;
   /// (stage, kind) pairs whose out-of-plane loads were reported.
   std::vector<std::pair<std::string, std::string>> dropped_reported_;
   bool limited_before_ = false;  // the last advance left contact pairs out
-  std::vector<Box2DPair> pairs_;
-  std::vector<ContactPoint> points_;
   std::vector<PairImpulse> impulses_;
   std::shared_ptr<std::size_t> impulse_demand_ = std::make_shared<std::size_t>(0);
   bool impulses_computed_ = false;
   bool dirty_ = true;
   std::vector<std::uint64_t> versions_;  // of the columns read, after our last write
+  std::vector<PropertyId> defining_;     // those columns (kDefining), looked up once
+  std::array<PropertyId, 4> motion_{kNoProperty, kNoProperty, kNoProperty, kNoProperty};
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
 };
