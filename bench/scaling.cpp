@@ -825,17 +825,14 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
             pm(1e3 * big.tree <= 10) + ".\n";
       md += "- the FMM's summation alone at most 10 ms: " + fmt(1e3 * big.fmm) + " ms (" +
             fmt(big.fmm / big.prev_fmm, 3) + " of session 16's paths, " +
-            fmt(big.fmm / big.tree, 3) +
-            " of the tree's time, " + fmt(big.fmm / big.direct, 3) + " of the direct sum's), " +
-            pm(1e3 * big.fmm <= 10) + "; its RMS error " + fmt(big.fmm_error) +
-            " (random; see the packed block above), " + pm(big.fmm_error <= 1e-3) +
-            "; crossover with the direct sum " +
-            cross_text(cross_fmm) + ", " +
-            pm(std::isfinite(cross_fmm) && cross_fmm <= 500) + ".\n";
+            fmt(big.fmm / big.tree, 3) + " of the tree's time, " + fmt(big.fmm / big.direct, 3) +
+            " of the direct sum's), " + pm(1e3 * big.fmm <= 10) + "; its RMS error " +
+            fmt(big.fmm_error) + " (random; see the packed block above), " +
+            pm(big.fmm_error <= 1e-3) + "; crossover with the direct sum " + cross_text(cross_fmm) +
+            ", " + pm(std::isfinite(cross_fmm) && cross_fmm <= 500) + ".\n";
       md += "- RMS relative force error at most 1e-3: " + fmt(big.error) + ", " +
             pm(big.error <= 1e-3) + " (previous " + fmt(big.prev_error) + ").\n";
-      md += "- crossover with the direct sum at or below 500 magnets: " +
-            cross_text(cross) + ", " +
+      md += "- crossover with the direct sum at or below 500 magnets: " + cross_text(cross) + ", " +
             pm(std::isfinite(cross) && cross <= 500) + ".\n";
       const double rate = 4.0 * big.n * big.n / big.direct,
                    prev_rate = 4.0 * big.n * big.n / big.prev_direct;
