@@ -99,6 +99,12 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
   mutual_near_ = options.mutual_near;
   single_near_ = options.single_near && softening > 0;
   make_tables(std::clamp(options.order, 1, kMaxFmmOrder));
+  reused_ = options.reuse && try_reuse(sources);
+  if (reused_) {
+    profile_.upward += seconds_now() - t0;
+    return;
+  }
+  lists_valid_ = false;
   nodes_.clear();
   atoms_.clear();
   const auto n = std::uint32_t(sources.size());
@@ -171,21 +177,56 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
     sg_[t] = s.group == kNoGroup ? -1.0 : double(s.group);
     tg_[t] = s.group == kNoGroup ? -2.0 : double(s.group);
   }
-  if (single_near_) {
-    // Groups as 32-bit integers for the float kernels; a group number that
-    // does not fit leaves the near field in double.
-    sgi_.resize(n), tgi_.resize(n);
-    for (std::uint32_t t = 0; t < n && single_near_; ++t) {
-      const std::uint32_t g = src_[t].group;
-      if (g != kNoGroup && g > 0x7fffffffu) single_near_ = false;
-      sgi_[t] = g == kNoGroup ? -1 : std::int32_t(g);
-      tgi_[t] = g == kNoGroup ? -2 : std::int32_t(g);
-    }
-  }
+  integer_groups();
   const double t1 = seconds_now();
   upward();
+  built_leaf_ = leaf_size_, built_eps2_ = eps2_;
+  built_radius_.resize(nodes_.size()), built_empty_.resize(nodes_.size());
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    built_radius_[k] = nodes_[k].radius, built_empty_[k] = nodes_[k].empty;
+  built_root_radius_ = nodes_.empty() ? 0 : nodes_[0].radius;
   profile_.tree += t1 - t0;
   profile_.upward += seconds_now() - t1;
+}
+
+// Groups as 32-bit integers for the float kernels; a group number that does
+// not fit leaves the near field in double.
+void Fmm::integer_groups() {
+  if (!single_near_) return;
+  const std::size_t n = src_.size();
+  sgi_.resize(n), tgi_.resize(n);
+  for (std::size_t t = 0; t < n && single_near_; ++t) {
+    const std::uint32_t g = src_[t].group;
+    if (g != kNoGroup && g > 0x7fffffffu) single_near_ = false;
+    sgi_[t] = g == kNoGroup ? -1 : std::int32_t(g);
+    tgi_[t] = g == kNoGroup ? -2 : std::int32_t(g);
+  }
+}
+
+// FmmOptions::reuse: the same sources (count, groups, in the order given)
+// under the same leaves and softening as the last full build: refresh the
+// sources in tree order and the upward pass, keep the cells. False (for a
+// full build) when a cell grew past 1.5 times its radius then, or a cell's
+// emptiness changed (the walk skips pairs of empty cells).
+bool Fmm::try_reuse(std::span<const Source> sources) {
+  const std::size_t n = sources.size();
+  if (nodes_.empty() || n != src_.size() || built_leaf_ != leaf_size_ || built_eps2_ != eps2_)
+    return false;
+  for (std::size_t t = 0; t < n; ++t)
+    if (sources[order_of_[t]].group != src_[t].group) return false;
+  for (std::size_t t = 0; t < n; ++t) {
+    const Source& s = sources[order_of_[t]];
+    src_[t] = s;
+    sx_[t] = s.position.x, sy_[t] = s.position.y, sz_[t] = s.position.z, sq_[t] = s.strength;
+  }
+  integer_groups();
+  upward();
+  const double slack = 1e-3 * built_root_radius_;
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    if (nodes_[k].radius > 1.5 * built_radius_[k] + slack ||
+        bool(built_empty_[k]) != nodes_[k].empty)
+      return false;
+  return true;
 }
 
 // Splits node `index` (its begin/end are atom positions) into its non-empty
@@ -938,10 +979,31 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
       mutual_near_ && direct_accumulate_mutual({}, nullptr, {}, nullptr, nullptr, nullptr, 0);
   const double theta2 = theta_ * theta_;
   const std::uint64_t direct_pairs = std::uint64_t(leaf_size_) * leaf_size_;
+  // The previous lists stand while the cells are the same ones (a reused
+  // build): pairs summed directly or split stay exact whatever the cells'
+  // new radii, and a listed translation that no longer meets the criterion
+  // is walked again from that pair (split until it does, or summed directly).
+  lists_reused_ = reused_ && lists_valid_ && lists_theta_ == theta_ && lists_mutual_ == mutual;
   stack_.clear();
-  near_pairs_.clear();
-  m2l_pairs_.clear();
-  stack_.emplace_back(0, 0);
+  if (lists_reused_) {
+    std::size_t kept = 0;
+    for (const auto& pr : m2l_pairs_) {
+      const Node& A = nodes_[std::size_t(pr.first)];
+      const Node& B = nodes_[std::size_t(pr.second)];
+      const Vec3 gap = A.centre - B.centre;
+      const double reach = A.radius + B.radius;
+      if (reach * reach < theta2 * dot(gap, gap))
+        m2l_pairs_[kept++] = pr;
+      else
+        stack_.push_back(pr);
+    }
+    m2l_pairs_.resize(kept);
+  } else {
+    near_pairs_.clear();
+    m2l_pairs_.clear();
+    stack_.emplace_back(0, 0);
+    lists_valid_ = true, lists_theta_ = theta_, lists_mutual_ = mutual;
+  }
   while (!stack_.empty()) {
     const auto [a, b] = stack_.back();
     stack_.pop_back();

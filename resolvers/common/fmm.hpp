@@ -69,6 +69,17 @@ struct FmmOptions {
   /// the sums' about 1e-6, far under the expansions' (issue 16's 1e-3). Off:
   /// double precision everywhere (no softening: always double).
   bool single_near = false;
+  /// Keep the cells and the walk's lists of the previous build when the
+  /// sources are the same ones (count, groups, which are zero) and the
+  /// options the same: build() then only refreshes the positions, centres,
+  /// radii and moments, and evaluate skips the walk while every listed
+  /// translation still meets the criterion with the new radii (else it walks
+  /// afresh). No cell may have grown past 1.5 times its radius at the last
+  /// full build (else a full build). The bound holds either way; only the
+  /// cells' shapes age, and the result depends on the history of builds, not
+  /// only on the sources: off unless asked for (issue 16: "reuse of the tree
+  /// between steps when bodies move little").
+  bool reuse = false;
 };
 
 /// FmmOptions::single_near applies to a leaf whose near cells (itself
@@ -107,6 +118,10 @@ class Fmm {
   std::uint64_t direct_interactions() const { return p2p_; }
   /// Of those, the ones summed in single precision (FmmOptions::single_near).
   std::uint64_t single_interactions() const { return single_pairs_; }
+  /// Whether the last build() kept the previous cells (FmmOptions::reuse),
+  /// and whether the last evaluation kept the previous walk's lists.
+  bool reused() const { return reused_; }
+  bool lists_reused() const { return lists_reused_; }
   /// Time by phase over the calls so far.
   const FmmProfile& profile() const { return profile_; }
 
@@ -134,6 +149,8 @@ class Fmm {
   void near_field(const Node& leaf, std::span<const std::int32_t> near);
   void near_field_mutual(std::int32_t k, std::span<const std::int32_t> near);
   bool near_field_single(std::int32_t k, std::span<const std::int32_t> near);
+  bool try_reuse(std::span<const Source> sources);
+  void integer_groups();
 
   double eps2_ = 0, theta_ = 0.5;
   int order_ = 0;
@@ -184,6 +201,13 @@ class Fmm {
   std::vector<std::int32_t> nfg_;             ///< their groups
   std::vector<float> gfx_, gfy_, gfz_;        ///< their mutual sums, single
   std::uint64_t single_pairs_ = 0;
+  // Reuse (FmmOptions::reuse): the settings of the last full build, each
+  // cell's radius then, and the settings the walk's lists were made with.
+  bool reused_ = false, lists_reused_ = false, lists_valid_ = false, lists_mutual_ = false;
+  std::uint32_t built_leaf_ = 0;
+  double built_eps2_ = -1, lists_theta_ = 0, built_root_radius_ = 0;
+  std::vector<double> built_radius_;
+  std::vector<char> built_empty_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  ///< gathered source ranges
   std::vector<double> gx_, gy_, gz_;                           ///< their mutual sums
   std::vector<Vec3> centres_;                   ///< node centres, for the batched M2L

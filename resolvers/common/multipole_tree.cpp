@@ -82,7 +82,8 @@ void Tree::build(std::span<const Source> sources, double softening, TreeOptions 
                 {.theta = options.theta,
                  .order = options.fmm_order,
                  .leaf_size = options.leaf_size,
-                 .single_near = options.fmm_single_near});
+                 .single_near = options.fmm_single_near,
+                 .reuse = options.reuse});
     // evaluate() sums directly over these; the cells are left as they were
     // but never used (the next Barnes-Hut build cannot refit them).
     sources_.assign(sources.begin(), sources.end());

@@ -71,7 +71,8 @@ struct TreeOptions {
   /// 0: the Barnes-Hut walk above. From 1: build() builds the fast multipole
   /// method of fmm.hpp instead, with expansions of this order, `theta` as its
   /// separation parameter and `leaf_size` as its leaves' size, and
-  /// evaluate_at_sources() runs it (reuse is then ignored; evaluate() sums
+  /// evaluate_at_sources() runs it (reuse then keeps the FMM's cells and
+  /// lists, FmmOptions::reuse; evaluate() sums
   /// directly, exactly).
   int fmm_order = 0;
   /// With fmm_order: the FMM's near field in single precision where the

@@ -441,6 +441,59 @@ TEST(Fmm, SingleKernelsMatchTheScalarReference) {
   }
 }
 
+TEST(Fmm, ReuseKeepsTheCellsAndListsWhileTheMagnetsMoveLittle) {
+  // FmmOptions::reuse: the same positions again give the same bits, lists
+  // and all; magnets moved 2 mm keep the cells (and, mostly, the lists) and
+  // stay within the bound against the direct sum at their new places (the
+  // translations that no longer meet the criterion walked again); a
+  // change of groups, or a move that swells the cells, builds afresh.
+  const Magnets m = random_magnets(1500, 51);
+  const FmmOptions o{.theta = magnetism::kFmmTheta,
+                     .order = magnetism::kFmmOrder,
+                     .leaf_size = 64,
+                     .single_near = true,
+                     .reuse = true};
+  Fmm f;
+  f.build(m.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+  std::vector<Vec3> first(m.s.size()), again(m.s.size());
+  f.evaluate_at_sources(first);
+  f.build(m.s, 0.005, o);
+  EXPECT_TRUE(f.reused());
+  f.evaluate_at_sources(again);
+  EXPECT_TRUE(f.lists_reused());
+  for (std::size_t i = 0; i < first.size(); ++i) ASSERT_EQ(first[i], again[i]) << i;
+
+  std::mt19937_64 rng(53);
+  Magnets moved = m;
+  std::vector<Vec3> shift(m.centre.size());
+  for (Vec3& v : shift) v = layouts::random_direction(rng) * 0.002;
+  for (Source& s : moved.s) s.position += shift[s.group];
+  f.build(moved.s, 0.005, o);
+  EXPECT_TRUE(f.reused());
+  std::vector<Vec3> out(m.s.size());
+  f.evaluate_at_sources(out);
+  const double e = rms_relative(net(moved, out), net(moved, direct(moved.s, 0.005)));
+  std::printf("reused cells, magnets moved 2 mm: error %.2e, lists reused %d\n", e,
+              int(f.lists_reused()));
+  EXPECT_LT(e, 1e-3);
+  EXPECT_TRUE(f.lists_reused());
+
+  Magnets regrouped = moved;
+  std::swap(regrouped.s[0].group, regrouped.s[2].group);
+  f.build(regrouped.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+
+  Magnets spread = m;
+  for (Source& s : spread.s) s.position = s.position * 3.0;
+  f.build(m.s, 0.005, o);
+  f.build(spread.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+  f.evaluate_at_sources(out);
+  EXPECT_FALSE(f.lists_reused());
+  EXPECT_LT(rms_relative(net(spread, out), net(spread, direct(spread.s, 0.005))), 1e-3);
+}
+
 TEST(Fmm, ProfileAccountsForEveryPhase) {
   const Magnets m = random_magnets(800, 31);
   Fmm f;
