@@ -588,10 +588,13 @@ struct KernelRow {
   double prev_tree = 0, tree = 0, prev_direct = NAN, direct = 0;
   double prev_error = 0, error = 0;
   double fmm = NAN, fmm_error = NAN;  ///< the fast multipole method at its defaults
-  /// The FMM as session 15 left it (theta 0.6, order 4, leaves of 64, one
-  /// translation at a time, each near pair twice), same run.
+  /// The FMM on session 16's paths (the same theta, order and leaves; the
+  /// translations in four-lane batches, the near field in double), same run.
   double prev_fmm = NAN, prev_fmm_error = NAN;
   multipole::FmmProfile profile;  ///< the current FMM's phases, one evaluation
+  /// The FMM reusing its cells and lists between calls (FmmOptions::reuse)
+  /// while every magnet moves 2 mm back and forth, and its error.
+  double fmm_reuse = NAN, fmm_reuse_error = NAN;
 };
 
 /// Previous and current tree, previous and current direct sum, on n random magnets.
@@ -640,21 +643,66 @@ KernelRow magnet_kernels(int n, double budget) {
       },
       budget);
   r.fmm_error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
-  // The phases of one evaluation (multipole::Fmm directly, on the same sources).
+  // The phases of one evaluation (multipole::Fmm directly, on the same
+  // sources): the mean of three after a first (its allocations and cold
+  // caches left out).
   {
     multipole::Fmm one;
-    one.build(sources, eps, {.theta = kFmmTheta, .order = kFmmOrder, .leaf_size = 64});
+    const multipole::FmmOptions o{
+        .theta = kFmmTheta, .order = kFmmOrder, .leaf_size = 64, .single_near = true};
+    one.build(sources, eps, o);
     one.evaluate_at_sources(k);
-    r.profile = one.profile();
+    const multipole::FmmProfile first = one.profile();
+    for (int rep = 0; rep < 3; ++rep) {
+      one.build(sources, eps, o);
+      one.evaluate_at_sources(k);
+    }
+    const multipole::FmmProfile& all = one.profile();
+    r.profile = {(all.tree - first.tree) / 3, (all.upward - first.upward) / 3,
+                 (all.walk - first.walk) / 3, (all.m2l - first.m2l) / 3,
+                 (all.near - first.near) / 3, (all.downward - first.downward) / 3};
   }
-  // Session 15's FMM, same run.
+  // Reuse between steps: the magnets moved 2 mm (whole, a random direction
+  // each) and back, alternately, as bodies that move little between steps.
+  {
+    std::mt19937_64 rng(5);
+    std::vector<multipole::Source> moved = sources;
+    std::vector<Vec3> shift(static_cast<std::size_t>(n));
+    for (Vec3& v : shift) v = layouts::random_direction(rng) * 0.002;
+    for (multipole::Source& s : moved) s.position += shift[s.group];
+    multipole::Fmm reuse;
+    const multipole::FmmOptions o{.theta = kFmmTheta,
+                                  .order = kFmmOrder,
+                                  .leaf_size = 64,
+                                  .single_near = true,
+                                  .reuse = true};
+    reuse.build(sources, eps, o);
+    reuse.evaluate_at_sources(k);
+    int call = 0;
+    r.fmm_reuse = cpu_per_call(
+        [&] {
+          reuse.build(++call % 2 ? moved : sources, eps, o);
+          reuse.evaluate_at_sources(k);
+        },
+        budget);
+    std::vector<Vec3> exact_here(poles.size());
+    multipole::direct_at_sources(call % 2 ? moved : sources, eps, exact_here);
+    for (std::size_t i = 0; i < poles.size(); ++i) {
+      k[i] = k[i] * (kMu0Over4Pi * poles[i].strength);
+      exact_here[i] = exact_here[i] * (kMu0Over4Pi * poles[i].strength);
+    }
+    r.fmm_reuse_error = rms_relative(magnet_forces(poles, k), magnet_forces(poles, exact_here));
+  }
+  // Session 16's paths, same run: four-lane translations, the near field in
+  // double (its P2M and L2P are today's, unrolled: the ratio understates the
+  // gain a little).
   {
     multipole::Fmm old;
-    const multipole::FmmOptions o{.theta = 0.6,
-                                  .order = 4,
+    const multipole::FmmOptions o{.theta = kFmmTheta,
+                                  .order = kFmmOrder,
                                   .leaf_size = 64,
-                                  .m2l = multipole::FmmOptions::M2l::Reference,
-                                  .mutual_near = false};
+                                  .m2l = multipole::FmmOptions::M2l::Simd4,
+                                  .single_near = false};
     r.prev_fmm = cpu_per_call(
         [&] {
           old.build(sources, eps, o);
@@ -774,9 +822,10 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
     for (int n : ns) rows.push_back(magnet_kernels(n, budget));
     Table t({"magnets", "previous tree (theta 0.25)", "tree", "ratio", "previous direct",
              "direct (SIMD)", "ratio", "pairs/s (SIMD)", "RMS error previous", "RMS error"});
-    Table tf({"magnets", "direct (SIMD)", "tree", "FMM (session 15)", "FMM", "FMM / previous FMM",
-              "FMM / direct", "FMM / tree", "RMS error tree", "RMS error FMM (session 15)",
-              "RMS error FMM"});
+    Table tf({"magnets", "direct (SIMD)", "tree", "FMM (session 16 paths)", "FMM",
+              "FMM / previous FMM", "FMM / direct", "FMM / tree", "RMS error tree",
+              "RMS error FMM (session 16 paths)", "RMS error FMM", "FMM reused", "reused / FMM",
+              "RMS error reused"});
     for (const KernelRow& r : rows) {
       const double pairs = 4.0 * r.n * r.n;  // ordered pole pairs
       t.row({std::to_string(r.n), fmt(1e3 * r.prev_tree), fmt(1e3 * r.tree),
@@ -785,29 +834,33 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
              fmt(r.error)});
       tf.row({std::to_string(r.n), fmt(1e3 * r.direct), fmt(1e3 * r.tree), fmt(1e3 * r.prev_fmm),
               fmt(1e3 * r.fmm), fmt(r.fmm / r.prev_fmm, 3), fmt(r.fmm / r.direct, 3),
-              fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.prev_fmm_error), fmt(r.fmm_error)});
+              fmt(r.fmm / r.tree, 3), fmt(r.error), fmt(r.prev_fmm_error), fmt(r.fmm_error),
+              fmt(1e3 * r.fmm_reuse), fmt(r.fmm_reuse / r.fmm, 3), fmt(r.fmm_reuse_error)});
     }
     md += "\nmagnetic forces on random magnets (tree at the default tolerance 1e-3, theta " +
           fmt(magnetism::kDefaultTheta) + ", leaves of 64, blocks of 32 poles):\n\n" + t.str();
     md += "\nThe fast multipole method (method \"fmm\": theta " + fmt(magnetism::kFmmTheta) +
           ", order " + std::to_string(magnetism::kFmmOrder) +
-          ", leaves of 64; translations in SIMD batches, near pairs once each) against session "
-          "15's FMM (theta 0.6, one translation at a time, near pairs twice), the tree and the "
-          "direct sum, same run (ratios: below 1 is faster):\n\n" +
+          ", leaves of 64; translations in eight-lane batches, the near field in single "
+          "precision) against session 16's paths (four-lane translations, the near field in "
+          "double), the tree and the direct sum, same run (ratios: below 1 is faster):\n\n" +
           tf.str();
-    {
-      const multipole::FmmProfile& p = rows.back().profile;
+    for (const KernelRow& row : rows) {
+      if (row.n != 500 && row.n != rows.back().n) continue;
+      const multipole::FmmProfile& p = row.profile;
       const double T = p.total();
       auto pc = [&](double x) { return fmt(100 * x / T, 2) + " %"; };
-      md += "\nWhere the FMM's time goes at " + std::to_string(rows.back().n) +
-            " magnets (one evaluation, CPU " + fmt(1e3 * T) + " ms): tree " + pc(p.tree) +
-            ", multipoles (P2M, M2M) " + pc(p.upward) + ", walk " + pc(p.walk) +
+      md += "\nWhere the FMM's time goes at " + std::to_string(row.n) +
+            " magnets (one evaluation, the mean of three, CPU " + fmt(1e3 * T) + " ms): tree " +
+            pc(p.tree) + ", multipoles (P2M, M2M) " + pc(p.upward) + ", walk " + pc(p.walk) +
             ", translations (M2L) " + pc(p.m2l) + ", near field (P2P) " + pc(p.near) +
             ", local expansions down and out (L2L, L2P) " + pc(p.downward) + ".\n";
     }
     // Crossover of the current tree (and of the FMM) with the current direct sum.
+    // Already faster at the smallest n: the crossover is at or below it
+    // (printed as that n).
     auto crossover = [&](auto fast) {
-      double cross = NAN;
+      double cross = fast(rows[0]) < rows[0].direct ? double(rows[0].n) : NAN;
       for (std::size_t i = 1; i < rows.size(); ++i) {
         const double ra = std::log(fast(rows[i - 1]) / rows[i - 1].direct),
                      rb = std::log(fast(rows[i]) / rows[i].direct);
@@ -816,6 +869,11 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
                            ra / (ra - rb) * (std::log(rows[i].n) - std::log(rows[i - 1].n)));
       }
       return cross;
+    };
+    auto cross_text = [&](double c) {
+      if (!std::isfinite(c)) return std::string("not reached");
+      if (c == double(rows[0].n)) return "at or below " + std::to_string(rows[0].n);
+      return fmt(c, 2);
     };
     const double cross = crossover([](const KernelRow& r) { return r.tree; });
     const double cross_fmm = crossover([](const KernelRow& r) { return r.fmm; });
@@ -841,17 +899,18 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
             fmt(1e3 * big.prev_tree) + " ms, " + fmt(big.prev_tree / big.tree, 3) + "x), " +
             pm(1e3 * big.tree <= 10) + ".\n";
       md += "- the FMM's summation alone at most 10 ms: " + fmt(1e3 * big.fmm) + " ms (" +
-            fmt(big.fmm / big.prev_fmm, 3) + " of session 15's FMM, " + fmt(big.fmm / big.tree, 3) +
-            " of the tree's time, " + fmt(big.fmm / big.direct, 3) + " of the direct sum's), " +
-            pm(1e3 * big.fmm <= 10) + "; its RMS error " + fmt(big.fmm_error) +
+            fmt(big.fmm / big.prev_fmm, 3) + " of session 16's paths, " +
+            fmt(big.fmm / big.tree, 3) + " of the tree's time, " + fmt(big.fmm / big.direct, 3) +
+            " of the direct sum's), " + pm(1e3 * big.fmm <= 10) +
+            "; reusing its cells and lists between steps (magnets moving 2 mm) " +
+            fmt(1e3 * big.fmm_reuse) + " ms, " + pm(1e3 * big.fmm_reuse <= 10) + ", error " +
+            fmt(big.fmm_reuse_error) + "; its RMS error " + fmt(big.fmm_error) +
             " (random; see the packed block above), " + pm(big.fmm_error <= 1e-3) +
-            "; crossover with the direct sum " +
-            (std::isfinite(cross_fmm) ? fmt(cross_fmm, 2) : std::string("not reached")) + ", " +
+            "; crossover with the direct sum " + cross_text(cross_fmm) + ", " +
             pm(std::isfinite(cross_fmm) && cross_fmm <= 500) + ".\n";
       md += "- RMS relative force error at most 1e-3: " + fmt(big.error) + ", " +
             pm(big.error <= 1e-3) + " (previous " + fmt(big.prev_error) + ").\n";
-      md += "- crossover with the direct sum at or below 500 magnets: " +
-            (std::isfinite(cross) ? fmt(cross, 2) : std::string("not reached")) + ", " +
+      md += "- crossover with the direct sum at or below 500 magnets: " + cross_text(cross) + ", " +
             pm(std::isfinite(cross) && cross <= 500) + ".\n";
       const double rate = 4.0 * big.n * big.n / big.direct,
                    prev_rate = 4.0 * big.n * big.n / big.prev_direct;

@@ -205,6 +205,95 @@ __attribute__((target("avx512f"))) void accumulate_avx512(const SoaTargets& t, c
   }
 }
 
+// --- single precision (the FMM's near field) ------------------------------------
+// Sixteen sources a lane, two targets per sweep; MUTUAL also subtracts each
+// pair's pull from the source's sums (in memory). 1/s from rsqrt14 and one
+// Newton step: (2^-14)^2 * 3/2, under float's 2^-24.
+template <bool MUTUAL>
+__attribute__((target("avx512f"), always_inline)) inline void sweep_f32(const SoaTargetsF& t,
+                                                                        const float* tq,
+                                                                        const SoaSourcesF& s,
+                                                                        float* sfx, float* sfy,
+                                                                        float* sfz, float eps2) {
+  const __m512 e2 = _mm512_set1_ps(eps2), zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f),
+               half = _mm512_set1_ps(0.5f), three_halves = _mm512_set1_ps(1.5f);
+  const std::size_t n = s.n;
+  for (std::size_t i = 0; i < t.n; i += 2) {
+    // An odd last target pairs with itself at strength 0 and sums dropped.
+    const std::size_t i1 = i + 1 < t.n ? i + 1 : i;
+    const __m512 x0 = _mm512_set1_ps(t.x[i]), y0 = _mm512_set1_ps(t.y[i]),
+                 z0 = _mm512_set1_ps(t.z[i]), x1 = _mm512_set1_ps(t.x[i1]),
+                 y1 = _mm512_set1_ps(t.y[i1]), z1 = _mm512_set1_ps(t.z[i1]);
+    const __m512i g0 = _mm512_set1_epi32(t.g[i]), g1 = _mm512_set1_epi32(t.g[i1]);
+    __m512 q0 = zero, q1 = zero;
+    if constexpr (MUTUAL) q0 = _mm512_set1_ps(tq[i]), q1 = _mm512_set1_ps(i1 != i ? tq[i1] : 0.0f);
+    __m512 ax0 = zero, ay0 = zero, az0 = zero, ax1 = zero, ay1 = zero, az1 = zero;
+    for (std::size_t j = 0; j < n; j += 16) {
+      const __mmask16 valid = n - j >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - j)) - 1);
+      const __m512 sx = _mm512_maskz_loadu_ps(valid, s.x + j),
+                   sy = _mm512_maskz_loadu_ps(valid, s.y + j),
+                   sz = _mm512_maskz_loadu_ps(valid, s.z + j),
+                   sq = _mm512_maskz_loadu_ps(valid, s.q + j);
+      const __m512i sg = _mm512_maskz_loadu_epi32(valid, s.g + j);
+      const __m512 dx0 = _mm512_sub_ps(x0, sx), dy0 = _mm512_sub_ps(y0, sy),
+                   dz0 = _mm512_sub_ps(z0, sz), dx1 = _mm512_sub_ps(x1, sx),
+                   dy1 = _mm512_sub_ps(y1, sy), dz1 = _mm512_sub_ps(z1, sz);
+      __m512 s20 =
+          _mm512_fmadd_ps(dx0, dx0, _mm512_fmadd_ps(dy0, dy0, _mm512_fmadd_ps(dz0, dz0, e2)));
+      __m512 s21 =
+          _mm512_fmadd_ps(dx1, dx1, _mm512_fmadd_ps(dy1, dy1, _mm512_fmadd_ps(dz1, dz1, e2)));
+      const __mmask16 keep0 =
+          valid & _mm512_cmpneq_epi32_mask(g0, sg) & _mm512_cmp_ps_mask(s20, e2, _CMP_GT_OQ);
+      const __mmask16 keep1 =
+          valid & _mm512_cmpneq_epi32_mask(g1, sg) & _mm512_cmp_ps_mask(s21, e2, _CMP_GT_OQ);
+      s20 = _mm512_mask_blend_ps(keep0, one, s20);
+      s21 = _mm512_mask_blend_ps(keep1, one, s21);
+      __m512 r0 = _mm512_rsqrt14_ps(s20), r1 = _mm512_rsqrt14_ps(s21);
+      r0 = _mm512_mul_ps(
+          r0, _mm512_fnmadd_ps(_mm512_mul_ps(half, s20), _mm512_mul_ps(r0, r0), three_halves));
+      r1 = _mm512_mul_ps(
+          r1, _mm512_fnmadd_ps(_mm512_mul_ps(half, s21), _mm512_mul_ps(r1, r1), three_halves));
+      const __m512 w0 = _mm512_maskz_mul_ps(keep0, r0, _mm512_mul_ps(r0, r0)),
+                   w1 = _mm512_maskz_mul_ps(keep1, r1, _mm512_mul_ps(r1, r1));
+      const __m512 ws0 = _mm512_mul_ps(w0, sq), ws1 = _mm512_mul_ps(w1, sq);
+      ax0 = _mm512_fmadd_ps(ws0, dx0, ax0), ay0 = _mm512_fmadd_ps(ws0, dy0, ay0),
+      az0 = _mm512_fmadd_ps(ws0, dz0, az0);
+      ax1 = _mm512_fmadd_ps(ws1, dx1, ax1), ay1 = _mm512_fmadd_ps(ws1, dy1, ay1),
+      az1 = _mm512_fmadd_ps(ws1, dz1, az1);
+      if constexpr (MUTUAL) {
+        const __m512 wt0 = _mm512_mul_ps(w0, q0), wt1 = _mm512_mul_ps(w1, q1);
+        _mm512_mask_storeu_ps(
+            sfx + j, valid,
+            _mm512_fnmadd_ps(wt1, dx1,
+                             _mm512_fnmadd_ps(wt0, dx0, _mm512_maskz_loadu_ps(valid, sfx + j))));
+        _mm512_mask_storeu_ps(
+            sfy + j, valid,
+            _mm512_fnmadd_ps(wt1, dy1,
+                             _mm512_fnmadd_ps(wt0, dy0, _mm512_maskz_loadu_ps(valid, sfy + j))));
+        _mm512_mask_storeu_ps(
+            sfz + j, valid,
+            _mm512_fnmadd_ps(wt1, dz1,
+                             _mm512_fnmadd_ps(wt0, dz0, _mm512_maskz_loadu_ps(valid, sfz + j))));
+      }
+    }
+    t.fx[i] += double(_mm512_reduce_add_ps(ax0)), t.fy[i] += double(_mm512_reduce_add_ps(ay0)),
+        t.fz[i] += double(_mm512_reduce_add_ps(az0));
+    if (i1 != i)
+      t.fx[i1] += double(_mm512_reduce_add_ps(ax1)), t.fy[i1] += double(_mm512_reduce_add_ps(ay1)),
+          t.fz[i1] += double(_mm512_reduce_add_ps(az1));
+  }
+}
+
+__attribute__((target("avx512f"))) void accumulate_f32(const SoaTargetsF& t, const SoaSourcesF& s,
+                                                       float eps2) {
+  sweep_f32<false>(t, nullptr, s, nullptr, nullptr, nullptr, eps2);
+}
+__attribute__((target("avx512f"))) void mutual_f32(const SoaTargetsF& t, const float* tq,
+                                                   const SoaSourcesF& s, float* sfx, float* sfy,
+                                                   float* sfz, float eps2) {
+  sweep_f32<true>(t, tq, s, sfx, sfy, sfz, eps2);
+}
+
 // Four sources a lane each, with the IEEE sqrt and division (AVX2 has no
 // double-precision reciprocal square root estimate); the tail by the scalar
 // loop.
@@ -273,6 +362,30 @@ bool direct_accumulate_mutual(const SoaTargets& targets, const double* tq,
 #ifdef ALLOY_DIRECT_KERNEL_X86
   if (kernel() == accumulate_avx512) {
     if (targets.n != 0 && sources.n != 0) mutual_avx512(targets, tq, sources, sfx, sfy, sfz, eps2);
+    return true;
+  }
+#endif
+  (void)targets, (void)tq, (void)sources, (void)sfx, (void)sfy, (void)sfz, (void)eps2;
+  return false;
+}
+
+bool direct_accumulate_single(const SoaTargetsF& targets, const SoaSourcesF& sources, float eps2) {
+#ifdef ALLOY_DIRECT_KERNEL_X86
+  if (kernel() == accumulate_avx512) {
+    if (targets.n != 0 && sources.n != 0) accumulate_f32(targets, sources, eps2);
+    return true;
+  }
+#endif
+  (void)targets, (void)sources, (void)eps2;
+  return false;
+}
+
+bool direct_accumulate_mutual_single(const SoaTargetsF& targets, const float* tq,
+                                     const SoaSourcesF& sources, float* sfx, float* sfy, float* sfz,
+                                     float eps2) {
+#ifdef ALLOY_DIRECT_KERNEL_X86
+  if (kernel() == accumulate_avx512) {
+    if (targets.n != 0 && sources.n != 0) mutual_f32(targets, tq, sources, sfx, sfy, sfz, eps2);
     return true;
   }
 #endif

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace alloy::multipole {
 
@@ -68,6 +69,45 @@ bool direct_accumulate_mutual(const SoaTargets& targets, const double* tq,
 void direct_accumulate_mutual_scalar(const SoaTargets& targets, const double* tq,
                                      const SoaSources& sources, double* sfx, double* sfy,
                                      double* sfz, double eps2);
+
+/// Sources in single precision, for the FMM's near field (fmm.hpp,
+/// FmmOptions::single_near): coordinates relative to a point near them (so
+/// that float keeps their separations to ~1e-7 of the region's size), groups
+/// as integers (-1: none; a target in none carries -2).
+struct SoaSourcesF {
+  const float* x = nullptr;
+  const float* y = nullptr;
+  const float* z = nullptr;
+  const float* q = nullptr;
+  const std::int32_t* g = nullptr;
+  std::size_t n = 0;
+};
+/// Targets in single precision (relative to the same point as the sources);
+/// their sums are reduced per target and added to the double arrays.
+struct SoaTargetsF {
+  const float* x = nullptr;
+  const float* y = nullptr;
+  const float* z = nullptr;
+  const std::int32_t* g = nullptr;
+  double* fx = nullptr;  ///< added to, not overwritten
+  double* fy = nullptr;
+  double* fz = nullptr;
+  std::size_t n = 0;
+};
+
+/// direct_accumulate and direct_accumulate_mutual in single precision,
+/// sixteen sources a lane, 1/s from rsqrt14 and one Newton step (relative
+/// error ~1e-8, below float's rounding): twice the lanes of the double
+/// kernels. Each pair's relative error is about 1e-7 times the coordinates'
+/// size over max(|r|, eps), so the caller keeps coordinates small against
+/// the softening (fmm.cpp). A source within float rounding of its target
+/// counts as at its position (left out). The source sums of the mutual one
+/// go to float arrays (sfx, ...), added to. Return false (nothing added)
+/// where the CPU has no AVX-512.
+bool direct_accumulate_single(const SoaTargetsF& targets, const SoaSourcesF& sources, float eps2);
+bool direct_accumulate_mutual_single(const SoaTargetsF& targets, const float* tq,
+                                     const SoaSourcesF& sources, float* sfx, float* sfy, float* sfz,
+                                     float eps2);
 
 /// Which kernel direct_accumulate runs on this CPU: "avx512", "avx2" or "scalar".
 const char* direct_kernel_isa();

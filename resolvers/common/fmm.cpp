@@ -97,7 +97,14 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
   leaf_size_ = std::max<std::uint32_t>(1, options.leaf_size);
   options_vector_m2l_ = int(options.m2l);
   mutual_near_ = options.mutual_near;
+  single_near_ = options.single_near && softening > 0;
   make_tables(std::clamp(options.order, 1, kMaxFmmOrder));
+  reused_ = options.reuse && try_reuse(sources);
+  if (reused_) {
+    profile_.upward += seconds_now() - t0;
+    return;
+  }
+  lists_valid_ = false;
   nodes_.clear();
   atoms_.clear();
   const auto n = std::uint32_t(sources.size());
@@ -170,10 +177,56 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
     sg_[t] = s.group == kNoGroup ? -1.0 : double(s.group);
     tg_[t] = s.group == kNoGroup ? -2.0 : double(s.group);
   }
+  integer_groups();
   const double t1 = seconds_now();
   upward();
+  built_leaf_ = leaf_size_, built_eps2_ = eps2_;
+  built_radius_.resize(nodes_.size()), built_empty_.resize(nodes_.size());
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    built_radius_[k] = nodes_[k].radius, built_empty_[k] = nodes_[k].empty;
+  built_root_radius_ = nodes_.empty() ? 0 : nodes_[0].radius;
   profile_.tree += t1 - t0;
   profile_.upward += seconds_now() - t1;
+}
+
+// Groups as 32-bit integers for the float kernels; a group number that does
+// not fit leaves the near field in double.
+void Fmm::integer_groups() {
+  if (!single_near_) return;
+  const std::size_t n = src_.size();
+  sgi_.resize(n), tgi_.resize(n);
+  for (std::size_t t = 0; t < n && single_near_; ++t) {
+    const std::uint32_t g = src_[t].group;
+    if (g != kNoGroup && g > 0x7fffffffu) single_near_ = false;
+    sgi_[t] = g == kNoGroup ? -1 : std::int32_t(g);
+    tgi_[t] = g == kNoGroup ? -2 : std::int32_t(g);
+  }
+}
+
+// FmmOptions::reuse: the same sources (count, groups, in the order given)
+// under the same leaves and softening as the last full build: refresh the
+// sources in tree order and the upward pass, keep the cells. False (for a
+// full build) when a cell grew past 1.5 times its radius then, or a cell's
+// emptiness changed (the walk skips pairs of empty cells).
+bool Fmm::try_reuse(std::span<const Source> sources) {
+  const std::size_t n = sources.size();
+  if (nodes_.empty() || n != src_.size() || built_leaf_ != leaf_size_ || built_eps2_ != eps2_)
+    return false;
+  for (std::size_t t = 0; t < n; ++t)
+    if (sources[order_of_[t]].group != src_[t].group) return false;
+  for (std::size_t t = 0; t < n; ++t) {
+    const Source& s = sources[order_of_[t]];
+    src_[t] = s;
+    sx_[t] = s.position.x, sy_[t] = s.position.y, sz_[t] = s.position.z, sq_[t] = s.strength;
+  }
+  integer_groups();
+  upward();
+  const double slack = 1e-3 * built_root_radius_;
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    if (nodes_[k].radius > 1.5 * built_radius_[k] + slack ||
+        bool(built_empty_[k]) != nodes_[k].empty)
+      return false;
+  return true;
 }
 
 // Splits node `index` (its begin/end are atom positions) into its non-empty
@@ -230,6 +283,13 @@ void Fmm::scaled_powers(Vec3 s, double* out) const {
     out[t] = out[rec_prev_[std::size_t(t)]] * xyz[rec_axis_[std::size_t(t)]] * rcp_[std::size_t(t)];
 }
 
+// P2M at one leaf and L2P at one leaf's sources, unrolled for the order
+// (defined below, after the compile-time term tables).
+void p2m_leaf(int order, const double* x, const double* y, const double* z, const double* q,
+              std::uint32_t begin, std::uint32_t end, Vec3 c, double* m);
+void l2p_leaf(int order, const double* l, const double* x, const double* y, const double* z,
+              std::uint32_t begin, std::uint32_t end, Vec3 c, double* fx, double* fy, double* fz);
+
 // Centres, radii and multipole moments, leaves from their sources (P2M) and
 // the rest from their children (M2M), children before parents.
 void Fmm::upward() {
@@ -259,11 +319,8 @@ void Fmm::upward() {
     double* m = mult_.data() + k * nt;
     if (node.empty) continue;
     if (node.children == 0) {
-      for (std::uint32_t t = node.begin; t < node.end; ++t) {
-        if (src_[t].strength == 0) continue;
-        powers(src_[t].position - node.centre, pw.data());
-        for (std::size_t i = 0; i < nt; ++i) m[i] += src_[t].strength * pw[i];
-      }
+      p2m_leaf(order_, sx_.data(), sy_.data(), sz_.data(), sq_.data(), node.begin, node.end,
+               node.centre, m);
     } else {
       for (std::int32_t ch = node.first_child; ch < node.first_child + node.children; ++ch) {
         if (nodes_[ch].empty) continue;
@@ -378,6 +435,115 @@ void derivatives_fixed(Vec3 r, double eps2, double* __restrict dpos, double* __r
   }
 }
 
+// P2M at a leaf: m[t] += q s^t / t! over its sources, s = x - c, each power
+// from the one a step back along its axis times a compile-time reciprocal
+// (the same operations, in the same order, as Fmm::scaled_powers).
+template <int P>
+void p2m_fixed(const double* x, const double* y, const double* z, const double* q,
+               std::uint32_t begin, std::uint32_t end, Vec3 c, double* __restrict m) {
+  static constexpr Terms<P> T = make_terms<P>();
+  for (std::uint32_t t = begin; t < end; ++t) {
+    if (q[t] == 0) continue;
+    const double xyz[3] = {x[t] - c.x, y[t] - c.y, z[t] - c.z};
+    double pw[T.N];
+    pw[0] = 1;
+    ALLOY_UNROLL(200)
+    for (int i = 1; i < T.N; ++i) pw[i] = pw[T.prev[i]] * xyz[T.axis[i]] * (1.0 / (T.k[i] + 1));
+    ALLOY_UNROLL(200)
+    for (int i = 0; i < T.N; ++i) m[i] += q[t] * pw[i];
+  }
+}
+
+// L2P at a leaf's sources: F = -grad phi, phi(c + y) = sum_m L_m y^m. The
+// gradient's three polynomials (g_x[m - x] = a L_m, and so on) are formed once
+// per leaf, then each source takes its plain powers y^t (|t| <= p - 1) and
+// three dot products, unrolled.
+template <int P>
+void l2p_fixed(const double* l, const double* x, const double* y, const double* z,
+               std::uint32_t begin, std::uint32_t end, Vec3 c, double* fx, double* fy, double* fz) {
+  static constexpr Terms<P> T = make_terms<P>();
+  // Per term m and axis: the term m minus one step along it, and the
+  // exponent there (0: none).
+  struct Down {
+    std::array<std::array<int, 3>, T.N> to{}, e{};
+  };
+  static constexpr Down D = [] {
+    Down d;
+    auto find = [](int fa, int fb, int fc) {
+      for (int j = 0; j < T.N; ++j)
+        if (T.off[j] == (fa * (P + 1) + fb) * (P + 1) + fc) return j;
+      return 0;
+    };
+    for (int m = 0; m < T.N; ++m) {
+      const int o = T.off[m], a = o / ((P + 1) * (P + 1)), b = o / (P + 1) % (P + 1),
+                c = o % (P + 1);
+      d.e[m] = {a, b, c};
+      d.to[m] = {a > 0 ? find(a - 1, b, c) : 0, b > 0 ? find(a, b - 1, c) : 0,
+                 c > 0 ? find(a, b, c - 1) : 0};
+    }
+    return d;
+  }();
+  constexpr int G = T.prefix[P - 1];
+  double gx[G] = {}, gy[G] = {}, gz[G] = {};
+  ALLOY_UNROLL(200)
+  for (int m = 1; m < T.N; ++m) {
+    if (D.e[m][0] > 0) gx[D.to[m][0]] = l[m] * double(D.e[m][0]);
+    if (D.e[m][1] > 0) gy[D.to[m][1]] = l[m] * double(D.e[m][1]);
+    if (D.e[m][2] > 0) gz[D.to[m][2]] = l[m] * double(D.e[m][2]);
+  }
+  for (std::uint32_t t = begin; t < end; ++t) {
+    const double xyz[3] = {x[t] - c.x, y[t] - c.y, z[t] - c.z};
+    double pw[G];
+    pw[0] = 1;
+    ALLOY_UNROLL(200)
+    for (int m = 1; m < G; ++m) pw[m] = pw[T.prev[m]] * xyz[T.axis[m]];
+    double sx = 0, sy = 0, sz = 0;
+    ALLOY_UNROLL(200)
+    for (int m = 0; m < G; ++m) {
+      sx += gx[m] * pw[m];
+      sy += gy[m] * pw[m];
+      sz += gz[m] * pw[m];
+    }
+    fx[t] -= sx, fy[t] -= sy, fz[t] -= sz;
+  }
+}
+
+void p2m_leaf(int order, const double* x, const double* y, const double* z, const double* q,
+              std::uint32_t begin, std::uint32_t end, Vec3 c, double* m) {
+  switch (order) {
+    case 1:
+      return p2m_fixed<1>(x, y, z, q, begin, end, c, m);
+    case 2:
+      return p2m_fixed<2>(x, y, z, q, begin, end, c, m);
+    case 3:
+      return p2m_fixed<3>(x, y, z, q, begin, end, c, m);
+    case 4:
+      return p2m_fixed<4>(x, y, z, q, begin, end, c, m);
+    case 5:
+      return p2m_fixed<5>(x, y, z, q, begin, end, c, m);
+    default:
+      return p2m_fixed<6>(x, y, z, q, begin, end, c, m);
+  }
+}
+
+void l2p_leaf(int order, const double* l, const double* x, const double* y, const double* z,
+              std::uint32_t begin, std::uint32_t end, Vec3 c, double* fx, double* fy, double* fz) {
+  switch (order) {
+    case 1:
+      return l2p_fixed<1>(l, x, y, z, begin, end, c, fx, fy, fz);
+    case 2:
+      return l2p_fixed<2>(l, x, y, z, begin, end, c, fx, fy, fz);
+    case 3:
+      return l2p_fixed<3>(l, x, y, z, begin, end, c, fx, fy, fz);
+    case 4:
+      return l2p_fixed<4>(l, x, y, z, begin, end, c, fx, fy, fz);
+    case 5:
+      return l2p_fixed<5>(l, x, y, z, begin, end, c, fx, fy, fz);
+    default:
+      return l2p_fixed<6>(l, x, y, z, begin, end, c, fx, fy, fz);
+  }
+}
+
 // u[m] += sum over k with |k| <= p - |m| of mn[k] d[offset(m) + offset(k)],
 // as one list of (m, k, offset) of constant length that the compiler unrolls.
 template <int P>
@@ -446,6 +612,13 @@ inline double lane(V4d v, int l) {
 inline void set_lane(V4d& v, int l, double x) {
   v[l] = x;
 }
+typedef double V8d __attribute__((vector_size(64)));
+inline double lane(V8d v, int l) {
+  return v[l];
+}
+inline void set_lane(V8d& v, int l, double x) {
+  v[l] = x;
+}
 #endif
 inline double lane(double v, int) {
   return v;
@@ -457,11 +630,11 @@ inline void set_lane(double& v, int, double x) {
 /// What one batch reads and writes: W separations r = c_A - c_B, the moments
 /// (A's plain, B's with (-1)^|k|) and the local expansions to add to.
 struct M2lBatch {
-  Vec3 r[4];
-  const double* plain_a[4];
-  const double* neg_b[4];
-  double* local_a[4];
-  double* local_b[4];
+  Vec3 r[8];
+  const double* plain_a[8];
+  const double* neg_b[8];
+  double* local_a[8];
+  double* local_b[8];
 };
 
 template <int P, class V, int W>
@@ -558,10 +731,17 @@ template <int P>
 __attribute__((target("avx2,fma"))) void m2l_run_avx2(const M2lList& list) {
   m2l_run<P, V4d, 4>(list);
 }
+// Eight lanes where the CPU has AVX-512 (0.8x of the four-lane batches'
+// time at order 5, 10,000 magnets; docs/performance.md).
+template <int P>
+__attribute__((target("avx512f,avx512dq,avx2,fma"))) void m2l_run_avx512(const M2lList& list) {
+  m2l_run<P, V8d, 8>(list);
+}
 #endif
 
 using M2lRunner = void (*)(const M2lList&);
-M2lRunner m2l_runner(int order, bool vector) {
+M2lRunner m2l_runner(int order, int width) {
+  const bool vector = width > 1;
   static constexpr M2lRunner scalar[] = {m2l_run_scalar<1>, m2l_run_scalar<2>, m2l_run_scalar<3>,
                                          m2l_run_scalar<4>, m2l_run_scalar<5>, m2l_run_scalar<6>};
   const int i = std::clamp(order, 1, kMaxFmmOrder) - 1;
@@ -572,6 +752,14 @@ M2lRunner m2l_runner(int order, bool vector) {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   }();
+  static constexpr M2lRunner avx512[] = {m2l_run_avx512<1>, m2l_run_avx512<2>, m2l_run_avx512<3>,
+                                         m2l_run_avx512<4>, m2l_run_avx512<5>, m2l_run_avx512<6>};
+  static const bool has_avx512 = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  if (width > 4 && has_avx512) return avx512[i];
   if (vector && has_avx2) return avx2[i];
 #endif
   (void)vector;
@@ -652,6 +840,7 @@ void Fmm::near_field(const Node& leaf, std::span<const std::int32_t> near) {
 // its own sources), the others both ways at once, their sources gathered into
 // one run and their sums added back.
 void Fmm::near_field_mutual(std::int32_t k, std::span<const std::int32_t> near) {
+  if (single_near_ && near_field_single(k, near)) return;
   const Node& leaf = nodes_[std::size_t(k)];
   const std::uint32_t n = leaf.end - leaf.begin;
   const SoaTargets targets{sx_.data() + leaf.begin, sy_.data() + leaf.begin,
@@ -694,6 +883,85 @@ void Fmm::near_field_mutual(std::int32_t k, std::span<const std::int32_t> near) 
   p2p_ += std::uint64_t(n) * m;
 }
 
+// near_field_mutual in single precision: every coordinate relative to the
+// leaf's centre, so that float's rounding is relative to the near region's
+// size, not to the world's; false (nothing done) when that region spans more
+// than kSingleNearReach softening lengths.
+bool Fmm::near_field_single(std::int32_t k, std::span<const std::int32_t> near) {
+  const Node& leaf = nodes_[std::size_t(k)];
+  const Vec3 c = leaf.centre;
+  double reach = leaf.radius;
+  for (std::int32_t b : near) {
+    const Node& B = nodes_[std::size_t(b)];
+    reach = std::max(reach, length(B.centre - c) + B.radius);
+  }
+  if (!(reach * reach <= kSingleNearReach * kSingleNearReach * eps2_)) return false;
+  const std::uint32_t n = leaf.end - leaf.begin;
+  tfx_.resize(n), tfy_.resize(n), tfz_.resize(n), tfq_.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t t = leaf.begin + i;
+    tfx_[i] = float(sx_[t] - c.x), tfy_[i] = float(sy_[t] - c.y), tfz_[i] = float(sz_[t] - c.z);
+    tfq_[i] = float(sq_[t]);
+  }
+  const float e2 = float(eps2_);
+  const SoaTargetsF targets{tfx_.data(),
+                            tfy_.data(),
+                            tfz_.data(),
+                            tgi_.data() + leaf.begin,
+                            fx_.data() + leaf.begin,
+                            fy_.data() + leaf.begin,
+                            fz_.data() + leaf.begin,
+                            n};
+  runs_.clear();
+  for (std::int32_t b : near) {
+    if (b == k) {
+      direct_accumulate_single(
+          targets,
+          {tfx_.data(), tfy_.data(), tfz_.data(), tfq_.data(), sgi_.data() + leaf.begin, n}, e2);
+      p2p_ += std::uint64_t(n) * n;
+      single_pairs_ += std::uint64_t(n) * n;
+      continue;
+    }
+    const Node& B = nodes_[std::size_t(b)];
+    if (!runs_.empty() && runs_.back().second == B.begin)
+      runs_.back().second = B.end;  // neighbours in memory: one run
+    else
+      runs_.emplace_back(B.begin, B.end);
+  }
+  if (runs_.empty()) return true;
+  std::size_t m = 0;
+  for (const auto& [b, e] : runs_) m += e - b;
+  nfx_.resize(m), nfy_.resize(m), nfz_.resize(m), nfq_.resize(m), nfg_.resize(m);
+  {
+    // Plain indexed loops, one array at a time: they vectorise.
+    std::size_t at = 0;
+    for (const auto& [b, e] : runs_) {
+      const std::size_t len = e - b;
+      float *x = nfx_.data() + at, *y = nfy_.data() + at, *z = nfz_.data() + at,
+            *q = nfq_.data() + at;
+      const double *px = sx_.data() + b, *py = sy_.data() + b, *pz = sz_.data() + b,
+                   *pq = sq_.data() + b;
+      for (std::size_t i = 0; i < len; ++i) x[i] = float(px[i] - c.x);
+      for (std::size_t i = 0; i < len; ++i) y[i] = float(py[i] - c.y);
+      for (std::size_t i = 0; i < len; ++i) z[i] = float(pz[i] - c.z);
+      for (std::size_t i = 0; i < len; ++i) q[i] = float(pq[i]);
+      std::copy(sgi_.begin() + b, sgi_.begin() + e, nfg_.begin() + std::ptrdiff_t(at));
+      at += len;
+    }
+  }
+  gfx_.assign(m, 0.0f), gfy_.assign(m, 0.0f), gfz_.assign(m, 0.0f);
+  direct_accumulate_mutual_single(
+      targets, tfq_.data(), {nfx_.data(), nfy_.data(), nfz_.data(), nfq_.data(), nfg_.data(), m},
+      gfx_.data(), gfy_.data(), gfz_.data(), e2);
+  std::size_t at = 0;
+  for (const auto& [b, e] : runs_)
+    for (std::uint32_t t = b; t < e; ++t, ++at)
+      fx_[t] += double(gfx_[at]), fy_[t] += double(gfy_[at]), fz_[t] += double(gfz_[at]);
+  p2p_ += std::uint64_t(n) * m;
+  single_pairs_ += std::uint64_t(n) * m;
+  return true;
+}
+
 void Fmm::evaluate_at_sources(std::span<Vec3> out) {
   const std::size_t n = src_.size();
   if (n == 0) return;
@@ -711,10 +979,31 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
       mutual_near_ && direct_accumulate_mutual({}, nullptr, {}, nullptr, nullptr, nullptr, 0);
   const double theta2 = theta_ * theta_;
   const std::uint64_t direct_pairs = std::uint64_t(leaf_size_) * leaf_size_;
+  // The previous lists stand while the cells are the same ones (a reused
+  // build): pairs summed directly or split stay exact whatever the cells'
+  // new radii, and a listed translation that no longer meets the criterion
+  // is walked again from that pair (split until it does, or summed directly).
+  lists_reused_ = reused_ && lists_valid_ && lists_theta_ == theta_ && lists_mutual_ == mutual;
   stack_.clear();
-  near_pairs_.clear();
-  m2l_pairs_.clear();
-  stack_.emplace_back(0, 0);
+  if (lists_reused_) {
+    std::size_t kept = 0;
+    for (const auto& pr : m2l_pairs_) {
+      const Node& A = nodes_[std::size_t(pr.first)];
+      const Node& B = nodes_[std::size_t(pr.second)];
+      const Vec3 gap = A.centre - B.centre;
+      const double reach = A.radius + B.radius;
+      if (reach * reach < theta2 * dot(gap, gap))
+        m2l_pairs_[kept++] = pr;
+      else
+        stack_.push_back(pr);
+    }
+    m2l_pairs_.resize(kept);
+  } else {
+    near_pairs_.clear();
+    m2l_pairs_.clear();
+    stack_.emplace_back(0, 0);
+    lists_valid_ = true, lists_theta_ = theta_, lists_mutual_ = mutual;
+  }
   while (!stack_.empty()) {
     const auto [a, b] = stack_.back();
     stack_.pop_back();
@@ -761,8 +1050,10 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
     centres_.resize(nodes_.size());
     for (std::size_t k = 0; k < nodes_.size(); ++k) centres_[k] = nodes_[k].centre;
     zero_.assign(nt, 0.0), sink_.assign(nt, 0.0);
-    m2l_runner(order_, options_vector_m2l_ >
-                           1)({m2l_pairs_.data(), m2l_pairs_.size(), centres_.data(), mult_.data(),
+    const int width = options_vector_m2l_ == int(FmmOptions::M2l::Batched) ? 1
+                      : options_vector_m2l_ == int(FmmOptions::M2l::Simd4) ? 4
+                                                                           : 8;
+    m2l_runner(order_, width)({m2l_pairs_.data(), m2l_pairs_.size(), centres_.data(), mult_.data(),
                                mneg_.data(), local_.data(), zero_.data(), sink_.data(), nt, eps2_});
     m2l_ += m2l_pairs_.size();
   }
@@ -811,41 +1102,13 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
       lc[s.to] += l2l_coef_[e] * lp[s.from] * pw[s.power];
     }
   }
-  // At the leaves' sources: F = -grad phi, phi(c + y) = sum_m L_m y^m. The
-  // gradient's three polynomials are formed once per leaf (g_x[m - x] = a L_m,
-  // and so on), so that each source takes its plain powers y^t and three dot
-  // products: no division and no index table in the inner loop.
-  const int ngrad = order_ >= 1 ? prefix_[std::size_t(order_ - 1)] : 0;
-  grad_.resize(3 * std::size_t(ngrad));
+  // At the leaves' sources: F = -grad phi, phi(c + y) = sum_m L_m y^m
+  // (l2p_leaf, unrolled for the order).
   for (std::size_t k = 0; k < nodes_.size(); ++k) {
     const Node& node = nodes_[k];
     if (node.children != 0) continue;
-    const double* l = local_.data() + k * nt;
-    double* gxp = grad_.data();
-    double* gyp = gxp + ngrad;
-    double* gzp = gyp + ngrad;
-    std::fill(grad_.begin(), grad_.end(), 0.0);
-    for (int m = 1; m < nterms_; ++m) {
-      if (ia_[m] > 0) gxp[dx_[m]] = l[m] * ia_[m];
-      if (ib_[m] > 0) gyp[dy_[m]] = l[m] * ib_[m];
-      if (ic_[m] > 0) gzp[dz_[m]] = l[m] * ic_[m];
-    }
-    for (std::uint32_t t = node.begin; t < node.end; ++t) {
-      const Vec3 y = src_[t].position - node.centre;
-      // Plain powers y^m, |m| <= p - 1, each from the one a step back.
-      pw[0] = 1;
-      for (int m = 1; m < ngrad; ++m)
-        pw[std::size_t(m)] = ia_[m] > 0   ? pw[std::size_t(dx_[m])] * y.x
-                             : ib_[m] > 0 ? pw[std::size_t(dy_[m])] * y.y
-                                          : pw[std::size_t(dz_[m])] * y.z;
-      double gx = 0, gy = 0, gz = 0;
-      for (int m = 0; m < ngrad; ++m) {
-        gx += gxp[m] * pw[std::size_t(m)];
-        gy += gyp[m] * pw[std::size_t(m)];
-        gz += gzp[m] * pw[std::size_t(m)];
-      }
-      fx_[t] -= gx, fy_[t] -= gy, fz_[t] -= gz;
-    }
+    l2p_leaf(order_, local_.data() + k * nt, sx_.data(), sy_.data(), sz_.data(), node.begin,
+             node.end, node.centre, fx_.data(), fy_.data(), fz_.data());
   }
   profile_.walk += t1 - t0;
   profile_.m2l += t2 - t1;

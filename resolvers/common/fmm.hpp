@@ -51,16 +51,42 @@ struct FmmOptions {
   /// group larger than this is a leaf of its own).
   std::uint32_t leaf_size = 32;
   /// How the cell-to-cell translations run: one at a time (the reference),
-  /// in batches of one lane, or in batches of four SIMD lanes where the CPU
-  /// has AVX2 and FMA (else one lane). The bits differ between the first and
-  /// the others by rounding only (tests/resolvers/magnetism/fmm_test.cpp).
-  enum class M2l : std::uint8_t { Reference, Batched, Simd };
+  /// in batches of one lane, in batches of the widest SIMD the CPU has (eight
+  /// lanes with AVX-512, four with AVX2 and FMA, else one), or of four lanes
+  /// at most (Simd4, session 16's batches, for the bench's comparison). The
+  /// bits differ between the first and the others by rounding only
+  /// (tests/resolvers/magnetism/fmm_test.cpp).
+  enum class M2l : std::uint8_t { Reference, Batched, Simd, Simd4 };
   M2l m2l = M2l::Simd;
   /// The near field between two distinct cells summed each pair once, both
   /// ways (direct_accumulate_mutual), where the CPU has that kernel; false:
   /// each way on its own (twice the kernel's work; the same sums to rounding).
   bool mutual_near = true;
+  /// The near field in single precision (direct_kernel.hpp's float kernels,
+  /// sixteen lanes, about twice as fast), where the CPU has the once-each
+  /// kernel and a leaf's near region spans at most kSingleNearReach
+  /// softening lengths: each pair's relative error is then below ~1e-4 and
+  /// the sums' about 1e-6, far under the expansions' (issue 16's 1e-3). Off:
+  /// double precision everywhere (no softening: always double).
+  bool single_near = false;
+  /// Keep the cells and the walk's lists of the previous build when the
+  /// sources are the same ones (count, groups, which are zero) and the
+  /// options the same: build() then only refreshes the positions, centres,
+  /// radii and moments, and evaluate skips the walk while every listed
+  /// translation still meets the criterion with the new radii (else it walks
+  /// afresh). No cell may have grown past 1.5 times its radius at the last
+  /// full build (else a full build). The bound holds either way; only the
+  /// cells' shapes age, and the result depends on the history of builds, not
+  /// only on the sources: off unless asked for (issue 16: "reuse of the tree
+  /// between steps when bodies move little").
+  bool reuse = false;
 };
+
+/// FmmOptions::single_near applies to a leaf whose near cells (itself
+/// included) lie within this many softening lengths of its centre: float's
+/// 6e-8 rounding of coordinates of that size is then under 1e-4 of the
+/// separation of two sources one softening length apart.
+inline constexpr double kSingleNearReach = 1000;
 
 inline constexpr int kMaxFmmOrder = 6;
 
@@ -90,6 +116,12 @@ class Fmm {
   /// source pairs summed directly, by the evaluations so far.
   std::uint64_t cell_interactions() const { return m2l_; }
   std::uint64_t direct_interactions() const { return p2p_; }
+  /// Of those, the ones summed in single precision (FmmOptions::single_near).
+  std::uint64_t single_interactions() const { return single_pairs_; }
+  /// Whether the last build() kept the previous cells (FmmOptions::reuse),
+  /// and whether the last evaluation kept the previous walk's lists.
+  bool reused() const { return reused_; }
+  bool lists_reused() const { return lists_reused_; }
   /// Time by phase over the calls so far.
   const FmmProfile& profile() const { return profile_; }
 
@@ -116,6 +148,9 @@ class Fmm {
   void contract(const double* mn, const double* d, double* u) const;
   void near_field(const Node& leaf, std::span<const std::int32_t> near);
   void near_field_mutual(std::int32_t k, std::span<const std::int32_t> near);
+  bool near_field_single(std::int32_t k, std::span<const std::int32_t> near);
+  bool try_reuse(std::span<const Source> sources);
+  void integer_groups();
 
   double eps2_ = 0, theta_ = 0.5;
   int order_ = 0;
@@ -159,11 +194,24 @@ class Fmm {
   std::vector<std::int32_t> near_order_fill_;
   int options_vector_m2l_ = 2;
   bool mutual_near_ = true;
+  bool single_near_ = false;
+  std::vector<std::int32_t> sgi_, tgi_;       ///< groups as integers (-1 / -2: none), single_near
+  std::vector<float> tfx_, tfy_, tfz_, tfq_;  ///< one leaf's targets, single
+  std::vector<float> nfx_, nfy_, nfz_, nfq_;  ///< its near sources, single
+  std::vector<std::int32_t> nfg_;             ///< their groups
+  std::vector<float> gfx_, gfy_, gfz_;        ///< their mutual sums, single
+  std::uint64_t single_pairs_ = 0;
+  // Reuse (FmmOptions::reuse): the settings of the last full build, each
+  // cell's radius then, and the settings the walk's lists were made with.
+  bool reused_ = false, lists_reused_ = false, lists_valid_ = false, lists_mutual_ = false;
+  std::uint32_t built_leaf_ = 0;
+  double built_eps2_ = -1, lists_theta_ = 0, built_root_radius_ = 0;
+  std::vector<double> built_radius_;
+  std::vector<char> built_empty_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  ///< gathered source ranges
   std::vector<double> gx_, gy_, gz_;                           ///< their mutual sums
-  std::vector<Vec3> centres_;        ///< node centres, for the batched M2L
-  std::vector<double> zero_, sink_;  ///< the batches' padding
-  std::vector<double> grad_;         ///< one leaf's gradient polynomials (x, y, z), for L2P
+  std::vector<Vec3> centres_;                   ///< node centres, for the batched M2L
+  std::vector<double> zero_, sink_;             ///< the batches' padding
   std::vector<double> nx_, ny_, nz_, nq_, ng_;  ///< one leaf's near sources, gathered
   std::uint64_t m2l_ = 0, p2p_ = 0;
   FmmProfile profile_;

@@ -78,9 +78,12 @@ void Tree::build(std::span<const Source> sources, double softening, TreeOptions 
   use_fmm_ = options.fmm_order > 0;
   if (use_fmm_) {
     if (!fmm_) fmm_ = std::make_unique<Fmm>();
-    fmm_->build(
-        sources, softening,
-        {.theta = options.theta, .order = options.fmm_order, .leaf_size = options.leaf_size});
+    fmm_->build(sources, softening,
+                {.theta = options.theta,
+                 .order = options.fmm_order,
+                 .leaf_size = options.leaf_size,
+                 .single_near = options.fmm_single_near,
+                 .reuse = options.reuse});
     // evaluate() sums directly over these; the cells are left as they were
     // but never used (the next Barnes-Hut build cannot refit them).
     sources_.assign(sources.begin(), sources.end());

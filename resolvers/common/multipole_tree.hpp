@@ -71,9 +71,14 @@ struct TreeOptions {
   /// 0: the Barnes-Hut walk above. From 1: build() builds the fast multipole
   /// method of fmm.hpp instead, with expansions of this order, `theta` as its
   /// separation parameter and `leaf_size` as its leaves' size, and
-  /// evaluate_at_sources() runs it (reuse is then ignored; evaluate() sums
+  /// evaluate_at_sources() runs it (reuse then keeps the FMM's cells and
+  /// lists, FmmOptions::reuse; evaluate() sums
   /// directly, exactly).
   int fmm_order = 0;
+  /// With fmm_order: the FMM's near field in single precision where the
+  /// softening allows it (FmmOptions::single_near; about twice as fast, its
+  /// error far under the expansions'). Off: double, as before.
+  bool fmm_single_near = false;
 };
 
 /// The softened kernel K(r), 1/m^2 along r; zero at r = 0 when eps = 0.

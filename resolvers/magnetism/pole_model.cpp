@@ -25,7 +25,8 @@ void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::
     tree.build(tree_sources(poles), softening,
                {.theta = options.theta,
                 .reuse = options.reuse,
-                .fmm_order = options.method == Summation::Fmm ? options.fmm_order : 0});
+                .fmm_order = options.method == Summation::Fmm ? options.fmm_order : 0,
+                .fmm_single_near = true});
     std::vector<Vec3> k(n);
     tree.evaluate_at_sources(k);
     for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);

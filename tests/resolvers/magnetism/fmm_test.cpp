@@ -302,6 +302,198 @@ TEST(Fmm, OnceEachNearKernelMatchesTheScalarReference) {
   }
 }
 
+// --- the near field in single precision (FmmOptions::single_near) ---------------
+
+/// Whether this CPU runs the single-precision near field at all (AVX-512).
+bool has_single_kernel() {
+  float x = 0, y = 0, z = 0, q = 1;
+  std::int32_t g = -2, sg = -1;
+  double f[3] = {};
+  return direct_accumulate_single({&x, &y, &z, &g, f, f + 1, f + 2, 1}, {&x, &y, &z, &q, &sg, 1},
+                                  1e-6f);
+}
+
+TEST(Fmm, SingleNearFieldWithinTheBoundOnRandomPackedAndClosePoles) {
+  // The defaults with the near field in float, on random magnets, a packed
+  // block and magnets with coincident and 1e-9 m poles (softening 5 mm): the
+  // force against the direct sum within the bound, and against the same FMM
+  // in double within 1e-5 (the float kernel's own error is far below the
+  // expansions').
+  Magnets close = random_magnets(300, 9);
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 at = close.s[std::size_t(2 * i)].position;
+    close.add(at + Vec3{0.0425, 0, 0}, {1, 0, 0}, 0.085, 80);
+    close.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);
+  }
+  for (int i = 0; i < 100; ++i) close.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  struct Case {
+    const char* name;
+    Magnets m;
+    FmmOptions o;
+    double bound;
+  };
+  const FmmOptions defaults{
+      .theta = magnetism::kFmmTheta, .order = magnetism::kFmmOrder, .leaf_size = 64};
+  std::vector<Case> cases{
+      {"random 1500", random_magnets(1500, 41), defaults, 1e-3},
+      {"packed 10 x 8 x 8",
+       packed_magnets(10, 8, 8),
+       {.theta = 0.4, .order = 6, .leaf_size = 64},
+       1e-3},
+      {"coincident and close", close, {.theta = 0.5, .order = 5, .leaf_size = 64}, 1e-3}};
+  for (Case& c : cases) {
+    FmmOptions single = c.o;
+    single.single_near = true;
+    const auto exact = direct(c.m.s, 0.005);
+    const auto twin = fmm(c.m.s, 0.005, c.o);
+    Fmm f;
+    f.build(c.m.s, 0.005, single);
+    std::vector<Vec3> approx(c.m.s.size());
+    f.evaluate_at_sources(approx);
+    ASSERT_TRUE(all_finite(approx)) << c.name;
+    const double e = rms_relative(net(c.m, approx), net(c.m, exact));
+    const double d = rms_relative(net(c.m, approx), net(c.m, twin));
+    std::printf("%s, single near field: error %.2e, against double %.2e, %llu of %llu pairs\n",
+                c.name, e, d, static_cast<unsigned long long>(f.single_interactions()),
+                static_cast<unsigned long long>(f.direct_interactions()));
+    EXPECT_LT(e, c.bound) << c.name;
+    EXPECT_LT(d, 1e-5) << c.name;
+    if (has_single_kernel()) EXPECT_EQ(f.single_interactions(), f.direct_interactions()) << c.name;
+  }
+}
+
+TEST(Fmm, SingleNearFieldFallsBackToDoubleWithoutSofteningOrWhenTheRegionIsTooLarge) {
+  // No softening (1e-9 m pairs would be lost to float's rounding), or near
+  // regions wider than kSingleNearReach softening lengths: the double path,
+  // bit for bit.
+  Magnets m = random_magnets(400, 43);
+  for (int i = 0; i < 20; ++i)
+    m.add(m.s[std::size_t(2 * i)].position + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);
+  for (double eps : {0.0, 1e-6}) {
+    const FmmOptions o{.theta = 0.6, .order = 4, .leaf_size = 32};
+    FmmOptions single = o;
+    single.single_near = true;
+    Fmm f;
+    f.build(m.s, eps, single);
+    std::vector<Vec3> a(m.s.size());
+    f.evaluate_at_sources(a);
+    const auto b = fmm(m.s, eps, o);
+    EXPECT_EQ(f.single_interactions(), 0u) << "eps " << eps;
+    for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "eps " << eps << " " << i;
+  }
+}
+
+TEST(Fmm, SingleKernelsMatchTheScalarReference) {
+  // direct_accumulate_single and its once-each form against the double
+  // scalar loop, with an odd number of targets, 17 sources (a masked tail), a
+  // source on a target and shared groups: the same sums to float's rounding.
+  if (!has_single_kernel()) GTEST_SKIP() << "no single-precision kernel on this CPU";
+  const Magnets m = random_magnets(20, 47);
+  const std::size_t nt = 23, ns = 17;  // targets: poles 0..22; sources: poles 23..39
+  std::vector<double> x, y, z, q, g, tg;
+  for (const Source& s : m.s)
+    x.push_back(s.position.x), y.push_back(s.position.y), z.push_back(s.position.z),
+        q.push_back(s.strength), g.push_back(double(s.group)), tg.push_back(double(s.group));
+  x[30] = x[4], y[30] = y[4], z[30] = z[4];  // a source exactly on target 4
+  g[25] = tg[2];                             // a source in target 2's group
+  std::vector<float> fx32, fy32, fz32, fq32;
+  std::vector<std::int32_t> sg, tgi;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    fx32.push_back(float(x[i])), fy32.push_back(float(y[i])), fz32.push_back(float(z[i])),
+        fq32.push_back(float(q[i])), sg.push_back(std::int32_t(g[i])),
+        tgi.push_back(std::int32_t(tg[i]));
+  const double eps2 = 0.005 * 0.005;
+  std::vector<double> rx(nt), ry(nt), rz(nt), sx(ns), sy(ns), sz(ns);
+  const SoaSources src{x.data() + nt, y.data() + nt, z.data() + nt,
+                       q.data() + nt, g.data() + nt, ns};
+  direct_accumulate_mutual_scalar(
+      {x.data(), y.data(), z.data(), tg.data(), rx.data(), ry.data(), rz.data(), nt}, q.data(), src,
+      sx.data(), sy.data(), sz.data(), eps2);
+  const SoaSourcesF srcf{fx32.data() + nt, fy32.data() + nt, fz32.data() + nt,
+                         fq32.data() + nt, sg.data() + nt,   ns};
+  for (bool mutual : {false, true}) {
+    std::vector<double> ax(nt), ay(nt), az(nt);
+    std::vector<float> bx(ns), by(ns), bz(ns);
+    const SoaTargetsF t{fx32.data(), fy32.data(), fz32.data(), tgi.data(),
+                        ax.data(),   ay.data(),   az.data(),   nt};
+    if (mutual)
+      ASSERT_TRUE(direct_accumulate_mutual_single(t, fq32.data(), srcf, bx.data(), by.data(),
+                                                  bz.data(), float(eps2)));
+    else
+      ASSERT_TRUE(direct_accumulate_single(t, srcf, float(eps2)));
+    double big = 0;
+    for (std::size_t i = 0; i < nt; ++i)
+      big = std::max({big, std::abs(rx[i]), std::abs(ry[i]), std::abs(rz[i])});
+    for (std::size_t i = 0; i < nt; ++i) {
+      EXPECT_NEAR(ax[i], rx[i], 1e-5 * big) << i;
+      EXPECT_NEAR(ay[i], ry[i], 1e-5 * big) << i;
+      EXPECT_NEAR(az[i], rz[i], 1e-5 * big) << i;
+    }
+    if (!mutual) continue;
+    double sbig = 0;
+    for (std::size_t j = 0; j < ns; ++j)
+      sbig = std::max({sbig, std::abs(sx[j]), std::abs(sy[j]), std::abs(sz[j])});
+    for (std::size_t j = 0; j < ns; ++j) {
+      EXPECT_NEAR(bx[j], sx[j], 1e-5 * sbig) << j;
+      EXPECT_NEAR(by[j], sy[j], 1e-5 * sbig) << j;
+      EXPECT_NEAR(bz[j], sz[j], 1e-5 * sbig) << j;
+    }
+  }
+}
+
+TEST(Fmm, ReuseKeepsTheCellsAndListsWhileTheMagnetsMoveLittle) {
+  // FmmOptions::reuse: the same positions again give the same bits, lists
+  // and all; magnets moved 2 mm keep the cells (and, mostly, the lists) and
+  // stay within the bound against the direct sum at their new places (the
+  // translations that no longer meet the criterion walked again); a
+  // change of groups, or a move that swells the cells, builds afresh.
+  const Magnets m = random_magnets(1500, 51);
+  const FmmOptions o{.theta = magnetism::kFmmTheta,
+                     .order = magnetism::kFmmOrder,
+                     .leaf_size = 64,
+                     .single_near = true,
+                     .reuse = true};
+  Fmm f;
+  f.build(m.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+  std::vector<Vec3> first(m.s.size()), again(m.s.size());
+  f.evaluate_at_sources(first);
+  f.build(m.s, 0.005, o);
+  EXPECT_TRUE(f.reused());
+  f.evaluate_at_sources(again);
+  EXPECT_TRUE(f.lists_reused());
+  for (std::size_t i = 0; i < first.size(); ++i) ASSERT_EQ(first[i], again[i]) << i;
+
+  std::mt19937_64 rng(53);
+  Magnets moved = m;
+  std::vector<Vec3> shift(m.centre.size());
+  for (Vec3& v : shift) v = layouts::random_direction(rng) * 0.002;
+  for (Source& s : moved.s) s.position += shift[s.group];
+  f.build(moved.s, 0.005, o);
+  EXPECT_TRUE(f.reused());
+  std::vector<Vec3> out(m.s.size());
+  f.evaluate_at_sources(out);
+  const double e = rms_relative(net(moved, out), net(moved, direct(moved.s, 0.005)));
+  std::printf("reused cells, magnets moved 2 mm: error %.2e, lists reused %d\n", e,
+              int(f.lists_reused()));
+  EXPECT_LT(e, 1e-3);
+  EXPECT_TRUE(f.lists_reused());
+
+  Magnets regrouped = moved;
+  std::swap(regrouped.s[0].group, regrouped.s[2].group);
+  f.build(regrouped.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+
+  Magnets spread = m;
+  for (Source& s : spread.s) s.position = s.position * 3.0;
+  f.build(m.s, 0.005, o);
+  f.build(spread.s, 0.005, o);
+  EXPECT_FALSE(f.reused());
+  f.evaluate_at_sources(out);
+  EXPECT_FALSE(f.lists_reused());
+  EXPECT_LT(rms_relative(net(spread, out), net(spread, direct(spread.s, 0.005))), 1e-3);
+}
+
 TEST(Fmm, ProfileAccountsForEveryPhase) {
   const Magnets m = random_magnets(800, 31);
   Fmm f;
