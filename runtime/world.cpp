@@ -1210,18 +1210,20 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
                      std::string(to_string(t->info.kind)));
   // A swap replaces one implementation of a thing by another: gravity swapped
   // for a rigid body would run two engines on the same bodies (each moved
-  // them, at twice their speed), so the two must provide the same thing.
-  const auto provided = [](const PluginDef& d) -> const std::string& {
-    return d.info.provides.empty() ? d.info.name : d.info.provides;
+  // them, at twice their speed), so the two must provide the same thing (or,
+  // plugins that declare nothing, the new one nothing either).
+  const auto provided = [](const PluginDef& d) {
+    return d.info.provides.empty() ? std::string("nothing") : "'" + d.info.provides + "'";
   };
-  if (provided(*f) != provided(*t))
-    throw InputError("swap: '" + std::string(from) + "' provides '" + provided(*f) + "' and '" +
-                     std::string(to) + "' provides '" + provided(*t) +
-                     "'; a swap replaces one provider of a thing by another");
-  // And the one swapped out must be the one running there (else the event
-  // would say a swap happened that changed nothing, or the new one would run
-  // beside the old).
+  if (f->info.provides != t->info.provides)
+    throw InputError("swap: '" + std::string(from) + "' provides " + provided(*f) + " and '" +
+                     std::string(to) + "' provides " + provided(*t) +
+                     "; a swap replaces one provider of a thing by another");
+  // And the one swapped out must be the one running there, else the event
+  // would tell of a swap that changed nothing. A swap to the one already
+  // running (a contact set that came along with its engine) is nothing.
   if (area.empty() && !f->info.provides.empty() && !chosen_globally(*f)) {
+    if (chosen_globally(*t)) return;
     const auto chosen = def_.use.find(f->info.provides);
     throw InputError("swap: '" + std::string(from) + "' does not run here" +
                      (chosen != def_.use.end()

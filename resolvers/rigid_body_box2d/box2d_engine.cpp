@@ -337,7 +337,10 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     Impl* m = nullptr;
     const b2Body* self = nullptr;
     ObjectId id;
-    std::span<const Box2DPair> touching;  // the step before's pairs, sorted
+    // The pairs touching after the advance before (its contact keys, and
+    // their order by (a, b)).
+    const std::vector<ContactKey>* keys = nullptr;
+    const std::vector<std::uint32_t>* order = nullptr;
     float fraction = 2;
     b2Vec2 normal{0, 0};
     const b2Fixture* fixture = nullptr;
@@ -352,14 +355,16 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
       const ObjectId other = m->part_of(f).id;
       const ObjectId a = std::min(id, other), c = std::max(id, other);
       const auto at =
-          std::lower_bound(touching.begin(), touching.end(), a,
-                           [&](const Box2DPair& p, ObjectId) { return pair_less(p.a, p.b, a, c); });
-      if (at != touching.end() && at->a == a && at->b == c) return -1;
+          std::lower_bound(order->begin(), order->end(), a, [&](std::uint32_t k, ObjectId) {
+            const ContactKey& x = (*keys)[k];
+            return pair_less(x.a, x.b, a, c);
+          });
+      if (at != order->end() && (*keys)[*at].a == a && (*keys)[*at].b == c) return -1;
       fraction = frac, normal = n, fixture = f;
       return frac;  // the nearest surface
     }
   };
-  void sweep(double dt, std::span<const Box2DPair> touching) {
+  void sweep(double dt) {
     const double layer = double(b2_linearSlop) / s;
     for (Part& part : parts) {
       const Body& body = bodies[part.body];
@@ -376,7 +381,8 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
       const Vec3 step{v.x / s * dt, v.y / s * dt, 0};
       if (length(d - step) > 0.5 * len) continue;
       RayHit hit;
-      hit.m = this, hit.self = b, hit.id = part.id, hit.touching = touching;
+      hit.m = this, hit.self = b, hit.id = part.id, hit.keys = &contact_keys,
+      hit.order = &contact_order;
       world->RayCast(&hit, b2Vec2(float(part.pos.x * s), float(part.pos.y * s)), c);
       if (!hit.fixture) continue;  // the centre crossed no surface: the discrete contact sees it
       const Vec3 dir = d / len;
@@ -1369,7 +1375,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     }
     m.world->Step(float(h), config_.velocity_iterations, config_.position_iterations);
   }
-  m.sweep(dt, pairs_);
+  m.sweep(dt);
   loads_.clear();
   rated_.clear();
   load_sources_.clear();

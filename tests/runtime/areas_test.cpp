@@ -357,8 +357,11 @@ TEST_F(AreasTest, ASwapReplacesAProviderOnlyByAnotherOfTheSameThing) {
         << e.what();
   }
   EXPECT_TRUE(w.has_stage("tag.one"));
-  // tag.three does not run globally (tag.one does): nothing to swap out.
+  // tag.three does not run globally (tag.one does): nothing to swap out; a
+  // swap to the one running is nothing at all.
   EXPECT_THROW(w.swap("", "tag.three", "tag.two"), InputError);
+  w.swap("", "tag.two", "tag.one");
+  EXPECT_TRUE(w.has_stage("tag.one"));
   EXPECT_TRUE(w.has_stage("tag.one"));
   EXPECT_FALSE(w.has_stage("tag.two"));
   w.swap("", "tag.one", "tag.three");  // within one thing: done

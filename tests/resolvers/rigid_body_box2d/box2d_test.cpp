@@ -575,8 +575,12 @@ TEST(Box2D, ARestoredHeapDoesNotReportItsContactLimitAgain) {
         "after the restore\n",
         box2d ? "box2d" : "ode", before, went_on, events - at_restore);
     EXPECT_EQ(before, 1) << (box2d ? "box2d" : "ode");
-    EXPECT_EQ(went_on, 0) << (box2d ? "box2d" : "ode");
-    EXPECT_EQ(events - at_restore, 0) << (box2d ? "box2d" : "ode");
+    // On Box2D the heap guard (session 17) takes buried balls out of the world
+    // and lets them back as their spot clears; a return can leave pairs out
+    // again, a new episode, reported once (1 event in the run that went on).
+    // The restore must not add one for the episode already reported.
+    EXPECT_EQ(went_on, box2d ? 1 : 0) << (box2d ? "box2d" : "ode");
+    EXPECT_LE(events - at_restore, went_on) << (box2d ? "box2d" : "ode");
   }
 }
 
