@@ -57,13 +57,18 @@ struct KitRun : test::EventRecords {
   }
 };
 
-KitRun run_kit(const std::string& scene, double seconds, const Engines& e,
-               const char* axle = nullptr) {
-  PluginRegistry registry;
+/// A bundled scene (or a test's), loaded as `alloy run` loads it.
+lua::LoadedScene load_kit_scene(const std::string& scene, PluginRegistry& registry) {
   register_native_plugins(registry);
   lua::LoadOptions load;
   load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(source(scene), registry, load);
+  return lua::load_scene(source(scene), registry, load);
+}
+
+KitRun run_kit(const std::string& scene, double seconds, const Engines& e,
+               const char* axle = nullptr) {
+  PluginRegistry registry;
+  lua::LoadedScene loaded = load_kit_scene(scene, registry);
   World& world = *loaded.world;
   if (e.start) world.swap("", kOde, e.start);
   if (e.to) world.schedule_swap(e.at, "", e.start ? e.start : kOde, e.to);
@@ -103,10 +108,16 @@ struct Ringing {
   int count = 0;
   double period = 0;
 };
-Ringing ringing(const KitRun& r, double t0, double t1) {
+/// The strike times in [t0, t1).
+std::vector<double> strikes_in(const KitRun& r, double t0, double t1) {
   std::vector<double> t;
   for (double s : r.strikes())
     if (s >= t0 && s < t1) t.push_back(s);
+  return t;
+}
+
+Ringing ringing(const KitRun& r, double t0, double t1) {
+  const std::vector<double> t = strikes_in(r, t0, t1);
   Ringing out{int(t.size()), 0};
   if (t.size() > 1) out.period = (t.back() - t.front()) / double(t.size() - 1);
   return out;
@@ -121,9 +132,7 @@ struct Steadiness {
   long mode = 0;
 };
 Steadiness steadiness(const KitRun& r, double t0, double t1) {
-  std::vector<double> t;
-  for (double s : r.strikes())
-    if (s >= t0 && s < t1) t.push_back(s);
+  const std::vector<double> t = strikes_in(r, t0, t1);
   Steadiness out;
   for (std::size_t i = 1; i < t.size(); ++i)
     out.steps.push_back(std::lround((t[i] - t[i - 1]) / r.dt));
@@ -316,10 +325,7 @@ test::EventRecords run_swapped(
     const std::string& scene, double seconds,
     const std::vector<std::tuple<double, const char*, const char*>>& swaps) {
   PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(source(scene), registry, load);
+  lua::LoadedScene loaded = load_kit_scene(scene, registry);
   World& world = *loaded.world;
   for (const auto& [at, from, to] : swaps) world.schedule_swap(at, "", from, to);
   test::EventRecords r;
