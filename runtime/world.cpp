@@ -1322,6 +1322,13 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
   // The contact sets going out hand their pairs to the ones coming in (at
   // their creation, in sync_structure), so that the swap itself begins and
   // ends no contact.
+  // Emptied however the swap ends (a new engine that fails to build throws
+  // out of sync_structure below): a contact set made later (a body entering
+  // an area) must not take pairs from a swap that did not happen.
+  struct ClearRetired {
+    std::vector<Retired>& list;
+    ~ClearRetired() { list.clear(); }
+  } clear_retired{retired_};
   retired_.clear();
   if (started_)
     for (Slot* s : old)
@@ -1348,7 +1355,6 @@ void World::swap_now(std::string_view area, std::string_view from, std::string_v
     synced_ = false;
     sync_structure();  // instantiate the new stage and its dependents, build, prime
   }
-  retired_.clear();
 }
 
 std::vector<std::string> World::plugin_changed(std::string_view plugin) {
