@@ -117,7 +117,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   const PropertyStore& store = world.store();
   const double dt = world.dt();
   const std::uint64_t step = world.step();
-  // induction_order 1 (the default until session 16): the parts move on
+  // induction_order 1 (the default through session 16): the parts move on
   // with their present velocity, as in sessions 14-16 (header).
   const bool second = target_.config().induction_order == 2;
   // A stage's first apply (the priming of a stage just created: at the
