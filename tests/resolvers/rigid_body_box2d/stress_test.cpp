@@ -4,7 +4,8 @@
 // are spread off the plane), the thousand-body pile (a 3D bin), the packed
 // magnets and circuits (no rigid-body engine in question). ODE-only settings (its solver,
 // auto_disable, substeps, ccd) have Box2D's counterparts where they exist (`sleep`, `substeps`);
-// the engine sweeps fast parts against static ones itself (Box2D's own continuous collision is off).
+// the engine sweeps fast parts against static ones itself (Box2D's own continuous collision is
+// off).
 #include <gtest/gtest.h>
 
 #include <cmath>
