@@ -11,6 +11,17 @@
 namespace alloy::multipole {
 
 namespace {
+
+/// Appends the source range [begin, end) to `runs`, joining it to the last
+/// run when they are neighbours in memory (one run for both).
+void add_run(std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs, std::uint32_t begin,
+             std::uint32_t end) {
+  if (!runs.empty() && runs.back().second == begin)
+    runs.back().second = end;
+  else
+    runs.emplace_back(begin, end);
+}
+
 // Below this a cube is not split further, whatever it holds: atoms at one
 // point (or nearly) would otherwise recurse without end.
 constexpr int kMaxDepth = 40;
@@ -858,10 +869,7 @@ void Fmm::near_field_mutual(std::int32_t k, std::span<const std::int32_t> near) 
       continue;
     }
     const Node& B = nodes_[std::size_t(b)];
-    if (!runs_.empty() && runs_.back().second == B.begin)
-      runs_.back().second = B.end;  // neighbours in memory: one run
-    else
-      runs_.emplace_back(B.begin, B.end);
+    add_run(runs_, B.begin, B.end);
   }
   if (runs_.empty()) return;
   for (const auto& [b, e] : runs_) {
@@ -923,10 +931,7 @@ bool Fmm::near_field_single(std::int32_t k, std::span<const std::int32_t> near) 
       continue;
     }
     const Node& B = nodes_[std::size_t(b)];
-    if (!runs_.empty() && runs_.back().second == B.begin)
-      runs_.back().second = B.end;  // neighbours in memory: one run
-    else
-      runs_.emplace_back(B.begin, B.end);
+    add_run(runs_, B.begin, B.end);
   }
   if (runs_.empty()) return true;
   std::size_t m = 0;
