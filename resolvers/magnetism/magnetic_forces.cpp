@@ -3,9 +3,64 @@
 #include <algorithm>
 #include <cmath>
 
+#include "resolvers/common/direct_kernel.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
 
 namespace alloy::magnetism {
+
+double sampled_force_error(std::span<const Pole> poles, std::span<const MagneticBody> bodies,
+                           std::span<const Vec3> approx, double softening) {
+  std::vector<std::uint32_t> with_poles;
+  for (std::uint32_t b = 0; b < bodies.size(); ++b)
+    if (bodies[b].pole_count > 0) with_poles.push_back(b);
+  const std::size_t m = with_poles.size(), parts = std::min(m, kAutoCheckParts);
+  if (parts == 0) return 0;
+  std::vector<double> sx(poles.size()), sy(poles.size()), sz(poles.size()), sq(poles.size()),
+      sg(poles.size());
+  for (std::size_t i = 0; i < poles.size(); ++i) {
+    sx[i] = poles[i].position.x, sy[i] = poles[i].position.y, sz[i] = poles[i].position.z;
+    sq[i] = poles[i].strength, sg[i] = double(poles[i].body);
+  }
+  std::vector<std::uint32_t> target;  // pole indices
+  for (std::size_t k = 0; k < parts; ++k) {
+    const MagneticBody& b = bodies[with_poles[k * m / parts]];
+    for (std::uint32_t i = b.first_pole; i < b.first_pole + b.pole_count; ++i) target.push_back(i);
+  }
+  const std::size_t t = target.size();
+  std::vector<double> tx(t), ty(t), tz(t), tg(t), fx(t, 0.0), fy(t, 0.0), fz(t, 0.0);
+  for (std::size_t j = 0; j < t; ++j) {
+    const Pole& p = poles[target[j]];
+    tx[j] = p.position.x, ty[j] = p.position.y, tz[j] = p.position.z, tg[j] = double(p.body);
+  }
+  multipole::direct_accumulate({.x = tx.data(),
+                                .y = ty.data(),
+                                .z = tz.data(),
+                                .g = tg.data(),
+                                .fx = fx.data(),
+                                .fy = fy.data(),
+                                .fz = fz.data(),
+                                .n = t},
+                               {.x = sx.data(),
+                                .y = sy.data(),
+                                .z = sz.data(),
+                                .q = sq.data(),
+                                .g = sg.data(),
+                                .n = poles.size()},
+                               softening * softening);
+  double num = 0, den = 0;
+  for (std::size_t j = 0; j < t;) {
+    const std::uint32_t body = poles[target[j]].body;
+    Vec3 exact{}, fast{};
+    for (; j < t && poles[target[j]].body == body; ++j) {
+      exact += Vec3{fx[j], fy[j], fz[j]} * (kMu0Over4Pi * poles[target[j]].strength);
+      fast += approx[target[j]];
+    }
+    num += dot(fast - exact, fast - exact);
+    den += dot(exact, exact);
+  }
+  if (den == 0) return num == 0 ? 0 : INFINITY;
+  return std::sqrt(num / den);
+}
 
 double iron_coenergy_ratio(double ratio) {
   // m = m_s tanh(x) for a linear moment m_s x, so x = atanh(|m| / m_s); the
@@ -218,8 +273,31 @@ void MagneticForces::update(const WorldView& world) {
 
   // 4. Forces on poles, then force and torque about each part's centre.
   std::vector<Vec3> pole_force(poles_.size());
-  used_tree_ = summation_.use_tree(poles_.size());
-  accumulate_pole_forces(poles_, softening_, pole_force, summation_, &tree_);
+  // Auto (the default): from kFmmAutoPoles poles the FMM, which is the
+  // fastest there on spread-out parts but several percent off on a packed
+  // block of aligned bars (their near forces cancel; docs/magnetism.md "Fast
+  // summation"). Its error is therefore measured every evaluation against the
+  // direct sum on a sample of parts, and where it exceeds the tolerance the
+  // evaluation is redone on the tree, whose theta is set for that block.
+  SummationOptions step = summation_;
+  last_check_error_ = NAN;
+  if (summation_.method == Summation::Auto && poles_.size() >= kFmmAutoPoles) {
+    step.method = Summation::Fmm;
+    step.theta = kFmmTheta;
+    accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
+    last_check_error_ = sampled_force_error(poles_, bodies_, pole_force, softening_);
+    if (!(last_check_error_ <= summation_.tolerance)) {
+      step = summation_;
+      std::fill(pole_force.begin(), pole_force.end(), Vec3{});
+      accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
+    }
+  } else {
+    accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
+  }
+  used_method_ = !step.use_tree(poles_.size())   ? Summation::Direct
+                 : step.method == Summation::Fmm ? Summation::Fmm
+                                                 : Summation::Tree;
+  used_tree_ = used_method_ != Summation::Direct;
   for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
     for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
@@ -298,7 +376,7 @@ void MagneticForces::update(const WorldView& world) {
     count_moved[b] = 2;
   }
   std::vector<Vec3> force_moved(poles_moved.size());
-  accumulate_pole_forces(poles_moved, softening_, force_moved, summation_, &tree_);
+  accumulate_pole_forces(poles_moved, softening_, force_moved, step, &tree_);
   for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
     if (count_moved[b] == 0 ||

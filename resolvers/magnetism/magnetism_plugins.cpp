@@ -95,6 +95,7 @@ void register_magnetism_resolver(PluginRegistry& registry) {
             if (!(sum.theta > 0 && sum.theta < 1))
               throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
             sum.reuse = s.boolean("reuse_tree", false);
+            sum.tolerance = tolerance;
             return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false));
           },
   });

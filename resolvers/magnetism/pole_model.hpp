@@ -78,7 +78,11 @@ inline BarPoles bar_poles(Vec3 centre, Vec3 axis, double separation) {
 enum class Summation : std::uint8_t {
   Direct,  ///< every pair, exactly
   Tree,    ///< Barnes-Hut octree, cells expanded to the octupole
-  Auto,    ///< Direct below kTreeCrossoverPoles poles, Tree from there on
+  /// Direct below kFmmAutoPoles poles; from there the FMM, checked against
+  /// the direct sum on a sample of parts every evaluation (magnetic_forces.cpp),
+  /// and the tree (Direct below kTreeCrossoverPoles) where the check finds the
+  /// FMM's error above SummationOptions::tolerance.
+  Auto,
   /// The fast multipole method (multipole/fmm.hpp): cell-to-cell expansions of
   /// order fmm_order, theta its separation parameter. Faster than the tree on
   /// spread-out magnets, far less accurate on packed blocks at the same
@@ -91,6 +95,10 @@ enum class Summation : std::uint8_t {
 /// "Magnetic forces": the blocked tree with SIMD near field against the SIMD
 /// direct sum crosses near 1,100 magnets, 2,200 poles; issue 16 asks for 500).
 inline constexpr std::size_t kTreeCrossoverPoles = 2200;
+/// Number of poles from which Auto takes the FMM (with its check) instead of
+/// the direct sum: the FMM at its defaults is faster than the SIMD direct sum
+/// from 370-450 magnets (bench/scaling.cpp --magnets, session 17-18).
+inline constexpr std::size_t kFmmAutoPoles = 800;
 /// From this many poles the direct sum runs on the SIMD kernel
 /// (multipole::direct_at_sources); below it, on the scalar loop that takes each
 /// pair once, whose bits the bundled scenes' golden hashes hold.
@@ -118,6 +126,10 @@ struct SummationOptions {
   bool reuse = false;
   /// Summation::Fmm: the expansions' order (1 to multipole::kMaxFmmOrder).
   int fmm_order = kFmmOrder;
+  /// Auto: the RMS relative error of the parts' forces the FMM may make (the
+  /// setting `tolerance`); above it, as the sampled check measures it, the
+  /// evaluation is redone on the tree.
+  double tolerance = 1e-3;
   /// Whether `method` sums `poles` poles with the tree (or the FMM).
   bool use_tree(std::size_t poles) const {
     return method == Summation::Tree || method == Summation::Fmm ||

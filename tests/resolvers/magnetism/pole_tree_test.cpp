@@ -319,5 +319,124 @@ TEST_F(MagneticForcesMethod, ToleranceSetsThetaAndReuseIsASetting) {
   }
 }
 
+// --- method "auto" (the default): the FMM with its check, else the tree ------------
+
+/// The stage on bars of a layout (the bars' axis is the body's x).
+struct LayoutStage {
+  LayoutStage(PluginRegistry& registry, const std::vector<layouts::Bar>& bars, WorldDef def)
+      : world(registry, std::move(def)) {
+    int i = 0;
+    for (const layouts::Bar& bar : bars) {
+      const Vec3 a = bar.axis / length(bar.axis);
+      const Vec3 about = cross({1, 0, 0}, a);
+      const double s = length(about);
+      const ObjectId id =
+          add_permanent(world, "m" + std::to_string(i++), bar.centre, 0, bar.strength);
+      if (s > 1e-12)
+        world.set(id, prop::kOrientation, Quat::from_axis_angle(about / s, std::atan2(s, a.x)));
+      else if (a.x < 0)
+        world.set(id, prop::kOrientation, Quat::from_angle_z(std::numbers::pi));
+    }
+    world.start();
+  }
+  const MagneticForces& stage() const { return forces_of(const_cast<World&>(world)); }
+  std::vector<Vec3> forces() const {
+    std::vector<Vec3> out;
+    for (const MagneticBody& b : stage().bodies()) out.push_back(b.force);
+    return out;
+  }
+  World world;
+};
+
+WorldDef method(const char* m) {
+  WorldDef def;
+  def.settings[MagneticForces::kName].set("method", std::string(m));
+  return def;
+}
+
+TEST_F(MagneticForcesMethod, AutoTakesTheFmmOnSpreadMagnetsWithinTheTolerance) {
+  // 500 magnets, 1,000 poles: past kFmmAutoPoles, below the tree's crossover.
+  static_assert(kFmmAutoPoles <= 1000 && 1000 < kTreeCrossoverPoles);
+  const auto bars = layouts::random_bars(500, 3);
+  const LayoutStage automatic(registry, bars, WorldDef{}), direct(registry, bars, method("direct"));
+  EXPECT_EQ(automatic.stage().used_method(), Summation::Fmm);
+  EXPECT_EQ(direct.stage().used_method(), Summation::Direct);
+  const double error = rms_relative(automatic.forces(), direct.forces());
+  EXPECT_LT(error, 1e-3);
+  EXPECT_LE(automatic.stage().last_check_error(), 1e-3);
+  EXPECT_TRUE(std::isnan(direct.stage().last_check_error()));
+  // Below kFmmAutoPoles auto is the direct sum, bit for bit.
+  const auto few = layouts::random_bars(kFmmAutoPoles / 2 - 1, 3);
+  const LayoutStage few_auto(registry, few, WorldDef{}),
+      few_direct(registry, few, method("direct"));
+  EXPECT_EQ(few_auto.stage().used_method(), Summation::Direct);
+  EXPECT_EQ(few_auto.forces(), few_direct.forces());
+}
+
+TEST_F(MagneticForcesMethod, AutoFallsBackWhereTheCheckFindsTheFmmOutsideTheTolerance) {
+  // A packed block of aligned bars (640 magnets): the FMM at its defaults is
+  // far outside 1e-3 there (near forces cancel), so auto sums directly
+  // (1,280 poles, below the tree's crossover) and gets the direct sum's bits.
+  const auto block = layouts::packed_bars(10, 8, 8);
+  const LayoutStage automatic(registry, block, WorldDef{}),
+      direct(registry, block, method("direct")), fmm(registry, block, method("fmm"));
+  EXPECT_GT(rms_relative(fmm.forces(), direct.forces()), 1e-3) << "the case the check is for";
+  EXPECT_GT(automatic.stage().last_check_error(), 1e-3);
+  EXPECT_EQ(automatic.stage().used_method(), Summation::Direct);
+  EXPECT_EQ(automatic.forces(), direct.forces());
+  // A tolerance the FMM cannot meet on spread magnets either: the same.
+  WorldDef strict;
+  strict.settings[MagneticForces::kName].set("tolerance", 1e-5);
+  const auto bars = layouts::random_bars(500, 3);
+  const LayoutStage tight(registry, bars, strict), exact(registry, bars, method("direct"));
+  EXPECT_EQ(tight.stage().used_method(), Summation::Direct);
+  EXPECT_EQ(tight.forces(), exact.forces());
+}
+
+TEST_F(MagneticForcesMethod, AutoWithinTheToleranceOnClusteredCoincidentAndVeryClosePoles) {
+  // Spread magnets, a tight cluster, two magnets at one place and pairs 1e-9 m
+  // apart: whatever auto takes, its forces are within the tolerance.
+  std::vector<layouts::Bar> bars = layouts::random_bars(420, 5);
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> g(0, 0.05);
+  for (int i = 0; i < 60; ++i)
+    bars.push_back(
+        {Vec3{1, 1, 1} + Vec3{g(rng), g(rng), g(rng)}, layouts::random_direction(rng), 100});
+  bars.push_back({{0.3, 0.3, 0.3}, {0, 0, 1}, 80});
+  bars.push_back({{0.3, 0.3, 0.3}, {0, 1, 0}, 120});
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 at{0.5 + 0.3 * i, 1.5, 0.2};
+    bars.push_back({at, {1, 0, 0}, 100});
+    bars.push_back({at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 90});
+  }
+  const LayoutStage automatic(registry, bars, WorldDef{}), direct(registry, bars, method("direct"));
+  for (const Vec3& f : automatic.forces()) ASSERT_TRUE(is_finite(f));
+  EXPECT_NE(automatic.stage().used_method(), Summation::Tree) << "below the tree's crossover";
+  EXPECT_LT(rms_relative(automatic.forces(), direct.forces()), 1e-3);
+}
+
+TEST(AutoCheck, SampledErrorFollowsTheFullError) {
+  // The check's estimate on 32 of the parts against the RMS error over all of
+  // them, for FMM forces on spread magnets (about 3e-4) and on a packed block
+  // (several percent): within a factor of 3 each, so that 1e-3 tells them apart.
+  for (bool packed : {false, true}) {
+    const Bars bars = packed ? packed_bars(10, 8, 8) : random_bars(1000, 11);
+    std::vector<Vec3> fast(bars.poles.size()), exact(bars.poles.size());
+    accumulate_pole_forces(bars.poles, 0.005, fast, {.method = Summation::Fmm, .theta = kFmmTheta});
+    accumulate_pole_forces(bars.poles, 0.005, exact, kDirect);
+    std::vector<MagneticBody> bodies(bars.count());
+    std::vector<Vec3> f(bars.count()), e(bars.count());
+    for (std::uint32_t b = 0; b < bars.count(); ++b) {
+      bodies[b].first_pole = 2 * b, bodies[b].pole_count = 2;
+      f[b] = fast[2 * b] + fast[2 * b + 1], e[b] = exact[2 * b] + exact[2 * b + 1];
+    }
+    const double full = rms_relative(f, e);
+    const double sampled = sampled_force_error(bars.poles, bodies, fast, 0.005);
+    EXPECT_GT(sampled, full / 3) << packed;
+    EXPECT_LT(sampled, full * 3) << packed;
+    EXPECT_EQ(sampled_force_error(bars.poles, bodies, exact, 0.005) < 1e-12, true) << packed;
+  }
+}
+
 }  // namespace
 }  // namespace alloy::magnetism
