@@ -117,12 +117,12 @@ class ElectricityFromMagnetism : public Interaction {
   /// loses in one step from the current its own velocity induces, as a
   /// fraction of that velocity (G^2/(m R) dt when L/R << dt, G^2 dt^2/(m L)
   /// when L/R >> dt): the coupling, one step late by the method, overshoots
-  /// and creates energy when it nears 1 (measured: a magnet dropped into a
-  /// closed coil rises above its release at g of 0.9 and more, falls
-  /// correctly at 0.36). Reported once per coil and part, as the event
-  /// `induction_coupling_strong` (a = the coil, b = the part; values gain,
-  /// gradient Wb/m, mass kg, resistance Ohm, inductance H, dt s, and
-  /// dt_suggested s, the step that brings the gain to kStrongCouplingGain / 2).
+  /// and creates energy as it nears 1 (measured, a 15 g magnet dropped into
+  /// a closed 3 Ohm coil: thrown back up at g = 0.67 at 1/240 s; braked
+  /// without rising at 0.58 and 0.34, 1/1293 and 1/1920 s). Reported once per coil and part, as the
+  /// event `induction_coupling_strong` (a = the coil, b = the part; values gain, gradient Wb/m,
+  /// mass kg, resistance Ohm, inductance H, dt s, and dt_suggested s, the step that brings the gain
+  /// to kStrongCouplingGain / 2).
   static constexpr double kStrongCouplingGain = 0.5;
   struct StrongCoupling {
     ObjectId coil, part;
