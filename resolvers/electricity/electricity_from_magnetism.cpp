@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -107,6 +108,81 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
   }
 }
 
+void ElectricityFromMagnetism::check_coupling(const WorldView& world, ObjectId coil,
+                                              const CoilGeometry& g, double inductance) {
+  // An open loop carries no current: no coupling to overshoot.
+  if (!target_.closed(coil)) return;
+  const PropertyStore& store = world.store();
+  const auto mass = mass_.column<double>(world);
+  const auto fixed = static_.column<std::uint8_t>(world);
+  const auto pinned = pinned_.column<std::uint8_t>(world);
+  const auto resistance = resistance_.column<double>(world);
+  // A part the rigid body does not move (static, pinned, no mass) takes no
+  // velocity from the coil: its inverse mass is 0.
+  auto inverse_mass = [&](std::uint32_t slot) {
+    if (fixed.value_or(slot, 0) != 0 || pinned.value_or(slot, 0) != 0) return 0.0;
+    const double m = mass.value_or(slot, 0.0);
+    return m > 0 && std::isfinite(m) ? 1 / m : 0.0;
+  };
+  const double dt = world.dt();
+  // The coil's own resistance: the loop's is at least that (wires, the
+  // battery, a lamp add to it), so the gain below is an upper bound. The
+  // circuit's floor (1 uOhm) keeps an ideal coil finite.
+  const double r = std::max(resistance.value_or(coil.index, 0.0), 1e-6);
+  // The current one step after a step EMF of 1 V: (1 - exp(-R dt/L)) / R.
+  const double x = inductance > 0 ? r * dt / inductance : INFINITY;
+  const double response = x < 1e-8 ? dt / inductance : -std::expm1(-x) / r;
+  const double coil_inverse = inverse_mass(coil.index);
+  CoilGeometry held = g;  // the gradient with the coil held: the part moves alone
+  held.velocity = {}, held.angular_velocity = {};
+  const auto poles = forces_.poles();
+  static constexpr Vec3 kAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const MagneticBody& b : forces_.bodies()) {
+    if (b.pole_count != 2 || b.id == coil || !store.alive(b.id)) continue;
+    // Relative motion: the part and the coil recoil from each other.
+    const double inverse = inverse_mass(b.id.index) + coil_inverse;
+    if (!(inverse > 0)) continue;
+    const std::span<const Pole> pair = poles.subspan(b.first_pole, 2);
+    Vec3 gradient;  // dPhi/dx of the part's translation, Wb/m
+    double* component[3] = {&gradient.x, &gradient.y, &gradient.z};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 unit[2] = {kAxes[k], kAxes[k]};
+      *component[k] = coil_flux(pair, unit, forces_.softening(), held).rate;
+    }
+    const double g2 = dot(gradient, gradient);
+    const double gain = g2 * inverse * dt * response;
+    if (!std::isfinite(gain)) continue;
+    largest_gain_ = std::max(largest_gain_, gain);
+    if (gain < kStrongCouplingGain) continue;
+    auto seen = std::find_if(strong_.begin(), strong_.end(), [&](const StrongCoupling& s) {
+      return s.coil == coil && s.part == b.id;
+    });
+    if (seen != strong_.end()) {
+      seen->gain = std::max(seen->gain, gain);
+      continue;
+    }
+    strong_.push_back({coil, b.id, gain});
+    // The gain grows with the step (as dt with a resistive coil, dt^2 with
+    // an inductive one): the step scaled by half the threshold over the
+    // gain brings it below half the threshold either way.
+    const double suggested = dt * 0.5 * kStrongCouplingGain / gain;
+    world.emit({.type = "induction_coupling_strong",
+                .a = coil,
+                .b = b.id,
+                .values = {{"gain", gain},
+                           {"gradient", std::sqrt(g2)},
+                           {"mass", 1 / inverse},
+                           {"resistance", r},
+                           {"inductance", inductance},
+                           {"dt", dt},
+                           {"dt_suggested", suggested}},
+                .text = "the coil and the part are coupled too strongly for the step (the "
+                        "one-step-late induction overshoots and creates energy): use a step of "
+                        "at most " +
+                        std::to_string(suggested) + " s"});
+  }
+}
+
 void ElectricityFromMagnetism::apply(const WorldView& world) {
   coils_.clear();
   if (!ids_) ids_ = MagnetColumns::Ids::resolve(world);
@@ -194,7 +270,10 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       moved.velocity = coil.velocity + m.acceleration * (1.5 * dt);
       moved.angular_velocity = coil.angular_velocity + m.angular * (1.5 * dt);
       f_end = coil_flux(moved_poles_, pole_velocity_end_, forces_.softening(), moved);
-      if (coil.linkage != 0) geometry.push_back(coil), geometry_id.push_back(id);
+      if (coil.linkage != 0) {
+        geometry.push_back(coil), geometry_id.push_back(id);
+        check_coupling(world, id, coil, inductance[slot]);
+      }
     }
     if (!std::isfinite(f.flux) || !std::isfinite(f.rate)) f = {};
     if (!std::isfinite(f_end.rate)) f_end = f;
@@ -222,7 +301,7 @@ void register_electricity_from_magnetism(PluginRegistry& registry) {
                .reads = {prop::kMagnet, prop::kTurns, prop::kCoilFactor, prop::kPoleSeparation,
                          "inductance", prop::kPosition, prop::kOrientation, "velocity",
                          "angular_velocity", prop::kShape, prop::kSize, prop::kRadius,
-                         prop::kLength},
+                         prop::kLength, "mass", "static", "pinned", "resistance"},
                .needs = {prop::kMagnet},
                .derived = {MagneticForces::kName},
                .target = electricity::kResolverName,
