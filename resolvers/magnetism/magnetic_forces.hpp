@@ -122,6 +122,10 @@ class MagneticForces : public DerivedSet {
   Vec3 field(Vec3 point) const;
 
   double softening() const { return softening_; }
+  /// Per body (index of bodies()): 1 where a coil's near field acts on its
+  /// poles as a finite solenoid's (permanent magnets), else 0 (the pole pair's
+  /// field only: coils, soft iron). solenoid_field.hpp.
+  std::span<const std::uint8_t> sheet_bodies() const { return sheet_body_; }
   const SummationOptions& summation() const { return summation_; }
   void set_summation(const SummationOptions& s) { summation_ = s; }
   /// Whether the last update summed the forces with the tree.
@@ -143,6 +147,7 @@ class MagneticForces : public DerivedSet {
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody
+  std::vector<std::uint8_t> sheet_body_;     // per body: sheet_bodies()
   // Per body: the share of its pole strength the field induced (soft iron's
   // whole strength, a cored coil's core beyond its own current's share), A*m.
   std::vector<double> induced_share_;

@@ -68,9 +68,9 @@ double fade(double s, double& ds) {
 
 // The window's zone, in radii: the box |z| <= l/2 + kEndMargin a, rho <=
 // kSideMargin a, faded over kNearMargin a beyond it.
-constexpr double kEndMargin = 1.0;
-constexpr double kSideMargin = 1.5;
-constexpr double kNearMargin = 1.0;
+constexpr double kEndMargin = 2.0;
+constexpr double kSideMargin = 2.0;
+constexpr double kNearMargin = 3.0;
 
 struct Local {
   double z = 0, rho = 0;
@@ -91,6 +91,16 @@ Local local(const Solenoid& c, Vec3 p) {
 double solenoid_radius(double coil_factor, double separation) {
   if (!(coil_factor > 0) || !(separation > 0)) return 0;
   return std::sqrt(coil_factor * separation / kPi);
+}
+
+double coil_sheet_radius(const MagnetColumns& c, std::uint32_t slot, double coil_factor,
+                         double separation) {
+  const double a = solenoid_radius(coil_factor, separation);
+  if (const auto bulk = part_bulk(c, slot)) {
+    const double half_width = 0.5 * std::min(bulk->extent.y, bulk->extent.z);
+    if (!(a <= 1.05 * half_width)) return 0;
+  }
+  return a;
 }
 
 double disk_potential(double a, double rho, double z, double* d_rho, double* d_z) {
@@ -295,6 +305,43 @@ double sheet_self_inductance(const Solenoid& c) {
   }
   const double s0 = 16 * kPi * a * a * a / 3;
   return kMu0 * n * n * (kPi * a * a * l - (s0 - w) / (2 * kPi));
+}
+
+void add_near_forces(std::span<const NearCoil> coils, std::span<const Pole> poles,
+                     std::span<const std::uint8_t> sheet_body, double softening,
+                     std::span<Vec3> pole_force, std::span<Vec3> body_force,
+                     std::span<Vec3> body_torque) {
+  auto applies = [&](std::size_t i) {
+    const std::uint32_t b = poles[i].body;
+    return b < sheet_body.size() && sheet_body[b] != 0 && poles[i].strength != 0;
+  };
+  for (const NearCoil& c : coils) {
+    if (c.strength == 0 || !(c.sheet.radius > 0)) continue;
+    Vec3 reaction{}, moment{};
+    auto push = [&](std::size_t i, Vec3 f) {
+      pole_force[i] += f;
+      reaction -= f;
+      moment -= cross(poles[i].position - c.sheet.centre, f);
+    };
+    for (std::size_t i = 0; i < poles.size(); ++i) {
+      if (poles[i].body == c.body || !applies(i)) continue;
+      const PoleLinkage g = near_correction(c.sheet, softening, poles[i].position);
+      if (g.flux != 0 || g.gradient != Vec3{})
+        push(i, (c.strength * poles[i].strength) * g.gradient);
+      // A body's pole pair (north, then south): its string through the bore.
+      if (i + 1 < poles.size() && poles[i + 1].body == poles[i].body && poles[i].strength > 0 &&
+          poles[i + 1].strength == -poles[i].strength) {
+        const StringLinkage s = string_linkage(c.sheet, poles[i + 1].position, poles[i].position);
+        if (s.overlap != 0) {
+          const double qq = c.strength * poles[i].strength;
+          push(i, qq * s.grad_north);
+          push(i + 1, qq * s.grad_south);
+        }
+      }
+    }
+    if (c.body < body_force.size()) body_force[c.body] += reaction;
+    if (c.body < body_torque.size()) body_torque[c.body] += moment;
+  }
 }
 
 }  // namespace alloy::magnetism

@@ -39,6 +39,11 @@
 // and the energy the EMF moves equals the work the force does.
 #pragma once
 
+#include <cstdint>
+#include <span>
+
+#include "resolvers/magnetism/magnet_parts.hpp"
+#include "resolvers/magnetism/pole_model.hpp"
 #include "runtime/math.hpp"
 
 namespace alloy::magnetism {
@@ -56,6 +61,14 @@ struct Solenoid {
 /// separation d (m): pi a^2 = k d, so the sheet's end disks carry the pole
 /// pair's strength and its far field is the pair's. 0 when either is not > 0.
 double solenoid_radius(double coil_factor, double separation);
+
+/// The sheet radius of the electromagnet at `slot` (coil factor k, pole
+/// separation d): solenoid_radius(k, d), unless the part has a shape whose
+/// half-width across its axis is less than that (by 5 %): then k carries an
+/// iron core's enhancement (the kit's cored coils: k = (A + chi A_core) / d),
+/// the coil is not a current sheet of that radius, and 0 keeps its pole pair.
+double coil_sheet_radius(const MagnetColumns& c, std::uint32_t slot, double coil_factor,
+                         double separation);
 
 /// D = int over the disk (radius a, centre 0, normal z) of dA / |p - x| at the
 /// point (rho, z), m; with its partial derivatives d/drho and d/dz (unitless)
@@ -78,8 +91,8 @@ PoleLinkage pair_linkage(const Solenoid& coil, double softening, Vec3 p);
 /// The sheet's per-ampere flux from a unit pole at p (unsoftened), psi_sheet.
 PoleLinkage sheet_linkage(const Solenoid& coil, Vec3 p);
 
-/// The near-zone window at p: 1 within the bore and l/2 + a of the centre
-/// along the axis, a margin of `kNearMargin` radii beyond it to 0 (C2).
+/// The near-zone window at p: 1 within 2a of the axis and l/2 + 2a of the
+/// centre along it, fading (C2) to 0 over 3 more radii beyond that box.
 struct Window {
   double value = 0;  ///< w in [0, 1]
   Vec3 gradient;     ///< dw / dp, 1/m
@@ -109,5 +122,26 @@ double sheet_mutual_inductance(const Solenoid& a, const Solenoid& b, double soft
 /// Self-inductance of a coil as the same model sees it (its own poles and
 /// string in its own sheet), H: mu0 n^2 pi a^2 l minus the end disks' share.
 double sheet_self_inductance(const Solenoid& coil);
+
+/// A coil whose sheet acts on the poles near it (magnetic_forces): the sheet
+/// with turns_per_metre 1 / (pi a^2), so that `strength` (the coil's own pole
+/// strength k N I, A m) stands for the current.
+struct NearCoil {
+  Solenoid sheet;
+  double strength = 0;     ///< A m
+  std::uint32_t body = 0;  ///< the coil's body index in the poles
+};
+
+/// The near-field correction's forces: on each pole of a body with
+/// sheet_body[body] != 0 (its north pole first, its south next) from every
+/// coil in `coils`, strength q_coil q_pole grad(near_correction) plus the
+/// string's, added to pole_force; each coil's reaction (force, and torque about
+/// its sheet's centre) added to body_force / body_torque at its body. The
+/// correction's energy is -strength sum (q w (psi_sheet - psi_pair) + strings),
+/// so these are its exact negative gradient.
+void add_near_forces(std::span<const NearCoil> coils, std::span<const Pole> poles,
+                     std::span<const std::uint8_t> sheet_body, double softening,
+                     std::span<Vec3> pole_force, std::span<Vec3> body_force,
+                     std::span<Vec3> body_torque);
 
 }  // namespace alloy::magnetism
