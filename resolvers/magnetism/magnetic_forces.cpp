@@ -88,7 +88,7 @@ void MagneticForces::update(const WorldView& world) {
     fixed_strength.push_back(0.0);
     iron_of.push_back(-1);
     const MagnetKind kind = c.kind(slot);
-    sheet_body_.push_back(kind == MagnetKind::Permanent ? 1 : 0);
+    sheet_body_.push_back(near_field_ && kind == MagnetKind::Permanent ? 1 : 0);
     if (kind != MagnetKind::SoftIron) {
       const double q = c.pole_strength.value_or(slot, 0.0);
       if (q != 0 && std::isfinite(q)) fixed_strength.back() = q;
@@ -227,7 +227,7 @@ void MagneticForces::update(const WorldView& world) {
     std::vector<NearCoil> out;
     for (std::uint32_t b = 0; b < n_bodies; ++b) {
       const std::uint32_t slot = bodies_[b].id.index;
-      if (q[b] == 0 || c.kind(slot) != MagnetKind::Electromagnet) continue;
+      if (!near_field_ || q[b] == 0 || c.kind(slot) != MagnetKind::Electromagnet) continue;
       const auto k = coil_factor(c, slot);
       const double a = k ? coil_sheet_radius(c, slot, *k, at[b].separation) : 0.0;
       if (!(a > 0) || !std::isfinite(a)) continue;

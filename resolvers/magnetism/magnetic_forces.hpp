@@ -31,6 +31,10 @@
 //             resolver's rates, the electromagnets' pole_strength_rate moves
 //             their strengths on in the same evaluation, so the loads' rates
 //             also carry a coil's rising or falling current
+//             near_field (default false): an air-cored coil's near field as a
+//             finite solenoid's for the permanent magnets near it (force and
+//             flux: solenoid_field.hpp, docs/magnetism.md "A coil's near
+//             field"); off, every coil is its pole pair
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -91,8 +95,8 @@ class MagneticForces : public DerivedSet {
 
   explicit MagneticForces(double softening = kDefaultSoftening,
                           SummationOptions summation = {.method = Summation::Auto},
-                          bool rates = false)
-      : softening_(softening), summation_(summation), rates_(rates) {}
+                          bool rates = false, bool near_field = false)
+      : softening_(softening), summation_(summation), rates_(rates), near_field_(near_field) {}
 
   void update(const WorldView& world) override;
   /// Its forces matter only to the stages that read them (the rigid body's
@@ -142,7 +146,8 @@ class MagneticForces : public DerivedSet {
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
-  multipole::Tree tree_;  // its memory, kept between updates
+  bool near_field_ = false;  // the near_field setting (solenoid_field.hpp)
+  multipole::Tree tree_;     // its memory, kept between updates
   bool used_tree_ = false;
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
