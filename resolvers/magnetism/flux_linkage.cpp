@@ -77,6 +77,7 @@ FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_ve
           p.strength * (dot(st.grad_north, velocity(i)) + dot(st.grad_south, velocity(i + 1)));
     }
   }
+  if (near_flux == 0 && near_rate == 0) return out;  // nothing near: the pair's bits, -0 kept
   out.flux += near_flux;
   out.rate += near_rate;
   return out;
