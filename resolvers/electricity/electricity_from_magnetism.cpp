@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "resolvers/electricity/electricity.hpp"
+#include "resolvers/magnetism/solenoid_field.hpp"
 
 namespace alloy::magnetism {
 
@@ -246,6 +247,9 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     coil.axis = coil.axis / length(coil.axis);
     coil.separation = *d;
     coil.linkage = *k * c.turns.value_or(slot, 0.0);
+    coil.radius =
+        coil_sheet_radius(c, slot, *k, *d);  // its near field as a sheet (solenoid_field.hpp)
+    coil.sheet_bodies = forces_.sheet_bodies();
     coil.velocity = velocity.value_or(slot, Vec3{});
     coil.angular_velocity = spin.value_or(slot, Vec3{});
     const ObjectId id = store.id_at(slot);

@@ -1,6 +1,9 @@
 #include "resolvers/magnetism/flux_linkage.hpp"
 
 #include <cmath>
+#include <numbers>
+
+#include "resolvers/magnetism/solenoid_field.hpp"
 
 namespace alloy::magnetism {
 
@@ -41,6 +44,42 @@ FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_ve
   }
   out.flux = coil.linkage * kMu0Over4Pi * flux;
   out.rate = coil.linkage * kMu0Over4Pi * rate;
+  if (!(coil.radius > 0) || coil.sheet_bodies.empty()) return out;
+  // The near field as a finite solenoid, per ampere: turns per metre
+  // N / d = k N / (pi a^2). Each point moves relative to the coil's frame.
+  const Solenoid sheet{coil.centre, coil.axis, coil.separation, coil.radius,
+                       coil.linkage / (std::numbers::pi * coil.radius * coil.radius)};
+  auto frame_velocity = [&](Vec3 x) {
+    return coil.velocity + cross(coil.angular_velocity, x - coil.centre);
+  };
+  auto applies = [&](std::size_t i) {
+    const std::uint32_t b = poles[i].body;
+    return b != coil.body && b < coil.sheet_bodies.size() && coil.sheet_bodies[b] != 0 &&
+           poles[i].strength != 0;
+  };
+  auto velocity = [&](std::size_t i) {
+    return (i < pole_velocity.size() ? pole_velocity[i] : Vec3{}) -
+           frame_velocity(poles[i].position);
+  };
+  double near_flux = 0, near_rate = 0;
+  for (std::size_t i = 0; i < poles.size(); ++i) {
+    if (!applies(i)) continue;
+    const Pole& p = poles[i];
+    const PoleLinkage g = near_correction(sheet, softening, p.position);
+    near_flux += p.strength * g.flux;
+    near_rate += p.strength * dot(g.gradient, velocity(i));
+    if (i + 1 < poles.size() && poles[i + 1].body == p.body && p.strength > 0 &&
+        poles[i + 1].strength == -p.strength) {
+      const StringLinkage st = string_linkage(sheet, poles[i + 1].position, p.position);
+      if (st.overlap == 0) continue;
+      near_flux += p.strength * st.flux;
+      near_rate +=
+          p.strength * (dot(st.grad_north, velocity(i)) + dot(st.grad_south, velocity(i + 1)));
+    }
+  }
+  if (near_flux == 0 && near_rate == 0) return out;  // nothing near: the pair's bits, -0 kept
+  out.flux += near_flux;
+  out.rate += near_rate;
   return out;
 }
 

@@ -47,6 +47,12 @@ struct CoilGeometry {
   Vec3 velocity;                 ///< of its centre, m/s
   Vec3 angular_velocity;         ///< rad/s, world
   std::uint32_t body = kNoBody;  ///< its own body index in `poles` (its poles are skipped)
+  /// Its sheet's radius a, m (solenoid_radius(k, d)); 0: the pole pair only.
+  double radius = 0;
+  /// Per body index of `poles`: 1 where the sheet's near field applies
+  /// (MagneticForces::sheet_bodies(): permanent magnets), the same bodies the
+  /// forces correct; empty: none. A body's poles are north, then south.
+  std::span<const std::uint8_t> sheet_bodies;
 };
 
 struct FluxLinkage {
@@ -55,7 +61,12 @@ struct FluxLinkage {
 };
 
 /// Phi and dPhi/dt of `coil` from `poles`, whose velocities are
-/// `pole_velocity[i]` (m/s). The rate is exact (the kernel's gradient), so
+/// `pole_velocity[i]` (m/s). With a radius and sheet bodies, the poles of those
+/// bodies near the coil link the finite solenoid's flux (solenoid_field.hpp:
+/// the pole pair plus the windowed sheet correction plus each pole pair's
+/// string through the bore), the flux whose gradient the forces use.
+/// Otherwise the pole pair's.
+/// The rate is exact (the kernel's gradient, the sheet's), so
 /// rate = sum over moving points of the flux's gradient times their velocity.
 FluxLinkage coil_flux(std::span<const Pole> poles, std::span<const Vec3> pole_velocity,
                       double softening, const CoilGeometry& coil);

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "resolvers/common/direct_kernel.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
+#include "resolvers/magnetism/solenoid_field.hpp"
 
 namespace alloy::magnetism {
 
@@ -110,6 +112,7 @@ void MagneticForces::update(const WorldView& world) {
   bodies_.clear();
   poles_.clear();
   body_of_slot_.assign(store.slot_count(), kNoBody);
+  sheet_body_.clear();
 
   // 1. Gather the parts: their frames, the fixed poles of magnets and coils,
   //    and the soft iron (free parts and coils' cores) whose moment depends
@@ -146,6 +149,7 @@ void MagneticForces::update(const WorldView& world) {
     fixed_strength.push_back(0.0);
     iron_of.push_back(-1);
     const MagnetKind kind = c.kind(slot);
+    sheet_body_.push_back(near_field_ && kind == MagnetKind::Permanent ? 1 : 0);
     if (kind != MagnetKind::SoftIron) {
       const double q = c.pole_strength.value_or(slot, 0.0);
       if (q != 0 && std::isfinite(q)) fixed_strength.back() = q;
@@ -277,6 +281,25 @@ void MagneticForces::update(const WorldView& world) {
     bodies_[b].pole_count = 2;
   }
 
+  // A coil's near field as a finite solenoid (solenoid_field.hpp): a
+  // correction on its pole pair for the permanent magnets' poles near it,
+  // exactly zero beyond its zone. Coils with a current of their own only.
+  auto near_coils = [&](const std::vector<Frame>& at, const std::vector<double>& q) {
+    std::vector<NearCoil> out;
+    for (std::uint32_t b = 0; b < n_bodies; ++b) {
+      const std::uint32_t slot = bodies_[b].id.index;
+      if (!near_field_ || q[b] == 0 || c.kind(slot) != MagnetKind::Electromagnet) continue;
+      const auto k = coil_factor(c, slot);
+      const double a = k ? coil_sheet_radius(c, slot, *k, at[b].separation) : 0.0;
+      if (!(a > 0) || !std::isfinite(a)) continue;
+      out.push_back(
+          {{at[b].centre, at[b].axes[0], at[b].separation, a, 1 / (std::numbers::pi * a * a)},
+           q[b],
+           b});
+    }
+    return out;
+  };
+
   // 4. Forces on poles, then force and torque about each part's centre.
   std::vector<Vec3> pole_force(poles_.size());
   // Auto (the default): from kFmmAutoPoles poles the FMM, which is the
@@ -304,8 +327,13 @@ void MagneticForces::update(const WorldView& world) {
                  : step.method == Summation::Fmm ? Summation::Fmm
                                                  : Summation::Tree;
   used_tree_ = used_method_ != Summation::Direct;
+  std::vector<Vec3> coil_force(n_bodies), coil_torque(n_bodies);
+  add_near_forces(near_coils(frames, fixed_strength), poles_, sheet_body_, softening_, pole_force,
+                  coil_force, coil_torque);
   for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
+    body.force += coil_force[b];
+    body.torque += coil_torque[b];
     for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
       body.force += pole_force[i];
       body.torque += cross(poles_[i].position - frames[b].centre, pole_force[i]);
@@ -383,12 +411,15 @@ void MagneticForces::update(const WorldView& world) {
   }
   std::vector<Vec3> force_moved(poles_moved.size());
   accumulate_pole_forces(poles_moved, softening_, force_moved, step, &tree_);
+  std::vector<Vec3> coil_force_moved(n_bodies), coil_torque_moved(n_bodies);
+  add_near_forces(near_coils(moved, fixed_moved_strength), poles_moved, sheet_body_, softening_,
+                  force_moved, coil_force_moved, coil_torque_moved);
   for (std::uint32_t b = 0; b < n_bodies; ++b) {
     MagneticBody& body = bodies_[b];
     if (count_moved[b] == 0 ||
         (body.pole_count != 0 && body.force == Vec3{} && body.torque == Vec3{}))
       continue;
-    Vec3 f{}, t{};
+    Vec3 f = coil_force_moved[b], t = coil_torque_moved[b];
     for (std::uint32_t i = first_moved[b]; i < first_moved[b] + count_moved[b]; ++i) {
       f += force_moved[i];
       t += cross(poles_moved[i].position - moved[b].centre, force_moved[i]);

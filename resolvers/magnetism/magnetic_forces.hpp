@@ -34,6 +34,10 @@
 //             resolver's rates, the electromagnets' pole_strength_rate moves
 //             their strengths on in the same evaluation, so the loads' rates
 //             also carry a coil's rising or falling current
+//             near_field (default false): an air-cored coil's near field as a
+//             finite solenoid's for the permanent magnets near it (force and
+//             flux: solenoid_field.hpp, docs/magnetism.md "A coil's near
+//             field"); off, every coil is its pole pair
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -108,8 +112,8 @@ class MagneticForces : public DerivedSet {
 
   explicit MagneticForces(double softening = kDefaultSoftening,
                           SummationOptions summation = {.method = Summation::Auto},
-                          bool rates = false)
-      : softening_(softening), summation_(summation), rates_(rates) {}
+                          bool rates = false, bool near_field = false)
+      : softening_(softening), summation_(summation), rates_(rates), near_field_(near_field) {}
 
   void update(const WorldView& world) override;
   /// Its forces matter only to the stages that read them (the rigid body's
@@ -139,6 +143,10 @@ class MagneticForces : public DerivedSet {
   Vec3 field(Vec3 point) const;
 
   double softening() const { return softening_; }
+  /// Per body (index of bodies()): 1 where a coil's near field acts on its
+  /// poles as a finite solenoid's (permanent magnets), else 0 (the pole pair's
+  /// field only: coils, soft iron). solenoid_field.hpp.
+  std::span<const std::uint8_t> sheet_bodies() const { return sheet_body_; }
   const SummationOptions& summation() const { return summation_; }
   void set_summation(const SummationOptions& s) { summation_ = s; }
   /// Whether the last update summed the forces with the tree (or the FMM).
@@ -160,13 +168,15 @@ class MagneticForces : public DerivedSet {
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
-  multipole::Tree tree_;  // its memory, kept between updates
+  bool near_field_ = false;  // the near_field setting (solenoid_field.hpp)
+  multipole::Tree tree_;     // its memory, kept between updates
   bool used_tree_ = false;
   Summation used_method_ = Summation::Direct;
   double last_check_error_ = 0;
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody
+  std::vector<std::uint8_t> sheet_body_;     // per body: sheet_bodies()
   // Per body: the share of its pole strength the field induced (soft iron's
   // whole strength, a cored coil's core beyond its own current's share), A*m.
   std::vector<double> induced_share_;

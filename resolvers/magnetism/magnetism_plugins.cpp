@@ -61,7 +61,7 @@ void register_magnetism_resolver(PluginRegistry& registry) {
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
             s.check_known(MagneticForces::kName, {"softening", "method", "theta", "tolerance",
-                                                  "reuse_tree", "order", "rates"});
+                                                  "reuse_tree", "order", "rates", "near_field"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
@@ -96,7 +96,8 @@ void register_magnetism_resolver(PluginRegistry& registry) {
               throw InputError(s.where, "magnetic_forces: 'theta' must be in (0, 1)");
             sum.reuse = s.boolean("reuse_tree", false);
             sum.tolerance = tolerance;
-            return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false));
+            return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false),
+                                                    s.boolean("near_field", false));
           },
   });
 
