@@ -423,6 +423,7 @@ struct CollisionSet::Impl {
     // Live objects have distinct slots, so slot order is ObjectId order. Always
     // collide a before b: the points then do not depend on the space's order.
     if (s1 > s2) std::swap(s1, s2), std::swap(g1, g2);
+    if (!m.waiting.empty() && (m.is_waiting(s1) || m.is_waiting(s2))) return;
     if (!m.joined.empty() && std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2)))
       return;
     if (m.pair_count[s1] >= limits::contact_pairs_per_part &&
@@ -459,6 +460,154 @@ struct CollisionSet::Impl {
     if (left_out_of.size() < geoms.size()) left_out_of.resize(geoms.size(), 0);
     ++left_out_of[s1], ++left_out_of[s2];
     ++left_out;
+  }
+
+  // --- parts buried in a heap (see the header; docs/security.md) -------------------
+  static constexpr std::uint32_t kCrowd = limits::contact_pairs_per_part;
+  /// A waiting part comes back when sunk into at most this many: into room
+  /// the heap's parts made by moving apart, not into the heap again
+  /// (rigid_body.box2d's measure: at kCrowd, parts came back into a mass
+  /// where the pair limit left pairs out).
+  static constexpr std::uint32_t kWake = 4;
+  std::vector<ObjectId> waiting;                       // in the order they went
+  std::vector<std::uint8_t> waiting_flag;              // by slot
+  std::size_t went = 0;                                // since the last report (for the event)
+  bool waiting_reported = false;                       // the event was sent and some still wait
+  ObjectId waiting_example;                            // a part that went, for the event
+  std::uint64_t crowd_tests = 0;                       // shape tests made by crowded(), in all
+  std::vector<std::uint32_t> crowd_check, crowd_back;  // scratch of settle_crowds() and wake()
+
+  bool is_waiting(std::uint32_t s) const { return s < waiting_flag.size() && waiting_flag[s]; }
+
+  /// Whether parts s and t overlap deeper than half the sum of their inscribed radii.
+  bool deep(std::uint32_t s, std::uint32_t t) {
+    ++crowd_tests;
+    const int n = collide_parts(geoms[s].geom, geoms[t].geom, int(buffer.size()), buffer.data());
+    double depth = 0;
+    for (int k = 0; k < n; ++k) depth = std::max(depth, double(buffer[std::size_t(k)].depth));
+    return depth > 0.5 * (geoms[s].inscribed + geoms[t].inscribed);
+  }
+
+  /// Whether slot s is sunk deep into more than `limit` movable parts of the
+  /// grid that do not wait, and of `also` (slots outside the grid). Walks the
+  /// cells its bounds cover and stops at the first limit + 1 found, so that a
+  /// part in a heap costs about limit + 1 shape tests.
+  bool crowded(std::uint32_t s, std::uint32_t limit, const std::vector<std::uint32_t>& also) {
+    dReal b[6];
+    dGeomGetAABB(geoms[s].geom, b);
+    Bounds rb;
+    for (int k = 0; k < 3; ++k) rb.lo[k] = b[2 * k], rb.hi[k] = b[2 * k + 1];
+    std::uint32_t count = 0;
+    auto found = [&](std::uint32_t t, const Bounds& tb) {
+      if (t == s || !geoms[t].movable || is_waiting(t) || !overlap(rb, tb)) return false;
+      return deep(s, t) && ++count > limit;
+    };
+    if (++query == 0) seen.assign(seen.size(), 0), query = 1;
+    seen.resize(live.size(), 0);
+    std::int64_t lo[3], hi[3];
+    double cells = 1;
+    for (int k = 0; k < 3; ++k)
+      lo[k] = cell_of(rb.lo[k]), hi[k] = cell_of(rb.hi[k]), cells *= double(hi[k] - lo[k] + 1);
+    if (cells > 64) {  // a part as large as the grid's big ones: every part
+      for (std::uint32_t i = 0; i < live.size(); ++i)
+        if (found(live[i], live_bounds[i])) return true;
+    } else if (bucket_start.size() > 1) {
+      const std::size_t size = bucket_start.size() - 1;
+      for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+        for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+            const std::int64_t c[3] = {x, y, z};
+            const std::size_t bkt = cell_hash(c) & (size - 1);
+            for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p) {
+              const Entry& en = table[p];
+              if (en.cell[0] != x || en.cell[1] != y || en.cell[2] != z || seen[en.part] == query)
+                continue;
+              seen[en.part] = query;
+              if (found(live[en.part], live_bounds[en.part])) return true;
+            }
+          }
+    }
+    for (const std::uint32_t i : big)
+      if (found(live[i], live_bounds[i])) return true;
+    for (const std::uint32_t t : also) {
+      dGeomGetAABB(geoms[t].geom, b);
+      Bounds tb;
+      for (int k = 0; k < 3; ++k) tb.lo[k] = b[2 * k], tb.hi[k] = b[2 * k + 1];
+      if (found(t, tb)) return true;
+    }
+    return false;
+  }
+
+  /// Of the movable parts of the grid that do not wait, in slot order, those
+  /// in a bucket of more than kCrowd entries (`left_out` false: where a heap
+  /// can be) or with pairs left out (`left_out` true): each crowded by the
+  /// parts that do not wait goes to wait (a heap of n keeps its last kCrowd +
+  /// 1 at its spot). Whether any went.
+  bool settle_crowds(bool pairs_left_out) {
+    const std::size_t before = waiting.size();
+    waiting_flag.resize(geoms.size(), 0);
+    std::vector<std::uint32_t>& check = crowd_check;
+    check.clear();
+    if (pairs_left_out) {
+      for (std::uint32_t i = 0; i < live.size(); ++i)
+        if (live[i] < left_out_of.size() && left_out_of[live[i]] > 0) check.push_back(i);
+    } else {
+      for (std::size_t bkt = 0; bkt + 1 < bucket_start.size(); ++bkt)
+        if (bucket_start[bkt + 1] - bucket_start[bkt] > kCrowd)
+          for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p)
+            check.push_back(table[p].part);
+      std::sort(check.begin(), check.end());
+      check.erase(std::unique(check.begin(), check.end()), check.end());
+    }
+    for (const std::uint32_t i : check) {
+      const std::uint32_t s = live[i];
+      if (geoms[s].movable && !waiting_flag[s] && crowded(s, kCrowd, {})) {
+        waiting_flag[s] = 1;
+        waiting.push_back(geoms[s].id);
+        if (went++ == 0) waiting_example = geoms[s].id;
+      }
+    }
+    return waiting.size() > before;
+  }
+  /// Whether a bucket of the grid holds more than kCrowd entries.
+  bool crowded_bucket() const {
+    for (std::size_t bkt = 0; bkt + 1 < bucket_start.size(); ++bkt)
+      if (bucket_start[bkt + 1] - bucket_start[bkt] > kCrowd) return true;
+    return false;
+  }
+
+  /// Puts back, in the order they went, the waiting parts no longer crowded
+  /// (the grid holds the parts that do not wait). Whether any came back.
+  bool wake() {
+    std::vector<std::uint32_t>& back = crowd_back;
+    back.clear();
+    std::size_t kept = 0;
+    for (const ObjectId id : waiting) {
+      const std::uint32_t s = id.index;
+      if (crowded(s, kWake, back)) {
+        waiting[kept++] = id;
+        continue;
+      }
+      waiting_flag[s] = 0;
+      back.push_back(s);
+    }
+    waiting.resize(kept);
+    return !back.empty();
+  }
+
+  /// After the geoms were built again: parts no longer there, or no longer
+  /// movable, stop waiting.
+  void recheck_waiting() {
+    waiting_flag.assign(geoms.size(), 0);
+    std::size_t kept = 0;
+    for (const ObjectId id : waiting) {
+      if (id.index >= geoms.size() || !geoms[id.index].geom || geoms[id.index].id != id ||
+          !geoms[id.index].movable)
+        continue;
+      waiting_flag[id.index] = 1;
+      waiting[kept++] = id;
+    }
+    waiting.resize(kept);
   }
 
   // --- continuous detection -----------------------------------------------------
@@ -546,7 +695,7 @@ struct CollisionSet::Impl {
     live.clear(), live_bounds.clear(), extents.clear();
     for (std::uint32_t s : geom_slots) {
       const dGeomID g = geoms[s].geom;
-      if (!dGeomIsEnabled(g)) continue;
+      if (!dGeomIsEnabled(g) || is_waiting(s)) continue;
       dReal b[6];
       dGeomGetAABB(g, b);
       for (const dReal v : b)
@@ -612,9 +761,9 @@ struct CollisionSet::Impl {
     if (may_collide(a, b)) near_callback(this, a, b);
   }
 
-  /// Every pair of enabled geoms whose bounds overlap goes to near_callback once.
+  /// Every pair of enabled geoms whose bounds overlap goes to near_callback
+  /// once (the grid built over them first).
   void collide_grid() {
-    build_grid();
     for (std::size_t bkt = 0; bkt + 1 < bucket_start.size(); ++bkt) {
       const std::uint32_t from = bucket_start[bkt], to = bucket_start[bkt + 1];
       for (std::uint32_t p = from; p < to; ++p)
@@ -771,9 +920,14 @@ void CollisionSet::update(const WorldView& world) {
   // Narrow phase into current_, then sort: ODE's pair order is not ours to rely on.
   begin_update();
   try {
+    // Parts added or changed (every spawn rebuilds): the grid's full cells
+    // are checked for a heap before the narrow phase.
+    bool fresh = false;
     if (Impl::changed(m.shape_columns, m.shape_seen) || m.geoms_dirty) {
       m.rebuild_geoms(world);
       m.geoms_dirty = false;
+      if (!m.waiting.empty()) m.recheck_waiting();
+      fresh = true;
     }
     if (Impl::changed(m.joint_columns, m.joint_seen) || m.joints_dirty) {
       m.rebuild_joined(world);
@@ -791,10 +945,30 @@ void CollisionSet::update(const WorldView& world) {
     m.pairs = &current_;
     m.points = &points_;
     m.grid = m.gather();
+    if (m.grid) {
+      // Waiting parts whose spot cleared come back (Impl::wake), and after a
+      // rebuild the parts of a cell holding more than kCrowd are checked for
+      // a heap before the narrow phase (Impl::settle_crowds).
+      m.build_grid();
+      if (!m.waiting.empty() && m.wake()) m.gather(), m.build_grid();
+      if (fresh && m.crowded_bucket() && m.settle_crowds(false)) m.gather(), m.build_grid();
+    }
     m.pair_count.assign(m.geoms.size(), 0);
     m.left_out = 0;
     if (m.grid) {
       m.collide_grid();
+      // Pairs left out (a part carried into a heap, a heap across cells):
+      // their parts are checked, and the pairs are found again without
+      // those that went to wait.
+      if (m.left_out > 0 && m.settle_crowds(true)) {
+        current_.clear(), points_.clear();
+        m.gather();
+        m.pair_count.assign(m.geoms.size(), 0);
+        m.left_out = 0;
+        std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
+        m.build_grid();
+        m.collide_grid();
+      }
     } else {  // a part beyond the grid's range: ODE's collide reports it (engine_failed)
       m.colliding = true;
       dSpaceCollide(m.space, &m, &Impl::near_callback);
@@ -813,6 +987,8 @@ void CollisionSet::update(const WorldView& world) {
   }
   m.sort_pairs(current_);
   report_left_out(world);
+  waiting_ = m.waiting;
+  report_waiting(world);
 
   // A repeated update is of the step the saved run's last update was (the
   // set may have been skipped since, while nothing it reads changed).
@@ -877,6 +1053,33 @@ void CollisionSet::report_left_out(const WorldView& world) {
   if (limited) std::fill(m.left_out_of.begin(), m.left_out_of.end(), 0u);
 }
 
+void CollisionSet::report_waiting(const WorldView& world) {
+  // One event when parts begin to wait (not one a step while a heap
+  // empties), naming one of them; again after every waiting part came back.
+  Impl& m = *impl_;
+  const bool report = m.went > 0 && !m.waiting_reported;
+  const std::size_t went = m.went;
+  m.went = 0;
+  m.waiting_reported = !m.waiting.empty() && (m.waiting_reported || report);
+  if (!report) return;
+  const ObjectId id = m.waiting_example;
+  world.emit(
+      Event{.type = "crowded",
+            .a = id,
+            .values = {{"went", double(went)},
+                       {"waiting", double(m.waiting.size())},
+                       {"limit", double(Impl::kCrowd)}},
+            .text = "collisions: " + std::to_string(went) +
+                    " parts were taken out of collisions, each sunk deep into more than " +
+                    std::to_string(Impl::kCrowd) + " moving parts ('" + world.store().describe(id) +
+                    "' among them): they wait, held still, until the parts around them have moved "
+                    "apart (parts placed through each other in a heap?; docs/security.md)"});
+}
+
+std::uint64_t CollisionSet::crowd_tests() const {
+  return impl_->crowd_tests;
+}
+
 void CollisionSet::sweep(const WorldView& world) {
   Impl& m = *impl_;
   sweeps_.clear();
@@ -896,6 +1099,7 @@ void CollisionSet::sweep(const WorldView& world) {
   made_at.clear();
   std::uint32_t order = 0;
   for (const Impl::Candidate& cand : m.candidates) {
+    if (m.is_waiting(cand.slot)) continue;  // out of collisions, held still
     const Impl::Geom& g = m.geoms[cand.slot];
     const Vec3 d = g.pos - cand.from;
     const double len = length(d);
@@ -1054,6 +1258,10 @@ void CollisionSet::restore_state(StateReader& in) {
   began_.clear(), ended_.clear(), sweeps_.clear();
   ongoing_.clear(), ongoing_made_ = false;
   impl_->candidates = std::move(swept);
+  // Parts that waited are not saved: the priming update finds the buried
+  // ones again, as rigid_body.box2d's rebuild does (docs/saves.md).
+  impl_->waiting.clear(), impl_->waiting_flag.clear(), waiting_.clear();
+  impl_->went = 0, impl_->waiting_reported = false;
   impulses_known_ = known != 0;
   impulses_since_ = since;
   step_ = step;

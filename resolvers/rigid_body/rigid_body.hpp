@@ -210,6 +210,11 @@ class RigidBodyResolver final : public RigidBodyEngine {
   /// its velocity: continuous detection's move back to the time of impact.
   /// Of several for one body, the largest is taken. Stale ids are ignored.
   void displace(ObjectId part, Vec3 displacement);
+  /// The parts to hold still from the next advance on, replacing the last
+  /// list: collisions' parts buried in a heap (CollisionSet::waiting). A held
+  /// part's body is disabled with no velocity (no load, no integration) until
+  /// a later list leaves it out; immovable parts and stale ids are ignored.
+  void hold(std::span<const ObjectId> parts);
 
   // --- in-place queueing, for bindings that write load records themselves ------
   // (Load and LoadCommand: engine.hpp.)
@@ -272,6 +277,7 @@ class RigidBodyResolver final : public RigidBodyEngine {
   void add_contact_joints(double h, bool record, bool feedback);
   void restitution_pass(double h, bool feedback);
   void apply_displacements();
+  void apply_holds();
   void carry_depths(double h);
   void find_substep_contacts(ResolverAccess& access);
 
@@ -343,6 +349,8 @@ class RigidBodyResolver final : public RigidBodyEngine {
   std::vector<ContactCommand> contacts_;
   std::vector<ContactPoint> contact_points_;
   std::vector<std::pair<ObjectId, Vec3>> displacements_;
+  std::vector<ObjectId> held_;   // hold(): parts to hold still
+  std::size_t held_bodies_ = 0;  // bodies apply_holds disabled, still held
   // substep_contacts = found: the window's queued pairs and points, kept
   // while contacts_ / contact_points_ hold a substep's, and each pair's force
   // summed over the substeps (on a, and its normal part).

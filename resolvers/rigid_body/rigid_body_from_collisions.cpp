@@ -35,6 +35,8 @@ void RigidBodyFromCollisions::apply(const WorldView& world) {
   }
   // Parts that tunnelled go back to where they first touched (continuous detection).
   for (const Sweep& s : contacts_.sweeps()) target_.displace(s.part, s.displacement);
+  // Parts buried in a heap wait, held still, until the heap has spread.
+  target_.hold(contacts_.waiting());
   target_.add_contacts(commands_, contacts_.points());
 }
 

@@ -81,6 +81,7 @@ struct RigidBodyResolver::Impl {
     // last ran; a sleeping body wakes when the two differ.
     Vec3 load_force, load_torque, awake_force, awake_torque;
     bool asleep = false;  ///< disabled when this advance began
+    bool held = false;    ///< disabled by apply_holds (a part buried in a heap)
   };
   struct Hinge {
     ObjectId id;

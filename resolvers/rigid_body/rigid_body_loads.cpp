@@ -87,6 +87,36 @@ void RigidBodyResolver::apply_displacements() {
   displacements_.clear();
 }
 
+void RigidBodyResolver::hold(std::span<const ObjectId> parts) {
+  held_.assign(parts.begin(), parts.end());
+}
+
+void RigidBodyResolver::apply_holds() {
+  // Held: disabled (apply_loads skips it, ODE does not integrate it; it has
+  // no contacts, collisions left it out) with no velocity, so that it comes
+  // back at rest where it waited. Released when the list leaves it out.
+  Impl& m = *impl_;
+  std::vector<std::uint8_t> want(m.bodies.size(), 0);
+  for (const ObjectId part : held_)
+    if (const std::int32_t b = m.body_of(part); b >= 0 && !m.bodies[b].kinematic) want[b] = 1;
+  held_bodies_ = 0;
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    Impl::Body& body = m.bodies[b];
+    if (want[b]) {
+      dBodySetLinearVel(body.id, 0, 0, 0);
+      dBodySetAngularVel(body.id, 0, 0, 0);
+      dBodySetForce(body.id, 0, 0, 0);
+      dBodySetTorque(body.id, 0, 0, 0);
+      dBodyDisable(body.id);
+      body.held = true;
+      ++held_bodies_;
+    } else if (body.held) {
+      body.held = false;
+      dBodyEnable(body.id);
+    }
+  }
+}
+
 void RigidBodyResolver::apply_loads() {
   Impl& m = *impl_;
   for (const LoadCommand& c : forces_) {

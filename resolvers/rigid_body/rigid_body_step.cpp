@@ -23,6 +23,7 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
   }
   if (config_.auto_disable) wake_on_load_change();
   if (!displacements_.empty()) apply_displacements();
+  if (!held_.empty() || held_bodies_ > 0) apply_holds();
 
   // Impulses only for their readers (demand_impulses): the feedback below is
   // work the solve itself does not need.

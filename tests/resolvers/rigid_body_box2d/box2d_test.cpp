@@ -561,7 +561,11 @@ TEST(Box2D, ARestoredHeapDoesNotReportItsContactLimitAgain) {
       add_sphere(*s, {1e-3 * std::cos(0.7 * i) * (i % 7) / 7, 0.3 + 1e-3 * std::sin(0.7 * i), 0},
                  0.05, 0.1);
     int events = 0;
-    s->add_observer([&](const Event& ev) { events += ev.type == "contact_limit"; });
+    // (ODE's heap, since session 18, waits before any pair is left out: its
+    // one report is `crowded`.)
+    s->add_observer([&](const Event& ev) {
+      events += ev.type == "contact_limit" || (!box2d && ev.type == "crowded");
+    });
     s->run(3);
     const int before = events;
     const Snapshot snap = s->snapshot();

@@ -56,7 +56,9 @@ std::vector<ObjectId> heap(World& w, int n) {
 
 TEST_P(ContactLimit, AHeapOfPartsThroughEachOtherIsBoundedAndNamed) {
   // 200 parts: 19,900 overlapping pairs; a pair is kept while one of its
-  // parts touches fewer than 32 moving parts.
+  // parts touches fewer than 32 moving parts. (On ODE since session 18 all
+  // but 33 wait before any pair is left out, with a `crowded` event instead:
+  // tests/resolvers/rigid_body/heap_guard_test.cpp; its limit there too.)
   const Engine& e = GetParam();
   Sim s(on(e));
   add_floor(*s);
@@ -79,6 +81,10 @@ TEST_P(ContactLimit, AHeapOfPartsThroughEachOtherIsBoundedAndNamed) {
   std::printf("%s: heap of 200: %.3f s for 3 steps, at most %zu touching pairs (bound %zu)\n",
               e.name, seconds, most, limit);
   EXPECT_LE(most, limit);
+  if (std::string(e.name) == "ode") {  // its heap waits: no pair is left out
+    EXPECT_TRUE(limits.empty());
+    return;
+  }
   // Reported once, when it began, naming a part of the heap and the limit.
   ASSERT_EQ(limits.size(), 1u);
   // At the start (the set primes itself) or step 1; on Box2D, where all but

@@ -7,13 +7,15 @@
 // ENGINE is ode or box2d. Prints the wall time of the start (the first build
 // and contact update) and of each step, the touching pairs, and on Box2D the
 // guard's counters (bodies waiting, pairs put to the contact filter, shape
-// tests, Box2D's contacts).
+// tests, Box2D's contacts); on ODE the parts waiting outside collisions and
+// the guard's shape tests.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include "resolvers/rigid_body/collisions.hpp"
 #include "resolvers/rigid_body_box2d/box2d_engine.hpp"
 #include "runtime/contact_set.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
@@ -56,6 +58,9 @@ int main(int argc, char** argv) {
       std::printf(", waiting %zu, filter calls %llu, shape tests %llu, Box2D contacts %zu",
                   b->waiting_count(), (unsigned long long)b->pair_filter_calls(),
                   (unsigned long long)b->crowd_tests(), b->box2d_contact_count());
+    if (auto* c = dynamic_cast<const rigid::CollisionSet*>(&set))
+      std::printf(", waiting %zu, shape tests %llu", c->waiting().size(),
+                  (unsigned long long)c->crowd_tests());
     std::printf("\n");
   }
   return 0;
