@@ -120,26 +120,29 @@ TEST(SwapTransient, GluedPartsMovingApartKeepTheirMomentum) {
     }
 }
 
-TEST(SwapTransient, GluedPartsMovingTogetherKeepTheirMotionBitForBit) {
-  // An assembly whose parts already move as one (what the engines write) is
-  // rebuilt from its first part's motion as before: a swap changes nothing.
+TEST(SwapTransient, GluedPartsOfUnequalMassKeepTheirAngularMomentumAboutTheirCentre) {
+  // a (1 kg) at rest at x = -0.1, b (3 kg) at x = 0.1 moving at 1 m/s along y
+  // and spinning at 2 rad/s, 0.2 m cubes, glued: the centre is at x = 0.05,
+  // v = 3 / 4 = 0.75 m/s; L about it = I_b w_b + m_b r_b v_b = 0.02 * 2 +
+  // 3 * 0.05 * 1 = 0.19, I = 1/150 + 0.0225 + 0.02 + 0.0075 = 0.056667, so
+  // w = 3.352941 rad/s. The parts' own spin and inertia count.
   for (const char* engine : {kOde, kBox2D}) {
     Sim s(on(engine, {0, 0, 0}));
     const ObjectId a = add_box(*s, {-0.1, 1, 0}, {0.2, 0.2, 0.2}, 1, {}, "a");
     const ObjectId b = add_box(*s, {0.1, 1, 0}, {0.2, 0.2, 0.2}, 3, {}, "b");
     s->set(a, "planar", true);
     s->set(b, "planar", true);
-    s->set(a, "velocity", Vec3{0.3, 1, 0});
-    s->set(b, "velocity", Vec3{0.3, 1 + 0.2 * 5, 0});
-    s->set(a, "angular_velocity", Vec3{0, 0, 5});
-    s->set(b, "angular_velocity", Vec3{0, 0, 5});
+    s->set(b, "velocity", Vec3{0, 1, 0});
+    s->set(b, "angular_velocity", Vec3{0, 0, 2});
     add_glue(*s, a, b, "glue");
     s.run_for(0.1);
+    const Vec3 p = 1.0 * s.velocity(a) + 3.0 * s.velocity(b);
     const double w = std::get<Vec3>(s->get(a, "angular_velocity")).z;
-    const Vec3 v = s.velocity(a);
-    std::printf("%s, glued while spinning together: spin %.9f rad/s, a's speed %.9f m/s\n", engine,
-                w, std::sqrt(dot(v, v)));
-    EXPECT_NEAR(w, 5, 1e-6) << engine;
+    std::printf("%s, 1:3 glued, b moving and spinning: momentum (%.6f, %.6f), spin %.6f rad/s\n",
+                engine, p.x, p.y, w);
+    EXPECT_NEAR(p.x, 0, 1e-5) << engine;
+    EXPECT_NEAR(p.y, 3, 1e-5) << engine;
+    EXPECT_NEAR(w, 0.19 / (1.0 / 150 + 0.0225 + 0.02 + 0.0075), 1e-5) << engine;
   }
 }
 
