@@ -50,17 +50,18 @@ std::int32_t JointProjection::add_body(dBodyID id, bool planar, bool fixed) {
   return std::int32_t(bodies_.size() - 1);
 }
 
-void JointProjection::add_hinge(std::int32_t b1, std::int32_t b2, Vec3 anchor, Vec3 axis) {
+void JointProjection::add_hinge(std::int32_t b1, std::int32_t b2, Vec3 anchor, Vec3 axis,
+                                Vec3 anchor2) {
   const Body& one = bodies_[b1];
   const Vec3 x1 = to_vec3(dBodyGetPosition(one.id));
   const Quat q1 = to_quat(dBodyGetQuaternion(one.id));
-  Hinge h{b1, b2, rotate(conjugate(q1), anchor - x1), anchor, rotate(conjugate(q1), axis), {}, {}};
+  Hinge h{b1, b2, rotate(conjugate(q1), anchor - x1), anchor2, rotate(conjugate(q1), axis), {}, {}};
   Vec3 u = across(axis), v = cross(axis, u);
   if (b2 >= 0) {
     const Body& two = bodies_[b2];
     const Vec3 x2 = to_vec3(dBodyGetPosition(two.id));
     const Quat q2 = to_quat(dBodyGetQuaternion(two.id));
-    h.r2 = rotate(conjugate(q2), anchor - x2);
+    h.r2 = rotate(conjugate(q2), anchor2 - x2);
     u = rotate(conjugate(q2), u), v = rotate(conjugate(q2), v);
   }
   h.u2 = u, h.v2 = v;

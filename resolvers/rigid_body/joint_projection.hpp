@@ -53,7 +53,8 @@ class JointProjection {
   /// A hinge between bodies b1 and b2 (indices from add_body; b2 = -1: the
   /// play area) at the world point `anchor` about the unit world `axis`, as
   /// the bodies stand now.
-  void add_hinge(std::int32_t b1, std::int32_t b2, Vec3 anchor, Vec3 axis);
+  /// Body 2 (or the play area) is held at `anchor2`, body 1 at `anchor`.
+  void add_hinge(std::int32_t b1, std::int32_t b2, Vec3 anchor, Vec3 axis, Vec3 anchor2);
   /// Groups the hinges into islands (after the last add_hinge).
   void finish();
   /// Records the start-of-step poses (before the ODE step).

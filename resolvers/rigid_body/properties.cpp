@@ -102,6 +102,15 @@ std::vector<PropertyDef> joint_properties() {
       within(
           vec3("anchor", "m", "hinge pivot, world frame (kept current by the rigid body resolver)"),
           limits::extent),
+      within(
+          vec3("anchor_a", "m",
+               "hinge pivot in body_a's frame, or a world point for the play area (set from anchor "
+               "at the first build; swaps, restores and rebuilds keep the joint at it)"),
+          limits::extent),
+      within(vec3("anchor_b", "m",
+                  "hinge pivot in body_b's frame, or a world point for the play area (set "
+                  "from anchor at the first build)"),
+             limits::extent),
       {.name = "axis",
        .kind = PropertyKind::Vec3,
        .doc = "hinge axis, world frame (default {0,0,1}; kept current by the resolver)",

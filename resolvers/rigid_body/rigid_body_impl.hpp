@@ -99,7 +99,7 @@ struct RigidBodyResolver::Impl {
   struct Ids {
     PropertyId position, orientation, velocity, angular_velocity, mass, density, shape, size,
         radius, length, static_, pinned, planar, linear_damping, angular_damping, joint, body_a,
-        body_b, anchor, axis, joint_friction, limit_low, limit_high;
+        body_b, anchor, axis, joint_friction, limit_low, limit_high, anchor_a, anchor_b;
   };
 
   explicit Impl(const RigidBodyConfig& c) : config(c) { ensure_ode(); }
@@ -174,7 +174,9 @@ struct RigidBodyResolver::Impl {
           v.property("axis"),
           v.property("joint_friction"),
           v.property("limit_low"),
-          v.property("limit_high")};
+          v.property("limit_high"),
+          v.property("anchor_a"),
+          v.property("anchor_b")};
     // Columns whose edit means "the bodies are different now": rebuild.
     for (PropertyId p :
          {id.mass, id.density, id.shape, id.size, id.radius, id.length, id.static_, id.pinned,
@@ -288,12 +290,14 @@ struct RigidBodyResolver::Impl {
   struct HingeSetup {
     Vec3 pivot, axis;
     double angle;
+    Vec3 pivot1;  // where body 1 is held (pivot: where body 2 or the play area holds it)
   };
   /// A call made to `projection` while building: add_body (body >= 0) or
   /// add_hinge (body < 0), in order.
   struct ProjectionCall {
     std::int64_t body, planar, fixed, b1, b2;
     Vec3 pivot, axis;
+    Vec3 pivot2;  // add_hinge's anchor2
   };
   std::vector<SetupPose> setup_poses;   // of every body a hinge holds
   std::vector<HingeSetup> hinge_setup;  // parallel to hinges
@@ -305,6 +309,21 @@ struct RigidBodyResolver::Impl {
   /// quaternion, which moves the last bits of one the integrator left
   /// unnormalised by rounding; the rotation matrix is recomputed from the
   /// exact quaternion, as ODE's own step does (dQtoR after its dNormalize4).
+  /// Makes hinge `j` hold body 1 at the world point `p1` and body 2 (or the
+  /// play area) at `p2`, at the bodies' present poses. ODE's hinge takes one
+  /// world anchor for both bodies, so body 1 is moved by p2 - p1 for the call
+  /// and put back exactly: its local anchor is then p1's.
+  static void set_hinge_anchors(dJointID j, dBodyID b1, Vec3 p1, Vec3 p2) {
+    if (p1 == p2) {
+      dJointSetHingeAnchor(j, p2.x, p2.y, p2.z);
+      return;
+    }
+    const dReal* at = dBodyGetPosition(b1);
+    const dReal x[3] = {at[0], at[1], at[2]};
+    dBodySetPosition(b1, x[0] + (p2.x - p1.x), x[1] + (p2.y - p1.y), x[2] + (p2.z - p1.z));
+    dJointSetHingeAnchor(j, p2.x, p2.y, p2.z);
+    dBodySetPosition(b1, x[0], x[1], x[2]);
+  }
   static void set_exact_pose(dBodyID id, const dReal* pos, const dReal* q) {
     dBodySetPosition(id, pos[0], pos[1], pos[2]);
     dBodySetQuaternion(id, q);

@@ -29,7 +29,7 @@ PluginDef rigid_body_plugin() {
                         "planar", "linear_damping", "angular_damping", "joint", "body_a", "body_b",
                         "joint_friction", "limit_low", "limit_high"},
               .writes = {"position", "orientation", "velocity", "angular_velocity", "mass",
-                         "anchor", "axis"},
+                         "anchor", "anchor_a", "anchor_b", "axis"},
               .needs = {"mass", "density"},
               .provides = "rigid_body",
               .doc = "rigid body dynamics (ODE): bodies, hinges, glued assemblies, contacts"};

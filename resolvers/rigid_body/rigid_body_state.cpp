@@ -178,10 +178,12 @@ void RigidBodyResolver::restore_state(StateReader& in) {
       if (!finite(sp.pos, 3) || !usable_quat(Quat{sp.q[0], sp.q[1], sp.q[2], sp.q[3]}))
         refuse("a hinge's body was set up at a pose that is not finite");
     for (const auto& hs : m.hinge_setup)
-      if (!finite(hs.pivot) || !usable_axis(hs.axis) || !std::isfinite(hs.angle))
+      if (!finite(hs.pivot) || !finite(hs.pivot1) || !usable_axis(hs.axis) ||
+          !std::isfinite(hs.angle))
         refuse("a hinge's pivot, axis or angle is not finite or its axis is not a direction");
     for (const auto& c : m.projection_calls)
-      if (!finite(c.pivot) || !finite(c.axis) || (c.body < 0 && !usable_axis(c.axis)))
+      if (!finite(c.pivot) || !finite(c.pivot2) || !finite(c.axis) ||
+          (c.body < 0 && !usable_axis(c.axis)))
         refuse("a projected hinge's pivot or axis is not finite");
     for (const auto& sp : m.setup_poses) {
       if (sp.body >= m.bodies.size()) refuse("a hinge's body is out of range");
@@ -189,7 +191,8 @@ void RigidBodyResolver::restore_state(StateReader& in) {
     }
     for (std::size_t h = 0; h < m.hinges.size(); ++h) {
       const auto& hs = m.hinge_setup[h];
-      dJointSetHingeAnchor(m.hinges[h].joint, hs.pivot.x, hs.pivot.y, hs.pivot.z);
+      Impl::set_hinge_anchors(m.hinges[h].joint, dJointGetBody(m.hinges[h].joint, 0), hs.pivot1,
+                              hs.pivot);
       dJointSetHingeAxisOffset(m.hinges[h].joint, hs.axis.x, hs.axis.y, hs.axis.z, hs.angle);
     }
     m.projection.clear();
@@ -202,7 +205,7 @@ void RigidBodyResolver::restore_state(StateReader& in) {
       } else {
         if (c.b1 < 0 || c.b1 >= projected || c.b2 < -1 || c.b2 >= projected)
           refuse("a projected hinge names a body out of range");
-        m.projection.add_hinge(std::int32_t(c.b1), std::int32_t(c.b2), c.pivot, c.axis);
+        m.projection.add_hinge(std::int32_t(c.b1), std::int32_t(c.b2), c.pivot, c.axis, c.pivot2);
       }
     }
     m.projection.finish();

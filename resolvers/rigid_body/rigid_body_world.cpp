@@ -1,3 +1,4 @@
+#include "resolvers/rigid_body/hinge_anchors.hpp"
 #include "resolvers/rigid_body/rigid_body_impl.hpp"
 
 namespace alloy::rigid {
@@ -41,12 +42,16 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
   const auto body_a = access.column<ObjectId>(id.body_a);
   const auto body_b = access.column<ObjectId>(id.body_b);
   const auto anchor = access.column<Vec3>(id.anchor);
+  const auto anchor_a = access.column<Vec3>(id.anchor_a);
+  const auto anchor_b = access.column<Vec3>(id.anchor_b);
   const auto axis = access.column<Vec3>(id.axis);
   const auto joint_friction = access.column<double>(id.joint_friction);
   const auto limit_low = access.column<double>(id.limit_low);
   const auto limit_high = access.column<double>(id.limit_high);
   auto mass_out = access.writer<double>(id.mass);
   auto anchor_out = access.writer<Vec3>(id.anchor);
+  auto anchor_a_out = access.writer<Vec3>(id.anchor_a);
+  auto anchor_b_out = access.writer<Vec3>(id.anchor_b);
   auto axis_out = access.writer<Vec3>(id.axis);
 
   const std::size_t slots = store.slot_count();
@@ -252,9 +257,45 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     if (body.kinematic) {
       dBodySetKinematic(body.id);
     } else {
-      // An assembly moves as its first part does.
-      const Vec3 w = angular_velocity.value_or(root.slot, {});
-      const Vec3 v = velocity.value_or(root.slot, {}) + cross(w, com - root.x);
+      // An assembly moves as its first part does when every part moves with
+      // it (the engines wrote them so); parts glued while moving apart keep
+      // their momentum and their angular momentum about the assembly's centre
+      // (adv15 F13: they took the first part's velocity).
+      Vec3 w = angular_velocity.value_or(root.slot, {});
+      Vec3 v = velocity.value_or(root.slot, {}) + cross(w, com - root.x);
+      if (mem.size() > 1) {
+        auto norm = [](Vec3 x) { return std::sqrt(dot(x, x)); };
+        Vec3 p{}, L{};
+        bool rigid = true;
+        for (std::int32_t i : mem) {
+          const Candidate& c = cand[i];
+          const Vec3 vi = velocity.value_or(c.slot, {}), wi = angular_velocity.value_or(c.slot, {});
+          const Vec3 r = c.x - com;
+          p += c.mass * vi;
+          // The part's own spin: its inertia (part frame) turned to the world.
+          const Vec3 wl = rotate(conjugate(c.q), wi);
+          const dReal* I = c.local.I;
+          const Vec3 Iw{I[0] * wl.x + I[1] * wl.y + I[2] * wl.z,
+                        I[4] * wl.x + I[5] * wl.y + I[6] * wl.z,
+                        I[8] * wl.x + I[9] * wl.y + I[10] * wl.z};
+          L += rotate(c.q, Iw) + c.mass * cross(r, vi);
+          // Moving with the assembly within rounding (1e-6 relative, as Box2D's
+          // single precision writes it): nothing changes.
+          const Vec3 dv = vi - (v + cross(w, r)), dw = wi - w;
+          const double tol = 1e-6 * (1 + norm(v) + norm(w) * (1 + norm(r)));
+          if (norm(dv) > tol || norm(dw) > tol) rigid = false;
+        }
+        if (!rigid) {
+          v = p / total.mass;
+          dMatrix3 inv;
+          if (dInvertPDMatrix(total.I, inv, 3)) {
+            const Vec3 Lb = rotate(conjugate(qb), L);
+            w = rotate(qb, Vec3{inv[0] * Lb.x + inv[1] * Lb.y + inv[2] * Lb.z,
+                                inv[4] * Lb.x + inv[5] * Lb.y + inv[6] * Lb.z,
+                                inv[8] * Lb.x + inv[9] * Lb.y + inv[10] * Lb.z});
+          }
+        }
+      }
       dBodySetLinearVel(body.id, v.x, v.y, v.z);
       dBodySetAngularVel(body.id, w.x, w.y, w.z);
       // Exact rotation for a constant angular velocity: the infinitesimal
@@ -304,10 +345,18 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     if (ba == bb) continue;  // both in one assembly: already rigid
     const ObjectId jid = store.id_at(h.slot);
     const ErrorLocation where{"", 0, store.describe(jid)};
-    const Vec3 pivot = anchor.has(h.slot) ? anchor[h.slot] : cand[h.a >= 0 ? h.a : h.b].x;
     Vec3 ax = unit(axis.value_or(h.slot, {0, 0, 1}));  // any finite size: scaled first
     if (ax == Vec3{}) throw InputError(where, "a hinge axis must not be zero");
     const Quat qa = h.a >= 0 ? cand[h.a].q : Quat{}, qbb = h.b >= 0 ? cand[h.b].q : Quat{};
+    // The points each part is held at, as defined (hinge_anchors.hpp): a
+    // swap or a rebuild does not bake the present stretch into the joint.
+    const Vec3 given = anchor.value_or(h.slot, {}), given_a = anchor_a.value_or(h.slot, {}),
+               given_b = anchor_b.value_or(h.slot, {});
+    const HingeAnchors held = hinge_anchors(
+        anchor.has(h.slot) ? &given : nullptr, cand[h.a >= 0 ? h.a : h.b].x,
+        anchor_a.has(h.slot) ? &given_a : nullptr, anchor_b.has(h.slot) ? &given_b : nullptr,
+        h.a >= 0, h.a >= 0 ? cand[h.a].x : Vec3{}, qa, h.b >= 0, h.b >= 0 ? cand[h.b].x : Vec3{},
+        qbb);
     double angle = twist_angle(qa * conjugate(qbb), ax);
     double lo = limit_low.value_or(h.slot, -dInfinity), hi = limit_high.value_or(h.slot, dInfinity);
     if (lo > hi) throw InputError(where, "limit_low must not exceed limit_high");
@@ -321,7 +370,9 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
     if (!swapped && bb >= 0) bodies[bb].jointed = true;
     dJointID j = dJointCreateHinge(world, 0);
     dJointAttach(j, b1, b2);
-    dJointSetHingeAnchor(j, pivot.x, pivot.y, pivot.z);
+    // ODE's body 1 is part a's body unless a is the play area.
+    const Vec3 p1 = swapped ? held.on_b : held.on_a, p2 = swapped ? held.on_a : held.on_b;
+    set_hinge_anchors(j, b1, p1, p2);
     const Vec3 ode_axis = ax;
     dJointSetHingeAxisOffset(j, ode_axis.x, ode_axis.y, ode_axis.z, angle);
     if (hi < dInfinity) dJointSetHingeParam(j, dParamHiStop, hi);
@@ -334,13 +385,17 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
       dJointSetHingeParam(j, dParamFMax, friction);
     }
     hinges.push_back({jid, j, b2 == nullptr});
-    hinge_setup.push_back({pivot, ode_axis, angle});
+    hinge_setup.push_back({p2, ode_axis, angle, p1});
     if (config.joint_projection) {
-      const std::int32_t p1 = projected_body(swapped ? bb : ba), p2 = b2 ? projected_body(bb) : -1;
-      projection.add_hinge(p1, p2, pivot, ax);
-      projection_calls.push_back({-1, 0, 0, p1, p2, pivot, ax});
+      const std::int32_t q1 = projected_body(swapped ? bb : ba), q2 = b2 ? projected_body(bb) : -1;
+      projection.add_hinge(q1, q2, p1, ax, p2);
+      projection_calls.push_back({-1, 0, 0, q1, q2, p1, ax, p2});
     }
-    if (!anchor.has(h.slot)) anchor_out.set(h.slot, pivot);
+    if (held.defined) {
+      anchor_a_out.set(h.slot, held.local_a);
+      anchor_b_out.set(h.slot, held.local_b);
+    }
+    if (!anchor.has(h.slot)) anchor_out.set(h.slot, held.on_a);
     if (!axis.has(h.slot)) axis_out.set(h.slot, ax);
   }
 
@@ -348,7 +403,7 @@ void RigidBodyResolver::Impl::rebuild(ResolverAccess& access) {
   for (std::uint32_t b = 0; b < bodies.size(); ++b) {
     if (!bodies[b].jointed) continue;
     SetupPose sp{b, {}, {}};
-    static_assert(sizeof(SetupPose) == 8 * 8 && sizeof(ProjectionCall) == 5 * 8 + 2 * sizeof(Vec3));
+    static_assert(sizeof(SetupPose) == 8 * 8 && sizeof(ProjectionCall) == 5 * 8 + 3 * sizeof(Vec3));
     std::copy_n(dBodyGetPosition(bodies[b].id), 3, sp.pos);
     std::copy_n(dBodyGetQuaternion(bodies[b].id), 4, sp.q);
     setup_poses.push_back(sp);

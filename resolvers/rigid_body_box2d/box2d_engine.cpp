@@ -12,6 +12,7 @@
 #include <numeric>
 #include <utility>
 
+#include "resolvers/rigid_body/hinge_anchors.hpp"
 #include "resolvers/rigid_body/properties.hpp"
 #include "runtime/stage_state.hpp"
 
@@ -539,11 +540,15 @@ void Box2DEngine::build(ResolverAccess& access) {
   const auto body_a = access.column<ObjectId>("body_a");
   const auto body_b = access.column<ObjectId>("body_b");
   const auto anchor = access.column<Vec3>("anchor");
+  const auto anchor_a = access.column<Vec3>("anchor_a");
+  const auto anchor_b = access.column<Vec3>("anchor_b");
   const auto axis = access.column<Vec3>("axis");
   const auto jfric = access.column<double>("joint_friction");
   const auto lo = access.column<double>("limit_low");
   const auto hi = access.column<double>("limit_high");
   auto mass_out = access.writer<double>("mass");
+  auto anchor_a_out = access.writer<Vec3>("anchor_a");
+  auto anchor_b_out = access.writer<Vec3>("anchor_b");
 
   auto refuse = [&](ObjectId id, const std::string& why) {
     // Named by the object, so that the scene loader adds its file and line.
@@ -644,6 +649,12 @@ void Box2DEngine::build(ResolverAccess& access) {
     b2Vec2 mc{0, 0};      // sum of m * local centre, scaled
     Vec3 v, w;
     bool have_first = false;
+    // The parts' own motions, about the first part's centre `x0` (SI): momentum,
+    // sum of m r, angular momentum about x0, sum of I + m r^2; `rigid` while every
+    // part moves as the first part's rigid motion says.
+    Vec3 x0, p, mr;
+    double L = 0, Ir = 0, pm = 0;
+    bool rigid = true;
   };
   std::vector<Acc> acc(m.bodies.size());
   for (std::uint32_t i = 0; i < m.parts.size(); ++i) {
@@ -664,6 +675,7 @@ void Box2DEngine::build(ResolverAccess& access) {
     m.bodies[bi].dynamic = !acc[bi].fixed;
     acc[bi].v = velocity.value_or(slot, {});
     acc[bi].w = angular.value_or(slot, {});
+    acc[bi].x0 = p;
   }
 
   // Fixtures and masses.
@@ -739,6 +751,24 @@ void Box2DEngine::build(ResolverAccess& access) {
     a.m += pm;
     a.I += inertia_z(sh, pm, sz, r, len) + pm * d2;
     a.mc += float(pm) * part.local;
+    {
+      // Momentum about the first part's centre (the body's velocity below).
+      const Vec3 d = position.value_or(slot, {}) - a.x0, v = velocity.value_or(slot, {});
+      const double w = angular.value_or(slot, {}).z;
+      a.pm += pm;
+      a.p += pm * v;
+      a.mr += pm * d;
+      a.L += inertia_z(sh, pm, sz, r, len) * w + pm * (d.x * v.y - d.y * v.x);
+      a.Ir += inertia_z(sh, pm, sz, r, len) + pm * (d.x * d.x + d.y * d.y);
+      const Vec3 rigid_v = a.v + Vec3{-a.w.z * d.y, a.w.z * d.x, 0};
+      // Within Box2D's single precision of the velocities it wrote: the
+      // first part's motion is then the assembly's, as it always was.
+      const double tol = 1e-6 * (1 + std::abs(a.v.x) + std::abs(a.v.y) +
+                                 std::abs(a.w.z) * (1 + std::abs(d.x) + std::abs(d.y)));
+      if (std::abs(w - a.w.z) > tol || std::abs(v.x - rigid_v.x) > tol ||
+          std::abs(v.y - rigid_v.y) > tol)
+        a.rigid = false;
+    }
     body.linear_damping = std::max(body.linear_damping, ldamp.value_or(slot, 0));
     body.angular_damping = std::max(body.angular_damping, adamp.value_or(slot, 0));
   }
@@ -773,11 +803,22 @@ void Box2DEngine::build(ResolverAccess& access) {
     md.I = float(a.I * s * s);
     b2Body* b = m.bodies[bi].b;
     b->SetMassData(&md);
-    // Velocity of the centre of mass from the first part's (at the origin).
-    const b2Vec2 rc = b->GetWorldCenter() - b->GetPosition();
-    const double w = a.w.z;
-    b->SetLinearVelocity(b2Vec2(float(a.v.x * s - w * rc.y), float(a.v.y * s + w * rc.x)));
-    b->SetAngularVelocity(float(w));
+    if (a.rigid) {
+      // Velocity of the centre of mass from the first part's (at the origin):
+      // every part already moves with it.
+      const b2Vec2 rc = b->GetWorldCenter() - b->GetPosition();
+      const double w = a.w.z;
+      b->SetLinearVelocity(b2Vec2(float(a.v.x * s - w * rc.y), float(a.v.y * s + w * rc.x)));
+      b->SetAngularVelocity(float(w));
+    } else {
+      // Parts glued while moving apart (adv15 F13): the assembly keeps their
+      // momentum and their angular momentum about its centre of mass.
+      const Vec3 c = a.mr / a.pm, v = a.p / a.pm;
+      const double L = a.L - a.pm * (c.x * v.y - c.y * v.x);
+      const double I = a.Ir - a.pm * (c.x * c.x + c.y * c.y);
+      b->SetLinearVelocity(b2Vec2(float(v.x * s), float(v.y * s)));
+      b->SetAngularVelocity(float(L / I));
+    }
   }
 
   // Hinges: Box2D's revolute joints about z.
@@ -805,9 +846,19 @@ void Box2DEngine::build(ResolverAccess& access) {
     b2Body* A = m.bodies[m.parts[std::size_t(a)].body].b;
     b2Body* B = b < 0 ? m.ground : m.bodies[m.parts[std::size_t(b)].body].b;
     if (A == B) continue;  // glued together: nothing turns
-    const Vec3 an_at =
-        anchor.value_or(slot, position.value_or(m.parts[std::size_t(a)].id.index, {}));
-    if (std::abs(an_at.z) > kResidueZ)
+    // The points each part is held at, as defined (hinge_anchors.hpp), not
+    // the present anchor: a swap or rebuild does not bake a stretch in.
+    const std::uint32_t sa = m.parts[std::size_t(a)].id.index;
+    const std::uint32_t sb = b < 0 ? 0 : m.parts[std::size_t(b)].id.index;
+    const Vec3 given = anchor.value_or(slot, {}), given_a = anchor_a.value_or(slot, {}),
+               given_b = anchor_b.value_or(slot, {});
+    const rigid::HingeAnchors held = rigid::hinge_anchors(
+        anchor.has(slot) ? &given : nullptr, position.value_or(sa, {}),
+        anchor_a.has(slot) ? &given_a : nullptr, anchor_b.has(slot) ? &given_b : nullptr, true,
+        position.value_or(sa, {}), orientation.value_or(sa, {}), b >= 0,
+        b < 0 ? Vec3{} : position.value_or(sb, {}), b < 0 ? Quat{} : orientation.value_or(sb, {}));
+    const Vec3 an_at = held.on_a;
+    if (std::abs(an_at.z) > kResidueZ || std::abs(held.on_b.z) > kResidueZ)
       refuse(jid, "has its anchor off the plane (z = " + num(an_at.z) + ")");
     b2RevoluteJointDef jd;
     // Box2D's angle is that of its body B relative to its body A, less the
@@ -818,6 +869,11 @@ void Box2DEngine::build(ResolverAccess& access) {
     // rebuild, a swap from ODE, or a restore (a reference taken from the pose
     // at the first build would shift them by wherever the swap found the hinge).
     jd.Initialize(B, A, b2Vec2(float(an_at.x * s), float(an_at.y * s)));
+    jd.localAnchorA = B->GetLocalPoint(b2Vec2(float(held.on_b.x * s), float(held.on_b.y * s)));
+    if (held.defined) {
+      anchor_a_out.set(slot, held.local_a);
+      anchor_b_out.set(slot, held.local_b);
+    }
     const double part_b_angle = b < 0 ? 0.0 : m.parts[std::size_t(b)].angle;
     jd.referenceAngle = float(part_b_angle - m.parts[std::size_t(a)].angle);
     jd.collideConnected = false;
@@ -1549,9 +1605,68 @@ Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : 
 }
 
 void Box2DContacts::update(const WorldView& world) {
+  if (std::exchange(restored_, false)) {
+    clear_changes();  // the saved lists stand, as after the saved run's last update
+    return;
+  }
   begin_update();
   engine_.touching_into(current_, points_);
   publish(world, engine_.impulses(), engine_.impulses_computed(), world.step());
+}
+
+// --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
+//
+// The bytes: a version, the step of the last update, the impulse flags, the
+// touching pairs (ContactPair, whole) and their points (ContactPoint).
+
+namespace {
+constexpr std::uint32_t kContactsVersion = 1;
+// Saved as raw bytes (put_vector): no padding, every byte a field.
+static_assert(sizeof(ContactPair) == 2 * sizeof(ObjectId) + 8 + 5 * 8 + sizeof(Vec3));
+static_assert(sizeof(ContactPoint) == 2 * sizeof(Vec3) + 8);
+}  // namespace
+
+bool Box2DContacts::save_state(StateWriter& out) const {
+  out.put(kContactsVersion);
+  out.put(step_);
+  out.put(std::uint8_t(impulses_known_));
+  out.put(impulses_since_);
+  const auto pairs = touching();
+  out.put_vector(std::vector<ContactPair>(pairs.begin(), pairs.end()));
+  const auto pts = points();
+  out.put_vector(std::vector<ContactPoint>(pts.begin(), pts.end()));
+  return true;
+}
+
+void Box2DContacts::restore_state(StateReader& in) {
+  auto damaged = [&](const std::string& what) {
+    throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
+  };
+  if (const auto v = in.get<std::uint32_t>(); v != kContactsVersion)
+    throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
+                     std::to_string(v) + ", this build reads " + std::to_string(kContactsVersion));
+  const auto step = in.get<std::uint64_t>();
+  const auto known = in.get<std::uint8_t>();
+  const auto since = in.get<std::uint64_t>();
+  auto pairs = in.get_vector<ContactPair>();
+  auto pts = in.get_vector<ContactPoint>();
+  if (known > 1) damaged("an impulse flag of " + std::to_string(known));
+  // The merge needs the pairs sorted and distinct, their points in range.
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const ContactPair& p = pairs[i];
+    if (!(p.a < p.b) || (i > 0 && !pair_less(pairs[i - 1].a, pairs[i - 1].b, p.a, p.b)) ||
+        p.began_step > step)
+      damaged("its touching pairs are out of order or began after step " + std::to_string(step));
+    if (std::uint64_t(p.first) + p.count > pts.size()) damaged("a pair's points are out of range");
+  }
+  current_ = std::move(pairs);
+  points_ = std::move(pts);
+  previous_.clear(), previous_points_.clear();
+  clear_changes();
+  impulses_known_ = known != 0;
+  impulses_since_ = since;
+  step_ = step;
+  restored_ = true;
 }
 
 }  // namespace alloy::box2d

@@ -189,10 +189,19 @@ class Box2DContacts final : public ContactSet {
   Box2DContacts(const Box2DEngine& engine, bool always_impulses);
   void update(const WorldView& world) override;
   ImpulseDemand demand_impulses() const override { return engine_.demand_impulses(); }
+  /// The pairs touching after the last update, with their points, began
+  /// steps and impulse totals. A restored Box2D world has no contacts until
+  /// its first advance (they are not saved), so the update that primes a
+  /// restored set publishes these instead, and the next one merges with them
+  /// as the run that went on did: no pair ends and begins again, no circuit
+  /// through a contact opens for a step (adv15 F9).
+  bool save_state(StateWriter& out) const override;
+  void restore_state(StateReader& in) override;
 
  private:
   const Box2DEngine& engine_;
-  ImpulseDemand always_;  // impulses = true
+  ImpulseDemand always_;   // impulses = true
+  bool restored_ = false;  // the next update primes a restored set
 };
 
 }  // namespace alloy::box2d
