@@ -230,9 +230,9 @@ class ContactSet : public DerivedSet {
     if (pending_) make_pending();
     return *this;
   }
-  mutable bool pending_ = false;  // the present update's geometry is deferred, not yet made
-  bool previous_pending_ = false;  // the same, of the update before (abandon_update)
-  bool readers_ = false;           // add_reader()
+  mutable bool pending_ = false;       // the present update's geometry is deferred, not yet made
+  bool previous_pending_ = false;      // the same, of the update before (abandon_update)
+  bool readers_ = false;               // add_reader()
   std::vector<ContactPoint> scratch_;  // the began pairs' points at publish (discarded)
 };
 

@@ -1559,8 +1559,7 @@ std::size_t Box2DEngine::box2d_contact_count() const {
 
 // --- collisions.box2d ----------------------------------------------------------------
 
-Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses)
-    : engine_(&engine) {
+Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : engine_(&engine) {
   if (always_impulses) always_ = engine.demand_impulses();
   engine.attach_contacts(this);
 }
