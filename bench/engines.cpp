@@ -25,7 +25,9 @@
 // rigid_body.box2d (its collisions.box2d, gravity and its interaction) against
 // a loop written by hand over Box2D with the same bodies, units, iterations
 // and step, stepped in lockstep rounds as alloy_bench_rigid does for ODE
-// (whose ratio is the "overhead" section). Goal: <= 1.02.
+// (whose ratio is the "overhead" section). Goal: <= 1.02 (session 18: 1.04
+// and 1.02 in two runs at load 15, main's 1.08 and 1.06 alternated with them;
+// docs/performance.md, "engines").
 //
 //   build/bench/alloy_bench_engines [--quick] [--out DIR] [--docs FILE] [--no-progress]
 //                                   [--overhead-only | --pile-study]

@@ -1,6 +1,7 @@
 #include "runtime/contact_set.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 
 #include "runtime/world.hpp"
@@ -17,11 +18,36 @@ const ContactPair* ContactSet::find(ObjectId a, ObjectId b) const {
   if (b < a) std::swap(a, b);
   ContactPair key;
   key.a = a, key.b = b;
-  auto it = std::lower_bound(current_.begin(), current_.end(), key, by_pair);
-  return it != current_.end() && it->a == a && it->b == b ? &*it : nullptr;
+  const auto& current = made().current_;
+  auto it = std::lower_bound(current.begin(), current.end(), key, by_pair);
+  return it != current.end() && it->a == a && it->b == b ? &*it : nullptr;
+}
+
+void ContactSet::make_geometry(std::span<ContactPair>, std::vector<ContactPoint>&) const {
+  throw std::logic_error("a contact set deferred its geometry but cannot make it");
+}
+
+void ContactSet::make_pending() const {
+  if (!pending_) return;
+  if (!geometry_available())
+    throw std::logic_error(
+        "contacts were read after their engine advanced without the contact set updating (a "
+        "contact set must update after every advance of its engine: give it the engine's "
+        "`every`)");
+  pending_ = false;
+  points_.clear();
+  make_geometry(current_, points_);
+  // began_ holds copies of some of current_'s pairs, made at publish with the
+  // same geometry but points of their own: point them into points_.
+  std::size_t i = 0;
+  for (ContactPair& p : began_) {
+    while (by_pair(current_[i], p)) ++i;
+    p.first = current_[i].first, p.count = current_[i].count;
+  }
 }
 
 std::span<const ContactPair> ContactSet::ongoing() const {
+  made();
   if (!ongoing_made_) {
     // current_ without began_ (both sorted by pair, began_ a subsequence of it).
     ongoing_.clear();
@@ -38,6 +64,8 @@ std::span<const ContactPair> ContactSet::ongoing() const {
 }
 
 void ContactSet::carry_over(const ContactSet& from) {
+  from.make_pending();
+  pending_ = previous_pending_ = false;
   current_ = from.current_;
   points_ = from.points_;
   previous_.clear(), previous_points_.clear();
@@ -45,16 +73,30 @@ void ContactSet::carry_over(const ContactSet& from) {
   step_ = from.step_;
 }
 
+void ContactSet::restore_lists(std::vector<ContactPair> pairs, std::vector<ContactPoint> points) {
+  pending_ = previous_pending_ = false;
+  current_ = std::move(pairs);
+  points_ = std::move(points);
+  previous_.clear(), previous_points_.clear();
+  clear_changes();
+}
+
 void ContactSet::begin_update() {
+  // The present lists become the previous ones as they are: an update whose
+  // geometry nobody read leaves its pairs' depth and speed 0 (the header).
   std::swap(previous_, current_);
   current_.clear();
   std::swap(points_, previous_points_);
   points_.clear();
+  previous_pending_ = pending_;
+  pending_ = false;
 }
 
 void ContactSet::abandon_update() {
   std::swap(previous_, current_);
   std::swap(points_, previous_points_);
+  pending_ = previous_pending_;
+  previous_pending_ = false;
 }
 
 void ContactSet::clear_changes() {
@@ -112,6 +154,13 @@ void ContactSet::publish(const WorldView& world, std::span<const PairImpulse> im
   // Impulses of ended pairs (their last push apart), in a second ordered pass.
   auto take_ended = impulse_cursor();
   for (ContactPair& p : ended_) take_ended(p);
+  // Deferred geometry: the began pairs' now (their events carry it), every
+  // pair's at the first read, or now if a stage declared it reads the set.
+  if (pending_) {
+    scratch_.clear();
+    make_geometry(began_, scratch_);
+    if (readers_) make_pending();
+  }
 
   for (const ContactPair& p : began_) {
     Event e;

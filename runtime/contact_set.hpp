@@ -12,6 +12,21 @@
 // with contact points, normals, depths, the approach speed, and the impulse
 // the rigid body applied to the pair in its last advance (while some reader
 // demands impulses: see ImpulseDemand).
+//
+// Geometry made on first read. A provider whose points are costly to make
+// (Box2D: a world manifold and two body velocities per contact) may publish
+// the pairs alone and make the points, and each pair's first, count,
+// normal_speed and depth, when a reader first asks for them in that update
+// (make_geometry): a step that nobody reads pays for the pairs (the events
+// need them) and for the few began pairs' geometry (their events carry the
+// impact speed and depth), not for a thousand resting pairs' points. Every
+// value a reader gets is the one an eager provider gives, bit for bit. Two
+// consequences, both documented where they apply: the lists are made at once
+// at every update while some stage declared the set among its inputs (a
+// reader: PluginContext), because an ended pair carries the depth and speed
+// of its last update and those cannot be made once the engine has moved on;
+// and without such a stage, an ended pair whose last update nobody read
+// carries depth and normal_speed 0.
 #pragma once
 
 #include <cstddef>
@@ -107,16 +122,25 @@ constexpr bool pair_less(ObjectId a1, ObjectId b1, ObjectId a2, ObjectId b2) {
 /// contact_began and contact_ended.
 class ContactSet : public DerivedSet {
  public:
-  std::span<const ContactPair> began() const { return began_; }
+  std::span<const ContactPair> began() const { return made().began_; }
   std::span<const ContactPair> ongoing() const;
   /// began and ongoing together, sorted by (a, b): every pair that touches now.
-  std::span<const ContactPair> touching() const { return current_; }
+  std::span<const ContactPair> touching() const { return made().current_; }
+  /// Pairs that ended at the last update, with the depth and normal_speed of
+  /// the update before (0 if that update's geometry was never made: see the
+  /// header) and no points.
   std::span<const ContactPair> ended() const { return ended_; }
   /// The contact points of began and ongoing pairs.
-  std::span<const ContactPoint> points() const { return points_; }
+  std::span<const ContactPoint> points() const { return made().points_; }
   std::span<const ContactPoint> points(const ContactPair& p) const {
-    return std::span<const ContactPoint>(points_).subspan(p.first, p.count);
+    return std::span<const ContactPoint>(made().points_).subspan(p.first, p.count);
   }
+  /// Declares a reader: a stage that listed this set among its inputs
+  /// (called by PluginContext when it hands the set out). From then on every
+  /// update makes its geometry at once (see the header), as the reader will
+  /// read it, and ended pairs always carry their last depth and speed.
+  void add_reader() { readers_ = true; }
+  bool has_readers() const { return readers_; }
   /// The world step of the last update: began() and ended() are about that
   /// step (the set is skipped, and keeps its lists, while nothing moves).
   std::uint64_t step() const { return step_; }
@@ -160,10 +184,39 @@ class ContactSet : public DerivedSet {
   /// Clears began, ended and the lazily made ongoing list (an update that
   /// keeps the last pairs but reports no change).
   void clear_changes();
+  /// Replaces the present lists by saved ones (a provider's restore_state):
+  /// nothing deferred, no previous lists, no change reported.
+  void restore_lists(std::vector<ContactPair> pairs, std::vector<ContactPoint> points);
 
-  std::vector<ContactPair> began_, ended_;
-  std::vector<ContactPair> current_, previous_;  // began + ongoing, sorted; the last update's
-  std::vector<ContactPoint> points_, previous_points_;
+  /// Geometry on first read (see the header). A provider that fills only the
+  /// pairs (a, b) of current_ calls defer_geometry() before publish(); the
+  /// set then asks make_geometry() for the began pairs' geometry at publish
+  /// (their events), and for every pair's at the first read.
+  void defer_geometry() { pending_ = true; }
+  /// Fills each of `pairs` (sorted by (a, b), each touching now, with first,
+  /// count, normal_speed and depth 0) with its first and count, appending its
+  /// points to `points`, and its normal_speed and depth: the same values, in
+  /// the same order, whichever subset is asked. Only providers that defer
+  /// geometry are asked; the default refuses.
+  virtual void make_geometry(std::span<ContactPair> pairs, std::vector<ContactPoint>& points) const;
+  /// Whether the present update's geometry can still be made: a provider
+  /// whose engine moves on (its next advance) without this set updating
+  /// after it returns false, and a read then throws rather than read the new
+  /// state as the old (a contact set updated less often than its engine).
+  virtual bool geometry_available() const { return true; }
+  /// Makes the present update's geometry now, if it was deferred and not
+  /// yet made: for a provider whose engine is about to lose what it needs
+  /// (a rebuild, a restore, its end).
+  void make_pending() const;
+
+  // Lists that a first read completes (make_pending) are mutable: reading is const.
+  mutable std::vector<ContactPair> began_;
+  std::vector<ContactPair> ended_;
+  mutable std::vector<ContactPair> current_;  // began + ongoing, sorted
+  std::vector<ContactPair> previous_;         // the last update's
+  mutable std::vector<ContactPoint> points_;
+  std::vector<ContactPoint> previous_points_;
+
   // ongoing() is made from current_ when first asked for after an update: a
   // pile's pairs are nearly all ongoing (1,000 boxes: about 1,000 pairs a
   // step, 2 of them new), and most readers read touching().
@@ -172,6 +225,18 @@ class ContactSet : public DerivedSet {
   std::uint64_t step_ = 0;
   bool impulses_known_ = false;
   std::uint64_t impulses_since_ = 0;  ///< first step of the present run of known impulses
+
+ private:
+  /// This set with its present geometry made (make_pending): what every
+  /// reading accessor goes through.
+  const ContactSet& made() const {
+    if (pending_) make_pending();
+    return *this;
+  }
+  mutable bool pending_ = false;       // the present update's geometry is deferred, not yet made
+  bool previous_pending_ = false;      // the same, of the update before (abandon_update)
+  bool readers_ = false;               // add_reader()
+  std::vector<ContactPoint> scratch_;  // the began pairs' points at publish (discarded)
 };
 
 }  // namespace alloy

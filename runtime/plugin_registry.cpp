@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "runtime/contact_set.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy {
@@ -22,6 +23,11 @@ Stage& PluginContext::stage(std::string_view name, std::string* instance) {
   if (!s)
     throw AccessError("stage '" + info_.name + "' needs '" + std::string(name) +
                       "', which is not active");
+  // A contact set handed to a stage that declared it reads it makes its
+  // geometry at every update (ContactSet::add_reader).
+  if (auto* set = dynamic_cast<ContactSet*>(s);
+      set && std::find(info_.derived.begin(), info_.derived.end(), name) != info_.derived.end())
+    set->add_reader();
   return *s;
 }
 

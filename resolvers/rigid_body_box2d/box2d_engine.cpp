@@ -465,7 +465,9 @@ Box2DEngine::Box2DEngine(const World& world, Box2DConfig config)
   impl_->bounce = config_.bounce_velocity;
 }
 
-Box2DEngine::~Box2DEngine() = default;
+Box2DEngine::~Box2DEngine() {
+  if (contacts_) contacts_->engine_gone();
+}
 
 namespace {
 const char* const kDefining[] = {"shape",      "size",           "radius",          "length",
@@ -1501,7 +1503,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
     m.last_keys = keys;
   }
   m.touch_changed = false;
-  // The pairs' points are made when the contact set asks (touching_into),
+  // The pairs' points are made when the contact set asks (pairs_into, geometry_into),
   // straight into its lists: the set is updated after every advance that
   // changed something, and nothing touches Box2D's world in between.
   if (m.pre_speeds.size() > 1)
@@ -1527,26 +1529,40 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   ++state_version_;
 }
 
-void Box2DEngine::touching_into(std::vector<ContactPair>& pairs,
+void Box2DEngine::pairs_into(std::vector<ContactPair>& pairs) const {
+  const Impl& m = *impl_;
+  for (const std::uint32_t k : m.contact_order) {
+    const Impl::ContactKey& key = m.contact_keys[k];
+    if (pairs.empty() || pairs.back().a != key.a || pairs.back().b != key.b) {
+      ContactPair& p = pairs.emplace_back();
+      p.a = key.a, p.b = key.b;
+    }
+  }
+}
+
+void Box2DEngine::geometry_into(std::span<ContactPair> pairs,
                                 std::vector<ContactPoint>& points) const {
-  // Pairs and points are written in the order advance() left (by pair, then
-  // Box2D's list order); a pair's approach speed is the largest at its
-  // points now or at its beginning (PreSolve's).
+  // Points are written in the order advance() left (by pair, then Box2D's
+  // list order), for the pairs asked (a merge by pair); a pair's approach
+  // speed is the largest at its points now or at its beginning (PreSolve's).
   Impl& m = *impl_;
   const double s = m.s;
   const auto& keys = m.contact_keys;
-  std::size_t ps = 0;
+  std::size_t ps = 0, j = 0;
   for (const std::uint32_t k : m.contact_order) {
+    if (j == pairs.size()) break;
     const Impl::ContactKey& key = keys[k];
+    while (j < pairs.size() && pair_less(pairs[j].a, pairs[j].b, key.a, key.b)) ++j;
+    if (j == pairs.size() || pairs[j].a != key.a || pairs[j].b != key.b) continue;
+    ContactPair& p = pairs[j];
     b2Contact* c = key.c;
     const bool a_is_A = m.part_of(c->GetFixtureA()).id == key.a;
     b2WorldManifold wm;
     c->GetWorldManifold(&wm);
     const int np = c->GetManifold()->pointCount;
     const double speed = m.approach(c, wm, np, a_is_A);
-    if (pairs.empty() || pairs.back().a != key.a || pairs.back().b != key.b) {
-      ContactPair& p = pairs.emplace_back();
-      p.a = key.a, p.b = key.b, p.first = std::uint32_t(points.size());
+    if (p.count == 0 && p.normal_speed == 0 && p.depth == 0) {  // the pair's first key
+      p.first = std::uint32_t(points.size());
       while (ps < m.pre_speeds.size() &&
              pair_less(m.pre_speeds[ps].a, m.pre_speeds[ps].b, key.a, key.b))
         ++ps;
@@ -1554,7 +1570,6 @@ void Box2DEngine::touching_into(std::vector<ContactPair>& pairs,
            q < m.pre_speeds.size() && m.pre_speeds[q].a == key.a && m.pre_speeds[q].b == key.b; ++q)
         p.normal_speed = std::max(p.normal_speed, m.pre_speeds[q].speed);
     }
-    ContactPair& p = pairs.back();
     // ContactPoint's normal points from b towards a; Box2D's from A to B.
     const b2Vec2 nn = a_is_A ? -wm.normal : wm.normal;
     for (int i = 0; i < np; ++i) {
@@ -1600,18 +1615,36 @@ std::size_t Box2DEngine::box2d_contact_count() const {
 
 // --- collisions.box2d ----------------------------------------------------------------
 
-Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : engine_(engine) {
+Box2DContacts::Box2DContacts(const Box2DEngine& engine, bool always_impulses) : engine_(&engine) {
   if (always_impulses) always_ = engine.demand_impulses();
+  engine.attach_contacts(this);
+}
+
+Box2DContacts::~Box2DContacts() {
+  if (engine_) engine_->attach_contacts(nullptr);
+}
+
+void Box2DContacts::engine_gone() {
+  make_pending();
+  engine_ = nullptr;
 }
 
 void Box2DContacts::update(const WorldView& world) {
+  if (!engine_) return;  // its engine is gone (the set is retired): keep the last lists
   if (std::exchange(restored_, false)) {
     clear_changes();  // the saved lists stand, as after the saved run's last update
     return;
   }
   begin_update();
-  engine_.touching_into(current_, points_);
-  publish(world, engine_.impulses(), engine_.impulses_computed(), world.step());
+  engine_->pairs_into(current_);
+  version_ = engine_->state_version();
+  defer_geometry();
+  publish(world, engine_->impulses(), engine_->impulses_computed(), world.step());
+}
+
+void Box2DContacts::make_geometry(std::span<ContactPair> pairs,
+                                  std::vector<ContactPoint>& points) const {
+  engine_->geometry_into(pairs, points);
 }
 
 // --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
@@ -1659,10 +1692,7 @@ void Box2DContacts::restore_state(StateReader& in) {
       damaged("its touching pairs are out of order or began after step " + std::to_string(step));
     if (std::uint64_t(p.first) + p.count > pts.size()) damaged("a pair's points are out of range");
   }
-  current_ = std::move(pairs);
-  points_ = std::move(pts);
-  previous_.clear(), previous_points_.clear();
-  clear_changes();
+  restore_lists(std::move(pairs), std::move(pts));
   impulses_known_ = known != 0;
   impulses_since_ = since;
   step_ = step;

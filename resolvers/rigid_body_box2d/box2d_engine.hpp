@@ -108,9 +108,17 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
 
   // --- published for collisions.box2d ---------------------------------------------
   /// Appends the pairs touching after the last advance, sorted by (a, b), to
-  /// `pairs`, and their points to `points` (ContactSet's lists; the pairs'
-  /// first and count index `points`). Valid from one advance to the next.
-  void touching_into(std::vector<ContactPair>& pairs, std::vector<ContactPoint>& points) const;
+  /// `pairs`: a and b only (ContactSet's deferred geometry).
+  void pairs_into(std::vector<ContactPair>& pairs) const;
+  /// Fills `pairs` (sorted, a subset of pairs_into's, geometry 0) with their
+  /// points, appended to `points`, and first, count, normal_speed and depth:
+  /// the same values whichever subset is asked. Valid from one advance to the
+  /// next: while state_version() is what it was after the advance.
+  void geometry_into(std::span<ContactPair> pairs, std::vector<ContactPoint>& points) const;
+  /// The contact set that reads this engine's contacts (collisions.box2d):
+  /// told before Box2D's world is destroyed, to make a deferred geometry
+  /// first (a swap hands the retired set's pairs to the next engine's).
+  void attach_contacts(class Box2DContacts* set) const { contacts_ = set; }
   /// Impulses of the last advance per pair, sorted by (a, b); empty unless
   /// impulses_computed().
   std::span<const PairImpulse> impulses() const { return impulses_; }
@@ -181,6 +189,7 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   std::array<PropertyId, 4> motion_{kNoProperty, kNoProperty, kNoProperty, kNoProperty};
   std::uint64_t state_version_ = 0;
   std::uint64_t rebuilds_ = 0;
+  mutable class Box2DContacts* contacts_ = nullptr;  // attach_contacts
 };
 
 /// `collisions.box2d`: the contact lists of the Box2D engine's last advance.
@@ -188,7 +197,10 @@ class Box2DContacts final : public ContactSet {
  public:
   Box2DContacts(const Box2DEngine& engine, bool always_impulses);
   void update(const WorldView& world) override;
-  ImpulseDemand demand_impulses() const override { return engine_.demand_impulses(); }
+  ~Box2DContacts() override;
+  ImpulseDemand demand_impulses() const override {
+    return engine_ ? engine_->demand_impulses() : ImpulseDemand{};
+  }
   /// The pairs touching after the last update, with their points, began
   /// steps and impulse totals. A restored Box2D world has no contacts until
   /// its first advance (they are not saved), so the update that primes a
@@ -199,9 +211,20 @@ class Box2DContacts final : public ContactSet {
   void restore_state(StateReader& in) override;
 
  private:
-  const Box2DEngine& engine_;
-  ImpulseDemand always_;   // impulses = true
-  bool restored_ = false;  // the next update primes a restored set
+  void make_geometry(std::span<ContactPair> pairs,
+                     std::vector<ContactPoint>& points) const override;
+  bool geometry_available() const override {
+    return engine_ && engine_->state_version() == version_;
+  }
+  friend class Box2DEngine;  // its end: engine_gone()
+  /// The engine is being destroyed: makes the deferred geometry while its
+  /// world still stands, and forgets it.
+  void engine_gone();
+
+  const Box2DEngine* engine_;  // null once the engine is gone (engine_gone)
+  ImpulseDemand always_;       // impulses = true
+  std::uint64_t version_ = 0;  // the engine's state_version() at the last update
+  bool restored_ = false;      // the next update primes a restored set
 };
 
 }  // namespace alloy::box2d

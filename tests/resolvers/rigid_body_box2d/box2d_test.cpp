@@ -199,6 +199,99 @@ TEST(Box2D, ContactsArePublishedThroughTheContactSet) {
   }
 }
 
+/// A floor with boxes and disks dropped on it and on each other: pairs begin,
+/// bounce apart (end) and begin again in the first 0.6 s.
+void bouncing_heap(World& w) {
+  add_floor(w);
+  for (int i = 0; i < 6; ++i) {
+    const ObjectId d = add_sphere(w, {0.13 * i - 0.3, 0.2 + 0.07 * i, 0}, 0.05, 1.0);
+    w.set(d, "restitution", 0.6);
+    add_box(w, {0.13 * i - 0.33, 0.5 + 0.05 * i, 0}, {0.1, 0.08, 0.1}, 1.0);
+  }
+}
+
+/// One step's contact lists as bits: every field of every pair and point.
+std::vector<double> lists_of(const ContactSet& set, bool with_ended) {
+  std::vector<double> out;
+  auto pair = [&](const ContactPair& p) {
+    for (double v : {double(p.a.index), double(p.b.index), double(p.first), double(p.count),
+                     p.normal_speed, p.depth, p.impulse.x, p.impulse.y, p.normal_impulse,
+                     p.total_impulse, double(p.began_step)})
+      out.push_back(v);
+  };
+  for (const ContactPair& p : set.began()) pair(p);
+  out.push_back(-1);
+  for (const ContactPair& p : set.ongoing()) pair(p);
+  out.push_back(-2);
+  for (const ContactPair& p : set.touching()) {
+    pair(p);
+    for (const ContactPoint& c : set.points(p))
+      for (double v : {c.position.x, c.position.y, c.normal.x, c.normal.y, c.depth})
+        out.push_back(v);
+  }
+  out.push_back(-3);
+  if (with_ended)
+    for (const ContactPair& p : set.ended()) pair(p);
+  return out;
+}
+
+TEST(Box2D, ContactGeometryMadeOnFirstReadIsBitForBitTheEagerOne) {
+  // collisions.box2d makes its points (and each pair's depth and speed) when
+  // first read in a step. A set with a declared reader makes them at every
+  // update (eager); one read every step makes them at each first read; one
+  // read every 7th step skips the others. The lists each reads, and every
+  // contact event of the three runs, must be the same bits.
+  struct Run {
+    Sim s{on_box2d()};
+    std::vector<std::string> events;
+    const ContactSet* set = nullptr;
+    explicit Run(bool eager) {
+      bouncing_heap(*s);
+      s->add_observer([this](const Event& e) {
+        char line[200];
+        std::snprintf(line, sizeof line, "%llu %s %u %u %.17g %.17g %.17g",
+                      (unsigned long long)e.step, e.type.c_str(), e.a.index, e.b.index,
+                      e.value("speed"), e.value("depth"), e.value("duration"));
+        events.push_back(line);
+      });
+      s->start();
+      set = &dynamic_cast<const ContactSet&>(*s->stage("collisions.box2d"));
+      if (eager) const_cast<ContactSet*>(set)->add_reader();
+    }
+  };
+  Run eager(true), every(false), sparse(false);
+  EXPECT_TRUE(eager.set->has_readers());
+  EXPECT_FALSE(every.set->has_readers());
+  const ImpulseDemand d1 = eager.set->demand_impulses(), d2 = every.set->demand_impulses(),
+                      d3 = sparse.set->demand_impulses();
+  int began = 0, ended = 0;
+  for (int i = 0; i < 144; ++i) {
+    eager.s->step(), every.s->step(), sparse.s->step();
+    const auto want = lists_of(*eager.set, true);
+    ASSERT_EQ(lists_of(*every.set, true), want) << "step " << i;
+    began += int(eager.set->began().size()), ended += int(eager.set->ended().size());
+    // A began pair is the touching pair: the same points (made at publish for
+    // the event, then placed among every pair's at the first read).
+    for (const Run* r : {&eager, &every})
+      for (const ContactPair& p : r->set->began()) {
+        const ContactPair* t = r->set->find(p.a, p.b);
+        ASSERT_NE(t, nullptr);
+        EXPECT_EQ(p.first, t->first);
+        EXPECT_EQ(p.count, t->count);
+        EXPECT_GT(p.count, 0u);
+      }
+    // (Its ended pairs carry the depth of an update nobody read as 0: documented.)
+    if (i % 7 == 0)
+      ASSERT_EQ(lists_of(*sparse.set, false), lists_of(*eager.set, false)) << "step " << i;
+  }
+  std::printf("box2d lazy contact geometry: %d began, %d ended over 144 steps, %zu events\n", began,
+              ended, eager.events.size());
+  EXPECT_GT(began, 12);
+  EXPECT_GT(ended, 3);
+  EXPECT_EQ(every.events, eager.events);
+  EXPECT_EQ(sparse.events, eager.events);
+}
+
 template <class F>
 std::string refusal(F&& make) {
   Sim s(on_box2d());
