@@ -1,8 +1,8 @@
 -- A generator from kit parts: the motor's rotor (mods/motor/rotor.lua: eight
 -- 50 x 10 x 10 mm NdFeB spokes, north out and south out in turn, glued to a
--- wooden hub on a pinned axle) and its two coils (the kit's 500-turn coil,
--- radial at +22.5 and -22.5 degrees, 8 mm outside the spokes' ends), wired in
--- series through a lamp. A crank glued to the axle carries the hand's torque
+-- wooden hub on a pinned axle) and its two coils (the motor's coreless coils,
+-- 5100 turns each, radial at +22.5 and -22.5 degrees, 1.5 mm outside the
+-- spokes' ends), wired in series through a lamp. A crank glued to the axle carries the hand's torque
 -- (`drive_torque`, mods/generator/runtime.lua). There is no battery, no
 -- slider and no bias magnet: nothing drives a current but the spokes' flux
 -- sweeping through the coils (-dPhi/dt, docs/magnetism.md "Induction").
@@ -20,29 +20,23 @@ local defaults = {
   centre = { 0.24, 0.20 },
   -- The motor's rotor and coils, the same numbers (mods/motor/layout.lua).
   spoke_length = 0.05, spoke_width = 0.01, spoke_inner = 0.024, hub_radius = 0.022,
-  coil_angle = 22.5, coil_gap = 0.008, coil_length = 0.05, coil_diameter = 0.03, turns = 500,
-  wire_diameter = 0.5e-3,
-  -- The cores amplify the coils' own field; the spokes do not magnetise
-  -- them (core_pulled = false). With them pulled the lamp glows brighter
-  -- (17.5 mW against 9.8 mW at 6 s) and the rotor still turns, but the
-  -- coupling's books do not close as the step shrinks: soft iron has had a
-  -- store in magnetic_forces since session 16, but its strengths are held
-  -- over a step, and the work beyond the store (-0.135, -0.079, -0.044 J at
-  -- 1/120, 1/240, 1/480 s over 10 s) falls only as the step (docs/motor.md,
-  -- "Iron cores"; docs/energy.md).
-  core_pulled = false,
+  -- The motor's coils (mods/motor/layout.lua), air-cored as there: an iron
+  -- core would be magnetised by the spokes too and cog the rotor
+  -- (docs/motor.md, "Iron cores").
+  coil_angle = 22.5, coil_gap = 0.0015, coil_length = 0.02, coil_diameter = 0.058, turns = 5100,
+  wire_diameter = 0.25e-3, core = "air", core_diameter = 0.0174,
   -- The bearing: dry friction (N m) and a light oil's viscous drag (N m s;
   -- 0.1 Pa s in the motor's bush: a hundredth of the motor's grease, so the
   -- lamp's load is what the hand feels most).
   axle_friction = 0.002, bearing_drag = 9e-5,
-  -- The lamp: a 1.2 V, 0.22 A torch bulb (5.5 ohm hot, 10 lm/W), matched to
-  -- the coils' EMF of about a volt at a brisk turn (two coils in series,
-  -- 6.5 ohm).
-  lamp_resistance = 5.5, lamp_efficacy = 10,
-  -- The falling weight (weight = true): a 40 g steel ball on a string wound
+  -- The lamp: a 12 V, 30 mA pilot bulb (400 ohm hot, 10 lm/W), matched to
+  -- the two coils in series (414 ohm), whose EMF is a few volts at a brisk
+  -- turn.
+  lamp_resistance = 400, lamp_efficacy = 10,
+  -- The falling weight (weight = true): a 100 g steel ball on a string wound
   -- on the hub, hanging from its left side, weight_drop below the axle. The
-  -- string: 20 N/m (an elastic cord: 2 cm of stretch under the weight), damped 0.3 N s/m.
-  weight = false, weight_mass = 0.04, weight_drop = 0.15, string_stiffness = 20, string_damping = 0.3,
+  -- string: 20 N/m (an elastic cord: 5 cm of stretch under the weight), damped 0.3 N s/m.
+  weight = false, weight_mass = 0.1, weight_drop = 0.15, string_stiffness = 20, string_damping = 0.3,
   -- The crank: a wooden arm across the hub's face, glued to it (inside the
   -- hub's outline, so that it touches no spoke).
   crank_length = 0.04,
@@ -85,7 +79,7 @@ return function(options)
   for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
     kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
                diameter = o.coil_diameter, turns = o.turns, wire_diameter = o.wire_diameter,
-               core_pulled = o.core_pulled }
+               core = o.core, core_diameter = o.core_diameter }
   end
 
   -- The lamp, above the rotor, and the loop through both coils.

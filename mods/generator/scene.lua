@@ -1,4 +1,4 @@
--- The generator: a hand turns the crank with a steady 6 mN m from 0.2 s;
+-- The generator: a hand turns the crank with a steady 20 mN m from 0.2 s;
 -- the rotor speeds up until the bearing and the lamp take all of it, and the
 -- lamp glows brighter as it goes. At 6 s the hand lets go: the rotor runs
 -- down, and the lamp with it. `alloy run mods/generator` reports the speed
@@ -21,5 +21,5 @@ world {
 
 require "generator.layout" ()
 
-at(0.2, "crank", { drive_torque = { 0, 0, 0.006 } })
+at(0.2, "crank", { drive_torque = { 0, 0, 0.02 } })
 at(6, "crank", { drive_torque = { 0, 0, 0 } })

@@ -1,4 +1,4 @@
--- The generator driven by a falling weight: a 40 g steel ball on a string
+-- The generator driven by a falling weight: a 100 g steel ball on a string
 -- wound on the rotor's hub. Let go at 0.2 s, it falls, turns the rotor, and
 -- the lamp lights; the lamp's load is what keeps the fall slow.
 -- `alloy run mods/generator/weight.lua`.

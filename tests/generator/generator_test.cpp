@@ -64,7 +64,7 @@ Steady crank(double torque, bool open = false, double seconds = 10, double windo
 // square of the speed (a resistive load on an EMF proportional to the
 // speed): the log-log slope of power against speed is 2 within 10 %.
 TEST(Generator, LampPowerGrowsAsTheSquareOfTheCrankSpeed) {
-  const double torques[] = {0.004, 0.006, 0.008};
+  const double torques[] = {0.015, 0.02, 0.025};
   Steady s[3];
   for (int k = 0; k < 3; ++k) {
     s[k] = crank(torques[k]);
@@ -89,7 +89,7 @@ TEST(Generator, LampPowerGrowsAsTheSquareOfTheCrankSpeed) {
 // and the rotor pays for it: the induced current's field brakes the spokes
 // (Lenz), through the same pole model that gives the EMF.
 TEST(Generator, TheLampsLoadSlowsTheRotor) {
-  const double torque = 0.006;
+  const double torque = 0.02;
   const Steady loaded = crank(torque), open = crank(torque, true);
   std::printf("open %.2f rad/s, loaded %.2f rad/s, lamp %.5f W\n", open.speed, loaded.speed,
               loaded.lamp_power);
@@ -101,8 +101,8 @@ TEST(Generator, TheLampsLoadSlowsTheRotor) {
 /// The falling-weight scene (mods/generator/weight.lua) for `seconds`: the
 /// weight's downward speed and the lamp's energy over the run.
 struct Fall {
-  double speed = 0;        ///< m/s, downward, at the end
-  double rotor = 0;        ///< rad/s at the end
+  double speed = 0;        ///< m/s, downward, the mean over the last 2 s
+  double rotor = 0;        ///< rad/s, the mean over the last 2 s
   double lamp_energy = 0;  ///< J radiated over the run
   double drop = 0;         ///< m fallen
 };
@@ -117,13 +117,18 @@ Fall fall(bool open, double seconds = 6) {
   const ObjectId weight = w.find("weight");
   const double y0 = std::get<Vec3>(w.get(weight, "position")).y;
   Fall f;
-  for (int i = 0, n = int(std::lround(seconds / w.dt())); i < n; ++i) {
+  // Means over the last 2 s: the rotor's speed ripples within a turn (the
+  // coils brake it hardest where a spoke's flux changes fastest) and the
+  // elastic string lets the weight lag it, so single samples differ.
+  const int n = int(std::lround(seconds / w.dt())), from = n - int(std::lround(2.0 / w.dt()));
+  for (int i = 0; i < n; ++i) {
     w.step();
     if (auto* light = dynamic_cast<light::LightResolver*>(w.stage("light")))
       f.lamp_energy += light->emitted_energy();
+    if (i < from) continue;
+    f.speed -= std::get<Vec3>(w.get(weight, "velocity")).y / (n - from);
+    f.rotor += std::get<Vec3>(w.get(w.find("axle"), "angular_velocity")).z / (n - from);
   }
-  f.speed = -std::get<Vec3>(w.get(weight, "velocity")).y;
-  f.rotor = std::get<Vec3>(w.get(w.find("axle"), "angular_velocity")).z;
   f.drop = y0 - std::get<Vec3>(w.get(weight, "position")).y;
   return f;
 }
@@ -148,7 +153,7 @@ TEST(Generator, AFallingWeightLightsTheLampAndIsHeldBackByIt) {
 // Run with --gtest_also_run_disabled_tests --gtest_filter=*Study*.
 TEST(Generator, DISABLED_Study) {
   for (double dt : {1.0 / 240, 1.0 / 480, 1.0 / 960}) {
-    const Steady loaded = crank(0.006, false, 10, 2, dt), open = crank(0.006, true, 10, 2, dt);
+    const Steady loaded = crank(0.02, false, 10, 2, dt), open = crank(0.02, true, 10, 2, dt);
     std::printf("dt 1/%.0f: open %.3f rad/s, loaded %.3f rad/s, lamp %.5f W\n", 1 / dt, open.speed,
                 loaded.speed, loaded.lamp_power);
   }

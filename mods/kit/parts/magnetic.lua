@@ -22,7 +22,7 @@ magnetic.coil = {
     { "core", "string", default = "iron", doc = "\"iron\" (a soft-iron rod inside the winding) or \"air\"" },
     { "core_diameter", "positive", doc = "m; default 0.6 x the diameter" },
     { "core_pulled", "boolean", default = true,
-      doc = "an iron core is magnetised by the other parts' fields too (pulled by a magnet, cogging); false: only the coil's own current magnetises it (the model before session 15, kept by the motor family until its retune)" },
+      doc = "an iron core is magnetised by the other parts' fields too (pulled by a magnet, cogging); false: only the coil's own current magnetises it (the model before session 15, kept by the motor and the hoist until a retune meets the DC-motor model: docs/motor.md, \"Iron cores\")" },
   }),
   build = function(a, kit)
     local L, D, N, dw = a.length, a.diameter, a.turns, a.wire_diameter
