@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -951,6 +952,41 @@ TEST_F(ElectricityTest, TheBooksRefuseAPowerThatOverflows) {
     EXPECT_NE(std::string(e.what()).find("the energy books overflowed"), std::string::npos)
         << e.what();
   }
+}
+
+/// Writes +inf into `overheat` of every object carrying it at step 3: the
+/// world refuses the value and freezes the object (as magnetism's inf pole
+/// strength froze adv13's coil of 1e300 turns).
+class Overheat : public Resolver {
+ public:
+  void build(ResolverAccess&) override {}
+  void advance(ResolverAccess& a, double) override {
+    auto w = a.writer<double>("overheat");
+    if (a.step() == 3)
+      for (std::uint32_t s : w.members()) w.set(s, std::numeric_limits<double>::infinity());
+  }
+};
+
+TEST_F(ElectricityTest, AWireToAFrozenPartHasAnOpenEnd) {
+  // adv13 F4: the frozen coil left electricity's scope, and its wires then
+  // failed the run as "not an electrical part", blaming the wire.
+  registry.add({.info = {.name = "overheat",
+                         .kind = StageKind::Resolver,
+                         .writes = {"overheat"},
+                         .needs = {"overheat"}},
+                .properties = {{.name = "overheat", .kind = PropertyKind::Number}},
+                .create = [](PluginContext&) { return std::make_unique<Overheat>(); }});
+  World w(registry);
+  const ObjectId b = battery(w, "bat", 1.0, 1.0);
+  const ObjectId x = coil(w, "x", 0.01, 1.0);
+  w.set(x, "overheat", 0.0);
+  wire(w, "w1", b, 1, x, 0, 0.0);
+  wire(w, "w2", x, 1, b, 0, 0.0);
+  w.run(2);
+  EXPECT_GT(num(w, b, "current"), 0.0);
+  EXPECT_NO_THROW(w.run(4));
+  EXPECT_TRUE(w.frozen(x));
+  EXPECT_EQ(num(w, b, "current"), 0.0);  // the loop is open at the frozen coil
 }
 
 }  // namespace
