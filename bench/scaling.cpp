@@ -6,6 +6,7 @@
 //
 //   build/bench/alloy_bench_scaling [--quick] [--out DIR] [--docs FILE] [--no-progress]
 //                                   [--electricity] [--collisions] [--magnets] [--gravity]
+//                                   [--ladder]
 //
 // n runs to 100,000; above 10,000 each point is sampled sparingly (a few
 // steps, skipped if predicted slower than 2 s a step), so that the sweep fits
@@ -16,7 +17,9 @@
 // (and their goals), print the table and write nothing: for working on one
 // stage without the hour of the whole sweep. --magnets and --gravity also
 // print issue 16's kernel comparison (previous method against current, same
-// run, same machine) with the goals as pass or miss.
+// run, same machine) with the goals as pass or miss. --ladder times the
+// 10,000-element ladder alone at the default settings and with 1 substep
+// (400 steps each; seconds, not the hour): what to profile the goal with.
 //
 // Scenes (each built through the world's editing API, only the plugins it
 // needs allowed, so that a stage's time is its own):
@@ -974,9 +977,37 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
 
 }  // namespace
 
+/// --ladder: the 10,000-element ladder alone, at the settings a user gets
+/// (4 substeps, the default dense limit) and with 1 substep, each timed over
+/// 400 steps in CPU seconds (the whole step of a world that holds only the
+/// electricity resolver, and the stage's own share): a quick figure to work
+/// on the goal with, and to profile (perf record on this mode sees the stage
+/// and nothing else).
+void ladder_only() {
+  for (int substeps : {4, 1}) {
+    WorldDef d = def_with({"electricity"});
+    if (substeps != 4) d.settings["electricity"].set("substeps", std::int64_t(substeps));
+    scenes::Sim sim(d);
+    World& w = *sim;
+    build_ladder(w, 10000);
+    w.start();
+    w.run(20);
+    const Timed t = time_steps(w, 1e9, 400);
+    std::printf(
+        "ladder of 10,000 elements, %d substep%s: %s ms a step (stage), %s ms (whole step)\n",
+        substeps, substeps > 1 ? "s" : "", fmt(1e3 * t.per_step.at("electricity")).c_str(),
+        fmt(1e3 * t.per_step.at(kWholeStep)).c_str());
+  }
+}
+
 int main(int argc, char** argv) {
-  Options opt = Options::parse(argc, argv, "alloy_bench_scaling",
-                               {"--electricity", "--collisions", "--magnets", "--gravity"});
+  Options opt =
+      Options::parse(argc, argv, "alloy_bench_scaling",
+                     {"--electricity", "--collisions", "--magnets", "--gravity", "--ladder"});
+  if (opt.flag("--ladder")) {
+    ladder_only();
+    return 0;
+  }
   // A filter runs only the rows it names and writes nothing.
   const bool only_electricity = opt.flag("--electricity"),
              only_collisions = opt.flag("--collisions");

@@ -6,13 +6,16 @@
 #include <cstring>
 #include <utility>
 
+#include "runtime/scope.hpp"
+
 namespace alloy::electricity {
 
 namespace {
 
 PropertyDef number(const char* name, const char* unit, const char* doc,
-                   std::optional<double> min = {}) {
-  return {.name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = min};
+                   std::optional<double> min = {}, std::optional<double> max = {}) {
+  return {
+      .name = name, .kind = PropertyKind::Number, .unit = unit, .doc = doc, .min = min, .max = max};
 }
 
 /// The columns that decide the network. `emf` counts by membership only
@@ -37,15 +40,19 @@ std::vector<PropertyDef> electricity_property_defs() {
        .kind = PropertyKind::Bool,
        .doc = "conducts electricity: touching conductive parts connect; without emf, inductance or "
               "resistance the part is one equipotential node"},
-      number(prop::kEmf, "V", "battery: electromotive force from terminal 0 (-) to terminal 1 (+)"),
-      number(prop::kInternalResistance, "Ohm", "battery: internal resistance (default 0.1)", 0.0),
-      number(prop::kInductance, "H", "coil: self-inductance between terminals 0 and 1", 0.0),
+      number(prop::kEmf, "V", "battery: electromotive force from terminal 0 (-) to terminal 1 (+)",
+             -kMaxEmf, kMaxEmf),
+      number(prop::kInternalResistance, "Ohm", "battery: internal resistance (default 0.1)", 0.0,
+             kMaxResistance),
+      number(prop::kInductance, "H", "coil: self-inductance between terminals 0 and 1", 0.0,
+             kMaxInductance),
       number(
           prop::kResistance, "Ohm",
           "resistor or coil: resistance between terminals 0 and 1; wire: end to end (default 0.01)",
-          0.0),
+          0.0, kMaxResistance),
       number(prop::kContactResistance, "Ohm",
-             "resistance a touching contact on this part adds (default 0.0005 per side)", 0.0),
+             "resistance a touching contact on this part adds (default 0.0005 per side)", 0.0,
+             kMaxResistance),
       {.name = prop::kWireFrom,
        .kind = PropertyKind::Ref,
        .doc = "this object is a wire: the part its first end is attached to"},
@@ -75,9 +82,11 @@ std::vector<PropertyDef> electricity_property_defs() {
       number(prop::kCurrentRate, "A/s",
              "written by electricity with rates = true: a coil's dI/dt at the end of the step"),
       number(prop::kCapacitance, "F",
-             "capacitor: capacitance between terminals 0 and 1 (below 1 pF: an open gap)", 0.0),
+             "capacitor: capacitance between terminals 0 and 1 (below 1 pF: an open gap)", 0.0,
+             kMaxCapacitance),
       number(prop::kCharge, "C",
-             "capacitor: charge on the plate at terminal 0 (its state; kept across edits)"),
+             "capacitor: charge on the plate at terminal 0 (its state; kept across edits)",
+             -kMaxCharge, kMaxCharge),
       {.name = prop::kSwitchClosed,
        .kind = PropertyKind::Bool,
        .doc = "switch: joins its terminals 0 and 1 through `resistance` (default: the contact "
@@ -341,6 +350,11 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
           ErrorLocation{"", 0, store.describe(store.id_at(wire))},
           std::string(which) + "_terminal must be 0 or 1, got " + std::to_string(terminal));
     if (target.is_null() || !store.alive(target)) return -1;
+    // A part out of this stage's scope (frozen for a value it could not
+    // carry, World::frozen, or in another area) is not in the network: the
+    // wire's end is open, as on a destroyed part, rather than a scene error
+    // that would blame the wire for the part's fault.
+    if (view.scope() && !view.scope()->contains(target.index)) return -1;
     const std::int32_t pi = target.index < slots ? part_of_slot[target.index] : -1;
     if (pi < 0)
       throw InputError(
@@ -399,7 +413,22 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   branch_on_loop_.assign(on_cycle.begin(), on_cycle.begin() + std::ptrdiff_t(net.branches.size()));
   conductance_on_loop_.assign(on_cycle.begin() + std::ptrdiff_t(net.branches.size()),
                               on_cycle.end());
+  // The same facts as lists, for the loops of every substep: the bridges
+  // (usually none or a few) whose current is set to zero, and the
+  // conductances on loops whose heat the books take, in index order (the
+  // order of the sums, so the same bits as a scan of every conductance).
+  bridge_branches_.clear();
+  for (std::uint32_t k = 0; k < net.branches.size(); ++k)
+    if (!on_cycle[k]) bridge_branches_.push_back(k);
+  loop_conductances_.clear();
+  for (std::size_t k = 0; k < net.conductances.size(); ++k)
+    if (on_cycle[net.branches.size() + k]) loop_conductances_.push_back(net.conductances[k]);
   element_closed_.assign(parts_.size(), false);
+  // write_outputs sums the current passing a node only where a node part
+  // (a bar, a contact) reports it: not at the terminals of every element.
+  node_reports_through_.assign(net.node_count, 0);
+  for (const Part& p : parts_)
+    if (p.kind == PartKind::Node) node_reports_through_[p.node[0]] = 1;
   for (std::size_t i = 0; i < parts_.size(); ++i) {
     const Part& p = parts_[i];
     if (p.element < 0) continue;  // a node, an open switch, a vanishing capacitor
@@ -549,7 +578,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       for (std::size_t col = 0; col < k; ++col) {
         unit.assign(e_.size(), 0.0);
         unit[nb + coupled[col]] = 1.0;
-        solver_.solve(unit, unit_potential, unit_current);
+        solve(access, unit, unit_potential, unit_current);
         for (std::size_t row = 0; row < k; ++row)
           if (branch_on_loop_[nb + coupled[row]])
             transfer_[col * k + row] = unit_current[nb + coupled[row]];
@@ -583,14 +612,14 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Capacitor& c = capacitors_[j];
       e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
     }
-    books_.begin(potential_, branch_current_, coils_, capacitors_);
+    books_.begin(coils_, capacitors_);
     const std::size_t k = coupled.size();
     Eigen::VectorXd before(k), after(k);
     if (k > 0) {
       for (std::size_t a = 0; a < k; ++a) before[a] = coils_[coupled[a]].current;
       const Eigen::VectorXd known = (2 / h) * (mutual_m * before);
       for (std::size_t a = 0; a < k; ++a) e_[nb + coupled[a]] += known[a];
-      solver_.solve(e_, free_potential_, free_current_);
+      solve(access, e_, free_potential_, free_current_);
       Eigen::VectorXd i0(k);
       for (std::size_t a = 0; a < k; ++a)
         i0[a] = branch_on_loop_[nb + coupled[a]] ? free_current_[nb + coupled[a]] : 0.0;
@@ -600,14 +629,19 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     }
     // The same sources, bit for bit, as the solve whose answer we hold: the
     // same answer (the factor is the same until build_network), so reuse it.
+    // The books start from the last answer: kept by swapping buffers (the
+    // solve overwrites every potential and every current), copied only when
+    // the answer is reused.
     if (solved_valid_ && solved_e_.size() == e_.size() &&
         std::memcmp(solved_e_.data(), e_.data(), e_.size() * sizeof(double)) == 0) {
       ++solves_skipped_;
+      books_.potential0 = potential_, books_.current0 = branch_current_;
     } else {
       solved_valid_ = false;  // until the solve below succeeds
-      solver_.solve(e_, potential_, branch_current_);
-      for (std::size_t k = 0; k < branch_current_.size(); ++k)
-        if (!branch_on_loop_[k]) branch_current_[k] = 0.0;
+      std::swap(books_.potential0, potential_), std::swap(books_.current0, branch_current_);
+      potential_.resize(books_.potential0.size()), branch_current_.resize(books_.current0.size());
+      solve(access, e_, potential_, branch_current_);
+      for (std::uint32_t k : bridge_branches_) branch_current_[k] = 0.0;
       solved_e_ = e_;
       solved_valid_ = true;
       ++solves_;
@@ -661,11 +695,44 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   write_outputs(access);
 }
 
-void ElectricityResolver::Books::begin(const std::vector<double>& potential,
-                                       const std::vector<double>& current,
-                                       const std::vector<Coil>& coils,
+void ElectricityResolver::solve(const WorldView& view, std::span<const double> e,
+                                std::span<double> potential, std::span<double> current) const {
+  try {
+    solver_.solve(e, potential, current);
+  } catch (const NonFiniteSolution& failure) {
+    // Only sources beyond any circuit's reach get here (the values a scene
+    // sets are bounded; an induced EMF is not): name the circuit's parts
+    // and its largest source, and point at that source's object.
+    const PropertyStore& store = view.store();
+    const auto component = solver_.component_of_node();
+    std::string names;
+    std::size_t count = 0;
+    double largest = -1;
+    ObjectId source;
+    for (const Part& p : parts_) {
+      if (component[p.node[0]] != failure.component) continue;
+      if (++count <= 6)
+        names +=
+            std::string(names.empty() ? "'" : ", '") + store.describe(store.id_at(p.slot)) + "'";
+      if (p.element >= 0 &&
+          (p.kind == PartKind::Battery || p.kind == PartKind::Coil ||
+           p.kind == PartKind::Capacitor) &&
+          std::size_t(p.element) < e.size() && std::abs(e[std::size_t(p.element)]) > largest)
+        largest = std::abs(e[std::size_t(p.element)]), source = store.id_at(p.slot);
+    }
+    if (count > 6) names += " and " + std::to_string(count - 6) + " more parts";
+    throw InputError(
+        ErrorLocation{"", 0, source.is_null() ? std::string() : store.describe(source)},
+        "the circuit of " + names + " has no finite solution: its currents overflow a double" +
+            (source.is_null() ? std::string()
+                              : " (its largest source, '" + store.describe(source) + "', drives " +
+                                    std::to_string(largest) + " V)") +
+            "; see docs/electricity.md \"Values\"");
+  }
+}
+
+void ElectricityResolver::Books::begin(const std::vector<Coil>& coils,
                                        const std::vector<Capacitor>& capacitors) {
-  potential0 = potential, current0 = current;
   v_l0.resize(coils.size()), coil_current0.resize(coils.size());
   for (std::size_t i = 0; i < coils.size(); ++i)
     v_l0[i] = coils[i].v_l, coil_current0[i] = coils[i].current;
@@ -736,14 +803,25 @@ void ElectricityResolver::book_substep(double trap, double hs) {
     books_.switching += mean(q0, c.charge) / c.capacitance * i * hs -
                         (c.charge * c.charge - q0 * q0) / (2 * c.capacitance);
   }
-  for (std::size_t k = 0; k < network_.conductances.size(); ++k) {
-    if (!conductance_on_loop_[k]) continue;
-    const Conductance& g = network_.conductances[k];
-    const double v =
-        mean(books_.potential0.size() == p.size() ? books_.potential0[g.a] - books_.potential0[g.b]
-                                                  : 0.0,
-             p[g.a] - p[g.b]);
-    books_.heat += g.g * v * v * hs;
+  // The conductances on loops (a bridge carries nothing): the longest loop
+  // of a substep in a large network, so its two cases are written out and the
+  // sum kept in a register; same operations in the same order as mean().
+  {
+    const double* p1 = p.data();
+    const double* p0 = books_.potential0.size() == p.size() ? books_.potential0.data() : nullptr;
+    double heat = books_.heat;
+    if (trap > 0) {
+      for (const Conductance& g : loop_conductances_) {
+        const double v = 0.5 * ((p0 ? p0[g.a] - p0[g.b] : 0.0) + (p1[g.a] - p1[g.b]));
+        heat += g.g * v * v * hs;
+      }
+    } else {
+      for (const Conductance& g : loop_conductances_) {
+        const double v = p1[g.a] - p1[g.b];
+        heat += g.g * v * v * hs;
+      }
+    }
+    books_.heat = heat;
   }
   books_.emf0.resize(nc);
   for (std::size_t n = 0; n < nc; ++n) books_.emf0[n] = coils_[n].series_emf;
@@ -781,6 +859,16 @@ void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out
     out.store("capacitors (q^2 / 2C)", charges);
     return;
   }
+  // The ledger books a non-finite figure as 0 J: say so instead (a power that
+  // overflowed; the bounded circuit values keep this from any scene's values).
+  for (const auto& [what, j] : {std::pair{"battery work", books_.battery},
+                                {"heat", books_.heat},
+                                {"switching", books_.switching},
+                                {"the EMF's work", books_.emf_work}})
+    if (!std::isfinite(j))
+      throw std::runtime_error(std::string("electricity: the energy books overflowed: ") + what +
+                               " is " + std::to_string(j) +
+                               " J (a circuit's power beyond a double)");
   out.source("battery work", std::exchange(books_.battery, 0.0));
   out.sink("heat (I^2 R)", std::exchange(books_.heat, 0.0));
   out.sink("switching (guard steps, opened coils)", std::exchange(books_.switching, 0.0));
@@ -904,15 +992,17 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
   std::vector<double>& g_current = g_current_;
   through.assign(network_.node_count, 0.0);
   g_current.resize(network_.conductances.size());
+  const std::vector<std::uint8_t>& reports = node_reports_through_;
   for (std::size_t i = 0; i < network_.conductances.size(); ++i) {
     const Conductance& g = network_.conductances[i];
     g_current[i] = conductance_on_loop_[i] ? g.g * (p[g.a] - p[g.b]) : 0.0;
-    through[g.a] += std::abs(g_current[i]) / 2, through[g.b] += std::abs(g_current[i]) / 2;
+    if (reports[g.a]) through[g.a] += std::abs(g_current[i]) / 2;
+    if (reports[g.b]) through[g.b] += std::abs(g_current[i]) / 2;
   }
   for (std::size_t k = 0; k < network_.branches.size(); ++k) {
     const TheveninBranch& br = network_.branches[k];
-    through[br.a] += std::abs(branch_current_[k]) / 2,
-        through[br.b] += std::abs(branch_current_[k]) / 2;
+    if (reports[br.a]) through[br.a] += std::abs(branch_current_[k]) / 2;
+    if (reports[br.b]) through[br.b] += std::abs(branch_current_[k]) / 2;
   }
 
   auto publish = [&](std::uint32_t slot, double i, double v) {

@@ -112,6 +112,29 @@ std::vector<PropertyDef> electricity_property_defs();
 /// and a short circuit a huge but finite current.
 inline constexpr double kMinResistance = 1e-6;
 
+/// The ranges of the circuit values a scene may set (PropertyDef bounds:
+/// refused at load and at every edit with the file, line and object;
+/// docs/electricity.md "Values"). Each is far beyond a bench circuit, and
+/// together they keep every product the solver and the energy books form
+/// finite: the largest current is kMaxEmf / kMinResistance = 1e12 A, its
+/// power 1e18 W; the largest stored energy q^2 / 2C at 1 pF is 5e35 J. (A
+/// value of 1e200 V passed the finite check, then its power, 1e406 W,
+/// overflowed.)
+/// emf, V (either sign): a megavolt, beyond any battery or generator on a bench.
+inline constexpr double kMaxEmf = 1e6;
+/// resistance, internal_resistance, contact_resistance, Ohm: a teraohm (an
+/// insulator); with kMinResistance the ratio is 1e18, all that double's
+/// 16 digits can tell apart in one circuit anyway.
+inline constexpr double kMaxResistance = 1e12;
+/// inductance, H: a kilohenry (the largest iron-cored chokes are tens of H).
+inline constexpr double kMaxInductance = 1e3;
+/// capacitance, F: 10 kF (supercapacitors reach a few kF).
+inline constexpr double kMaxCapacitance = 1e4;
+/// plate_charge, C (either sign): bounded well above what the resolver itself
+/// can put there (kMaxCapacitance at kMaxEmf is 1e10 C), since a save holds
+/// the charge it wrote and is checked against the same bound when loaded.
+inline constexpr double kMaxCharge = 1e12;
+
 /// A capacitor below this capacitance, F, is an open gap (no branch): its
 /// companion impedance h / 2C would exceed 1e8 Ohm at a 1 ms substep and cost
 /// the solve its digits next to micro-ohm wires.
@@ -308,6 +331,10 @@ class ElectricityResolver final : public Resolver {
   void take_resistance_commands(const WorldView& view);
   bool inputs_changed(const WorldView& view) { return input_versions(view) != seen_versions_; }
   void build_network(const WorldView& view, double h);
+  /// solver_.solve, with a solution that overflowed turned into an
+  /// InputError that names the circuit's parts and its largest source.
+  void solve(const WorldView& view, std::span<const double> e, std::span<double> potential,
+             std::span<double> current) const;
   void write_outputs(ResolverAccess& access);
   void write_current_rates(ResolverAccess& access);
   /// Value and membership counters of the columns that define the network.
@@ -377,6 +404,9 @@ class ElectricityResolver final : public Resolver {
   std::vector<double> battery_emf_;       // the emfs of the last advance, V
   std::vector<bool> element_closed_;      // per part: on a closed loop (two-terminal parts)
   std::vector<bool> branch_on_loop_, conductance_on_loop_;  // per element: not a bridge
+  std::vector<std::uint32_t> bridge_branches_;      // branches not on a loop (current exactly 0)
+  std::vector<Conductance> loop_conductances_;      // the conductances on loops, in index order
+  std::vector<std::uint8_t> node_reports_through_;  // per node: a node part reports its current
   // What the last events said, per element. Hashed: write_outputs looks up
   // every part each step, and a tree made that n log n.
   std::unordered_map<ObjectId, bool> reported_closed_;
@@ -417,8 +447,9 @@ class ElectricityResolver final : public Resolver {
     std::vector<double> potential0, current0, v_l0, coil_current0, charge0, cap_current0;
     std::vector<double> emf0;  // per coil: the series EMF of the last solve, V
     double battery = 0, heat = 0, switching = 0, emf_work = 0;
-    void begin(const std::vector<double>& potential, const std::vector<double>& current,
-               const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
+    /// The elements' state at a substep's start (potential0 and current0,
+    /// the last answer, are kept by the substep itself).
+    void begin(const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
   };
   Books books_;
   void book_substep(double trap, double hs);

@@ -311,7 +311,11 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
   for (std::size_t ci = 0; ci < components_.size(); ++ci) {
     const Component& comp = components_[ci];
     bool driven = false;
-    for (std::uint32_t k : comp.branches) driven = driven || e[k] != 0.0;
+    for (std::uint32_t k : comp.branches)
+      if (e[k] != 0.0) {
+        driven = true;
+        break;
+      }
     if (!driven) {  // no source anywhere in the component: everything rests at zero
       for (std::uint32_t v : comp.nodes) potential[v] = 0;
       for (std::uint32_t k : comp.branches) current[k] = 0;
@@ -331,8 +335,8 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
       }
       if (comp.ldlt) solve_ldlt_permuted(*comp.ldlt, y);
       if (!y.allFinite())
-        throw std::runtime_error("electric network component " + std::to_string(ci) +
-                                 " gave a non-finite solution");
+        throw NonFiniteSolution(
+            ci, "electric network component " + std::to_string(ci) + " gave a non-finite solution");
       for (std::uint32_t v : comp.nodes) potential[v] = v == comp.ground ? 0.0 : y[node_pos_[v]];
       for (std::uint32_t k : comp.branches) {
         const auto [a, b] = branch_ends(k);
@@ -346,8 +350,8 @@ void MnaSolver::solve(std::span<const double> e, std::span<double> potential,
     else
       comp.x = comp.sparse_lu->solve(comp.rhs);
     if (!comp.x.allFinite())
-      throw std::runtime_error("electric network component " + std::to_string(ci) +
-                               " gave a non-finite solution");
+      throw NonFiniteSolution(
+          ci, "electric network component " + std::to_string(ci) + " gave a non-finite solution");
     for (std::uint32_t v : comp.nodes) potential[v] = v == comp.ground ? 0.0 : comp.x[node_row_[v]];
     for (std::uint32_t k : comp.branches) current[k] = comp.x[branch_row_[k]];
   }

@@ -42,6 +42,8 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -69,6 +71,16 @@ struct Network {
   std::vector<Conductance> conductances;
   std::vector<TheveninBranch> branches;
   friend bool operator==(const Network&, const Network&) = default;
+};
+
+/// What MnaSolver::solve throws when a component's answer is not finite
+/// (sources so large that a current or a potential overflowed): the
+/// component, so that the caller can name its parts.
+class NonFiniteSolution : public std::runtime_error {
+ public:
+  NonFiniteSolution(std::size_t component, const std::string& message)
+      : std::runtime_error(message), component(component) {}
+  std::size_t component;  ///< index into the solver's components
 };
 
 /// How components above the dense limit are factorised.
@@ -108,8 +120,9 @@ class MnaSolver {
   /// potentials relative to their component's ground (V) and the branch
   /// currents (A). Components whose sources are all zero are not solved: their
   /// answer is zero. Conductance currents follow as g (V_a - V_b).
-  /// Throws std::runtime_error if a solution is not finite (it cannot be for a
-  /// network that factor() accepted; the check keeps a NaN from spreading).
+  /// Throws NonFiniteSolution if a solution is not finite (sources whose
+  /// currents overflow double; the check keeps a NaN or an infinity from
+  /// spreading).
   void solve(std::span<const double> e, std::span<double> potential,
              std::span<double> current) const;
 

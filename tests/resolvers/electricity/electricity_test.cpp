@@ -7,8 +7,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
+
+#include "runtime/energy_ledger.hpp"
 
 namespace alloy::electricity {
 namespace {
@@ -843,6 +846,147 @@ TEST_F(ElectricityTest, AZeroCapacitanceIsAnOpenGap) {
   EXPECT_EQ(num(w, cap, "current"), 0.0);
   EXPECT_EQ(num(w, cap, "plate_charge"), 0.0);
   EXPECT_NEAR(num(w, cap, "voltage"), 6.0, 1e-9);
+}
+
+// adv13 F3 / F4 (session 17): huge but finite circuit values passed the finite
+// check, then overflowed in the solve ("component 0 gave a non-finite
+// solution", no object named) or in the energy books (booked as 0 J).
+TEST_F(ElectricityTest, CircuitValuesBeyondTheirRangesAreRefusedNamingTheObject) {
+  World w(registry);
+  const ObjectId b = battery(w, "bat", 6.0, 1.0);
+  const ObjectId c = coil(w, "x", 0.01, 1.0);
+  const ObjectId cap = make_capacitor(w, "cap", 0.01, 0.0);
+  struct Case {
+    ObjectId id;
+    const char* property;
+    double value;
+  };
+  const Case refused[] = {{b, "emf", 1e308},
+                          {b, "emf", 1e200},
+                          {b, "emf", -1e303},
+                          {b, "internal_resistance", 1e300},
+                          {c, "inductance", 1e300},
+                          {c, "resistance", 1e13},
+                          {cap, "capacitance", 1e300},
+                          {cap, "plate_charge", 1e308},
+                          {cap, "plate_charge", -1e160}};
+  for (const Case& k : refused) {
+    try {
+      w.set(k.id, k.property, k.value);
+      ADD_FAILURE() << k.property << " = " << k.value << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + k.property + "' must lie between"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // The edges of the ranges are values a scene may use.
+  w.set(b, "emf", -kMaxEmf);
+  w.set(b, "emf", kMaxEmf);
+  w.set(c, "inductance", kMaxInductance);
+  w.set(c, "resistance", kMaxResistance);
+  w.set(cap, "capacitance", kMaxCapacitance);
+  w.set(cap, "plate_charge", -kMaxCharge);
+}
+
+TEST_F(ElectricityTest, TheLargestValuesInRangeGiveFiniteCurrentsAndBooks) {
+  // A megavolt across micro-ohm wires and an ideal coil (adv13's hugeemf at
+  // the edge of the range): 1e12 A, finite, and the books finite too.
+  World w(registry);
+  const ObjectId b = battery(w, "bat", kMaxEmf, 0.0);
+  const ObjectId x = coil(w, "x", 0.0, 0.0);
+  wire(w, "w1", b, 1, x, 0, 0.0);
+  wire(w, "w2", x, 1, b, 0, 0.0);
+  EnergyLedger books;
+  books.record(w);
+  for (int k = 0; k < 3; ++k) {
+    w.step();
+    books.record(w);
+  }
+  EXPECT_TRUE(std::isfinite(num(w, b, "current")));
+  EXPECT_GT(std::abs(num(w, b, "current")), 1e10);
+  EXPECT_GT(books.total().sources, 0.0);
+  EXPECT_TRUE(std::isfinite(books.total().sources));
+}
+
+TEST_F(ElectricityTest, ASolveThatOverflowsNamesTheCircuitsParts) {
+  // An induced EMF is not a scene value (magnetism computes it): one of 1e308 V
+  // in a 1-Ohm loop overflows the solve, and the error names the loop's parts.
+  World w(registry);
+  const ObjectId b = battery(w, "bat", 1.0, 0.0);
+  const ObjectId x = coil(w, "x", 0.0, 1e-3);
+  wire(w, "w1", b, 1, x, 0, 0.0);
+  wire(w, "w2", x, 1, b, 0, 0.0);
+  w.step();
+  resolver(w).set_induced_emf(x, 1e308);
+  try {
+    w.step();
+    FAIL() << "an overflowing solve went through";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.where().object, "x");
+    EXPECT_NE(what.find("the circuit of 'bat', 'x'"), std::string::npos) << what;
+    EXPECT_NE(what.find("no finite solution"), std::string::npos) << what;
+  }
+}
+
+TEST_F(ElectricityTest, TheBooksRefuseAPowerThatOverflows) {
+  // 1e200 V induced in a coil of 1 kH: a current of about 1e194 A is finite,
+  // its power is not. The ledger would book it as 0 J; the resolver says so.
+  World w(registry);
+  const ObjectId b = battery(w, "bat", 1.0, 1.0);
+  const ObjectId x = coil(w, "x", kMaxInductance, 1.0);
+  wire(w, "w1", b, 1, x, 0, 0.0);
+  wire(w, "w2", x, 1, b, 0, 0.0);
+  EnergyLedger books;
+  books.record(w);
+  w.step();
+  books.record(w);
+  resolver(w).set_induced_emf(x, 1e200);
+  w.step();
+  EXPECT_TRUE(std::isfinite(num(w, x, "current")));
+  try {
+    books.record(w);
+    FAIL() << "an overflowed power was booked";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("the energy books overflowed"), std::string::npos)
+        << e.what();
+  }
+}
+
+/// Writes +inf into `overheat` of every object carrying it at step 3: the
+/// world refuses the value and freezes the object (as magnetism's inf pole
+/// strength froze adv13's coil of 1e300 turns).
+class Overheat : public Resolver {
+ public:
+  void build(ResolverAccess&) override {}
+  void advance(ResolverAccess& a, double) override {
+    auto w = a.writer<double>("overheat");
+    if (a.step() == 3)
+      for (std::uint32_t s : w.members()) w.set(s, std::numeric_limits<double>::infinity());
+  }
+};
+
+TEST_F(ElectricityTest, AWireToAFrozenPartHasAnOpenEnd) {
+  // adv13 F4: the frozen coil left electricity's scope, and its wires then
+  // failed the run as "not an electrical part", blaming the wire.
+  registry.add({.info = {.name = "overheat",
+                         .kind = StageKind::Resolver,
+                         .writes = {"overheat"},
+                         .needs = {"overheat"}},
+                .properties = {{.name = "overheat", .kind = PropertyKind::Number}},
+                .create = [](PluginContext&) { return std::make_unique<Overheat>(); }});
+  World w(registry);
+  const ObjectId b = battery(w, "bat", 1.0, 1.0);
+  const ObjectId x = coil(w, "x", 0.01, 1.0);
+  w.set(x, "overheat", 0.0);
+  wire(w, "w1", b, 1, x, 0, 0.0);
+  wire(w, "w2", x, 1, b, 0, 0.0);
+  w.run(2);
+  EXPECT_GT(num(w, b, "current"), 0.0);
+  EXPECT_NO_THROW(w.run(4));
+  EXPECT_TRUE(w.frozen(x));
+  EXPECT_EQ(num(w, b, "current"), 0.0);  // the loop is open at the frozen coil
 }
 
 }  // namespace
