@@ -10,7 +10,8 @@
 // joint, and a swap after swap ratchets the parts apart for good (adv15 F15: 1.77 mm after 30
 // swaps). `anchor` stays the world pivot as the running engine reports it (on part a); moving it by
 // an edit (further than kEditedAnchor from where part a holds it) redefines both points from it at
-// the poses of that moment.
+// the poses of that moment, and so does part b's point lying further than kStretchedHinge from it
+// (a copy pasted elsewhere keeps the original's points until then).
 #pragma once
 
 #include <algorithm>
@@ -24,6 +25,17 @@ namespace alloy::rigid {
 /// as edited, m per metre of distance from the origin (at least 1 um): Box2D
 /// reports the anchor in single precision (about 1e-7 of the coordinate).
 inline constexpr double kEditedAnchor = 1e-6;
+
+/// How far part b's point may lie from the pivot while the hinge still counts
+/// as the one defined, m: a solver's stretch (Box2D's swinging double
+/// pendulum: 0.2 mm) is far below it, an edit or a paste far above.
+inline constexpr double kStretchedHinge = 0.005;
+
+/// How far a stored point may lie from the pivot and still be the pivot, per
+/// metre from the origin: rounding in the last bits (ODE reports the pivot in
+/// double precision), far below any stretch and below Box2D's single
+/// precision, whose report must not move the stored points.
+inline constexpr double kSameAnchor = 1e-12;
 
 /// The rotation undoing q (q unit).
 inline Quat unturned(Quat q) {
@@ -51,20 +63,36 @@ inline HingeAnchors hinge_anchors(const Vec3* anchor, Vec3 default_pivot, const 
     h.local_a = *local_a, h.local_b = *local_b;
     h.on_a = has_a ? xa + rotate(qa, h.local_a) : h.local_a;
     h.on_b = has_b ? xb + rotate(qb, h.local_b) : h.local_b;
-    const double tol =
-        kEditedAnchor * std::max({1.0, std::abs(pivot.x), std::abs(pivot.y), std::abs(pivot.z)});
+    const double scale = std::max({1.0, std::abs(pivot.x), std::abs(pivot.y), std::abs(pivot.z)});
+    const double tol = kEditedAnchor * scale;
     auto near = [&](Vec3 p) {
       const Vec3 d = p - pivot;
       return std::abs(d.x) <= tol && std::abs(d.y) <= tol && std::abs(d.z) <= tol;
     };
-    // Either side: an engine reports where part a holds the pivot, but a
-    // scene may have written the other.
-    if (!anchor || near(h.on_a) || near(h.on_b)) return h;
+    if (!anchor) return h;
+    // Kept while `anchor` is where part a holds it (an engine reports it
+    // there) and part b holds it no further than a solver's stretch: a pivot
+    // moved by an edit, or a pasted copy's play-area point left at the
+    // original's pivot, redefines both.
+    const Vec3 d = h.on_b - pivot;
+    if (near(h.on_a) && dot(d, d) <= kStretchedHinge * kStretchedHinge) {
+      // A point that is the pivot to rounding (a part's pose rewritten by an
+      // ulp when glue rebuilt its body) is the pivot: a world edited in place
+      // and the same world saved and loaded build the same joint, to the bit.
+      const double same = kSameAnchor * scale;
+      auto same_point = [&](Vec3 p) {
+        const Vec3 e = p - pivot;
+        return std::abs(e.x) <= same && std::abs(e.y) <= same && std::abs(e.z) <= same;
+      };
+      if (same_point(h.on_a)) h.on_a = pivot;
+      if (same_point(h.on_b)) h.on_b = pivot;
+      return h;
+    }
   }
   h.defined = true;
-  h.on_a = h.on_b = pivot;
   h.local_a = has_a ? rotate(unturned(qa), pivot - xa) : pivot;
   h.local_b = has_b ? rotate(unturned(qb), pivot - xb) : pivot;
+  h.on_a = h.on_b = pivot;
   return h;
 }
 

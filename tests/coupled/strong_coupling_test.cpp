@@ -115,8 +115,13 @@ TEST(StrongCoupling, TheBundledInductionScenesReportNothing) {
     std::printf("%s: largest gain %.2e over 1 s\n", scene, d.largest_gain);
     EXPECT_TRUE(d.events.of(kStrong).empty()) << scene;
     // Measured 0.17 (the motor: its rotor's magnets, each taken at its own
-    // mass though the rotor's inertia resists the coil), 0.022, 0.012.
-    EXPECT_LT(d.largest_gain, 0.5 * magnetism::ElectricityFromMagnetism::kStrongCouplingGain)
+    // mass though the rotor's inertia resists the coil), 0.012 (the
+    // doorbell), 0.29 (the generator since its coils lost their iron cores in
+    // session 18: air-cored coils of 5100 turns 1.5 mm from the spokes; 0.022
+    // before). Below the report threshold with room; the generator's margin
+    // is the smallest.
+    EXPECT_LT(d.largest_gain, (std::string(scene) == "mods/generator" ? 0.7 : 0.5) *
+                                  magnetism::ElectricityFromMagnetism::kStrongCouplingGain)
         << scene;
   }
 }
