@@ -502,8 +502,6 @@ struct CollisionSet::Impl {
       if (t == s || !geoms[t].movable || is_waiting(t) || !overlap(rb, tb)) return false;
       return deep(s, t) && ++count > limit;
     };
-    if (++query == 0) seen.assign(seen.size(), 0), query = 1;
-    seen.resize(live.size(), 0);
     std::int64_t lo[3], hi[3];
     double cells = 1;
     for (int k = 0; k < 3; ++k)
@@ -511,21 +509,9 @@ struct CollisionSet::Impl {
     if (cells > 64) {  // a part as large as the grid's big ones: every part
       for (std::uint32_t i = 0; i < live.size(); ++i)
         if (found(live[i], live_bounds[i])) return true;
-    } else if (bucket_start.size() > 1) {
-      const std::size_t size = bucket_start.size() - 1;
-      for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-        for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-          for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-            const std::int64_t c[3] = {x, y, z};
-            const std::size_t bkt = cell_hash(c) & (size - 1);
-            for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p) {
-              const Entry& en = table[p];
-              if (en.cell[0] != x || en.cell[1] != y || en.cell[2] != z || seen[en.part] == query)
-                continue;
-              seen[en.part] = query;
-              if (found(live[en.part], live_bounds[en.part])) return true;
-            }
-          }
+    } else if (visit_cells(lo, hi,
+                           [&](std::uint32_t i) { return found(live[i], live_bounds[i]); })) {
+      return true;
     }
     for (const std::uint32_t i : big)
       if (found(live[i], live_bounds[i])) return true;
@@ -785,6 +771,30 @@ struct CollisionSet::Impl {
     }
   }
 
+  /// Each grid part (its index into live) with an entry in the cells lo..hi,
+  /// once, to `visit`; stops, and returns true, when `visit` returns true.
+  template <class Visit>
+  bool visit_cells(const std::int64_t (&lo)[3], const std::int64_t (&hi)[3], Visit&& visit) {
+    if (++query == 0) seen.assign(seen.size(), 0), query = 1;
+    seen.resize(live.size(), 0);
+    if (bucket_start.size() <= 1) return false;
+    const std::size_t size = bucket_start.size() - 1;
+    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+          const std::int64_t c[3] = {x, y, z};
+          const std::size_t bkt = cell_hash(c) & (size - 1);
+          for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p) {
+            const Entry& en = table[p];
+            if (en.cell[0] != x || en.cell[1] != y || en.cell[2] != z || seen[en.part] == query)
+              continue;
+            seen[en.part] = query;
+            if (visit(en.part)) return true;
+          }
+        }
+    return false;
+  }
+
   /// The enabled geoms whose bounds overlap the ray's, in slot order, to
   /// ray_callback: the cells the ray's bounds cover (every part if they cover
   /// many), and the big parts.
@@ -796,8 +806,6 @@ struct CollisionSet::Impl {
     for (int k = 0; k < 3; ++k) rb.lo[k] = r[2 * k], rb.hi[k] = r[2 * k + 1];
     std::vector<std::uint32_t>& found = ray_found;
     found.clear();
-    if (++query == 0) seen.assign(seen.size(), 0), query = 1;
-    seen.resize(live.size(), 0);
     std::int64_t lo[3], hi[3];
     double cells = 1;
     for (int k = 0; k < 3; ++k)
@@ -805,18 +813,7 @@ struct CollisionSet::Impl {
     if (cells > double(std::max<std::size_t>(64, live.size()))) {
       for (std::uint32_t i = 0; i < live.size(); ++i) found.push_back(i);
     } else {
-      const std::size_t size = bucket_start.size() - 1;
-      for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-        for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-          for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-            const std::int64_t c[3] = {x, y, z};
-            const std::size_t bkt = cell_hash(c) & (size - 1);
-            for (std::uint32_t p = bucket_start[bkt]; p < bucket_start[bkt + 1]; ++p) {
-              const Entry& en = table[p];
-              if (en.cell[0] != x || en.cell[1] != y || en.cell[2] != z) continue;
-              if (seen[en.part] != query) seen[en.part] = query, found.push_back(en.part);
-            }
-          }
+      visit_cells(lo, hi, [&](std::uint32_t i) { return found.push_back(i), false; });
       found.insert(found.end(), big.begin(), big.end());
       std::sort(found.begin(), found.end());
     }
