@@ -25,7 +25,10 @@ namespace alloy::rigid {
 //   - the impulses the last advance published (the collisions set reads them).
 // Queued commands are not saved: the world primes the interactions again.
 namespace {
-constexpr std::uint32_t kStateVersion = 1;
+// Version 2 (session 18): a hinge's setup keeps where body 1 is held beside
+// the pivot, and a projected hinge its second point (the hinges' defining
+// points, hinge_anchors.hpp); a version-1 save is refused by name, not misread.
+constexpr std::uint32_t kStateVersion = 2;
 
 bool finite(const Vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
