@@ -5,12 +5,17 @@
 
 namespace alloy::rigid {
 
-RigidBodyFromCollisions::RigidBodyFromCollisions(RigidBodyResolver& target, const CollisionSet& contacts,
+RigidBodyFromCollisions::RigidBodyFromCollisions(RigidBodyResolver& target,
+                                                 const CollisionSet& contacts,
                                                  double bounce_velocity)
     : target_(target), contacts_(contacts), bounce_velocity_(bounce_velocity) {}
 
-double RigidBodyFromCollisions::mix_friction(double a, double b) { return std::sqrt(a * b); }
-double RigidBodyFromCollisions::mix_restitution(double a, double b) { return std::max(a, b); }
+double RigidBodyFromCollisions::mix_friction(double a, double b) {
+  return std::sqrt(a * b);
+}
+double RigidBodyFromCollisions::mix_restitution(double a, double b) {
+  return std::max(a, b);
+}
 
 void RigidBodyFromCollisions::apply(const WorldView& world) {
   if (friction_ == kNoProperty) {
@@ -28,9 +33,10 @@ void RigidBodyFromCollisions::apply(const WorldView& world) {
     c.first = p.first, c.count = p.count;
     c.friction = mix_friction(friction.value_or(p.a.index, kDefaultFriction),
                               friction.value_or(p.b.index, kDefaultFriction));
-    c.restitution = std::clamp(mix_restitution(restitution.value_or(p.a.index, kDefaultRestitution),
-                                               restitution.value_or(p.b.index, kDefaultRestitution)),
-                               0.0, 1.0);
+    c.restitution =
+        std::clamp(mix_restitution(restitution.value_or(p.a.index, kDefaultRestitution),
+                                   restitution.value_or(p.b.index, kDefaultRestitution)),
+                   0.0, 1.0);
     c.bounce_velocity = bounce_velocity_;
   }
   // Parts that tunnelled go back to where they first touched (continuous detection).

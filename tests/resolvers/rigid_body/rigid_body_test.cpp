@@ -24,7 +24,9 @@ WorldDef without_gravity() {
   return def;
 }
 
-RigidBodyResolver& rigid_of(World& w) { return dynamic_cast<RigidBodyResolver&>(*w.stage("rigid_body")); }
+RigidBodyResolver& rigid_of(World& w) {
+  return dynamic_cast<RigidBodyResolver&>(*w.stage("rigid_body"));
+}
 
 TEST(RigidBody, MovesWithItsVelocity) {
   Sim s(without_gravity());
@@ -62,7 +64,9 @@ TEST(RigidBody, BadBodiesAreRefusedWithTheObjectsName) {
       FAIL() << "mass 0 accepted";
     } catch (const InputError& e) {
       EXPECT_EQ(e.where().object, "weightless");
-      EXPECT_NE(std::string(e.what()).find("'mass' must be greater than 0, got 0"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'mass' must be greater than 0, got 0"),
+                std::string::npos)
+          << e.what();
     }
     EXPECT_NO_THROW(s->check(b));  // the refused edit left the mass as it was
     s->remove(b, "size");
@@ -70,7 +74,9 @@ TEST(RigidBody, BadBodiesAreRefusedWithTheObjectsName) {
       s->check(b);  // the rigid body's whole-object check, run by World::check
       FAIL() << "a box without a size passed";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("object 'weightless': a box needs a 'size'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("object 'weightless': a box needs a 'size'"),
+                std::string::npos)
+          << e.what();
     }
   }
   {
@@ -113,11 +119,13 @@ TEST(RigidBody, PinnedPartStaysAndFallsOnceUnpinned) {
 TEST(RigidBody, GluedPartsAreOneBody) {
   Sim s;
   const ObjectId a = add_box(*s, {0, 3, 0}, {0.4, 0.1, 0.1}, 1.0, {}, "a");
-  const ObjectId b = add_box(*s, {0.25, 3.1, 0}, {0.1, 0.3, 0.1}, 3.0, Quat::from_angle_z(0.3), "b");
+  const ObjectId b =
+      add_box(*s, {0.25, 3.1, 0}, {0.1, 0.3, 0.1}, 3.0, Quat::from_angle_z(0.3), "b");
   add_glue(*s, a, b);
   s->set(a, "angular_velocity", Vec3{0, 0, 1.5});
-  const Vec3 rel0 = rotate(Quat{s.orientation(a).w, -s.orientation(a).x, -s.orientation(a).y, -s.orientation(a).z},
-                           s.position(b) - s.position(a));
+  const Vec3 rel0 = rotate(
+      Quat{s.orientation(a).w, -s.orientation(a).x, -s.orientation(a).y, -s.orientation(a).z},
+      s.position(b) - s.position(a));
   s.run_for(1.0);
   EXPECT_EQ(rigid_of(*s).body_count(), 1u);
   const Quat qa = s.orientation(a);
@@ -238,7 +246,8 @@ TEST(RigidBody, SettingsAreValidated) {
   try {
     s->start();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("did you mean 'iterations'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("did you mean 'iterations'"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -277,8 +286,8 @@ TEST(RigidBody, PluginsAreNotInstantiatedWhenNothingNeedsThem) {
   s->set(wall, "position", Vec3{1, 1, 0});
   s->set(wall, "static", true);
   s->step();
-  for (const char* name : {"rigid_body", "collisions", "rigid_body_from_collisions", "gravity.uniform",
-                           "rigid_body_from_gravity"}) {
+  for (const char* name : {"rigid_body", "collisions", "rigid_body_from_collisions",
+                           "gravity.uniform", "rigid_body_from_gravity"}) {
     EXPECT_FALSE(s->has_stage(name)) << name;
     const auto& ni = s->profile().not_instantiated;
     EXPECT_NE(std::find(ni.begin(), ni.end(), name), ni.end()) << name;
@@ -286,8 +295,8 @@ TEST(RigidBody, PluginsAreNotInstantiatedWhenNothingNeedsThem) {
   // A part with mass appears: everything it needs comes to life.
   const ObjectId ball = add_sphere(*s, {0, 1, 0}, 0.1, 1.0);
   s->run(2);  // stages made mid-run are not primed: their first commands act one step later
-  for (const char* name : {"rigid_body", "collisions", "rigid_body_from_collisions", "gravity.uniform",
-                           "rigid_body_from_gravity"})
+  for (const char* name : {"rigid_body", "collisions", "rigid_body_from_collisions",
+                           "gravity.uniform", "rigid_body_from_gravity"})
     EXPECT_TRUE(s->has_stage(name)) << name;
   EXPECT_LT(s.position(ball).y, 1.0);
 }
@@ -296,23 +305,30 @@ TEST(RigidBody, PluginsAreNotInstantiatedWhenNothingNeedsThem) {
 class Rogue final : public Resolver {
  public:
   void build(ResolverAccess&) override {}
-  void advance(ResolverAccess& access, double) override { access.writer<Vec3>("position").set(0, Vec3{1, 1, 1}); }
+  void advance(ResolverAccess& access, double) override {
+    access.writer<Vec3>("position").set(0, Vec3{1, 1, 1});
+  }
 };
 
 TEST(RigidBody, WritingAnUndeclaredColumnThrows) {
   PluginRegistry registry;
   register_native_plugins(registry);
-  registry.add({.info = {.name = "rogue", .kind = StageKind::Resolver, .writes = {"velocity"}, .needs = {"mass"}},
-                .create = [](PluginContext&) -> std::unique_ptr<Stage> { return std::make_unique<Rogue>(); }});
+  registry.add({.info = {.name = "rogue",
+                         .kind = StageKind::Resolver,
+                         .writes = {"velocity"},
+                         .needs = {"mass"}},
+                .create = [](PluginContext&) -> std::unique_ptr<Stage> {
+                  return std::make_unique<Rogue>();
+                }});
   World w(registry);
   add_sphere(w, {}, 0.1, 1.0);
   EXPECT_THROW(w.step(), AccessError);
   // The rigid body may write only what it declared, too.
   const PluginDef* def = registry.find("rigid_body");
   ASSERT_NE(def, nullptr);
-  EXPECT_EQ(def->info.writes, (std::vector<std::string>{"position", "orientation", "velocity",
-                                                         "angular_velocity", "mass", "anchor", "anchor_a",
-                                                         "anchor_b", "axis"}));
+  EXPECT_EQ(def->info.writes,
+            (std::vector<std::string>{"position", "orientation", "velocity", "angular_velocity",
+                                      "mass", "anchor", "anchor_a", "anchor_b", "axis"}));
 }
 
 std::vector<Vec3> positions_after(int steps, int rebuild_every, bool tumble = true) {
@@ -327,7 +343,8 @@ std::vector<Vec3> positions_after(int steps, int rebuild_every, bool tumble = tr
   }
   std::vector<ObjectId> ids;
   for (std::uint32_t i = 0; i < s->store().slot_count(); ++i)
-    if (s->store().has(s->store().id_at(i), s->properties().id("position"))) ids.push_back(s->store().id_at(i));
+    if (s->store().has(s->store().id_at(i), s->properties().id("position")))
+      ids.push_back(s->store().id_at(i));
   for (int i = 0; i < steps; ++i) {
     if (rebuild_every && i % rebuild_every == rebuild_every - 1) {
       // An edit of a defining column of one part: the resolver rebuilds everything.
