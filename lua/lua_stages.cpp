@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <lua.hpp>
+#include <utility>
 #include <variant>
 
 #include "lua/lua_bridge.hpp"
@@ -125,6 +127,7 @@ void push_stage_host_functions(lua_State* L) {
       {"emit", &LuaStage::host_emit},
       {"slow_get", &LuaStage::host_slow_get},
       {"slow_set", &LuaStage::host_slow_set},
+      {"energy", &LuaStage::host_energy},
   };
   lua_createtable(L, 0, int(std::size(fns)));
   for (const auto& f : fns) {
@@ -138,6 +141,7 @@ void push_stage_host_functions(lua_State* L) {
 LuaStage::LuaStage(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx)
     : mod_(std::move(mod)),
       decl_name_(decl.info.name),
+      target_(decl.info.target),
       kind_(decl.info.kind),
       where_(decl.where),
       world_(ctx.world()) {
@@ -1017,6 +1021,103 @@ int LuaStage::host_emit(lua_State* L) {
     st->view_->emit(std::move(e));
     return 0;
   });
+}
+
+// --- energy: w:energy(kind, account, joules) (docs/modding.md "Energy") -----------------
+
+std::string LuaStage::transfer_refused(const std::string& account) const {
+  // The rigid body books the loads an interaction queues as a transfer named
+  // after its physics: its name less "<target>_from_" and the area
+  // (work_account in rigid_body_energy.cpp). That name, and the mod's own
+  // "<mod>." names, are the only transfers a mod's stage may be a side of:
+  // it cannot join a coupling of native stages and cancel their mismatch.
+  auto physics = [](const std::string& name, const std::string& target) {
+    const std::string prefix = target + "_from_";
+    return !target.empty() && name.starts_with(prefix) ? name.substr(prefix.size()) : name;
+  };
+  const std::string own = physics(decl_name_, target_);
+  const std::string mine = mod_->name() + ".";
+  if (account != own && !(account.size() > mine.size() && account.starts_with(mine)))
+    return "w:energy: transfer '" + account + "' is not this stage's: a mod's stage reports a " +
+           "transfer only under its physics' name ('" + own + "', the name its target books " +
+           "its loads by) or under '" + mine + "<name>'";
+  // A name native stages book under is theirs, even where a mod's stage's
+  // name happens to make it (an interaction called <target>_from_light).
+  const PluginRegistry& registry = world_.plugins();
+  for (const std::string& n : registry.order()) {
+    const PluginDef* d = registry.find(n);
+    if (d && d->info.owner.empty() &&
+        (n == account || physics(n, d->info.target) == account || d->info.provides == account))
+      return "w:energy: transfer '" + account + "' belongs to the native plugin '" + n + "'";
+  }
+  return "";
+}
+
+int LuaStage::host_energy(lua_State* L) {
+  LuaStage* st = stage_in_call(L);
+  // Every argument converted before any C++ object is made (a Lua error
+  // here unwinds; none of these runs code of the mod).
+  const char* kind_text = luaL_checkstring(L, 2);
+  std::size_t n = 0;
+  const char* name = luaL_checklstring(L, 3, &n);
+  const double joules = luaL_checknumber(L, 4);
+  return catch_exceptions(L, [&] {
+    static constexpr std::pair<std::string_view, EnergyKind> kKinds[] = {
+        {"source", EnergyKind::Source},
+        {"sink", EnergyKind::Sink},
+        {"store", EnergyKind::Store},
+        {"transfer", EnergyKind::Transfer}};
+    const auto kind = std::find_if(std::begin(kKinds), std::end(kKinds),
+                                   [&](const auto& k) { return k.first == kind_text; });
+    if (kind == std::end(kKinds))
+      throw InputError(std::string("w:energy: the kind must be 'source', 'sink', 'store' or ") +
+                       "'transfer', not '" + std::string(kind_text).substr(0, 40) + "'");
+    const std::string account(name, std::min<std::size_t>(n, 200));
+    if (n == 0 || n > 64)
+      throw InputError("w:energy: an account's name has 1 to 64 bytes ('" + account + "')");
+    const ModBudget& budget = st->mod_->budget();
+    if (!std::isfinite(joules))
+      throw InputError("w:energy '" + account + "': the energy must be finite, got " +
+                       number_text(joules) + " J");
+    if (std::abs(joules) > budget.energy_joules)
+      throw InputError("w:energy '" + account + "': " + number_text(joules) +
+                       " J is beyond what one report may carry (" +
+                       number_text(budget.energy_joules) + " J, its budget energy_joules)");
+    if (std::string why = st->mod_->count_energy_report(); !why.empty()) throw InputError(why);
+    auto it = std::find_if(st->booked_.begin(), st->booked_.end(), [&](const Booked& b) {
+      return b.kind == kind->second && b.account == account;
+    });
+    if (it == st->booked_.end()) {
+      if (st->booked_.size() >= budget.energy_accounts_per_stage)
+        throw InputError("w:energy '" + account + "': stage '" + st->decl_name_ +
+                         "' already keeps " + std::to_string(st->booked_.size()) +
+                         " accounts (its budget energy_accounts_per_stage)");
+      if (kind->second == EnergyKind::Transfer)
+        if (std::string why = st->transfer_refused(account); !why.empty()) throw InputError(why);
+      st->booked_.push_back({account, kind->second, 0.0});
+      it = st->booked_.end() - 1;
+    }
+    // A store is a level (the last report wins); a flow adds up.
+    it->joules = kind->second == EnergyKind::Store ? joules : it->joules + joules;
+    return 0;
+  });
+}
+
+void LuaStage::report_books(EnergyReport& out) {
+  for (Booked& b : booked_) switch (b.kind) {
+      case EnergyKind::Source:
+        out.source(b.account, std::exchange(b.joules, 0.0));
+        break;
+      case EnergyKind::Sink:
+        out.sink(b.account, std::exchange(b.joules, 0.0));
+        break;
+      case EnergyKind::Transfer:
+        out.transfer(b.account, std::exchange(b.joules, 0.0));
+        break;
+      case EnergyKind::Store:
+        out.store(b.account, b.joules);
+        break;
+    }
 }
 
 int LuaStage::host_slow_get(lua_State* L) {

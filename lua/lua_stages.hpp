@@ -87,12 +87,21 @@ class LuaStage {
   static int host_emit(lua_State* L);
   static int host_slow_get(lua_State* L);
   static int host_slow_set(lua_State* L);
+  static int host_energy(lua_State* L);
+
+  /// Hands what the stage's calls booked with w:energy since the last report
+  /// to the ledger (runtime/energy_ledger.hpp): flows summed, stores at the
+  /// level last reported. The overrides of Stage::report_energy call it.
+  void report_books(EnergyReport& out);
 
  protected:
   /// Calls the stage's `phase` function. Returns false if it failed (the
   /// stage is then disabled, or its mod stopped, and an event says so).
   bool invoke(const WorldView& view, ResolverAccess* access, const char* phase, double dt);
   bool runnable() const { return !disabled_ && !mod_->stopped(); }
+  /// Why this stage may not report a transfer named `account` ("" if it
+  /// may): docs/modding.md "Energy".
+  std::string transfer_refused(const std::string& account) const;
 
   /// Where a column's data comes from.
   struct Source {
@@ -141,6 +150,7 @@ class LuaStage {
   std::shared_ptr<ModState> mod_;
   std::string decl_name_;
   std::string instance_;  // with "@area" for a stage of an area
+  std::string target_;    // an interaction's target
   StageKind kind_;
   ErrorLocation where_;
   World& world_;
@@ -195,11 +205,20 @@ class LuaStage {
   static constexpr int kContactLists = 4;
   std::vector<abi::Contact> contacts_[kContactLists];
   std::uint32_t contacts_made_ = 0;
+  // The books of w:energy: per account, the flow since the last report, or
+  // a store's last level (EnergyReport's meaning).
+  struct Booked {
+    std::string account;
+    EnergyKind kind;
+    double joules = 0;
+  };
+  std::vector<Booked> booked_;
 };
 
 class LuaResolver final : public Resolver, public LuaStage {
  public:
   LuaResolver(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx);
+  void report_energy(const WorldView&, EnergyReport& out) override { report_books(out); }
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
   /// Interaction functions, as declared.
@@ -219,6 +238,7 @@ class LuaResolver final : public Resolver, public LuaStage {
 class LuaDerivedSet final : public DerivedSet, public LuaStage {
  public:
   LuaDerivedSet(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx);
+  void report_energy(const WorldView&, EnergyReport& out) override { report_books(out); }
   void update(const WorldView& world) override;
   const std::vector<OutputDecl>& outputs() const { return outputs_; }
   /// The output column `k` as a reader sees it (valid until the next update).
@@ -239,6 +259,7 @@ class LuaDerivedSet final : public DerivedSet, public LuaStage {
 class LuaInteraction final : public Interaction, public LuaStage {
  public:
   LuaInteraction(std::shared_ptr<ModState> mod, const StageDecl& decl, PluginContext& ctx);
+  void report_energy(const WorldView&, EnergyReport& out) override { report_books(out); }
   void apply(const WorldView& world) override;
 };
 

@@ -705,6 +705,19 @@ std::string ModState::count_event(std::size_t bytes) {
   return "";
 }
 
+std::string ModState::count_energy_report() {
+  if (stopped_) return stop_message_;
+  if (step_out_.energy_reports + 1 > budget_.energy_reports_per_step) {
+    mark_stopped(over("made", budget_.energy_reports_per_step, "energy_reports_per_step", false,
+                      " energy reports") +
+                 "; the report was refused");
+    return stop_message_;
+  }
+  ++step_out_.energy_reports;
+  ++run_out_.energy_reports;
+  return "";
+}
+
 std::string ModState::may_queue(std::size_t bytes_in_call, std::uint64_t commands_in_call) {
   if (stopped_) return stop_message_;
   if (step_out_.commands + commands_in_call > budget_.commands_per_step) {

@@ -67,6 +67,16 @@ struct ModBudget {
   /// nothing accumulates over a run: the budget is per step only.
   std::uint64_t commands_per_step = 250'000;
   std::size_t command_bytes_per_step = 16u << 20;  ///< host memory those commands take
+  /// Energy reports (w:energy, docs/modding.md "Energy"), over all of the
+  /// mod's stages in one step: a mod books a few accounts a step.
+  std::uint64_t energy_reports_per_step = 10'000;
+  /// Accounts one stage of the mod may keep in the books (each a line of
+  /// the ledger's table, and host memory for as long as the stage lives).
+  std::size_t energy_accounts_per_stage = 32;
+  /// The largest energy one report may carry, J: far above what a kit scene
+  /// moves (joules over a run), far below where a sum of reports loses the
+  /// other stages' figures in its rounding.
+  double energy_joules = 1e9;
   /// Bytes of one error message (text, object, file) the host keeps and
   /// passes on; the rest is cut with a note of how much.
   std::size_t error_bytes = 4096;
@@ -227,11 +237,15 @@ class ModState : public std::enable_shared_from_this<ModState> {
     std::uint64_t event_bytes = 0;
     std::uint64_t commands = 0;  ///< interaction-function calls queued
     std::uint64_t command_bytes = 0;
+    std::uint64_t energy_reports = 0;  ///< w:energy calls accepted
   };
   /// Counts one event of `bytes` (type, text, value names) the mod's code
   /// asks to emit in the current call. Returns "" if it fits; else the event
   /// is refused, the mod is stopped, and the reason is returned.
   std::string count_event(std::size_t bytes);
+  /// Counts one energy report (w:energy) of the current call: "" if it fits
+  /// the step's budget; else the mod is stopped and the reason returned.
+  std::string count_energy_report();
   /// Asked before one of the mod's command queues grows to hold
   /// `bytes_in_call` bytes (`commands_in_call` commands, or as many as are
   /// known) in the current call: "" if the step's commands stay within the

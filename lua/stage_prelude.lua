@@ -871,6 +871,7 @@ function M.new_stage(handle, infos_ud, call_ud, bulks_ud, decl, state)
   function w:find(name) live("w:find") return host.find(handle_, name) end
   function w:alive(i) live("w:alive") return host.alive(handle_, i) end
   function w:emit(type_, fields) live("w:emit") return host.emit(handle_, type_, fields) end
+  function w:energy(kind, account, joules) live("w:energy") return host.energy(handle_, kind, account, joules) end
   if decl.functions then
     local by_name = {}
     for _, f in ipairs(decl.functions) do by_name[f.name] = f end

@@ -165,6 +165,42 @@ std::vector<Flood> floods() {
                       "    for n = 1, 1e5 do f[i] = vec3(0, n, 0) end\n"
                       "    for n = 1, 1e6 do add_force(i, vec3(0, 1, 0)) end"),
        Kind::Stopped, "commands_per_step", 7},
+      // Energy reports (w:energy, docs/modding.md "Energy"): bounded, finite,
+      // into the mod's own accounts only, and budgeted like events.
+      {"energy reports in a loop",
+       in_resolver("    while true do w:energy('sink', 'spill', 1) end"), Kind::Stopped,
+       "it made more than 10000 energy reports in one step (its budget energy_reports_per_step)",
+       4},
+      {"energy reports swallowed by pcall",
+       in_resolver("    while true do pcall(w.energy, w, 'sink', 'spill', 1) end"), Kind::Stopped,
+       "energy_reports_per_step", 4},
+      {"a NaN energy report", in_resolver("    w:energy('sink', 'spill', 0 / 0)"),
+       Kind::StageDisabled, "w:energy 'spill': the energy must be finite", 4},
+      {"an infinite energy report", in_resolver("    w:energy('source', 'spring', math.huge)"),
+       Kind::StageDisabled, "w:energy 'spring': the energy must be finite", 4},
+      {"an energy report of 1e300 J", in_resolver("    w:energy('store', 'tank', 1e300)"),
+       Kind::StageDisabled,
+       "w:energy 'tank': 1e+300 J is beyond what one report may carry (1e+09 J, its budget "
+       "energy_joules)",
+       4},
+      {"a transfer into a native coupling",
+       in_resolver("    w:energy('transfer', 'evil.own', 1) w:energy('transfer', 'magnetism', -1)"),
+       Kind::StageDisabled,
+       "w:energy: transfer 'magnetism' is not this stage's: a mod's stage reports a transfer only "
+       "under its physics' name ('evil.stage', the name its target books its loads by) or under "
+       "'evil.<name>'",
+       4},
+      {"a transfer named after a native physics",
+       kMark + "mod.interaction { name = 'rigid_body_from_light', reads = { 'evil_mark' },\n"
+               "  needs = { 'evil_mark' }, target = 'rigid_body', apply = function(w)\n"
+               "    w:energy('transfer', 'light', 1) end }\n",
+       Kind::StageDisabled, "w:energy: transfer 'light' belongs to the native plugin 'light'", 4},
+      {"an energy report of an unknown kind", in_resolver("    w:energy('gift', 'x', 1)"),
+       Kind::StageDisabled, "w:energy: the kind must be 'source', 'sink', 'store' or 'transfer'",
+       4},
+      {"energy accounts without end",
+       in_resolver("    for k = 1, 1e6 do w:energy('sink', 'account ' .. k, 1) end"),
+       Kind::StageDisabled, "already keeps 32 accounts (its budget energy_accounts_per_stage)", 4},
       {"commands queued from a handler",
        "local keep\nmod.on('*', function() for n = 1, 1e6 do keep(0, vec3(0, 1, 0)) end end)\n" +
            in_interaction("    keep = add_force"),
