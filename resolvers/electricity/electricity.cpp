@@ -693,6 +693,27 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
   }
   write_outputs(access);
+  book_light(access, dt);
+}
+
+void ElectricityResolver::book_light(const WorldView& view, double dt) {
+  // A lamp's power is the product light_from_electricity sends the light
+  // resolver (the current and voltage just written), over this advance: the
+  // light resolver books the same numbers, so the transfer's two sides agree
+  // to rounding. Its visible share leaves the heat the substeps booked.
+  if (!efficacy_id_) efficacy_id_ = view.properties().find(kLampEfficacy);
+  if (!efficacy_id_) return;
+  const auto efficacy = view.column<double>(*efficacy_id_);
+  const auto current = current_id_.column<double>(view);
+  const auto voltage = voltage_id_.column<double>(view);
+  double light = 0;
+  for (std::uint32_t s : efficacy.members()) {
+    lamps_seen_ = true;
+    const double p = current.value_or(s, 0.0) * voltage.value_or(s, 0.0);
+    if (p > 0 && efficacy[s] > 0) light += efficacy[s] / kLumensPerLightWatt * p * dt;
+  }
+  books_.light += light;
+  books_.heat -= light;
 }
 
 void ElectricityResolver::solve(const WorldView& view, std::span<const double> e,
@@ -875,6 +896,8 @@ void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out
   // Induction's EMF works on the circuits with the energy the magnetic
   // forces take from (or give to) the moving parts: a transfer.
   out.transfer("magnetism", std::exchange(books_.emf_work, 0.0));
+  // The lamps' visible light, given to the light resolver.
+  if (lamps_seen_) out.transfer("light", -std::exchange(books_.light, 0.0));
   double fields = 0, charges = 0;
   for (const Coil& c : coils_) fields += 0.5 * c.inductance * c.current * c.current;
   for (const Capacitor& c : capacitors_) charges += c.charge * c.charge / (2 * c.capacitance);

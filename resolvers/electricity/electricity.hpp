@@ -139,6 +139,14 @@ inline constexpr double kMaxCharge = 1e12;
 /// companion impedance h / 2C would exceed 1e8 Ohm at a 1 ms substep and cost
 /// the solve its digits next to micro-ohm wires.
 inline constexpr double kMinCapacitance = 1e-12;
+/// Lamps (the light resolver's parts, docs/light.md): the property that marks
+/// one, its luminous efficacy in lm per electrical W. Of a lamp's power, the
+/// share efficacy / kLumensPerLightWatt is visible light: electricity books
+/// it as the transfer "light" instead of heat (docs/energy.md, "Light").
+inline constexpr const char* kLampEfficacy = "luminous_efficacy";
+/// Lumens per watt of light at 555 nm, the most a watt of light can give (the
+/// SI's definition of the lumen): luminous efficiency = efficacy / 683.
+inline constexpr double kLumensPerLightWatt = 683;
 
 /// Settings of the `electricity` plugin.
 struct ElectricityConfig {
@@ -446,13 +454,17 @@ class ElectricityResolver final : public Resolver {
   struct Books {
     std::vector<double> potential0, current0, v_l0, coil_current0, charge0, cap_current0;
     std::vector<double> emf0;  // per coil: the series EMF of the last solve, V
-    double battery = 0, heat = 0, switching = 0, emf_work = 0;
+    double battery = 0, heat = 0, switching = 0, emf_work = 0, light = 0;
     /// The elements' state at a substep's start (potential0 and current0,
     /// the last answer, are kept by the substep itself).
     void begin(const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
   };
   Books books_;
   void book_substep(double trap, double hs);
+  /// Moves the lamps' light out of this advance's heat (books_.light).
+  void book_light(const WorldView& view, double dt);
+  std::optional<PropertyId> efficacy_id_;  // kLampEfficacy, once registered
+  bool lamps_seen_ = false;                // report "light" from the first lamp on
 };
 
 /// Registers the `electricity` resolver and its property types only (for

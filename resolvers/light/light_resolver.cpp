@@ -1,6 +1,9 @@
 #include "resolvers/light/light_resolver.hpp"
 
 #include <cmath>
+#include <utility>
+
+#include "resolvers/electricity/electricity.hpp"
 
 namespace alloy::light {
 
@@ -56,17 +59,48 @@ void LightResolver::advance(ResolverAccess& access, double dt) {
 
   auto flux = flux_.writer<double>(access);
   auto radiant = radiant_.writer<double>(access);
-  double radiated = 0;
+  double radiated = 0, light = 0;
   lit_count_ = 0;
   for (std::uint32_t s : efficacy.members()) {
     const double p = power_[s] > 0 ? power_[s] : 0.0;  // no command: dark
     flux.set(s, efficacy[s] * p);
     radiant.set(s, p);
     radiated += p * dt;
+    if (efficacy[s] > 0) light += efficacy[s] / electricity::kLumensPerLightWatt * p * dt;
     lit_count_ += p > 0;
   }
   emitted_energy_ = radiated;
   total_emitted_energy_ += radiated;
+  light_radiated_ += light;
+  last_dt_ = dt;
+}
+
+double LightResolver::queued_light(const WorldView& view, double dt) {
+  const auto efficacy = efficacy_.column<double>(view);
+  const PropertyStore& store = view.store();
+  std::vector<double>& power = power_;  // advance() fills it afresh
+  power.assign(store.slot_count(), 0.0);
+  for (const auto& [id, watts] : queue_)
+    if (store.alive(id) && efficacy.has(id.index) && std::isfinite(watts) && watts >= 0)
+      power[id.index] = watts;
+  double light = 0;
+  for (std::uint32_t s : efficacy.members())
+    if (power[s] > 0 && efficacy[s] > 0)
+      light += efficacy[s] / electricity::kLumensPerLightWatt * power[s] * dt;
+  return light;
+}
+
+void LightResolver::report_energy(const WorldView& view, EnergyReport& out) {
+  // light_from_electricity queued this step's power after electricity's
+  // advance, which booked its light in the same step: received now, at the
+  // dt of the advance that will radiate it (the last one's; the world's
+  // before the first), held until then. What was received: what the
+  // advances since the last report radiated, plus the change of what waits.
+  const double queued = queued_light(view, last_dt_ > 0 ? last_dt_ : view.dt());
+  if (!reported_) light_queued_ = queued, reported_ = true;  // the store opens at its level
+  out.transfer("light", light_radiated_ + queued - std::exchange(light_queued_, queued));
+  out.store("light queued for the next step", queued);
+  out.sink("light leaving the scene", std::exchange(light_radiated_, 0.0));
 }
 
 }  // namespace alloy::light

@@ -14,8 +14,11 @@
 // Energy   a lamp radiates what it takes: radiant_power is its electrical
 //          power (light and heat radiation; the filament's conduction losses
 //          are neglected). emitted_energy() is the energy radiated in the last
-//          advance, J, for an energy ledger. It is part of the circuit's I^2 R:
-//          a ledger books it as where that heat went, not as a new loss.
+//          advance, J. Its visible share, efficacy / 683 lm/W (the luminous
+//          efficiency), is the ledger's "light" (docs/energy.md): electricity
+//          gives it (out of the lamp's I^2 R), this resolver receives it when
+//          the power is queued, holds it until the advance that radiates it (a
+//          store: the step's delay), and books it leaving the scene (a sink).
 //
 // State: none beyond properties. The queued power of the next advance is
 // rebuilt by the interaction when a world is primed, so a rebuild, a swap or
@@ -73,6 +76,9 @@ class LightResolver final : public Resolver {
 
   void build(ResolverAccess& access) override;
   void advance(ResolverAccess& access, double dt) override;
+  /// The "light" transfer (received), the light queued for the next advance
+  /// (a store) and the light radiated (a sink), docs/energy.md.
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
   // --- for an energy ledger, tests and tools -----------------------------------
   /// Energy all lamps radiated in the last advance, J (sum of radiant_power x dt).
@@ -87,6 +93,13 @@ class LightResolver final : public Resolver {
   std::vector<std::pair<ObjectId, double>> queue_;
   std::vector<double> power_;  // by slot, this advance's commands, W (-1: none)
   double emitted_energy_ = 0, total_emitted_energy_ = 0;
+  // The books: visible light radiated since the last report, the queued
+  // light's value at the last report, the dt of the last advance, J and s.
+  double light_radiated_ = 0, light_queued_ = 0, last_dt_ = 0;
+  bool reported_ = false;
+  /// The visible light the queued commands carry over an advance of `dt`, J
+  /// (the last command per lamp, as advance() takes them).
+  double queued_light(const WorldView& view, double dt);
   std::size_t lit_count_ = 0;
   PropertyRef efficacy_{prop::kLuminousEfficacy}, flux_{prop::kLuminousFlux},
       radiant_{prop::kRadiantPower};

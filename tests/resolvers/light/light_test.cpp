@@ -3,6 +3,7 @@
 // resistance falls with the light on them, against closed forms.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -11,6 +12,7 @@
 #include "resolvers/electricity/electricity.hpp"
 #include "resolvers/light/light_interactions.hpp"
 #include "resolvers/plugins.hpp"
+#include "runtime/energy_ledger.hpp"
 #include "runtime/world.hpp"
 
 namespace alloy::light {
@@ -119,6 +121,58 @@ TEST_F(LightTest, LampRadiatesItsElectricalPower) {
   EXPECT_NEAR(num(w, l, "luminous_flux"), 10.0 * p, 1e-9 * p);
   EXPECT_NEAR(light(w).emitted_energy(), p * w.dt(), 1e-10 * p * w.dt());
   EXPECT_EQ(light(w).lit_count(), 1u);
+}
+
+// Light is a ledger account (docs/energy.md "Light"): a lamp on a 6 V, 0.5
+// Ohm battery through a 7.5 Ohm resistor takes P = E^2 R / (R + r)^2, steady
+// from the first step (no coil, no capacitor); its visible share, efficacy /
+// 683 lm/W, leaves electricity's heat as the transfer "light" and the light
+// resolver receives the same, record by record, holds a step's worth (the
+// step's delay) and lets the rest leave the scene.
+TEST_F(LightTest, LampsLightIsALedgerAccountWithTwoSidesThatAgree) {
+  World w(registry, def());
+  const ObjectId b = battery(w, "battery", 6.0, 0.5, {0, 0, 0});
+  const ObjectId l = lamp(w, "lamp", 12.0, 10.0, {0.2, 0, 0});
+  const ObjectId r = placed(w, "resistor", {0.4, 0, 0});
+  w.set(r, "conductive", true);
+  w.set(r, "resistance", 7.5);
+  loop(w, "l", b, l, r);
+  EnergyLedger books;
+  w.start();
+  books.record(w);
+  const int steps = 240;
+  double worst = 0;  // the two sides' largest disagreement in one record, J
+  for (int k = 0; k < steps; ++k) {
+    w.step();
+    books.record(w);
+    const EnergyAccount* given = books.find("electricity", "light");
+    const EnergyAccount* taken = books.find("light", "light");
+    ASSERT_TRUE(given && taken);
+    worst = std::max(worst, std::abs(given->last + taken->last));
+  }
+  const double total_r = 12.0 + 7.5 + 0.5 + 3 * kWire, i = 6.0 / total_r;
+  const double p = i * i * 12.0, eta = 10.0 / 683, dt = w.dt();
+  const double light_given = -books.find("electricity", "light")->total;
+  const double received = books.find("light", "light")->total;
+  const double left = books.find("light", "light leaving the scene")->total;
+  const double held = books.find("light", "light queued for the next step")->total;
+  const double heat = books.find("electricity", "heat (I^2 R)")->total;
+  std::printf(
+      "lamp %.6f W (closed form), light %.9f J given, %.9f J received, %.9f J left, %.9f J "
+      "held (closed form eta P t %.9f J); worst record %.1e J; residue %.1e of %.4f J moved\n",
+      p, light_given, received, left, held, eta * p * steps * dt, worst, books.total().residue(),
+      books.total().moved);
+  // Every record's two sides agree to rounding, and so do the run's.
+  EXPECT_LT(worst, 1e-15);
+  EXPECT_NEAR(received, light_given, 1e-14);
+  // The closed form: eta P over every advance; the light resolver radiated
+  // all but the last step's, which waits for its next advance.
+  EXPECT_NEAR(light_given, eta * p * steps * dt, 1e-10 * light_given);
+  EXPECT_NEAR(held, eta * p * dt, 1e-10 * held);
+  EXPECT_NEAR(left, eta * p * (steps - 1) * dt, 1e-10 * left);
+  // Heat and light together are the circuit's whole I^2 R.
+  EXPECT_NEAR(heat + light_given, i * i * total_r * steps * dt, 1e-9 * heat);
+  EXPECT_LT(books.total().fraction(), 1e-12);
 }
 
 // The lamp's wire cut: the next step it takes nothing and is dark.
