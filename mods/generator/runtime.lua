@@ -8,15 +8,45 @@
 mod.property { name = "drive_torque", kind = "vec3", unit = "N m",
                doc = "a torque applied to this part every step (a hand on a crank), world frame" }
 
+-- The rotation that took a part from orientation a to orientation b: its
+-- axis times its angle (rad), world frame, the shorter way round.
+local function turn(a, b)
+  local d = b * quat(a.w, -a.x, -a.y, -a.z)
+  local s = d.w < 0 and -1 or 1
+  local v = vec3(d.x, d.y, d.z) * s
+  local n = v:length()
+  if n == 0 then return vec3(0, 0, 0) end
+  return v * (2 * math.atan2(n, d.w * s) / n)
+end
+
 mod.interaction {
   name = "rigid_body_from_drive",
-  doc = "a part carrying drive_torque is turned by it",
-  reads = { "drive_torque" },
+  doc = "a part carrying drive_torque is turned by it (and the hand's work is booked)",
+  reads = { "drive_torque", "orientation" },
   needs = { "drive_torque" },
   target = "rigid_body",
   apply = function(w)
-    local torque = w:read("drive_torque")
-    for i in torque:each() do w.target.add_torque(i, torque[i]) end
+    local torque, ori = w:read("drive_torque"), w:read("orientation")
+    -- The hand's work, for the energy books (docs/energy.md): the torque
+    -- queued at the last call acted over the rigid body's advance since,
+    -- while the part turned from where it was then to where it is now. The
+    -- hand is outside the books: its work enters them here (a source) and is
+    -- given to the rigid body, which books the same work received ("drive").
+    -- Each crank's last orientation and torque are kept by name, as numbers.
+    local cranks = w.state.cranks or {}
+    w.state.cranks = cranks
+    local work = 0
+    for i in torque:each() do
+      local name, q, t = w:name(i), ori[i], torque[i]
+      local c = cranks[name]
+      if c then
+        work = work + vec3(c[5], c[6], c[7]):dot(turn(quat(c[1], c[2], c[3], c[4]), q))
+      end
+      cranks[name] = { q.w, q.x, q.y, q.z, t.x, t.y, t.z }
+      w.target.add_torque(i, t)
+    end
+    w:energy("source", "the hand's work", work)  -- it enters the books here
+    w:energy("transfer", "drive", -work)
   end,
 }
 
