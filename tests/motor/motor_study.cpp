@@ -182,45 +182,44 @@ struct TorquePoint {
 
 TorquePoint coreless_point(const std::filesystem::path& scene, double emf, double load, double dt,
                            const std::vector<CoilFluxes>& phi, double step) {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load_options;
-  load_options.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(scene.string(), registry, load_options);
-  World& w = *loaded.world;
-  w.set_dt(dt);
-  w.set(w.find("battery"), "emf", emf);
-  w.set(w.find("bearing"), "joint_friction", load);
-  const ObjectId upper = w.find("upper_coil"), lower = w.find("lower_coil"), axle = w.find("axle");
-  const std::size_t n = phi.size() - 1;
-  const double h = step * std::numbers::pi / 180;
-  // dPhi/dtheta at the cells' midpoints, linearly between them.
-  auto slope = [&](double theta, bool up) {
-    double deg = std::fmod(theta * 180 / std::numbers::pi + 22.5, 90.0);
-    if (deg < 0) deg += 90;
-    const double x = deg / step - 0.5, j = std::floor(x), f = x - j;
-    auto cell = [&](double m) {
-      const auto c = std::size_t(std::fmod(m + double(n), double(n)));
-      return up ? (phi[c + 1].upper - phi[c].upper) / h : (phi[c + 1].lower - phi[c].lower) / h;
+  return with_scene(scene.string(), [&](lua::LoadedScene& loaded) {
+    World& w = *loaded.world;
+    w.set_dt(dt);
+    w.set(w.find("battery"), "emf", emf);
+    w.set(w.find("bearing"), "joint_friction", load);
+    const ObjectId upper = w.find("upper_coil"), lower = w.find("lower_coil"),
+                   axle = w.find("axle");
+    const std::size_t n = phi.size() - 1;
+    const double h = step * std::numbers::pi / 180;
+    // dPhi/dtheta at the cells' midpoints, linearly between them.
+    auto slope = [&](double theta, bool up) {
+      double deg = std::fmod(theta * 180 / std::numbers::pi + 22.5, 90.0);
+      if (deg < 0) deg += 90;
+      const double x = deg / step - 0.5, j = std::floor(x), f = x - j;
+      auto cell = [&](double m) {
+        const auto c = std::size_t(std::fmod(m + double(n), double(n)));
+        return up ? (phi[c + 1].upper - phi[c].upper) / h : (phi[c + 1].lower - phi[c].lower) / h;
+      };
+      return cell(j) * (1 - f) + cell(j + 1) * f;
     };
-    return cell(j) * (1 - f) + cell(j + 1) * f;
-  };
-  double angle = 0, torque = 0, speed = 0, current = 0;
-  long count = 0;
-  const auto steps = std::llround(6.0 / dt), from = std::llround(2.0 / dt);
-  for (long long s = 0; s < steps; ++s) {
-    w.step();
-    const double a = angle_z(std::get<Quat>(w.get(axle, "orientation")));
-    angle = s == 0 ? a : angle + std::remainder(a - angle, 2 * std::numbers::pi);
-    if (s < from) continue;
-    const double iu = std::get<double>(w.get(upper, "current"));
-    const double il = std::get<double>(w.get(lower, "current"));
-    torque += iu * slope(angle, true) + il * slope(angle, false);
-    speed += std::get<Vec3>(w.get(axle, "angular_velocity")).z;
-    current -= iu + il;
-    ++count;
-  }
-  return {emf, load, speed / double(count), current / double(count), torque / double(count)};
+    double angle = 0, torque = 0, speed = 0, current = 0;
+    long count = 0;
+    const auto steps = std::llround(6.0 / dt), from = std::llround(2.0 / dt);
+    for (long long s = 0; s < steps; ++s) {
+      w.step();
+      const double a = angle_z(std::get<Quat>(w.get(axle, "orientation")));
+      angle = s == 0 ? a : angle + std::remainder(a - angle, 2 * std::numbers::pi);
+      if (s < from) continue;
+      const double iu = std::get<double>(w.get(upper, "current"));
+      const double il = std::get<double>(w.get(lower, "current"));
+      torque += iu * slope(angle, true) + il * slope(angle, false);
+      speed += std::get<Vec3>(w.get(axle, "angular_velocity")).z;
+      current -= iu + il;
+      ++count;
+    }
+    return TorquePoint{emf, load, speed / double(count), current / double(count),
+                       torque / double(count)};
+  });
 }
 
 int torque_constant_study(const std::filesystem::path& out) {
@@ -250,16 +249,8 @@ int torque_constant_study(const std::filesystem::path& out) {
   std::vector<CoilFluxes> phi;
   for (std::size_t j = 0; j <= std::size_t(std::llround(90 / step)); ++j)
     phi.push_back(coil_fluxes(-22.5 + double(j) * step, kCoreless));
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene built = lua::load_scene(scene.string(), registry, load);
-  World& b = *built.world;
-  const double R =
-      get_number(b, "upper_coil", "resistance") + get_number(b, "battery", "internal_resistance") +
-      get_number(b, "lead", "resistance") + get_number(b, "spoke_N1_wire", "resistance") +
-      get_number(b, "upper_return", "resistance");
+  const double R = with_scene(
+      scene.string(), [](lua::LoadedScene& built) { return loop_resistance(*built.world); });
   const double drag = kBearingDrag;
   std::cout << "coreless loop " << num(R) << " ohm; short-L prediction: k "
             << num((coreless.mean_square / R + drag) / (coreless.mean / R)) << " V s, R "

@@ -71,6 +71,18 @@ inline double get_number(World& w, const char* object, const char* property) {
   return std::get<double>(w.get(w.find(object), property));
 }
 
+/// Loads the scene at `path` (with the source tree's mods) and returns
+/// f(loaded) while its registry lives.
+template <class F>
+decltype(auto) with_scene(const std::string& path, F&& f) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions load;
+  load.mod_paths.push_back(source("mods"));
+  lua::LoadedScene loaded = lua::load_scene(path, registry, load);
+  return f(loaded);
+}
+
 inline RunResult run_motor(const std::string& scene, const RunOptions& options = {}) {
   PluginRegistry registry;
   register_native_plugins(registry);
@@ -251,16 +263,14 @@ inline const std::vector<DcPoint>& scene_dc_points() {
 
 /// The loop's resistance as built: the coil, the battery's inside and the
 /// three wires of one circuit (lead, a spoke's wire, a return), ohm.
-inline double loop_resistance() {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(source(kScene), registry, load);
-  World& w = *loaded.world;
+inline double loop_resistance(World& w) {
   return get_number(w, "upper_coil", "resistance") +
          get_number(w, "battery", "internal_resistance") + get_number(w, "lead", "resistance") +
          get_number(w, "spoke_N1_wire", "resistance") + get_number(w, "upper_return", "resistance");
+}
+inline double loop_resistance() {
+  return with_scene(source(kScene).string(),
+                    [](lua::LoadedScene& loaded) { return loop_resistance(*loaded.world); });
 }
 
 /// The bearing's viscous drag, N m s (mods/motor/layout.lua: a light oil).
@@ -304,20 +314,18 @@ inline CoilFluxes coil_fluxes(double degrees, const std::string& layout = "") {
                       "require \"motor.layout\" { "
                    << layout << "rotor_angle = " << std::setprecision(17) << degrees
                    << ", slider_release = 1 }\n";
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(f.string(), registry, load);
+  const CoilFluxes out = with_scene(f.string(), [](lua::LoadedScene& loaded) -> CoilFluxes {
+    World& w = *loaded.world;
+    w.step();
+    const auto& faraday = dynamic_cast<const magnetism::ElectricityFromMagnetism&>(
+        *w.stage(magnetism::ElectricityFromMagnetism::kName));
+    const auto* upper = faraday.find(w.find("upper_coil"));
+    const auto* lower = faraday.find(w.find("lower_coil"));
+    if (!upper || !lower) return {NAN, NAN};
+    return {upper->linkage.flux, lower->linkage.flux};
+  });
   fs::remove(f);
-  World& w = *loaded.world;
-  w.step();
-  const auto& faraday = dynamic_cast<const magnetism::ElectricityFromMagnetism&>(
-      *w.stage(magnetism::ElectricityFromMagnetism::kName));
-  const auto* upper = faraday.find(w.find("upper_coil"));
-  const auto* lower = faraday.find(w.find("lower_coil"));
-  if (!upper || !lower) return {NAN, NAN};
-  return {upper->linkage.flux, lower->linkage.flux};
+  return out;
 }
 
 /// k(theta) over one period of the rotor (90 degrees: the spokes alternate,
