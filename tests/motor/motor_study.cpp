@@ -7,11 +7,12 @@
 //   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg,
 //                            motor_dc_model.csv (the DC-motor model's fit), and
 //                            hoist.csv and .svg (mods/hoist's lifting speed)
-//   motor_study --torque-constant OUT_DIR
+//   motor_study --torque-constant OUT_DIR [COIL_H]
 //                            k(theta) of the scene's coils and of session 18's
 //                            coreless ones (OUT_DIR/motor_torque_constant.csv),
 //                            and the coreless motor's DC fit and mean electrical
-//                            torque at three steps (docs/motor.md, "Session 19")
+//                            torque at three steps (docs/motor.md, "Session 19");
+//                            COIL_H: the coreless coils' inductance set to it
 //
 // The SVG is written here, by hand: four panels of points with bars, no
 // plotting package needed.
@@ -222,7 +223,7 @@ TorquePoint coreless_point(const std::filesystem::path& scene, double emf, doubl
   });
 }
 
-int torque_constant_study(const std::filesystem::path& out) {
+int torque_constant_study(const std::filesystem::path& out, double inductance) {
   const double step = 0.25;
   const TorqueConstant cored = measure_torque_constant(step),
                        coreless = measure_torque_constant(step, kCoreless);
@@ -246,6 +247,10 @@ int torque_constant_study(const std::filesystem::path& out) {
                           "electricity = { induction_order = 2 } } }\n"
                           "local m = require \"motor.layout\" { "
                        << kCoreless << "}\nat(m.slider_release, \"slider\", { pinned = false })\n";
+  if (inductance > 0)  // the coils rewound to this inductance, H, before the slider lands
+    for (const char* coil : {"upper_coil", "lower_coil"})
+      std::ofstream(scene, std::ios::app)
+          << "at(0.05, \"" << coil << "\", { inductance = " << inductance << " })\n";
   std::vector<CoilFluxes> phi;
   for (std::size_t j = 0; j <= std::size_t(std::llround(90 / step)); ++j)
     phi.push_back(coil_fluxes(-22.5 + double(j) * step, kCoreless));
@@ -283,11 +288,12 @@ int torque_constant_study(const std::filesystem::path& out) {
 }
 
 int main(int argc, char** argv) {
-  if (argc == 3 && std::string(argv[1]) == "--torque-constant")
-    return torque_constant_study(argv[2]);
+  if ((argc == 3 || argc == 4) && std::string(argv[1]) == "--torque-constant")
+    return torque_constant_study(argv[2], argc == 4 ? std::stod(argv[3]) : 0.0);
   if (argc != 2) {
-    std::cerr << "usage: motor_study OUT_DIR   (writes OUT_DIR/motor_tolerance.csv and .svg)\n"
-                 "       motor_study --torque-constant OUT_DIR   (k(theta), docs/motor.md)\n";
+    std::cerr
+        << "usage: motor_study OUT_DIR   (writes OUT_DIR/motor_tolerance.csv and .svg)\n"
+           "       motor_study --torque-constant OUT_DIR [COIL_H]   (k(theta), docs/motor.md)\n";
     return 2;
   }
   const std::filesystem::path out = argv[1];
