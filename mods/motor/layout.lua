@@ -76,6 +76,10 @@ local defaults = {
   -- variants run from the bundled start, none starts from every put-down
   -- (docs/motor.md, "Iron cores", the table and why).
   core_pulled = false,
+  -- The coils' core: "iron" (the scene's) or "air" (a coreless coil, as
+  -- session 18's search and the generator use), and the core's or bore's
+  -- diameter (false: the kit's, 0.6 of the coil's diameter).
+  core = "iron", core_diameter = false,
   -- The bias magnet: a 30 x 10 x 10 mm ferrite bar (q = 37 A m) standing
   -- below the axle, north up; it pulls a south spoke to the bottom, which
   -- puts a north spoke under the slider, where the torque is largest.
@@ -125,7 +129,8 @@ return function(options)
   for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
     kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
                diameter = o.coil_diameter, turns = o.turns,
-               wire_diameter = o.wire_diameter, core_pulled = o.core_pulled }
+               wire_diameter = o.wire_diameter, core = o.core, core_diameter = o.core_diameter or nil,
+               core_pulled = o.core_pulled }
   end
 
   -- The bias magnet, standing below the axle, north up.

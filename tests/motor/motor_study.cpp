@@ -7,6 +7,12 @@
 //   motor_study OUT_DIR      writes OUT_DIR/motor_tolerance.csv and .svg,
 //                            motor_dc_model.csv (the DC-motor model's fit), and
 //                            hoist.csv and .svg (mods/hoist's lifting speed)
+//   motor_study --torque-constant OUT_DIR [COIL_H]
+//                            k(theta) of the scene's coils and of session 18's
+//                            coreless ones (OUT_DIR/motor_torque_constant.csv),
+//                            and the coreless motor's DC fit and mean electrical
+//                            torque at three steps (docs/motor.md, "Session 19");
+//                            COIL_H: the coreless coils' inductance set to it
 //
 // The SVG is written here, by hand: four panels of points with bars, no
 // plotting package needed.
@@ -160,9 +166,134 @@ void panel(std::ostream& svg, const Sweep& sweep, const std::vector<Point>& poin
 
 }  // namespace
 
+using namespace alloy;
+using namespace alloy::motor::test;
+
+/// Session 18's coreless coils (docs/motor.md), as motor.layout options.
+constexpr const char* kCoreless =
+    "coil_gap = 0.0015, coil_length = 0.02, coil_diameter = 0.058, turns = 5100, "
+    "wire_diameter = 0.25e-3, core = \"air\", core_diameter = 0.0174, bias_distance = 0.14, ";
+
+/// The coreless motor at emf V and bearing friction T, 6 s at step dt, from
+/// 2 s: its mean speed and coil current, and the mean electrical torque
+/// sum_c I_c dPhi_c/dtheta, the coils' currents times their k(theta).
+struct TorquePoint {
+  double emf, load, speed, current, torque;
+};
+
+TorquePoint coreless_point(const std::filesystem::path& scene, double emf, double load, double dt,
+                           const std::vector<CoilFluxes>& phi, double step) {
+  return with_scene(scene.string(), [&](lua::LoadedScene& loaded) {
+    World& w = *loaded.world;
+    w.set_dt(dt);
+    w.set(w.find("battery"), "emf", emf);
+    w.set(w.find("bearing"), "joint_friction", load);
+    const ObjectId upper = w.find("upper_coil"), lower = w.find("lower_coil"),
+                   axle = w.find("axle");
+    const std::size_t n = phi.size() - 1;
+    const double h = step * std::numbers::pi / 180;
+    // dPhi/dtheta at the cells' midpoints, linearly between them.
+    auto slope = [&](double theta, bool up) {
+      double deg = std::fmod(theta * 180 / std::numbers::pi + 22.5, 90.0);
+      if (deg < 0) deg += 90;
+      const double x = deg / step - 0.5, j = std::floor(x), f = x - j;
+      auto cell = [&](double m) {
+        const auto c = std::size_t(std::fmod(m + double(n), double(n)));
+        return up ? (phi[c + 1].upper - phi[c].upper) / h : (phi[c + 1].lower - phi[c].lower) / h;
+      };
+      return cell(j) * (1 - f) + cell(j + 1) * f;
+    };
+    double angle = 0, torque = 0, speed = 0, current = 0;
+    long count = 0;
+    const auto steps = std::llround(6.0 / dt), from = std::llround(2.0 / dt);
+    for (long long s = 0; s < steps; ++s) {
+      w.step();
+      const double a = angle_z(std::get<Quat>(w.get(axle, "orientation")));
+      angle = s == 0 ? a : angle + std::remainder(a - angle, 2 * std::numbers::pi);
+      if (s < from) continue;
+      const double iu = std::get<double>(w.get(upper, "current"));
+      const double il = std::get<double>(w.get(lower, "current"));
+      torque += iu * slope(angle, true) + il * slope(angle, false);
+      speed += std::get<Vec3>(w.get(axle, "angular_velocity")).z;
+      current -= iu + il;
+      ++count;
+    }
+    return TorquePoint{emf, load, speed / double(count), current / double(count),
+                       torque / double(count)};
+  });
+}
+
+int torque_constant_study(const std::filesystem::path& out, double inductance) {
+  const double step = 0.25;
+  const TorqueConstant cored = measure_torque_constant(step),
+                       coreless = measure_torque_constant(step, kCoreless);
+  std::ofstream csv(out / "motor_torque_constant.csv");
+  csv << "degrees_from_hand_over,k_cored_V_s,k_coreless_V_s\n";
+  for (std::size_t j = 0; j < cored.k.size(); ++j)
+    csv << num((double(j) + 0.5) * step, 6) << "," << num(cored.k[j], 6) << ","
+        << num(coreless.k[j], 6) << "\n";
+  for (const auto& [name, t] : {std::pair{"cored (the scene's)", &cored}, {"coreless", &coreless}})
+    std::cout << name << ": <k> " << num(t->mean) << " V s, from "
+              << num(*std::min_element(t->k.begin(), t->k.end())) << " to "
+              << num(*std::max_element(t->k.begin(), t->k.end())) << ", var(k) / <k>^2 "
+              << num(t->dc_resistance_factor() - 1) << ", <k^2> / <k> " << num(t->dc_k())
+              << " V s\n";
+  // The coreless motor as a scene, at the scene's settings.
+  namespace fs = std::filesystem;
+  const fs::path scene =
+      fs::temp_directory_path() / ("alloy_motor_coreless_" + std::to_string(::getpid()) + ".lua");
+  std::ofstream(scene) << "world { dt = 1 / 240, seconds = 6, settings = { [\"gravity.uniform\"] = "
+                          "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" }, "
+                          "electricity = { induction_order = 2 } } }\n"
+                          "local m = require \"motor.layout\" { "
+                       << kCoreless << "}\nat(m.slider_release, \"slider\", { pinned = false })\n";
+  if (inductance > 0)  // the coils rewound to this inductance, H, before the slider lands
+    for (const char* coil : {"upper_coil", "lower_coil"})
+      std::ofstream(scene, std::ios::app)
+          << "at(0.05, \"" << coil << "\", { inductance = " << inductance << " })\n";
+  std::vector<CoilFluxes> phi;
+  for (std::size_t j = 0; j <= std::size_t(std::llround(90 / step)); ++j)
+    phi.push_back(coil_fluxes(-22.5 + double(j) * step, kCoreless));
+  const double R = with_scene(
+      scene.string(), [](lua::LoadedScene& built) { return loop_resistance(*built.world); });
+  const double drag = kBearingDrag;
+  std::cout << "coreless loop " << num(R) << " ohm; short-L prediction: k "
+            << num((coreless.mean_square / R + drag) / (coreless.mean / R)) << " V s, R "
+            << num((coreless.mean_square / R + drag) / std::pow(coreless.mean / R, 2))
+            << " ohm; long-L: k " << num(coreless.mean) << ", R " << num(R) << "\n";
+  for (double dt : {1.0 / 240, 1.0 / 480, 1.0 / 960}) {
+    std::vector<DcPoint> dc;
+    std::vector<TorquePoint> tp;
+    for (const auto& [v, t] :
+         {std::pair{4.5, 0.002}, {6.0, 0.002}, {7.5, 0.002}, {6.0, 0.004}, {6.0, 0.0055}}) {
+      tp.push_back(coreless_point(scene, v, t, dt, phi, step));
+      dc.push_back({v, t, tp.back().speed, tp.back().current});
+    }
+    const DcFit f = fit_dc_model(dc);
+    std::cout << "dt 1/" << num(1 / dt) << ": DC fit from the speeds k " << num(f.k) << " V s, R "
+              << num(f.R) << " ohm, T0 " << num(1e3 * f.T0) << " mN m\n";
+    for (const TorquePoint& p : tp)
+      std::cout << "  " << num(p.emf) << " V, " << num(1e3 * p.load) << " mN m: " << num(p.speed)
+                << " rad/s (model " << num(f.speed(p.emf, p.load)) << "), " << num(1e3 * p.current)
+                << " mA, (V - I R) / w " << num((p.emf - p.current * R) / p.speed)
+                << " V s, electrical torque " << num(1e3 * p.torque)
+                << " mN m, short-L model at this speed "
+                << num(1e3 * (coreless.mean * p.emf - coreless.mean_square * p.speed) / R)
+                << ", left after the load and the oil "
+                << num(1e3 * (p.torque - p.load - drag * p.speed)) << " mN m\n";
+  }
+  fs::remove(scene);
+  std::cout << "wrote " << (out / "motor_torque_constant.csv").string() << "\n";
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if ((argc == 3 || argc == 4) && std::string(argv[1]) == "--torque-constant")
+    return torque_constant_study(argv[2], argc == 4 ? std::stod(argv[3]) : 0.0);
   if (argc != 2) {
-    std::cerr << "usage: motor_study OUT_DIR   (writes OUT_DIR/motor_tolerance.csv and .svg)\n";
+    std::cerr
+        << "usage: motor_study OUT_DIR   (writes OUT_DIR/motor_tolerance.csv and .svg)\n"
+           "       motor_study --torque-constant OUT_DIR [COIL_H]   (k(theta), docs/motor.md)\n";
     return 2;
   }
   const std::filesystem::path out = argv[1];

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "lua/scene_loader.hpp"
+#include "resolvers/electricity/electricity_from_magnetism.hpp"
 #include "resolvers/plugins.hpp"
 #include "runtime/world.hpp"
 #include "tests/scenes/event_records.hpp"
@@ -67,6 +69,18 @@ struct RunResult : EventRecords {
 
 inline double get_number(World& w, const char* object, const char* property) {
   return std::get<double>(w.get(w.find(object), property));
+}
+
+/// Loads the scene at `path` (with the source tree's mods) and returns
+/// f(loaded) while its registry lives.
+template <class F>
+decltype(auto) with_scene(const std::string& path, F&& f) {
+  PluginRegistry registry;
+  register_native_plugins(registry);
+  lua::LoadOptions load;
+  load.mod_paths.push_back(source("mods"));
+  lua::LoadedScene loaded = lua::load_scene(path, registry, load);
+  return f(loaded);
 }
 
 inline RunResult run_motor(const std::string& scene, const RunOptions& options = {}) {
@@ -249,16 +263,104 @@ inline const std::vector<DcPoint>& scene_dc_points() {
 
 /// The loop's resistance as built: the coil, the battery's inside and the
 /// three wires of one circuit (lead, a spoke's wire, a return), ohm.
-inline double loop_resistance() {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(source(kScene), registry, load);
-  World& w = *loaded.world;
+inline double loop_resistance(World& w) {
   return get_number(w, "upper_coil", "resistance") +
          get_number(w, "battery", "internal_resistance") + get_number(w, "lead", "resistance") +
          get_number(w, "spoke_N1_wire", "resistance") + get_number(w, "upper_return", "resistance");
+}
+inline double loop_resistance() {
+  return with_scene(source(kScene).string(),
+                    [](lua::LoadedScene& loaded) { return loop_resistance(*loaded.world); });
+}
+
+/// The bearing's viscous drag, N m s (mods/motor/layout.lua: a light oil).
+constexpr double kBearingDrag = 9e-5;
+
+// --- the torque constant against the angle, k(theta) ---------------------------------
+//
+// A coil's current I puts the torque I dPhi/dtheta on the rotor (Phi the flux
+// the spokes link with it, theta the rotor's angle, anticlockwise) and the
+// rotor's turning induces -dPhi/dt = -(dPhi/dtheta) w in it
+// (flux_linkage.hpp). Counting the current the way the battery drives it
+// (i = -I), the torque is k i and the back-EMF k w with
+// k(theta) = -dPhi_c/dtheta, c the coil the commutation connects at theta.
+// Over a turn the time mean of k w is <k> (over the angle) times the mean
+// speed, whatever the ripple, so (V - I R) / w = <k> up to the inductive
+// drop at the hand-overs. How the mean torque <k i> depends on V and w
+// depends on L / R against the time k takes to change: with L / R short,
+// i = (V - k w) / R follows k and the motor is a DC motor with
+// k_dc = <k^2> / <k> and R_dc = R <k^2> / <k>^2 = R (1 + var(k) / <k>^2);
+// with L / R long, i is nearly constant and k_dc = <k>, R_dc = R. The
+// scene's cored coils' fit is the second (k = <k> within 0.6 %, R the
+// loop's); session 18's coreless coils lie between the two (docs/motor.md,
+// "Session 19").
+
+/// The flux linking each coil, Wb, with the rotor put down turned by
+/// `degrees` from where the bias magnet holds it and the slider held up
+/// (both circuits open: no current, so no coil field): the flux code's own
+/// Phi, read from electricity_from_magnetism after one step of 1 us (the
+/// rotor moves by 1e-10 rad in it).
+struct CoilFluxes {
+  double upper = 0, lower = 0;
+};
+
+/// `layout` is more of motor.layout's options, as Lua ("coil_gap = 0.002, ");
+/// empty: the scene's.
+inline CoilFluxes coil_fluxes(double degrees, const std::string& layout = "") {
+  namespace fs = std::filesystem;
+  const fs::path f =
+      fs::temp_directory_path() / ("alloy_motor_flux_" + std::to_string(::getpid()) + ".lua");
+  std::ofstream(f) << "world { dt = 1e-6, seconds = 1e-6 }\n"
+                      "require \"motor.layout\" { "
+                   << layout << "rotor_angle = " << std::setprecision(17) << degrees
+                   << ", slider_release = 1 }\n";
+  const CoilFluxes out = with_scene(f.string(), [](lua::LoadedScene& loaded) -> CoilFluxes {
+    World& w = *loaded.world;
+    w.step();
+    const auto& faraday = dynamic_cast<const magnetism::ElectricityFromMagnetism&>(
+        *w.stage(magnetism::ElectricityFromMagnetism::kName));
+    const auto* upper = faraday.find(w.find("upper_coil"));
+    const auto* lower = faraday.find(w.find("lower_coil"));
+    if (!upper || !lower) return {NAN, NAN};
+    return {upper->linkage.flux, lower->linkage.flux};
+  });
+  fs::remove(f);
+  return out;
+}
+
+/// k(theta) over one period of the rotor (90 degrees: the spokes alternate,
+/// and the two coils' fluxes repeat every second spoke), at the midpoints of
+/// a grid of `step` degrees from -22.5 (a hand-over) on, each the central
+/// difference of the connected coil's Phi across its cell. The slider lies on
+/// the spokes' ends at 135 degrees and a spoke carries it from 112.5 to 157.5
+/// degrees (mods/motor/layout.lua): with the rotor at theta a north spoke, and
+/// so the upper coil, is connected while (theta + 22.5) mod 90 < 45, else a
+/// south spoke and the lower coil.
+struct TorqueConstant {
+  double step = 0;         ///< degrees
+  std::vector<double> k;   ///< V s (N m / A), at -22.5 + (j + 1/2) step degrees
+  double mean = 0;         ///< <k>, V s
+  double mean_square = 0;  ///< <k^2>, V^2 s^2
+  double dc_k() const { return mean_square / mean; }
+  double dc_resistance_factor() const { return mean_square / (mean * mean); }
+};
+
+inline TorqueConstant measure_torque_constant(double step, const std::string& layout = "") {
+  TorqueConstant t;
+  t.step = step;
+  const auto n = std::size_t(std::llround(90.0 / step));
+  std::vector<CoilFluxes> phi(n + 1);
+  for (std::size_t j = 0; j <= n; ++j) phi[j] = coil_fluxes(-22.5 + double(j) * step, layout);
+  const double h = step * std::numbers::pi / 180;
+  for (std::size_t j = 0; j < n; ++j) {
+    const double mid = (double(j) + 0.5) * step;  // from -22.5
+    const bool north = std::fmod(mid, 90.0) < 45.0;
+    const double dphi = north ? phi[j + 1].upper - phi[j].upper : phi[j + 1].lower - phi[j].lower;
+    t.k.push_back(-dphi / h);
+  }
+  for (double k : t.k) t.mean += k, t.mean_square += k * k;
+  t.mean /= double(n), t.mean_square /= double(n);
+  return t;
 }
 
 // --- the hoist (mods/hoist) ------------------------------------------------------------
