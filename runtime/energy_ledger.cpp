@@ -44,6 +44,7 @@ EnergyAccount& EnergyLedger::account(std::string_view stage, std::string_view na
   }
   accounts_.push_back({.stage = std::string(stage), .name = std::string(name), .kind = kind});
   reported_.push_back(true);
+  before_.push_back(false);
   return accounts_.back();
 }
 
@@ -65,13 +66,41 @@ void EnergyLedger::add(std::string_view stage, const EnergyReport& report) {
   }
 }
 
+void EnergyLedger::hand_over_stores() {
+  // A store that a stage began to report in this record while another
+  // stage of the same area stopped reporting a store of the same name (one
+  // rigid-body engine swapped for another: "rigid_body" -> "rigid_body.box2d",
+  // both holding the bodies' "kinetic energy") is the same energy: the new
+  // one continues from the old one's level, so that the swap books none
+  // created, and none lost with the engine that left.
+  auto area = [](const std::string& stage) {
+    const std::size_t at = stage.find('@');
+    return at == std::string::npos ? std::string_view() : std::string_view(stage).substr(at);
+  };
+  for (std::size_t i = 0; i < accounts_.size(); ++i) {
+    EnergyAccount& a = accounts_[i];
+    if (a.kind != EnergyKind::Store || !reported_[i] || before_[i]) continue;
+    for (std::size_t j = 0; j < accounts_.size(); ++j) {
+      EnergyAccount& gone = accounts_[j];
+      if (gone.kind != EnergyKind::Store || reported_[j] || !before_[j] || gone.name != a.name ||
+          area(gone.stage) != area(a.stage))
+        continue;
+      a.last = a.level - gone.level;
+      before_[j] = false;  // handed over once
+      break;
+    }
+  }
+}
+
 void EnergyLedger::close_record() {
+  if (records_ > 0) hand_over_stores();
   EnergyBalance b;
   double flow = 0;
   for (std::size_t i = 0; i < accounts_.size(); ++i) {
     EnergyAccount& a = accounts_[i];
     if (!reported_[i])
       a.last = 0;  // a flow not reported again moved nothing; a store kept its level
+    before_[i] = reported_[i];
     reported_[i] = false;
     a.total += a.last;
     switch (a.kind) {
@@ -97,6 +126,7 @@ void EnergyLedger::close_record() {
 }
 
 void EnergyLedger::record(World& world) {
+  world.keep_energy_books();
   for (const std::string& name : world.active_stages()) {
     Stage* stage = world.stage(name);
     if (!stage) continue;

@@ -137,6 +137,8 @@ class EnergyLedger {
   EnergyAccount& account(std::string_view stage, std::string_view name, EnergyKind kind);
   std::vector<EnergyAccount> accounts_;
   std::vector<bool> reported_;  // accounts reported in the open record
+  std::vector<bool> before_;    // and in the record before it
+  void hand_over_stores();
   EnergyBalance total_, last_;
   std::uint64_t records_ = 0;
   EnergyReport scratch_;

@@ -255,6 +255,14 @@ class World {
   void demand_impulses(bool on);
   bool impulses_demanded() const { return impulses_demanded_; }
 
+  // --- energy books ---------------------------------------------------------------
+  /// Whether an energy ledger has asked the stages for their books
+  /// (EnergyLedger::record): a stage made later in the run (an engine swapped
+  /// in) keeps them from its first advance, not from its first report, so
+  /// that the step it was made in is booked too. Changes no state.
+  void keep_energy_books() { energy_books_ = true; }
+  bool energy_books_kept() const { return energy_books_; }
+
   // --- frozen objects ------------------------------------------------------------
   // A resolver that writes a non-finite value (NaN, +-Inf) into a property is
   // refused (the old value stays), a "non_finite" event is published (source:
@@ -498,6 +506,7 @@ class World {
   std::vector<Retired> retired_;
   std::vector<ScheduledInput> inputs_;          // sorted by time, stable
   bool impulses_demanded_ = false;              // demand_impulses()
+  bool energy_books_ = false;                   // keep_energy_books()
   std::vector<ImpulseDemand> impulse_demands_;  // held for this step's advance
   std::size_t next_input_ = 0;
   std::uint64_t step_ = 0;

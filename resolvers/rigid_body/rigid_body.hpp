@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "resolvers/rigid_body/contact.hpp"
+#include "resolvers/rigid_body/energy_books.hpp"
 #include "resolvers/rigid_body/engine.hpp"
 #include "resolvers/rigid_body/load_screen.hpp"
 #include "runtime/stage.hpp"
@@ -317,28 +318,12 @@ class RigidBodyResolver final : public RigidBodyEngine {
   SourceMarks load_sources_, rated_sources_;  // of forces_ and rated_loads_
   LoadScreen screen_;                         // screen_loads' sums, kept for their storage
 
-  /// The energy books (report_energy): sums since the last report, J. Kept
-  /// only once a ledger asked (books_on_): they cost three passes over the
-  /// bodies a substep.
-  struct EnergyBooks {
-    double drag = 0, restitution = 0, integration = 0, contacts = 0;
-    std::vector<std::pair<std::string, double>> work;  // per transfer name
-    /// A load of this substep: its body, force, torque, lever arm (from the
-    /// body's centre at the substep's start), and where it acts, in the
-    /// world at the start and in the body's frame.
-    struct Applied {
-      std::uint32_t body;
-      Vec3 force, torque, arm;
-      std::uint32_t source;  // index into work
-      Vec3 at, local;
-    };
-    std::vector<Applied> applied;
-    std::vector<Vec3> v0, w0;  // per body, at the substep's start (after restitution)
-  };
+  /// The energy books (report_energy; energy_books.hpp). Kept only once a
+  /// ledger asked (books_on_): they cost three passes over the bodies a
+  /// substep.
   bool books_on_ = false;
   EnergyBooks books_;
   double kinetic_energy() const;
-  std::uint32_t work_account(const std::string& stage);
   void book_loads_before(double tau);
   void book_loads_after(double h, double ke_before);
   /// Per body, the stage whose load did the most to it in this window (into

@@ -35,20 +35,6 @@ double RigidBodyResolver::kinetic_energy() const {
   return e;
 }
 
-std::uint32_t RigidBodyResolver::work_account(const std::string& stage) {
-  // The transfer is named after the physics whose stage queued the load
-  // (rigid_body_from_gravity@moon -> gravity), so that the stage on the
-  // other side of it can report the same name.
-  std::string name = stage.substr(0, stage.find('@'));
-  static constexpr std::string_view prefix = "rigid_body_from_";
-  if (name.starts_with(prefix)) name.erase(0, prefix.size());
-  if (name.empty()) name = "loads from outside the stages";
-  for (std::size_t i = 0; i < books_.work.size(); ++i)
-    if (books_.work[i].first == name) return std::uint32_t(i);
-  books_.work.emplace_back(name, 0.0);
-  return std::uint32_t(books_.work.size() - 1);
-}
-
 void RigidBodyResolver::book_loads_before(double tau) {
   Impl& m = *impl_;
   books_.applied.clear();
@@ -68,7 +54,7 @@ void RigidBodyResolver::book_loads_before(double tau) {
   std::uint32_t account = 0;
   std::string last = "\x01";
   auto source = [&](const std::string& stage) {
-    if (stage != last) account = work_account(stage), last = stage;
+    if (stage != last) account = books_.account(stage), last = stage;
     return account;
   };
   for (std::size_t k = 0; k < forces_.size(); ++k) {
@@ -116,30 +102,20 @@ void RigidBodyResolver::book_loads_before(double tau) {
 
 void RigidBodyResolver::book_loads_after(double h, double ke_before) {
   Impl& m = *impl_;
-  double along_step = 0, along_mean = 0;
+  double along_mean = 0;
   for (const EnergyBooks::Applied& a : books_.applied) {
     const dBodyID id = m.bodies[a.body].id;
     const Vec3 v1 = to_vec3(dBodyGetLinearVel(id)), w1 = to_vec3(dBodyGetAngularVel(id));
-    const Vec3 v0 = books_.v0[a.body], w0 = books_.w0[a.body];
-    const Vec3 torque = a.torque + cross(a.arm, a.force);
-    const double step = h * (dot(a.force, v1) + dot(torque, w1));
-    const double mean = 0.5 * h * (dot(a.force, v0 + v1) + dot(torque, w0 + w1));
-    books_.work[a.source].second += step;
-    along_step += step, along_mean += mean;
+    // ODE moves a body by h v': the displacement's work is h (F . v' + tau . w').
+    const double step = h * (dot(a.force, v1) + dot(a.torque + cross(a.arm, a.force), w1));
+    along_mean += books_.book_load(a, step, h, v1, w1);
   }
-  books_.integration += along_step - along_mean;
-  books_.contacts += along_mean - (kinetic_energy() - ke_before);
+  books_.close_substep(along_mean, kinetic_energy() - ke_before);
 }
 
 void RigidBodyResolver::report_energy(const WorldView&, EnergyReport& out) {
-  out.store("kinetic energy", kinetic_energy());
   books_on_ = true;
-  out.sink("viscous drag (linear_damping, angular_damping)", std::exchange(books_.drag, 0.0));
-  out.sink("restitution (collision impulses)", std::exchange(books_.restitution, 0.0));
-  out.sink("integration and position corrections", std::exchange(books_.integration, 0.0));
-  out.sink("contacts and joints (residue of the kinetic energy)",
-           std::exchange(books_.contacts, 0.0));
-  for (auto& [name, joules] : books_.work) out.transfer(name, std::exchange(joules, 0.0));
+  books_.report(kinetic_energy(), out);
 }
 
 }  // namespace alloy::rigid

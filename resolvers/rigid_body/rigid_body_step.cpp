@@ -10,6 +10,8 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
   if (m.dirty) return;  // the build failed inside ODE (engine_failed): nothing to step
   m.apply_edits(access);
   screen_loads(access, dt);
+  // Swapped in while a ledger keeps the books: from this first advance on.
+  books_on_ = books_on_ || world_.energy_books_kept();
 
   const int n = config_.substeps;
   const double h = dt / n;

@@ -1392,6 +1392,14 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
       push(*part, m.bodies[part->body].b, b2Vec2(float(w.x * s), float(w.y * s)));
     }
   };
+  // The energy books (box2d_energy.cpp): from the first advance of an engine
+  // swapped in while a ledger keeps them.
+  books_on_ = books_on_ || world_.energy_books_kept();
+  if (books_on_)
+    books_open(weigh, mass, [&](std::uint32_t slot, std::uint32_t gen, b2Vec2& local) -> b2Body* {
+      const Impl::Part* part = part_for(slot, gen);
+      return part ? (local = part->local, m.bodies[part->body].b) : nullptr;
+    });
   for (int k = 0; k < n; ++k) {
     for (std::size_t i = 0; i < loads_.size(); ++i) {
       if (weigh && i == uniform_at_) apply_weights();
@@ -1422,6 +1430,7 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
       push(*part, b->b, b2Vec2(float(f.x * s), float(f.y * s)));
       b->b->ApplyTorque(float(t.z * s * s), wake);
     }
+    if (books_on_) books_before_drag(tau);
     for (auto& body : m.bodies) {
       if (!body.dynamic) continue;
       if (body.linear_damping > 0)
@@ -1431,9 +1440,12 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
         body.b->SetAngularVelocity(float(damping_factor(body.angular_damping, h)) *
                                    body.b->GetAngularVelocity());
     }
+    if (books_on_) books_before_step(h);
     m.world->Step(float(h), config_.velocity_iterations, config_.position_iterations);
+    if (books_on_) books_after_step(h);
   }
   m.sweep(dt);
+  if (books_on_) books_close();
   loads_.clear();
   rated_.clear();
   load_sources_.clear();
@@ -1588,6 +1600,9 @@ std::size_t Box2DEngine::body_count() const {
   std::size_t n = 0;
   for (const auto& b : impl_->bodies) n += b.dynamic;
   return n;
+}
+b2World* Box2DEngine::box2d_world() const {
+  return impl_->world.get();
 }
 std::uint64_t Box2DEngine::sweep_count() const {
   return impl_->sweeps;

@@ -30,16 +30,24 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "resolvers/rigid_body/energy_books.hpp"
 #include "resolvers/rigid_body/engine.hpp"
 #include "resolvers/rigid_body/load_screen.hpp"
 #include "runtime/contact_set.hpp"
 #include "runtime/world.hpp"
+
+class b2Body;
+class b2Contact;
+class b2World;
+struct b2ContactImpulse;
+struct b2Vec2;
 
 namespace alloy::box2d {
 
@@ -79,6 +87,14 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   /// `contact_limit` again as if it had just begun.
   bool save_state(StateWriter& out) const override;
   void restore_state(StateReader& in) override;
+  /// The same books as ODE's engine, under the same names (energy_books.hpp,
+  /// box2d_energy.cpp): kinetic energy (store), the work of each stage's
+  /// loads (transfer named after the physics), drag, the collision impulses'
+  /// loss (restitution), the integrator's share and position corrections,
+  /// and the contacts' and joints' (the residue) as sinks. Kept from the
+  /// first report on, or from the first advance when the world's ledger
+  /// asked before this engine was made (a swap).
+  void report_energy(const WorldView& view, EnergyReport& out) override;
 
   void add_force(ObjectId part, Vec3 force) override;
   void add_force(ObjectId part, Vec3 force, Vec3 point) override;
@@ -154,6 +170,32 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void report_waiting(ResolverAccess& access);
   bool edited_since_write(const WorldView& view) const;
   void note_versions(const WorldView& view);
+
+  // --- the energy books (box2d_energy.cpp), kept while books_on_ -----------------
+  /// The Box2D body that carries a load's part (null: not ours, stale, not
+  /// moving) and the part's centre in its frame.
+  using Carrier =
+      std::function<b2Body*(std::uint32_t slot, std::uint32_t generation, b2Vec2& local)>;
+  /// Before the substeps: the window's loads (the queue, the rated loads and
+  /// the uniform weights when `weigh`) with their accounts and carriers, and
+  /// Box2D's contact callbacks relayed through the books (for restitution).
+  void books_open(bool weigh, const ColumnView<double>& mass, const Carrier& carrier);
+  /// Substep at time `tau` into the window: before the drag, before the step
+  /// (h long), after it.
+  void books_before_drag(double tau);
+  void books_before_step(double h);
+  void books_after_step(double h);
+  /// After the window's sweep (continuous detection's move back, with no
+  /// velocity): the loads' work along it, and the contact callbacks back.
+  void books_close();
+  /// PostSolve of a contact in a booked step: its impulses' work if it bounced.
+  void book_collision(b2Contact* contact, const b2ContactImpulse* impulse);
+  double kinetic_energy() const;
+  b2World* box2d_world() const;  // null before the first build
+  bool books_on_ = false;
+  rigid::EnergyBooks books_;
+  struct Books;  // the window's loads, carriers, velocities and the relay
+  std::shared_ptr<Books> b2books_;
 
   const World& world_;
   const PropertyStore& store_;
