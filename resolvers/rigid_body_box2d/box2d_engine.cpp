@@ -107,7 +107,7 @@ constexpr int kMaxAutoSubsteps = 64;
 
 Box2DConfig Box2DConfig::from(const PluginSettings& s) {
   s.check_known("rigid_body.box2d", {"scale", "velocity_iterations", "position_iterations",
-                                     "substeps", "sleep", "bounce_velocity"});
+                                     "substeps", "max_substep", "sleep", "bounce_velocity"});
   Box2DConfig c;
   auto bad = [&](const std::string& what) {
     throw InputError(s.where, "rigid_body.box2d: " + what);
@@ -123,10 +123,20 @@ Box2DConfig Box2DConfig::from(const PluginSettings& s) {
     bad("position_iterations must be 0..1000");
   c.substeps = int(s.integer("substeps", c.substeps));
   if (c.substeps < 1 || c.substeps > 1000) bad("substeps must be 1..1000");
+  c.max_substep = s.number("max_substep", c.max_substep);
+  if (!(c.max_substep == 0 || (c.max_substep >= 1e-6 && c.max_substep <= 1)))
+    bad("max_substep must be 0 (no bound) or between 1e-6 and 1 s");
   c.sleep = s.boolean("sleep", c.sleep);
   c.bounce_velocity = s.number("bounce_velocity", c.bounce_velocity);
   if (!(c.bounce_velocity >= 0 && c.bounce_velocity < 1e6)) bad("bounce_velocity must be >= 0 m/s");
   return c;
+}
+
+int substeps_for(const Box2DConfig& c, double dt) {
+  // A step equal to max_substep up to rounding is one Box2D step.
+  if (!(c.max_substep > 0)) return c.substeps;
+  const double k = std::ceil(dt / c.max_substep * (1 - 1e-9));
+  return std::max(c.substeps, int(std::min(k, 1000.0)));
 }
 
 // --- Box2D's world and the tables ----------------------------------------------------
@@ -1396,10 +1406,11 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   m.want_impulses = *impulse_demand_ > 0;
   m.step_impulses.clear();
   m.pre_speeds.clear();
-  // Substeps: the configured number, or as many more as keep every body's
-  // move and turn within 90 % of what Box2D allows a step (it clamps past
-  // that, silently). A body too fast even for kMaxAutoSubsteps is refused.
-  int n = config_.substeps;
+  // Substeps: the configured number, or as many as keep Box2D's step within
+  // max_substep, or as many more as keep every body's move and turn within
+  // 90 % of what Box2D allows a step (it clamps past that, silently). A body
+  // too fast even for kMaxAutoSubsteps is refused.
+  int n = substeps_for(config_, dt);
   {
     const double max_move = 0.9 * double(b2_maxTranslation),
                  max_turn = 0.9 * double(b2_maxRotation);

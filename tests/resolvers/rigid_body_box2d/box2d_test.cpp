@@ -203,6 +203,57 @@ TEST(Box2D, ABlockSlidingOnAFloorKeepsItsContactEveryStep) {
     }
 }
 
+TEST(Box2D, ItsStepsAreAtMostMaxSubstepLong) {
+  // max(substeps, ceil(dt / max_substep)) Box2D steps a world step.
+  box2d::Box2DConfig c;
+  EXPECT_EQ(c.max_substep, 1.0 / 240);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 4);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 120), 2);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 240), 1);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 960), 1);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 100), 3);  // 2.4 rounds up
+  c.substeps = 3;
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 240), 3);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 4);
+  c.max_substep = 0;  // no bound: the count alone
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 3);
+  PluginSettings bad;
+  bad.where = {"scene.lua", 7, "rigid_body.box2d"};
+  bad.set("max_substep", -0.01);
+  try {
+    box2d::Box2DConfig::from(bad);
+    ADD_FAILURE() << "a negative max_substep was taken";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("max_substep"), std::string::npos) << what;
+    EXPECT_NE(what.find("scene.lua"), std::string::npos) << what;
+  }
+}
+
+TEST(Box2D, AColumnStandsAtTheCoarseStep) {
+  // 20 boxes of 0.2 m stacked on a floor at 1/120 s: nothing should move.
+  // Box2D's position solver stops once every contact is within three linear
+  // slops (1.5 mm at scale 10), so the top box may sink by 20 of those, 3 cm
+  // (at 1/240 s each contact sinks by 0.63 mm). With one Box2D step of 1/120 s the
+  // contacts compressed by about 2.3 mm each in the first quarter second and
+  // Box2D's position solver took seconds to lift them back (the top 4.0 cm
+  // down at 0.5 s; alloy_bench_engines --pile-study); with Box2D steps of at
+  // most max_substep (two at 1/120 s) 1.4 cm.
+  Sim s(on_box2d(1.0 / 120));
+  add_floor(*s);
+  const int n = 20;
+  const double a = 0.2;
+  std::vector<ObjectId> boxes;
+  for (int j = 0; j < n; ++j) {
+    boxes.push_back(add_box(*s, {0, a / 2 + a * j, 0}, {a, a, a}, 1.0));
+    s->set(boxes.back(), "planar", true);
+  }
+  s.run_for(0.5);
+  const double sink = (n - 0.5) * a - s.position(boxes.back()).y;
+  std::printf("box2d column of %d at 1/120 s: the top box sank %.4g m in 0.5 s\n", n, sink);
+  EXPECT_LE(std::abs(sink), n * 1.5e-3);
+}
+
 TEST(Box2D, BounceReboundsToRestitutionSquared) {
   const double e = 0.5;
   std::vector<double> err;
