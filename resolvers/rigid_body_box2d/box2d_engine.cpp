@@ -193,9 +193,9 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     ObjectId a, b;
     b2Contact* c;
     std::uint32_t seq;
-    /// Published touching though Box2D's contact is not at the step's end:
-    /// kept across a drop of its touching test, or touched in an earlier
-    /// substep only (kept_contacts); its point comes from the shapes' distance.
+    /// Published touching though Box2D's contact is not: kept across a drop
+    /// of its touching test (kept_contacts); its point comes from the
+    /// shapes' distance.
     bool kept = false;
   };
   std::vector<ContactKey> contact_keys, last_keys;  // this step's, and the last sorted ones
@@ -206,13 +206,10 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   /// prepends the contacts it makes, and a contact it destroys that touched
   /// ends first), so the keys stand and the list is not walked again.
   bool touch_changed = true;
-  void BeginContact(b2Contact* c) override {
-    touch_changed = true;
-    changed.push_back({c->GetFixtureA(), c->GetFixtureB(), true});
-  }
+  void BeginContact(b2Contact*) override { touch_changed = true; }
   void EndContact(b2Contact* c) override {
     touch_changed = true;
-    changed.push_back({c->GetFixtureA(), c->GetFixtureB(), false});
+    ended.push_back({c->GetFixtureA(), c->GetFixtureB()});
   }
 
   // --- contacts Box2D's touching test leaves out ------------------------------------
@@ -226,16 +223,17 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   // floor lost the contact for one step (adv F5) when the rounding went the
   // other way, fell for that step without friction and landed 0.17 mm deeper.
   // The engine keeps such a pair touching in what it publishes while the
-  // skins are within kKeepGap of each other. With several Box2D steps to a
-  // world step, a contact made and broken between them (a strike) is
-  // published for that step, as the world's step would have seen it.
+  // skins are within kKeepGap of each other. (With several Box2D steps to a
+  // world step, publishing also the contacts made and broken between them
+  // was tried and left out: brief touches of the motor's slider on the next
+  // spoke closed a coil's circuit for a whole step and stalled the rotor at
+  // 1/120 s; docs/box2d.md, "Substeps".)
   struct FixturePair {
     b2Fixture* a;
     b2Fixture* b;
-    bool began;  // BeginContact (else EndContact)
   };
-  std::vector<FixturePair> changed;  // Begin/EndContact in this advance, in order
-  std::vector<FixturePair> kept;     // pairs kept at the last advance
+  std::vector<FixturePair> ended;  // EndContact in this advance
+  std::vector<FixturePair> kept;   // pairs kept at the last advance
   /// The largest gap between the skins of a kept pair, Box2D units: a tenth
   /// of the linear slop (Box2D's own tolerance for the choice of reference
   /// face), 0.05 mm at scale 10; the rounding is below 1e-4 up to 1,000 units.
@@ -274,30 +272,21 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
         if ((q.a == p.a && q.b == p.b) || (q.a == p.b && q.b == p.a)) return true;
       return false;
     };
-    auto consider = [&](const FixturePair& p, bool brief) {
+    auto consider = [&](const FixturePair& p) {
       if (seen(p)) return;
       b2Contact* c = contact_of(p.a, p.b);
       if (!c || !c->IsEnabled() || c->IsTouching()) return;
-      if (!brief) {
-        const float r =
-            c->GetFixtureA()->GetShape()->m_radius + c->GetFixtureB()->GetShape()->m_radius;
-        if (!(distance(c).distance - r <= kKeepGap)) return;
-      }
-      now.push_back({c->GetFixtureA(), c->GetFixtureB(), brief});
+      const float r =
+          c->GetFixtureA()->GetShape()->m_radius + c->GetFixtureB()->GetShape()->m_radius;
+      if (!(distance(c).distance - r <= kKeepGap)) return;
+      now.push_back({c->GetFixtureA(), c->GetFixtureB()});
       const ObjectId a = part_of(c->GetFixtureA()).id, b = part_of(c->GetFixtureB()).id;
       keys.push_back({std::min(a, b), std::max(a, b), c, std::uint32_t(keys.size()), true});
     };
-    // A pair that began in this advance and does not touch at its end was
-    // touched between its substeps: published for this step.
-    for (const FixturePair& p : changed)
-      if (p.began) consider(p, true);
-    for (const FixturePair& p : changed)
-      if (!p.began) consider(p, false);
-    for (const FixturePair& p : kept) consider(p, false);
-    changed.clear();
-    kept.clear();
-    for (const FixturePair& p : now)
-      if (!p.began) kept.push_back(p);
+    for (const FixturePair& p : ended) consider(p);
+    for (const FixturePair& p : kept) consider(p);
+    ended.clear();
+    kept = std::move(now);
   }
   /// Versions of position, orientation, velocity and angular_velocity after
   /// the last write-back (none after a build: the parts are compared then).
@@ -632,7 +621,7 @@ void Box2DEngine::build(ResolverAccess& access) {
   m.world->SetContactListener(&m);
   m.world->SetContactFilter(&m);
   m.touch_changed = true;  // the keys point into the world just destroyed
-  m.changed.clear(), m.kept.clear();
+  m.ended.clear(), m.kept.clear();
   m.contact_keys.clear(), m.last_keys.clear(), m.contact_order.clear();
   m.parts.clear();
   m.dormant.clear();
