@@ -152,7 +152,7 @@ double bounce_ratio(double h, double e) {
 /// A block put down touching a floor and launched along it (adv F5): the
 /// steps at which its floor pair ended while it slid, and its stop distance.
 struct Slide {
-  int ended = 0, began = 0, disconnected = 0, steps = 0;
+  int ended = 0, began = 0, disconnected = 0, closed = 0, opened = 0, steps = 0;
   double distance = 0;
 };
 Slide slide_on_long_floor(double h, double v0) {
@@ -161,10 +161,25 @@ Slide slide_on_long_floor(double h, double v0) {
   // floor's at zero overlap, where Box2D's touching test sits on its rounding.
   const ObjectId floor = add_floor(*s, 0, {20, 0.1, 1});
   const ObjectId block = add_box(*s, {0, 0.1, 0}, {0.2, 0.2, 0.2}, 1.0, {}, "block");
+  // A circuit through the contact: battery + -> block, floor -> battery -;
+  // electricity connects the two parts while they touch.
   for (const ObjectId o : {floor, block}) {
     s->set(o, "friction", 0.3);
-    s->set(o, "conductive", true);  // electricity connects them while they touch
+    s->set(o, "conductive", true);
+    s->set(o, "resistance", 1.0);
   }
+  const ObjectId battery = s->create("battery");
+  s->set(battery, "emf", 6.0);
+  s->set(battery, "internal_resistance", 0.5);
+  auto wire = [&](ObjectId from, int ft, ObjectId to, int tt) {
+    const ObjectId w = s->create();
+    s->set(w, "wire_from", from);
+    s->set(w, "wire_from_terminal", std::int64_t(ft));
+    s->set(w, "wire_to", to);
+    s->set(w, "wire_to_terminal", std::int64_t(tt));
+  };
+  wire(battery, 1, block, 0);
+  wire(floor, 0, battery, 0);
   s->set(block, "velocity", Vec3{v0, 0, 0});
   test::EventRecords events;
   events.record(*s);
@@ -175,6 +190,8 @@ Slide slide_on_long_floor(double h, double v0) {
   r.ended = int(events.of("contact_ended").size());
   r.began = int(events.of("contact_began").size());
   r.disconnected = int(events.of("disconnected").size());
+  r.closed = int(events.of("circuit_closed", "battery").size());
+  r.opened = int(events.of("circuit_opened", "battery").size());
   return r;
 }
 
@@ -194,11 +211,14 @@ TEST(Box2D, ABlockSlidingOnAFloorKeepsItsContactEveryStep) {
       const double d = v0 * v0 / (2 * 0.3 * kG);
       std::printf(
           "box2d block sliding at %.1f m/s on a long floor, 1/%.0f s: %d steps, pair began %d, "
-          "ended %d, disconnected %d; stop distance %.5f m (closed form %.5f)\n",
-          v0, 1 / h, r.steps, r.began, r.ended, r.disconnected, r.distance, d);
+          "ended %d, disconnected %d, the battery's circuit closed %d and opened %d times; stop "
+          "distance %.5f m (closed form %.5f)\n",
+          v0, 1 / h, r.steps, r.began, r.ended, r.disconnected, r.closed, r.opened, r.distance, d);
       EXPECT_EQ(r.began, 1) << v0 << " m/s at 1/" << 1 / h;
       EXPECT_EQ(r.ended, 0) << v0 << " m/s at 1/" << 1 / h;
       EXPECT_EQ(r.disconnected, 0) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.closed, 1) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.opened, 0) << v0 << " m/s at 1/" << 1 / h;
       EXPECT_NEAR(r.distance, d, 0.02 * d);
     }
 }
