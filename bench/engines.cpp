@@ -432,7 +432,8 @@ Point kit(const bench::coupled::Scene& scene, Engine e, double dt, double* value
 /// steps a world step, CPU per world step against the error (the resting
 /// scenes' RMS from rest; the chain's and the kit scenes' against the same
 /// engine at 1/3840 s with one Box2D step a step). Printed as a table
-/// (docs/box2d.md, "Substeps"); `only` names one scene, or empty for all.
+/// (docs/box2d.md, "Box2D's step and the world's"); `only` names one scene,
+/// or empty for all.
 void substep_study(const Layout& pile, const Layout& pyramid, int links,
                    const std::vector<bench::coupled::Scene>& kits, const std::string& only) {
   const double steps[] = {1.0 / 60, 1.0 / 120, 1.0 / 240};

@@ -227,7 +227,7 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   // world step, publishing also the contacts made and broken between them
   // was tried and left out: brief touches of the motor's slider on the next
   // spoke closed a coil's circuit for a whole step and stalled the rotor at
-  // 1/120 s; docs/box2d.md, "Substeps".)
+  // 1/120 s; docs/box2d.md, "Box2D's step and the world's".)
   struct FixturePair {
     b2Fixture* a;
     b2Fixture* b;

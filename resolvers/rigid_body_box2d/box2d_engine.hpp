@@ -55,9 +55,9 @@ struct Box2DConfig {
   int substeps = 1;
   /// The longest Box2D step, s (0: no bound): an advance of dt takes
   /// max(substeps, ceil(dt / max_substep)) steps. 1/240 s by the
-  /// work-precision study in docs/box2d.md ("Substeps"): at the kit's 1/240 s
-  /// one step, as before; at 1/120 s two, at 1/60 s four (Box2D v3's own
-  /// default at 60 Hz).
+  /// work-precision study in docs/box2d.md ("Box2D's step and the world's"):
+  /// at the kit's 1/240 s one step, as before; at 1/120 s two, at 1/60 s four
+  /// (Box2D v3's own default at 60 Hz).
   double max_substep = 1.0 / 240;
   /// Bodies at rest sleep (Box2D's islands, 0.5 s below 1 cm/s and 2 deg/s in
   /// scaled units). Off by default, as ODE's auto_disable.

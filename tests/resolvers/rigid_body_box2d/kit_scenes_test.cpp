@@ -252,7 +252,7 @@ TEST(KitOnBox2D, DoorbellRingsSteadilyAtTheCoarseStep) {
   // begins and ends between the two Box2D steps of a world step is not in the
   // contact set at its end, and the bell does not hear it (publishing such
   // contacts steadied it, spread 1 step, but stalled the motor; docs/box2d.md,
-  // "Substeps").
+  // "Box2D's step and the world's").
   int steady = 0;
   for (long n : sc.steps) steady += std::abs(double(n) - c.period * 120) <= 3;
   EXPECT_GE(steady, 0.85 * double(sc.steps.size()));
