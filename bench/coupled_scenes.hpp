@@ -50,6 +50,9 @@ struct Rates {
   /// The rigid body's engine: "box2d" runs the scene on rigid_body.box2d and
   /// collisions.box2d (world `use`); empty: the scene's (ODE)
   std::string engine;
+  /// rigid_body.box2d's Box2D steps per world step, with no max_substep
+  /// bound (the substep study of alloy_bench_engines); 0: its defaults
+  int box2d_substeps = 0;
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
@@ -88,6 +91,10 @@ inline std::string rate_prelude(const Rates& r) {
     s << "    w.use = w.use or {}\n"
       << "    w.use.rigid_body = \"rigid_body.box2d\"\n"
       << "    w.use.collisions = \"collisions.box2d\"\n";
+  if (r.box2d_substeps > 0) {
+    setting("rigid_body.box2d", "substeps", std::to_string(r.box2d_substeps));
+    setting("rigid_body.box2d", "max_substep", "0");
+  }
   s << "    return scene_world(w)\n  end\nend\n";
   return s.str();
 }
@@ -153,6 +160,7 @@ inline Rates with(Rates base, const Rates& over) {
   base.current_rates = base.current_rates || over.current_rates;
   if (!over.substep_contacts.empty()) base.substep_contacts = over.substep_contacts;
   if (!over.engine.empty()) base.engine = over.engine;
+  if (over.box2d_substeps > 0) base.box2d_substeps = over.box2d_substeps;
   return base;
 }
 

@@ -13,6 +13,7 @@
 #include "resolvers/plugins.hpp"
 #include "resolvers/rigid_body/rigid_body.hpp"
 #include "resolvers/rigid_body_box2d/box2d_engine.hpp"
+#include "tests/scenes/event_records.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
 namespace alloy::scenes {
@@ -146,6 +147,131 @@ double bounce_ratio(double h, double e) {
     }
   }
   return top / h0;
+}
+
+/// A block put down touching a floor and launched along it (adv F5): the
+/// steps at which its floor pair ended while it slid, and its stop distance.
+struct Slide {
+  int ended = 0, began = 0, disconnected = 0, closed = 0, opened = 0, steps = 0;
+  double distance = 0;
+};
+Slide slide_on_long_floor(double h, double v0) {
+  Sim s(on_box2d(h));
+  // Top at y = 0, 0.1 m thick and 20 m long; the block's skin meets the
+  // floor's at zero overlap, where Box2D's touching test sits on its rounding.
+  const ObjectId floor = add_floor(*s, 0, {20, 0.1, 1});
+  const ObjectId block = add_box(*s, {0, 0.1, 0}, {0.2, 0.2, 0.2}, 1.0, {}, "block");
+  // A circuit through the contact: battery + -> block, floor -> battery -;
+  // electricity connects the two parts while they touch.
+  for (const ObjectId o : {floor, block}) {
+    s->set(o, "friction", 0.3);
+    s->set(o, "conductive", true);
+    s->set(o, "resistance", 1.0);
+  }
+  const ObjectId battery = s->create("battery");
+  s->set(battery, "emf", 6.0);
+  s->set(battery, "internal_resistance", 0.5);
+  auto wire = [&](ObjectId from, int ft, ObjectId to, int tt) {
+    const ObjectId w = s->create();
+    s->set(w, "wire_from", from);
+    s->set(w, "wire_from_terminal", std::int64_t(ft));
+    s->set(w, "wire_to", to);
+    s->set(w, "wire_to_terminal", std::int64_t(tt));
+  };
+  wire(battery, 1, block, 0);
+  wire(floor, 0, battery, 0);
+  s->set(block, "velocity", Vec3{v0, 0, 0});
+  test::EventRecords events;
+  events.record(*s);
+  Slide r;
+  const double x0 = s.position(block).x;
+  for (; r.steps < int(2 / h) && s.velocity(block).x > 1e-9; ++r.steps) s->step();
+  r.distance = s.position(block).x - x0;
+  r.ended = int(events.of("contact_ended").size());
+  r.began = int(events.of("contact_began").size());
+  r.disconnected = int(events.of("disconnected").size());
+  r.closed = int(events.of("circuit_closed", "battery").size());
+  r.opened = int(events.of("circuit_opened", "battery").size());
+  return r;
+}
+
+TEST(Box2D, ABlockSlidingOnAFloorKeepsItsContactEveryStep) {
+  // Box2D 2.4's touching test (a manifold point where the separation is at
+  // most the two skins) has no margin, and its solvers leave a contact made
+  // at zero overlap there; as the block slides, the rounding of that test
+  // changes with its transform, and Box2D dropped the contact for one step
+  // (adv F5: steps 129/130 at 1/240 s, 358/359 at 1/480, 837/838 at 1/960).
+  // The engine keeps a pair whose skins stay within a tenth of the linear
+  // slop (box2d_engine.cpp, kept_contacts): the floor pair begins once, never
+  // ends while the block slides, and the circuit through it never opens.
+  // v0^2 / (2 mu g) with mu = 0.3 is the stop distance.
+  for (double h : kSteps)
+    for (double v0 : {1.5, 3.0}) {
+      const Slide r = slide_on_long_floor(h, v0);
+      const double d = v0 * v0 / (2 * 0.3 * kG);
+      std::printf(
+          "box2d block sliding at %.1f m/s on a long floor, 1/%.0f s: %d steps, pair began %d, "
+          "ended %d, disconnected %d, the battery's circuit closed %d and opened %d times; stop "
+          "distance %.5f m (closed form %.5f)\n",
+          v0, 1 / h, r.steps, r.began, r.ended, r.disconnected, r.closed, r.opened, r.distance, d);
+      EXPECT_EQ(r.began, 1) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.ended, 0) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.disconnected, 0) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.closed, 1) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_EQ(r.opened, 0) << v0 << " m/s at 1/" << 1 / h;
+      EXPECT_NEAR(r.distance, d, 0.02 * d);
+    }
+}
+
+TEST(Box2D, ItsStepsAreAtMostMaxSubstepLong) {
+  // max(substeps, ceil(dt / max_substep)) Box2D steps a world step.
+  box2d::Box2DConfig c;
+  EXPECT_EQ(c.max_substep, 1.0 / 240);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 4);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 120), 2);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 240), 1);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 960), 1);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 100), 3);  // 2.4 rounds up
+  c.substeps = 3;
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 240), 3);
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 4);
+  c.max_substep = 0;  // no bound: the count alone
+  EXPECT_EQ(box2d::substeps_for(c, 1.0 / 60), 3);
+  PluginSettings bad;
+  bad.where = {"scene.lua", 7, "rigid_body.box2d"};
+  bad.set("max_substep", -0.01);
+  try {
+    box2d::Box2DConfig::from(bad);
+    ADD_FAILURE() << "a negative max_substep was taken";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("max_substep"), std::string::npos) << what;
+    EXPECT_NE(what.find("scene.lua"), std::string::npos) << what;
+  }
+}
+
+TEST(Box2D, AColumnStandsAtTheCoarseStep) {
+  // 20 boxes of 0.2 m stacked on a floor at 1/120 s: nothing should move.
+  // Box2D's position solver stops once every contact is within three linear
+  // slops (1.5 mm at scale 10), so the top box may sink by 20 of those, 3 cm
+  // (at 1/240 s each contact sinks by 0.63 mm). With one Box2D step of 1/120 s the
+  // contacts compressed by about 2.3 mm each in the first quarter second and
+  // Box2D's position solver took seconds to lift them back (the top 4.0 cm
+  // down at 0.5 s; alloy_bench_engines --pile-study); with Box2D steps of at
+  // most max_substep (two at 1/120 s) 1.4 cm.
+  Sim s(on_box2d(1.0 / 120));
+  add_floor(*s);
+  const int n = 20;
+  const double a = 0.2;
+  std::vector<ObjectId> boxes;
+  for (int j = 0; j < n; ++j) {
+    boxes.push_back(add_box(*s, {0, a / 2 + a * j, 0}, {a, a, a}, 1.0));
+    s->set(boxes.back(), "planar", true);
+  }
+  s.run_for(0.5);
+  const double sink = (n - 0.5) * a - s.position(boxes.back()).y;
+  std::printf("box2d column of %d at 1/120 s: the top box sank %.4g m in 0.5 s\n", n, sink);
+  EXPECT_LE(std::abs(sink), n * 1.5e-3);
 }
 
 TEST(Box2D, BounceReboundsToRestitutionSquared) {
