@@ -75,16 +75,18 @@ inline constexpr std::size_t kAutoCheckParts = 32;
 /// When Auto's check runs (issue 16: it was 6 % of the stage at 10,000
 /// magnets, run every update): at the first update on the FMM, and then
 /// again when any of these holds since the last check: kAutoCheckEvery
-/// updates have passed (pole_model.hpp; SummationOptions::check_every); a part's pole moved farther
-/// than kAutoCheckMove of its own pole separation (the configuration changed much); the poles
-/// changed in number; or that check found more than kAutoCheckMargin of the
-/// tolerance (or fell back). Between checks the FMM's error is that of a
-/// configuration within a quarter of a bar's length of one checked with
-/// room to spare. A restored save checks at its first update, so its forces
-/// can differ from the uninterrupted run's only where a check skipped there
-/// would have failed, which the margin and the motion limit keep out of the
-/// runs we measured (docs/magnetism.md "Fast summation").
+/// updates have passed (pole_model.hpp; SummationOptions::check_every);
+/// more than kAutoCheckMovedShare of the parts have a pole that moved farther
+/// than kAutoCheckMove of its own pole separation (the configuration changed
+/// much); the poles changed in number; or that check found more than
+/// kAutoCheckMargin of the tolerance (or fell back). Between checks nearly
+/// every part is within a quarter of a bar of a configuration whose error
+/// was checked with room to spare. A restored save checks at its first
+/// update, so its forces can differ from the uninterrupted run's only where a
+/// check skipped there would have failed, which the margin and the motion
+/// limit keep out of the runs we measured (docs/magnetism.md "Summation").
 inline constexpr double kAutoCheckMove = 0.25;
+inline constexpr double kAutoCheckMovedShare = 0.01;
 inline constexpr double kAutoCheckMargin = 0.5;
 
 struct MagneticBody;
