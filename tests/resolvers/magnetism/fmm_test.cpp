@@ -166,10 +166,10 @@ TEST(Fmm, ClusteredMassesAgreeWithTheDirectSum) {
   EXPECT_LT(e, 1e-3);
 }
 
-TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
-  // Magnets whose poles sit exactly on other magnets' poles, magnets 1e-9 m
-  // apart, and a pile of 100 magnets at one place (deeper than the tree's
-  // depth limit can separate): every field finite and as the direct sum's.
+/// 300 random magnets, 40 with a magnet's south pole exactly on their pole
+/// and 40 more centred 1e-9 m from it, and a pile of 100 magnets at one
+/// place (deeper than the tree's depth limit can separate).
+Magnets close_poles() {
   Magnets m = random_magnets(300, 9);
   for (int i = 0; i < 40; ++i) {
     const Vec3 at = m.s[std::size_t(2 * i)].position;
@@ -177,6 +177,14 @@ TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
     m.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);   // a centre 1e-9 m from that pole
   }
   for (int i = 0; i < 100; ++i) m.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  return m;
+}
+
+TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
+  // Magnets whose poles sit exactly on other magnets' poles, magnets 1e-9 m
+  // apart, and a pile of 100 magnets at one place (deeper than the tree's
+  // depth limit can separate): every field finite and as the direct sum's.
+  const Magnets m = close_poles();
   for (double eps : {0.0, 0.005}) {
     const auto exact = direct(m.s, eps);
     const auto approx = fmm(m.s, eps, {.theta = 0.5, .order = 5, .leaf_size = 64});
@@ -324,13 +332,7 @@ TEST(Fmm, SingleNearFieldWithinTheBoundOnRandomPackedAndClosePoles) {
   // force against the direct sum within the bound, and against the same FMM
   // in double within 1e-5 (the float kernel's own error is far below the
   // expansions').
-  Magnets close = random_magnets(300, 9);
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 at = close.s[std::size_t(2 * i)].position;
-    close.add(at + Vec3{0.0425, 0, 0}, {1, 0, 0}, 0.085, 80);
-    close.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);
-  }
-  for (int i = 0; i < 100; ++i) close.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  const Magnets close = close_poles();
   struct Case {
     const char* name;
     Magnets m;
@@ -570,13 +572,7 @@ TEST(Fmm, PairOrdersWithinTheBoundOnRandomPackedClusteredAndClosePoles) {
   };
   const FmmOptions defaults{
       .theta = magnetism::kFmmTheta, .order = magnetism::kFmmOrder, .leaf_size = 64};
-  Magnets close = random_magnets(300, 9);
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 at = close.s[std::size_t(2 * i)].position;
-    close.add(at + Vec3{0.0425, 0, 0}, {1, 0, 0}, 0.085, 80);
-    close.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);
-  }
-  for (int i = 0; i < 100; ++i) close.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  const Magnets close = close_poles();
   std::vector<Case> cases = {
       {"random 300", random_magnets(300, 1), defaults},
       {"random 2000", random_magnets(2000, 3), defaults},
