@@ -11,7 +11,7 @@
 //             method ("auto" | "direct" | "tree" | "fmm", default "auto"): how pole
 //             pairs are summed; auto is direct below kFmmAutoPoles poles
 //             (pole_model.hpp), from there the fast multipole method, its error
-//             checked every update against the direct sum on 32 parts and the
+//             checked against the direct sum on 32 parts (kAutoCheckEvery) and the
 //             update redone on the tree (direct below kTreeCrossoverPoles) where
 //             it exceeds `tolerance`; fmm is the FMM alone: its error is not
 //             bounded by `tolerance` (docs/magnetism.md "Fast summation")

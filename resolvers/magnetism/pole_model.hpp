@@ -79,7 +79,7 @@ enum class Summation : std::uint8_t {
   Direct,  ///< every pair, exactly
   Tree,    ///< Barnes-Hut octree, cells expanded to the octupole
   /// Direct below kFmmAutoPoles poles; from there the FMM, checked against
-  /// the direct sum on a sample of parts every evaluation (magnetic_forces.cpp),
+  /// the direct sum on a sample of parts (kAutoCheckEvery, magnetic_forces.hpp),
   /// and the tree (Direct below kTreeCrossoverPoles) where the check finds the
   /// FMM's error above SummationOptions::tolerance.
   Auto,
