@@ -409,6 +409,11 @@ struct MagneticPoint {
   std::string auto_method = "-";
   /// At the same poles: the FMM's summation alone and auto's check alone, s.
   double sum_alone = NAN, check = NAN;
+  /// The stage as session 18 left it (every translation at the full order,
+  /// the check every update), same world, same run: s per step.
+  double previous_auto = NAN;
+  /// The share of the timed updates that ran the check.
+  double checked_share = NAN;
 };
 
 double rms_relative(const std::vector<Vec3>& approx, const std::vector<Vec3>& exact) {
@@ -601,8 +606,8 @@ struct KernelRow {
   double prev_tree = 0, tree = 0, prev_direct = NAN, direct = 0;
   double prev_error = 0, error = 0;
   double fmm = NAN, fmm_error = NAN;  ///< the fast multipole method at its defaults
-  /// The FMM on session 16's paths (the same theta, order and leaves; the
-  /// translations in four-lane batches, the near field in double), same run.
+  /// The FMM as session 18 left it (the same theta, order and leaves, every
+  /// translation at the full order: SummationOptions::fmm_pair_orders off), same run.
   double prev_fmm = NAN, prev_fmm_error = NAN;
   multipole::FmmProfile profile;  ///< the current FMM's phases, one evaluation
   /// The FMM reusing its cells and lists between calls (FmmOptions::reuse)
@@ -661,8 +666,11 @@ KernelRow magnet_kernels(int n, double budget) {
   // caches left out).
   {
     multipole::Fmm one;
-    const multipole::FmmOptions o{
-        .theta = kFmmTheta, .order = kFmmOrder, .leaf_size = 64, .single_near = true};
+    const multipole::FmmOptions o{.theta = kFmmTheta,
+                                  .order = kFmmOrder,
+                                  .leaf_size = 64,
+                                  .single_near = true,
+                                  .pair_orders = true};
     one.build(sources, eps, o);
     one.evaluate_at_sources(k);
     const multipole::FmmProfile first = one.profile();
@@ -688,7 +696,8 @@ KernelRow magnet_kernels(int n, double budget) {
                                   .order = kFmmOrder,
                                   .leaf_size = 64,
                                   .single_near = true,
-                                  .reuse = true};
+                                  .reuse = true,
+                                  .pair_orders = true};
     reuse.build(sources, eps, o);
     reuse.evaluate_at_sources(k);
     int call = 0;
@@ -706,24 +715,19 @@ KernelRow magnet_kernels(int n, double budget) {
     }
     r.fmm_reuse_error = rms_relative(magnet_forces(poles, k), magnet_forces(poles, exact_here));
   }
-  // Session 16's paths, same run: four-lane translations, the near field in
-  // double (its P2M and L2P are today's, unrolled: the ratio understates the
-  // gain a little).
+  // Session 18's FMM, same run: the same settings, every translation at the
+  // full order.
   {
-    multipole::Fmm old;
-    const multipole::FmmOptions o{.theta = kFmmTheta,
-                                  .order = kFmmOrder,
-                                  .leaf_size = 64,
-                                  .m2l = multipole::FmmOptions::M2l::Simd4,
-                                  .single_near = false};
+    multipole::Tree old;
     r.prev_fmm = cpu_per_call(
         [&] {
-          old.build(sources, eps, o);
-          old.evaluate_at_sources(k);
+          std::fill(f.begin(), f.end(), Vec3{});
+          accumulate_pole_forces(
+              poles, eps, f,
+              {.method = Summation::Fmm, .theta = kFmmTheta, .fmm_pair_orders = false}, &old);
         },
         budget);
-    for (std::size_t i = 0; i < poles.size(); ++i) k[i] = k[i] * (kMu0Over4Pi * poles[i].strength);
-    r.prev_fmm_error = rms_relative(magnet_forces(poles, k), magnet_forces(poles, exact));
+    r.prev_fmm_error = rms_relative(magnet_forces(poles, f), magnet_forces(poles, exact));
   }
   return r;
 }
@@ -835,10 +839,9 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
     for (int n : ns) rows.push_back(magnet_kernels(n, budget));
     Table t({"magnets", "previous tree (theta 0.25)", "tree", "ratio", "previous direct",
              "direct (SIMD)", "ratio", "pairs/s (SIMD)", "RMS error previous", "RMS error"});
-    Table tf({"magnets", "direct (SIMD)", "tree", "FMM (session 16 paths)", "FMM",
-              "FMM / previous FMM", "FMM / direct", "FMM / tree", "RMS error tree",
-              "RMS error FMM (session 16 paths)", "RMS error FMM", "FMM reused", "reused / FMM",
-              "RMS error reused"});
+    Table tf({"magnets", "direct (SIMD)", "tree", "FMM (session 18)", "FMM", "FMM / previous FMM",
+              "FMM / direct", "FMM / tree", "RMS error tree", "RMS error FMM (session 18)",
+              "RMS error FMM", "FMM reused", "reused / FMM", "RMS error reused"});
     for (const KernelRow& r : rows) {
       const double pairs = 4.0 * r.n * r.n;  // ordered pole pairs
       t.row({std::to_string(r.n), fmt(1e3 * r.prev_tree), fmt(1e3 * r.tree),
@@ -854,9 +857,10 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
           fmt(magnetism::kDefaultTheta) + ", leaves of 64, blocks of 32 poles):\n\n" + t.str();
     md += "\nThe fast multipole method (method \"fmm\": theta " + fmt(magnetism::kFmmTheta) +
           ", order " + std::to_string(magnetism::kFmmOrder) +
-          ", leaves of 64; translations in eight-lane batches, the near field in single "
-          "precision) against session 16's paths (four-lane translations, the near field in "
-          "double), the tree and the direct sum, same run (ratios: below 1 is faster):\n\n" +
+          ", leaves of 64; each translation at the lowest order its pair's separation allows, "
+          "in eight-lane batches; the near field in single precision) against session 18's "
+          "(every translation at the full order), the tree and the direct sum, same run "
+          "(ratios: below 1 is faster):\n\n" +
           tf.str();
     for (const KernelRow& row : rows) {
       if (row.n != 500 && row.n != rows.back().n) continue;
@@ -912,9 +916,9 @@ void issue16_kernels(bool magnets, bool gravity, bool quick, double stage_magnet
             fmt(1e3 * big.prev_tree) + " ms, " + fmt(big.prev_tree / big.tree, 3) + "x), " +
             pm(1e3 * big.tree <= 10) + ".\n";
       md += "- the FMM's summation alone at most 10 ms: " + fmt(1e3 * big.fmm) + " ms (" +
-            fmt(big.fmm / big.prev_fmm, 3) + " of session 16's paths, " +
-            fmt(big.fmm / big.tree, 3) + " of the tree's time, " + fmt(big.fmm / big.direct, 3) +
-            " of the direct sum's), " + pm(1e3 * big.fmm <= 10) +
+            fmt(big.fmm / big.prev_fmm, 3) + " of session 18's, " + fmt(big.fmm / big.tree, 3) +
+            " of the tree's time, " + fmt(big.fmm / big.direct, 3) + " of the direct sum's), " +
+            pm(1e3 * big.fmm <= 10) +
             "; reusing its cells and lists between steps (magnets moving 2 mm) " +
             fmt(1e3 * big.fmm_reuse) + " ms, " + pm(1e3 * big.fmm_reuse <= 10) + ", error " +
             fmt(big.fmm_reuse_error) + "; its RMS error " + fmt(big.fmm_error) +
@@ -1211,9 +1215,20 @@ int main(int argc, char** argv) {
         (k ? p.torque_error : p.auto_torque_error) = rms_relative(approx_t, exact_t);
       }
     }
-    // The stage as a user runs it.
+    // Session 18's stage, then the stage as a user runs it (same world; the
+    // magnets move on meanwhile, a few millimetres).
+    if (n * 2 >= magnetism::kFmmAutoPoles) {
+      magnetism::SummationOptions previous = as_user;
+      previous.fmm_pair_orders = false;
+      previous.check_every = 1;
+      forces.set_summation(previous);
+      p.previous_auto = time_steps(w, budget, max_steps).per_step.at("magnetic_forces");
+    }
     forces.set_summation(as_user);
+    const std::uint64_t checks0 = forces.checks(), updates0 = forces.updates();
     const Timed ta = time_steps(w, budget, max_steps);
+    if (forces.updates() > updates0)
+      p.checked_share = double(forces.checks() - checks0) / double(forces.updates() - updates0);
     p.automatic = ta.per_step.at("magnetic_forces");
     p.auto_method = forces.used_method() == magnetism::Summation::Fmm    ? "FMM"
                     : forces.used_method() == magnetism::Summation::Tree ? "tree"
@@ -1409,20 +1424,26 @@ int main(int argc, char** argv) {
           errors + ".\n";
   }
   if (!mag.empty()) {
-    Table ta({"magnets", "auto ms/step", "auto took", "auto / tree", "auto / direct",
-              "RMS rel. force error", "RMS rel. torque error", "its check's estimate",
-              "FMM sum alone ms", "check alone ms", "the stage's own work ms"});
+    Table ta({"magnets", "auto ms/step", "session 18's auto ms/step", "auto / session 18",
+              "auto took", "auto / tree", "auto / direct", "RMS rel. force error",
+              "RMS rel. torque error", "its check's estimate", "FMM sum alone ms", "check alone ms",
+              "updates checked", "the stage's own work ms"});
     for (const MagneticPoint& p : mag)
-      ta.row({fmt(p.n), fmt(1e3 * p.automatic), p.auto_method, fmt(p.automatic / p.tree, 3),
+      ta.row({fmt(p.n), fmt(1e3 * p.automatic), fmt(1e3 * p.previous_auto),
+              fmt(p.automatic / p.previous_auto, 3), p.auto_method, fmt(p.automatic / p.tree, 3),
               p.direct_skipped ? "-" : fmt(p.automatic / p.direct, 3), fmt(p.auto_error),
               fmt(p.auto_torque_error), fmt(p.check_error), fmt(1e3 * p.sum_alone),
-              fmt(1e3 * p.check), fmt(1e3 * (p.automatic - p.sum_alone - p.check))});
+              fmt(1e3 * p.check), fmt(p.checked_share, 2),
+              fmt(1e3 * (p.automatic - p.sum_alone - p.checked_share * p.check))});
     md += "\nmagnetic_forces as a user runs it (method \"auto\", the default: direct below " +
           std::to_string(magnetism::kFmmAutoPoles / 2) +
           " magnets, the FMM from there with its check on " +
-          std::to_string(magnetism::kAutoCheckParts) +
-          " magnets, the tree where the check fails), random magnets; the stage's own work is "
-          "the stage less the FMM's sum and the check, each timed alone on the same poles:\n\n" +
+          std::to_string(magnetism::kAutoCheckParts) + " magnets at most every " +
+          std::to_string(magnetism::kAutoCheckEvery) +
+          " updates, the tree where the check fails), random magnets, against session 18's "
+          "(every translation at the full order, the check every update) on the same world just "
+          "before; the stage's own work is the stage less the FMM's sum and the check times the "
+          "share of updates that ran it, each timed alone on the same poles:\n\n" +
           ta.str();
     Table table({"magnets", "direct ms/step", "tree ms/step", "direct / tree",
                  "RMS rel. force error", "RMS rel. torque error"});

@@ -110,6 +110,13 @@ void Fmm::build(std::span<const Source> sources, double softening, FmmOptions op
   mutual_near_ = options.mutual_near;
   single_near_ = options.single_near && softening > 0;
   make_tables(std::clamp(options.order, 1, kMaxFmmOrder));
+  // rho^(q-1) <= theta^(p-1)  <=>  rho^2 <= theta^(2 (p-1) / (q-1)), for
+  // 2 <= q < p (q = p needs no limit: the walk's theta rule is it; order 1
+  // drops a dipole's field altogether, so never: limit -1).
+  pair_orders_ = options.pair_orders;
+  for (int q = 1; q <= kMaxFmmOrder; ++q)
+    order_limit2_[std::size_t(q)] =
+        q < 2 || order_ < 2 ? -1.0 : std::pow(theta_, 2.0 * (order_ - 1) / (q - 1));
   reused_ = options.reuse && try_reuse(sources);
   if (reused_) {
     profile_.upward += seconds_now() - t0;
@@ -583,8 +590,8 @@ void contract_fixed(const double* __restrict mn, const double* __restrict d, dou
   for (int i = 0; i < int(L.e.size()); ++i) u[L.e[i][0]] += mn[L.e[i][1]] * d[L.e[i][2]];
 }
 
-void Fmm::contract(const double* mn, const double* d, double* u) const {
-  switch (order_) {
+void Fmm::contract(int order, const double* mn, const double* d, double* u) const {
+  switch (order) {
     case 1:
       return contract_fixed<1>(mn, d, u);
     case 2:
@@ -777,7 +784,7 @@ M2lRunner m2l_runner(int order, int width) {
   return scalar[i];
 }
 
-void Fmm::m2l(std::int32_t a, std::int32_t b) {
+void Fmm::m2l(std::int32_t a, std::int32_t b, int order) {
   const std::size_t nt = std::size_t(nterms_);
   const Vec3 r = nodes_[a].centre - nodes_[b].centre;
   // U_A[m] += sum_k (-1)^|k| M_B[k] D_(k+m)(r), and B's the same with r -> -r
@@ -786,7 +793,7 @@ void Fmm::m2l(std::int32_t a, std::int32_t b) {
   // term k + m sits at offset(k) + offset(m).
   double dpos[(kMaxFmmOrder + 1) * (kMaxFmmOrder + 1) * (kMaxFmmOrder + 1)];
   double dneg[(kMaxFmmOrder + 1) * (kMaxFmmOrder + 1) * (kMaxFmmOrder + 1)];
-  switch (order_) {
+  switch (order) {
     case 1:
       derivatives_fixed<1>(r, eps2_, dpos, dneg);
       break;
@@ -807,8 +814,10 @@ void Fmm::m2l(std::int32_t a, std::int32_t b) {
       break;
   }
   const bool to_a = !nodes_[b].empty, to_b = !nodes_[a].empty;
-  if (to_a) contract(mneg_.data() + std::size_t(b) * nt, dpos, local_.data() + std::size_t(a) * nt);
-  if (to_b) contract(mneg_.data() + std::size_t(a) * nt, dneg, local_.data() + std::size_t(b) * nt);
+  if (to_a)
+    contract(order, mneg_.data() + std::size_t(b) * nt, dpos, local_.data() + std::size_t(a) * nt);
+  if (to_b)
+    contract(order, mneg_.data() + std::size_t(a) * nt, dneg, local_.data() + std::size_t(b) * nt);
   ++m2l_;
 }
 
@@ -983,6 +992,11 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
   const bool mutual =
       mutual_near_ && direct_accumulate_mutual({}, nullptr, {}, nullptr, nullptr, nullptr, 0);
   const double theta2 = theta_ * theta_;
+  auto accept = [&](const Node& A, const Node& B) {
+    const Vec3 gap = A.centre - B.centre;
+    const double reach = A.radius + B.radius, g2 = dot(gap, gap);
+    return reach * reach < theta2 * g2;
+  };
   const std::uint64_t direct_pairs = std::uint64_t(leaf_size_) * leaf_size_;
   // The previous lists stand while the cells are the same ones (a reused
   // build): pairs summed directly or split stay exact whatever the cells'
@@ -995,9 +1009,7 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
     for (const auto& pr : m2l_pairs_) {
       const Node& A = nodes_[std::size_t(pr.first)];
       const Node& B = nodes_[std::size_t(pr.second)];
-      const Vec3 gap = A.centre - B.centre;
-      const double reach = A.radius + B.radius;
-      if (reach * reach < theta2 * dot(gap, gap))
+      if (accept(A, B))
         m2l_pairs_[kept++] = pr;
       else
         stack_.push_back(pr);
@@ -1024,9 +1036,7 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
     }
     const Node& B = nodes_[b];
     if (A.empty && B.empty) continue;
-    const Vec3 gap = A.centre - B.centre;
-    const double reach = A.radius + B.radius;
-    if (reach * reach < theta2 * dot(gap, gap)) {
+    if (accept(A, B)) {
       m2l_pairs_.emplace_back(a, b);
     } else if ((A.children == 0 && B.children == 0) ||
                std::uint64_t(A.end - A.begin) * (B.end - B.begin) <= direct_pairs) {
@@ -1048,19 +1058,45 @@ void Fmm::evaluate_at_sources(std::span<Vec3> out) {
   }
 
   const double t1 = seconds_now();
-  // The translations, in the walk's order (a fixed order, so fixed bits).
-  if (options_vector_m2l_ == 0) {
-    for (const auto& [a, b] : m2l_pairs_) m2l(a, b);  // the reference, one pair at a time
-  } else {
+  // The translations, in the walk's order (a fixed order, so fixed bits),
+  // each at its pair's order (FmmOptions::pair_orders): the lowest q whose
+  // limit rho^2 <= theta^(2 (p-1) / (q-1)) the pair meets. The orders' terms are
+  // numbered by total degree, so order q's are the first of order_'s: its
+  // translation reads and writes the same arrays, fewer terms.
+  for (auto& list : by_order_) list.clear();
+  if (pair_orders_) {
+    for (const auto& pr : m2l_pairs_) {
+      const Node& A = nodes_[std::size_t(pr.first)];
+      const Node& B = nodes_[std::size_t(pr.second)];
+      const Vec3 gap = A.centre - B.centre;
+      const double reach = A.radius + B.radius, rho2 = reach * reach / dot(gap, gap);
+      int q = 1;
+      while (q < order_ && !(rho2 <= order_limit2_[std::size_t(q)])) ++q;
+      by_order_[std::size_t(q)].push_back(pr);
+    }
+  }
+  if (options_vector_m2l_ != 0) {
     centres_.resize(nodes_.size());
     for (std::size_t k = 0; k < nodes_.size(); ++k) centres_[k] = nodes_[k].centre;
     zero_.assign(nt, 0.0), sink_.assign(nt, 0.0);
-    const int width = options_vector_m2l_ == int(FmmOptions::M2l::Batched) ? 1
-                      : options_vector_m2l_ == int(FmmOptions::M2l::Simd4) ? 4
-                                                                           : 8;
-    m2l_runner(order_, width)({m2l_pairs_.data(), m2l_pairs_.size(), centres_.data(), mult_.data(),
-                               mneg_.data(), local_.data(), zero_.data(), sink_.data(), nt, eps2_});
-    m2l_ += m2l_pairs_.size();
+  }
+  const int width = options_vector_m2l_ == int(FmmOptions::M2l::Batched) ? 1
+                    : options_vector_m2l_ == int(FmmOptions::M2l::Simd4) ? 4
+                                                                         : 8;
+  for (int q = 1; q <= order_; ++q) {
+    // Off: the walk's list as it is, at the full order.
+    const auto& list = pair_orders_  ? by_order_[std::size_t(q)]
+                       : q == order_ ? m2l_pairs_
+                                     : by_order_[0];
+    if (list.empty()) continue;
+    if (options_vector_m2l_ == 0) {
+      for (const auto& [a, b] : list) m2l(a, b, q);  // the reference, one pair at a time
+    } else {
+      m2l_runner(q, width)({list.data(), list.size(), centres_.data(), mult_.data(), mneg_.data(),
+                            local_.data(), zero_.data(), sink_.data(), nt, eps2_});
+      m2l_ += list.size();
+    }
+    m2l_by_order_[std::size_t(q)] += list.size();
   }
   const double t2 = seconds_now();
 

@@ -83,7 +83,8 @@ void Tree::build(std::span<const Source> sources, double softening, TreeOptions 
                  .order = options.fmm_order,
                  .leaf_size = options.leaf_size,
                  .single_near = options.fmm_single_near,
-                 .reuse = options.reuse});
+                 .reuse = options.reuse,
+                 .pair_orders = options.fmm_pair_orders});
     // evaluate() sums directly over these; the cells are left as they were
     // but never used (the next Barnes-Hut build cannot refit them).
     sources_.assign(sources.begin(), sources.end());

@@ -79,6 +79,9 @@ struct TreeOptions {
   /// softening allows it (FmmOptions::single_near; about twice as fast, its
   /// error far under the expansions'). Off: double, as before.
   bool fmm_single_near = false;
+  /// With fmm_order: each translation at the lowest order its pair's
+  /// separation allows (FmmOptions::pair_orders). Off: all at fmm_order.
+  bool fmm_pair_orders = false;
 };
 
 /// The softened kernel K(r), 1/m^2 along r; zero at r = 0 when eps = 0.

@@ -103,6 +103,23 @@ Vec3 MagneticForces::field(Vec3 point) const {
   return h * kMu0;
 }
 
+bool MagneticForces::due_check() const {
+  if (checked_at_.size() != poles_.size() || since_check_ >= summation_.check_every) return true;
+  // The share of parts that moved far: one magnet snapping onto another (tens
+  // of m/s) does not change the error of thousands, a block assembling does.
+  std::size_t parts = 0, moved = 0;
+  for (const MagneticBody& b : bodies_) {
+    if (b.pole_count != 2) continue;
+    ++parts;
+    const std::uint32_t i = b.first_pole;
+    const Vec3 n = poles_[i].position, s = poles_[i + 1].position;
+    const double limit2 = kAutoCheckMove * kAutoCheckMove * dot(n - s, n - s);
+    const Vec3 dn = n - checked_at_[i], ds = s - checked_at_[i + 1];
+    if (!(dot(dn, dn) <= limit2) || !(dot(ds, ds) <= limit2)) ++moved;
+  }
+  return !(double(moved) <= kAutoCheckMovedShare * double(parts));
+}
+
 void MagneticForces::update(const WorldView& world) {
   ++updates_;
   if (!ids_) ids_ = MagnetColumns::Ids::resolve(world);
@@ -248,9 +265,12 @@ void MagneticForces::update(const WorldView& world) {
   };
 
   // 2. The moments the field induces in the iron, consistently with one another.
-  const std::vector<Pole> fixed = fixed_poles(frames, fixed_strength);
+  //    Without iron there is nothing to solve: the fixed poles (one record
+  //    per pole, 20,000 for 10,000 magnets) are only gathered for iron.
   const std::vector<InducedPart> parts = induced_parts(frames);
-  const InductionResult induced = solve_induction(fixed, parts, softening_, summation_);
+  const InductionResult induced =
+      solve_induction(parts.empty() ? std::vector<Pole>{} : fixed_poles(frames, fixed_strength),
+                      parts, softening_, summation_);
   if (!induced.converged && induction_converged_)
     world.emit({.type = "magnetic_induction_unconverged",
                 .text = "soft-iron parts too strongly coupled for the pole model; using the "
@@ -305,22 +325,34 @@ void MagneticForces::update(const WorldView& world) {
   // Auto (the default): from kFmmAutoPoles poles the FMM, which is the
   // fastest there on spread-out parts but several percent off on a packed
   // block of aligned bars (their near forces cancel; docs/magnetism.md "Fast
-  // summation"). Its error is therefore measured every evaluation against the
-  // direct sum on a sample of parts, and where it exceeds the tolerance the
-  // evaluation is redone on the tree, whose theta is set for that block.
+  // summation"). Its error is therefore measured against the direct sum on a
+  // sample of parts (when kAutoCheckEvery says), and where it exceeds the
+  // tolerance the evaluation is redone on the tree, whose theta is set for
+  // that block.
   SummationOptions step = summation_;
-  last_check_error_ = NAN;
+  checked_ = false;
   if (summation_.method == Summation::Auto && poles_.size() >= kFmmAutoPoles) {
     step.method = Summation::Fmm;
     step.theta = kFmmTheta;
     accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
-    last_check_error_ = sampled_force_error(poles_, bodies_, pole_force, softening_);
+    if (due_check()) {
+      checked_ = true;
+      ++checks_;
+      last_check_error_ = sampled_force_error(poles_, bodies_, pole_force, softening_);
+      since_check_ = 0;
+      checked_at_.clear();
+      if (last_check_error_ <= kAutoCheckMargin * summation_.tolerance)
+        for (const Pole& p : poles_) checked_at_.push_back(p.position);
+    }
+    ++since_check_;
     if (!(last_check_error_ <= summation_.tolerance)) {
       step = summation_;
       std::fill(pole_force.begin(), pole_force.end(), Vec3{});
       accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
     }
   } else {
+    last_check_error_ = NAN;
+    checked_at_.clear();
     accumulate_pole_forces(poles_, softening_, pole_force, step, &tree_);
   }
   used_method_ = !step.use_tree(poles_.size())   ? Summation::Direct
@@ -392,8 +424,10 @@ void MagneticForces::update(const WorldView& world) {
   std::vector<double> fixed_moved_strength = fixed_strength;
   for (std::uint32_t b = 0; b < n_bodies; ++b)
     fixed_moved_strength[b] += kRateTime * strength_rate[b];
+  const std::vector<InducedPart> parts_moved = induced_parts(moved);
   const InductionResult induced_moved = solve_induction(
-      fixed_poles(moved, fixed_moved_strength), induced_parts(moved), softening_, summation_);
+      parts_moved.empty() ? std::vector<Pole>{} : fixed_poles(moved, fixed_moved_strength),
+      parts_moved, softening_, summation_);
   const std::vector<PolePair> pairs_moved = pole_pairs(
       moved, fixed_moved_strength,
       induced_moved.converged || !induced.converged ? induced_moved.moment : induced.moment);

@@ -11,7 +11,7 @@
 //             method ("auto" | "direct" | "tree" | "fmm", default "auto"): how pole
 //             pairs are summed; auto is direct below kFmmAutoPoles poles
 //             (pole_model.hpp), from there the fast multipole method, its error
-//             checked every update against the direct sum on 32 parts and the
+//             checked against the direct sum on 32 parts (kAutoCheckEvery) and the
 //             update redone on the tree (direct below kTreeCrossoverPoles) where
 //             it exceeds `tolerance`; fmm is the FMM alone: its error is not
 //             bounded by `tolerance` (docs/magnetism.md "Fast summation")
@@ -72,6 +72,22 @@ inline constexpr double kDefaultTolerance = 1e-3;
 /// 10,000 cost 64 targets x 20,000 poles, 1.3e6 pairs, about 0.6 ms on the
 /// SIMD kernel; fewer make the estimate too noisy to tell 3e-4 from 1e-3.
 inline constexpr std::size_t kAutoCheckParts = 32;
+/// When Auto's check runs (issue 16: it was 6 % of the stage at 10,000
+/// magnets, run every update): at the first update on the FMM, and then
+/// again when any of these holds since the last check: kAutoCheckEvery
+/// updates have passed (pole_model.hpp; SummationOptions::check_every);
+/// more than kAutoCheckMovedShare of the parts have a pole that moved farther
+/// than kAutoCheckMove of its own pole separation (the configuration changed
+/// much); the poles changed in number; or that check found more than
+/// kAutoCheckMargin of the tolerance (or fell back). Between checks nearly
+/// every part is within a quarter of a bar of a configuration whose error
+/// was checked with room to spare. A restored save checks at its first
+/// update, so its forces can differ from the uninterrupted run's only where a
+/// check skipped there would have failed, which the margin and the motion
+/// limit keep out of the runs we measured (docs/magnetism.md "Summation").
+inline constexpr double kAutoCheckMove = 0.25;
+inline constexpr double kAutoCheckMovedShare = 0.01;
+inline constexpr double kAutoCheckMargin = 0.5;
 
 struct MagneticBody;
 /// Auto's check: the RMS relative error of the net pole force on
@@ -153,9 +169,13 @@ class MagneticForces : public DerivedSet {
   bool used_tree() const { return used_tree_; }
   /// How the last update summed the forces: Direct, Tree or Fmm (never Auto).
   Summation used_method() const { return used_method_; }
-  /// Auto with the FMM: the error its check measured at the last update
-  /// (RMS relative, over a sample of parts); NaN when no check ran.
+  /// Auto with the FMM: the error its last check measured (RMS relative,
+  /// over a sample of parts; kAutoCheckEvery says when it runs); NaN when the
+  /// last update was not on the FMM.
   double last_check_error() const { return last_check_error_; }
+  /// Whether the last update ran Auto's check, and how many updates did.
+  bool checked() const { return checked_; }
+  std::uint64_t checks() const { return checks_; }
   /// Newton iterations of the last soft-iron solve, and whether it converged.
   int induction_iterations() const { return induction_iterations_; }
   bool induction_converged() const { return induction_converged_; }
@@ -165,6 +185,8 @@ class MagneticForces : public DerivedSet {
   std::uint64_t updates() const { return updates_; }
 
  private:
+  /// Whether Auto's check is due at this update (kAutoCheckEvery).
+  bool due_check() const;
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
@@ -173,6 +195,12 @@ class MagneticForces : public DerivedSet {
   bool used_tree_ = false;
   Summation used_method_ = Summation::Direct;
   double last_check_error_ = 0;
+  // Auto's check schedule: whether the last update ran it, the updates on the
+  // FMM since it ran, and the poles' places then (empty: check next time).
+  bool checked_ = false;
+  std::uint64_t checks_ = 0;
+  std::uint32_t since_check_ = 0;
+  std::vector<Vec3> checked_at_;
   std::vector<MagneticBody> bodies_;
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody

@@ -26,7 +26,8 @@ void accumulate_pole_forces(std::span<const Pole> poles, double softening, std::
                {.theta = options.theta,
                 .reuse = options.reuse,
                 .fmm_order = options.method == Summation::Fmm ? options.fmm_order : 0,
-                .fmm_single_near = true});
+                .fmm_single_near = true,
+                .fmm_pair_orders = options.fmm_pair_orders});
     std::vector<Vec3> k(n);
     tree.evaluate_at_sources(k);
     for (std::size_t i = 0; i < n; ++i) force[i] += k[i] * (kMu0Over4Pi * poles[i].strength);

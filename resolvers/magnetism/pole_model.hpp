@@ -79,7 +79,7 @@ enum class Summation : std::uint8_t {
   Direct,  ///< every pair, exactly
   Tree,    ///< Barnes-Hut octree, cells expanded to the octupole
   /// Direct below kFmmAutoPoles poles; from there the FMM, checked against
-  /// the direct sum on a sample of parts every evaluation (magnetic_forces.cpp),
+  /// the direct sum on a sample of parts (kAutoCheckEvery, magnetic_forces.hpp),
   /// and the tree (Direct below kTreeCrossoverPoles) where the check finds the
   /// FMM's error above SummationOptions::tolerance.
   Auto,
@@ -117,6 +117,10 @@ inline constexpr double kDefaultTheta = 0.35;
 inline constexpr double kFmmTheta = 0.7;
 inline constexpr int kFmmOrder = 5;
 
+/// Auto's check runs at most every this many updates (magnetic_forces.hpp,
+/// kAutoCheckMove and kAutoCheckMargin, give the whole rule).
+inline constexpr std::uint32_t kAutoCheckEvery = 8;
+
 struct SummationOptions {
   Summation method = Summation::Direct;
   double theta = kDefaultTheta;
@@ -126,10 +130,16 @@ struct SummationOptions {
   bool reuse = false;
   /// Summation::Fmm: the expansions' order (1 to multipole::kMaxFmmOrder).
   int fmm_order = kFmmOrder;
+  /// Summation::Fmm: each translation at the lowest order its pair's
+  /// separation allows (multipole::FmmOptions::pair_orders; session 19).
+  bool fmm_pair_orders = true;
   /// Auto: the RMS relative error of the parts' forces the FMM may make (the
   /// setting `tolerance`); above it, as the sampled check measures it, the
   /// evaluation is redone on the tree.
   double tolerance = 1e-3;
+  /// Auto: the check runs at least every this many updates (1: every update,
+  /// as until session 18; the bench's previous method).
+  std::uint32_t check_every = kAutoCheckEvery;
   /// Whether `method` sums `poles` poles with the tree (or the FMM).
   bool use_tree(std::size_t poles) const {
     return method == Summation::Tree || method == Summation::Fmm ||

@@ -166,10 +166,10 @@ TEST(Fmm, ClusteredMassesAgreeWithTheDirectSum) {
   EXPECT_LT(e, 1e-3);
 }
 
-TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
-  // Magnets whose poles sit exactly on other magnets' poles, magnets 1e-9 m
-  // apart, and a pile of 100 magnets at one place (deeper than the tree's
-  // depth limit can separate): every field finite and as the direct sum's.
+/// 300 random magnets, 40 with a magnet's south pole exactly on their pole
+/// and 40 more centred 1e-9 m from it, and a pile of 100 magnets at one
+/// place (deeper than the tree's depth limit can separate).
+Magnets close_poles() {
   Magnets m = random_magnets(300, 9);
   for (int i = 0; i < 40; ++i) {
     const Vec3 at = m.s[std::size_t(2 * i)].position;
@@ -177,6 +177,14 @@ TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
     m.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);   // a centre 1e-9 m from that pole
   }
   for (int i = 0; i < 100; ++i) m.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  return m;
+}
+
+TEST(Fmm, CoincidentAndVeryClosePolesMatchTheDirectSum) {
+  // Magnets whose poles sit exactly on other magnets' poles, magnets 1e-9 m
+  // apart, and a pile of 100 magnets at one place (deeper than the tree's
+  // depth limit can separate): every field finite and as the direct sum's.
+  const Magnets m = close_poles();
   for (double eps : {0.0, 0.005}) {
     const auto exact = direct(m.s, eps);
     const auto approx = fmm(m.s, eps, {.theta = 0.5, .order = 5, .leaf_size = 64});
@@ -233,8 +241,13 @@ TEST(Fmm, BatchedTranslationsAndTheOnceEachNearFieldAgreeWithTheReference) {
   Magnets m = random_magnets(600, 23);
   for (int i = 0; i < 10; ++i) m.add(m.s[std::size_t(2 * i)].position, {0, 0, 1}, 0.085, 90);
   const auto exact = direct(m.s, 0.005);
-  for (int order = 1; order <= kMaxFmmOrder; ++order) {
-    const FmmOptions fast{.theta = 0.7, .order = order, .leaf_size = 16};
+  for (int order = 1; order <= 2 * kMaxFmmOrder; ++order) {
+    // Orders 1 to 6 with every pair at the full order, then again with each
+    // pair at its own (pair_orders: the lists by order on the same paths).
+    const FmmOptions fast{.theta = 0.7,
+                          .order = (order - 1) % kMaxFmmOrder + 1,
+                          .leaf_size = 16,
+                          .pair_orders = order > kMaxFmmOrder};
     FmmOptions slow = fast;
     slow.m2l = FmmOptions::M2l::Reference;
     slow.mutual_near = false;
@@ -319,13 +332,7 @@ TEST(Fmm, SingleNearFieldWithinTheBoundOnRandomPackedAndClosePoles) {
   // force against the direct sum within the bound, and against the same FMM
   // in double within 1e-5 (the float kernel's own error is far below the
   // expansions').
-  Magnets close = random_magnets(300, 9);
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 at = close.s[std::size_t(2 * i)].position;
-    close.add(at + Vec3{0.0425, 0, 0}, {1, 0, 0}, 0.085, 80);
-    close.add(at + Vec3{1e-9, 0, 0}, {0, 1, 0}, 0.085, -60);
-  }
-  for (int i = 0; i < 100; ++i) close.add({0.3, 0.3, 0.3}, {0, 0, 1}, 0.085, 70);
+  const Magnets close = close_poles();
   struct Case {
     const char* name;
     Magnets m;
@@ -492,6 +499,109 @@ TEST(Fmm, ReuseKeepsTheCellsAndListsWhileTheMagnetsMoveLittle) {
   f.evaluate_at_sources(out);
   EXPECT_FALSE(f.lists_reused());
   EXPECT_LT(rms_relative(net(spread, out), net(spread, direct(spread.s, 0.005))), 1e-3);
+}
+
+/// Magnets in eight Gaussian clusters (a tenth of the cube's side wide) in
+/// the cube random_bars would fill, pointing anywhere.
+Magnets clustered_magnets(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double side = 0.15 * std::cbrt(double(n));
+  std::vector<Vec3> centres;
+  for (int k = 0; k < 8; ++k) centres.push_back({side * u(rng), side * u(rng), side * u(rng)});
+  Magnets m;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 c = centres[i % 8] + Vec3{g(rng), g(rng), g(rng)} * (0.1 * side);
+    const Vec3 axis = layouts::random_direction(rng);
+    m.add(c, axis, layouts::kBarSeparation, (50 + 100 * u(rng)) * (u(rng) < 0.5 ? -1 : 1));
+  }
+  return m;
+}
+
+TEST(Fmm, EachPairTakesTheLowestOrderItsSeparationAllows) {
+  // Two bars along x, a distance d apart on their axis (the worst alignment
+  // for the expansions): with leaves of one magnet the tree has two, centred
+  // on the magnets with radius s / 2, so their one pair has rho = s / d. At
+  // theta 0.7 and order 5, FmmOptions::pair_orders gives it the least q >= 2
+  // with rho^(q-1) <= 0.7^4: limits 0.240, 0.490, 0.622 for q = 2, 3, 4.
+  // Each bar's field at the other's poles then stays within the error the
+  // full order makes at the separation limit (rho 0.69), which is what the
+  // rule promises pair by pair.
+  const double s = layouts::kBarSeparation, theta = 0.7;
+  auto field_error = [&](double rho, bool pair_orders, int* order_used) {
+    Magnets m;
+    m.add({0, 0, 0}, {1, 0, 0}, s, 100);
+    m.add({s / rho, 0, 0}, {1, 0, 0}, s, -80);
+    Fmm f;
+    f.build(m.s, 0.005, {.theta = theta, .order = 5, .leaf_size = 2, .pair_orders = pair_orders});
+    std::vector<Vec3> out(m.s.size());
+    f.evaluate_at_sources(out);
+    const auto exact = direct(m.s, 0.005);
+    EXPECT_EQ(f.cell_interactions(), 1u) << "rho " << rho;  // the one pair, translated
+    for (int q = 1; q <= kMaxFmmOrder; ++q)
+      if (f.translations_by_order()[std::size_t(q)] == 1) *order_used = q;
+    return rms_relative(out, exact);
+  };
+  int full_order = 0;
+  const double at_limit = field_error(0.69, false, &full_order);
+  EXPECT_EQ(full_order, 5);
+  std::printf("two bars, rho 0.69, order 5: field error %.2e\n", at_limit);
+  const std::pair<double, int> cases[] = {{0.05, 2}, {0.1, 2}, {0.2, 2},  {0.3, 3},  {0.45, 3},
+                                          {0.5, 4},  {0.6, 4}, {0.63, 5}, {0.65, 5}, {0.69, 5}};
+  for (const auto& [rho, expected] : cases) {
+    int used = 0;
+    const double e = field_error(rho, true, &used);
+    std::printf("rho %.2f: order %d, field error %.2e\n", rho, used, e);
+    EXPECT_EQ(used, expected) << "rho " << rho;
+    EXPECT_LE(e, at_limit) << "rho " << rho;
+  }
+}
+
+TEST(Fmm, PairOrdersWithinTheBoundOnRandomPackedClusteredAndClosePoles) {
+  // FmmOptions::pair_orders against the direct sum, and against the same
+  // settings with every pair at the full order (measured: the lower orders
+  // add 5 to 30 % to its error here, 70 % on the coincident poles, whose
+  // error is a tenth of the bound): random magnets
+  // at two sizes, Gaussian clusters, the packed block at its measured
+  // settings, and the coincident and very close poles of the test above.
+  struct Case {
+    const char* name;
+    Magnets m;
+    FmmOptions o;
+  };
+  const FmmOptions defaults{
+      .theta = magnetism::kFmmTheta, .order = magnetism::kFmmOrder, .leaf_size = 64};
+  const Magnets close = close_poles();
+  std::vector<Case> cases = {
+      {"random 300", random_magnets(300, 1), defaults},
+      {"random 2000", random_magnets(2000, 3), defaults},
+      {"clustered 2000", clustered_magnets(2000, 1), defaults},
+      {"packed 768", packed_magnets(12, 8, 8), {.theta = 0.4, .order = 6, .leaf_size = 16}},
+      {"coincident and close", close, {.theta = 0.5, .order = 5, .leaf_size = 64}},
+  };
+  for (Case& c : cases) {
+    const auto exact = net(c.m, direct(c.m.s, 0.005));
+    const double full = rms_relative(net(c.m, fmm(c.m.s, 0.005, c.o)), exact);
+    c.o.pair_orders = true;
+    Fmm f;
+    f.build(c.m.s, 0.005, c.o);
+    std::vector<Vec3> out(c.m.s.size());
+    f.evaluate_at_sources(out);
+    ASSERT_TRUE(all_finite(out)) << c.name;
+    const double e = rms_relative(net(c.m, out), exact);
+    const auto& by = f.translations_by_order();
+    std::uint64_t lower = 0;
+    for (int q = 1; q < c.o.order; ++q) lower += by[std::size_t(q)];
+    std::printf(
+        "%s, pair orders: %.2e (every pair at order %d: %.2e); %llu of %llu translations "
+        "below it\n",
+        c.name, e, c.o.order, full, static_cast<unsigned long long>(lower),
+        static_cast<unsigned long long>(f.cell_interactions()));
+    EXPECT_LT(e, 1e-3) << c.name;
+    EXPECT_LT(e, 2 * full) << c.name;
+    EXPECT_GT(lower, 0u) << c.name;  // the lower orders were used
+  }
 }
 
 TEST(Fmm, ProfileAccountsForEveryPhase) {

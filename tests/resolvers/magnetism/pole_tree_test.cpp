@@ -415,6 +415,64 @@ TEST_F(MagneticForcesMethod, AutoWithinTheToleranceOnClusteredCoincidentAndVeryC
   EXPECT_LT(rms_relative(automatic.forces(), direct.forces()), 1e-3);
 }
 
+TEST_F(MagneticForcesMethod, AutoChecksEveryFewUpdatesOrWhenTheMagnetsMoveMuch) {
+  // The check's schedule (kAutoCheckEvery): at the first update, then every
+  // eighth while the magnets move little (1 mm a step against a quarter of
+  // the bars' 85 mm), at once when more than 1 % of them move 3 cm, and every update
+  // while it fails (the packed block). Between checks the forces are the
+  // FMM's, within the tolerance of the direct sum at the same places.
+  static_assert(kAutoCheckEvery == 8);
+  const auto bars = layouts::random_bars(500, 3);
+  LayoutStage automatic(registry, bars, WorldDef{});
+  World& w = automatic.world;
+  std::vector<ObjectId> ids;
+  for (const MagneticBody& b : automatic.stage().bodies()) ids.push_back(b.id);
+  auto shift = [&](std::size_t from, std::size_t to, Vec3 by) {
+    for (std::size_t i = from; i < to; ++i)
+      w.set(ids[i], prop::kPosition, *w.value<Vec3>(ids[i], prop::kPosition) + by);
+  };
+  std::vector<int> checked_at;
+  EXPECT_TRUE(automatic.stage().checked());
+  for (int update = 2; update <= 18; ++update) {
+    shift(0, ids.size(), {0.001, 0, 0});
+    const std::uint64_t before = automatic.stage().updates();
+    w.step();
+    ASSERT_EQ(automatic.stage().updates(), before + 1) << "the stage ran";
+    EXPECT_EQ(automatic.stage().used_method(), Summation::Fmm);
+    if (automatic.stage().checked()) checked_at.push_back(update);
+  }
+  EXPECT_EQ(checked_at, (std::vector<int>{9, 17}));
+  // Unchecked forces are still within the tolerance of the direct sum.
+  std::vector<layouts::Bar> moved = bars;
+  for (layouts::Bar& b : moved) b.centre += Vec3{0.017, 0, 0};
+  const LayoutStage direct(registry, moved, method("direct"));
+  EXPECT_FALSE(automatic.stage().checked());
+  EXPECT_LT(rms_relative(automatic.forces(), direct.forces()), 1e-3);
+  // One magnet 3 cm away (1 part in 500): not a new configuration; six
+  // more (7 in 500, above 1 %): checked at the next update.
+  shift(7, 8, {0, 0.03, 0});
+  w.step();
+  EXPECT_FALSE(automatic.stage().checked());
+  shift(100, 106, {0, 0.03, 0});
+  w.step();
+  EXPECT_TRUE(automatic.stage().checked());
+  shift(0, ids.size(), {0.001, 0, 0});
+  w.step();
+  EXPECT_FALSE(automatic.stage().checked());
+  // The packed block fails its check, so every update checks again.
+  LayoutStage block(registry, layouts::packed_bars(10, 8, 8), WorldDef{});
+  std::vector<ObjectId> block_ids;
+  for (const MagneticBody& b : block.stage().bodies()) block_ids.push_back(b.id);
+  for (int update = 2; update <= 4; ++update) {
+    for (ObjectId id : block_ids)
+      block.world.set(id, prop::kPosition,
+                      *block.world.value<Vec3>(id, prop::kPosition) + Vec3{0.001, 0, 0});
+    block.world.step();
+    EXPECT_TRUE(block.stage().checked()) << update;
+    EXPECT_EQ(block.stage().used_method(), Summation::Direct) << update;
+  }
+}
+
 TEST(AutoCheck, SampledErrorFollowsTheFullError) {
   // The check's estimate on 32 of the parts against the RMS error over all of
   // them, for FMM forces on spread magnets (about 3e-4) and on a packed block
