@@ -232,6 +232,7 @@ inline Measure doorbell_period(const Rates& rates, double from, double to) {
   register_native_plugins(registry);
   lua::LoadedScene loaded = load("doorbell", rates, registry);
   World& world = *loaded.world;
+  world.set_timing(true);  // the stages' times are part of the measure
   const ObjectId bell = world.find("bell");
   std::vector<double> strikes;
   world.add_observer([&](const Event& e) {
@@ -262,6 +263,7 @@ inline Measure motor_speed(const Rates& rates, double from, double to, const std
   register_native_plugins(registry);
   lua::LoadedScene loaded = load(mod, rates, registry);
   World& world = *loaded.world;
+  world.set_timing(true);  // the stages' times are part of the measure
   const ObjectId axle = world.find("axle");
   Measure m;
   m.steps = std::uint64_t(std::llround(to / world.dt()));

@@ -301,6 +301,7 @@ struct Timed {
 /// Steps `w` until `budget` CPU seconds have passed (at least once, at most
 /// max_steps) and returns each stage's time per step.
 Timed time_steps(World& w, double budget, int max_steps) {
+  w.set_timing(true);
   const auto before = stage_seconds(w);
   const double c0 = cpu_seconds(), w0 = now_seconds();
   int steps = 0;

@@ -461,7 +461,7 @@ void World::start() {
 void World::step() {
   advanced_ = false;  // also after a step that threw
   if (!started_) start();
-  const double t0 = now_seconds();
+  const double t0 = clock();
   apply_inputs();
   const bool crossed = assign_areas();
   sync_structure();
@@ -474,7 +474,7 @@ void World::step() {
     for (const auto& s : slots_)
       if (const auto* contacts = dynamic_cast<const ContactSet*>(s->stage.get()))
         impulse_demands_.push_back(contacts->demand_impulses());
-  const double t1 = now_seconds();
+  const double t1 = clock();
   advance_phase();
   advanced_ = true;
   store_.refresh();
@@ -484,15 +484,15 @@ void World::step() {
   // a body that crossed would get its next force from its old area's resolver
   // at a position outside that area.
   if (assign_areas()) rescope();
-  const double t2 = now_seconds();
+  const double t2 = clock();
   derive_phase();
-  const double t3 = now_seconds();
+  const double t3 = clock();
   interact_phase();
-  const double t4 = now_seconds();
+  const double t4 = clock();
   advanced_ = false;
   ++step_;
   publish_phase();
-  const double t5 = now_seconds();
+  const double t5 = clock();
   profile_.phases.edits += t1 - t0;
   profile_.phases.advance += t2 - t1;
   profile_.phases.derive += t3 - t2;
@@ -523,9 +523,9 @@ void World::advance_phase() {
     }
     current_stage_ = &s->instance;
     ResolverAccess access(*this, s->instance, s->writes, s->scope);
-    const double t = now_seconds();
+    const double t = clock();
     s->resolver->advance(access, def_.dt * s->every);
-    timing.seconds += now_seconds() - t;
+    timing.seconds += clock() - t;
     ++timing.runs;
     if (stage_hook_) stage_hook_(s->instance);
   }
@@ -578,9 +578,9 @@ void World::derive_phase() {
       continue;
     }
     current_stage_ = &s->instance;
-    const double t = now_seconds();
+    const double t = clock();
     s->derived->update(WorldView(*this, s->scope));
-    timing.seconds += now_seconds() - t;
+    timing.seconds += clock() - t;
     ++timing.runs;
     s->updated_once = true;
     ++s->output_version;
@@ -597,9 +597,9 @@ void World::interact_phase() {
       continue;
     }
     current_stage_ = &s->instance;
-    const double t = now_seconds();
+    const double t = clock();
     s->interaction->apply(WorldView(*this, s->scope));
-    timing.seconds += now_seconds() - t;
+    timing.seconds += clock() - t;
     ++timing.runs;
     if (stage_hook_) stage_hook_(s->instance);
   }

@@ -378,6 +378,7 @@ int run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   World& world = *scene.world;
   warn_if_empty(world, opt.scene, err);
   if (opt.dt) world.set_dt(*opt.dt);
+  world.set_timing(opt.profile);
   double save_period = 0;
   if (!opt.save_every.empty()) {
     try {

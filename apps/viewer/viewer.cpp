@@ -234,6 +234,7 @@ void Viewer::load() {
   scene_ = std::move(fresh);
   if (scene_->mods) scene_->mods->watch();  // a mod saved on disk is reloaded while the world runs
   World& w = *scene_->world;
+  w.set_timing(true);  // the stage panel shows each stage's time
   editor_.attach(&w);
   // A recording follows the user: each world loaded (the first, a New, an
   // Open, a Reset) is recorded from its own first snapshot, to FILE, then

@@ -55,6 +55,15 @@ inline constexpr const char* kCurrentRate = "current_rate";
 inline constexpr const char* kPoleStrengthRate = "pole_strength_rate";
 }  // namespace prop
 
+/// Upper bounds of magnetism's own inputs (docs/security.md). A coil of 1e7
+/// turns is far beyond a real one (a laboratory solenoid has 1e3 to 1e5), and
+/// an iron core multiplies the air-core coil_factor (cross-section over pole
+/// separation, under 1 m for any part the bounds allow) by at most its
+/// relative permeability, a few thousand: 1e4 m. Beyond them a coil drove the
+/// strong-coupling instability to overflow before anything named the coil.
+inline constexpr double kMaxTurns = 1e7;
+inline constexpr double kMaxCoilFactor = 1e4;
+
 /// Values of the `magnet` enum, in registration order.
 enum class MagnetKind : std::int32_t { Permanent = 0, Electromagnet = 1, SoftIron = 2 };
 

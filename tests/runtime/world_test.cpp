@@ -2,14 +2,14 @@
 // interaction commands, skipping of unneeded plugins and unchanged derived
 // sets, `every = n`, declared writes, and determinism. The plugins here are
 // small but real stages written against the public contracts.
+#include "runtime/world.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
-
-#include "runtime/world.hpp"
 
 namespace alloy {
 namespace {
@@ -25,7 +25,9 @@ class Oscillator : public Resolver {
     double dv;
     std::uint64_t queued_at;
   };
-  void kick(std::uint32_t slot, double dv, std::uint64_t step) { queue_.push_back({slot, dv, step}); }
+  void kick(std::uint32_t slot, double dv, std::uint64_t step) {
+    queue_.push_back({slot, dv, step});
+  }
 
   void build(ResolverAccess& a) override { ++builds; }
   void advance(ResolverAccess& a, double dt) override {
@@ -59,7 +61,8 @@ class Energy : public DerivedSet {
     auto x = w.column<double>("x");
     auto v = w.column<double>("v");
     total = 0;
-    for (std::uint32_t s : x.members()) total += 0.5 * (x[s] * x[s] + v.value_or(s, 0) * v.value_or(s, 0));
+    for (std::uint32_t s : x.members())
+      total += 0.5 * (x[s] * x[s] + v.value_or(s, 0) * v.value_or(s, 0));
     ++updates;
   }
   bool on_demand() const override { return demand; }
@@ -100,16 +103,24 @@ class Magnets : public Resolver {
 };
 
 void register_test_plugins(PluginRegistry& r) {
-  r.add({.info = {.name = "oscillator", .kind = StageKind::Resolver, .reads = {"x", "v"},
-                  .writes = {"x", "v"}, .needs = {"x"}},
+  r.add({.info = {.name = "oscillator",
+                  .kind = StageKind::Resolver,
+                  .reads = {"x", "v"},
+                  .writes = {"x", "v"},
+                  .needs = {"x"}},
          .properties = {{.name = "x", .kind = PropertyKind::Number, .unit = "m"},
                         {.name = "v", .kind = PropertyKind::Number, .unit = "m/s"}},
          .create = [](PluginContext&) { return std::make_unique<Oscillator>(); }});
-  r.add({.info = {.name = "energy", .kind = StageKind::Derived, .reads = {"x", "v"}, .needs = {"x"}},
-         .create = [](PluginContext&) { return std::make_unique<Energy>(); }});
-  r.add({.info = {.name = "kicker", .kind = StageKind::Interaction, .derived = {"energy"}, .target = "oscillator"},
+  r.add(
+      {.info = {.name = "energy", .kind = StageKind::Derived, .reads = {"x", "v"}, .needs = {"x"}},
+       .create = [](PluginContext&) { return std::make_unique<Energy>(); }});
+  r.add({.info = {.name = "kicker",
+                  .kind = StageKind::Interaction,
+                  .derived = {"energy"},
+                  .target = "oscillator"},
          .create = [](PluginContext& c) {
-           auto k = std::make_unique<Kicker>(c.target<Oscillator>(), c.dependency<Energy>("energy"));
+           auto k =
+               std::make_unique<Kicker>(c.target<Oscillator>(), c.dependency<Energy>("energy"));
            k->threshold = c.settings().number("threshold", 0);
            return k;
          }});
@@ -142,8 +153,9 @@ TEST_F(WorldTest, StepRunsAdvanceThenDeriveThenInteract) {
   g_log.clear();
   w.step();
   w.step();
-  EXPECT_EQ(g_log, (std::vector<std::string>{"advance:oscillator", "update:energy", "apply:kicker",
-                                             "advance:oscillator", "update:energy", "apply:kicker"}));
+  EXPECT_EQ(g_log,
+            (std::vector<std::string>{"advance:oscillator", "update:energy", "apply:kicker",
+                                      "advance:oscillator", "update:energy", "apply:kicker"}));
   EXPECT_EQ(w.active_stages(), (std::vector<std::string>{"oscillator", "energy", "kicker"}));
 }
 
@@ -215,6 +227,23 @@ TEST_F(WorldTest, EveryNRunsAStageEveryNthStepWithNTimesTheStep) {
   EXPECT_THROW(World(registry, WorldDef{.every = {{"oscillator", 0}}}), InputError);
 }
 
+TEST_F(WorldTest, StagesAreTimedOnlyWhenAsked) {
+  // A scene pays nothing for a profile nobody reads: the counts are kept, the
+  // clock is read only with timing on (alloy run --profile, the viewer).
+  World w(registry);
+  add_oscillator(w, "a", 1.0);
+  EXPECT_FALSE(w.timing());
+  w.run(20);
+  EXPECT_EQ(w.profile().steps, 20u);
+  EXPECT_EQ(w.profile().stages[0].runs, 20u);
+  EXPECT_EQ(w.profile().stages[0].seconds, 0.0);
+  EXPECT_EQ(w.profile().phases.total(), 0.0);
+  w.set_timing(true);
+  w.run(20);
+  EXPECT_EQ(w.profile().stages[0].runs, 40u);
+  EXPECT_GT(w.profile().phases.total(), 0.0);
+}
+
 TEST_F(WorldTest, AnInteractionQueuesOnlyForTheAdvanceOfATargetThatRunsEveryNthStep) {
   // The kicker kicks every step; the oscillator advances every 3rd. Each
   // advance must perform one kick per object, queued just before it, not the
@@ -232,7 +261,8 @@ TEST_F(WorldTest, AnInteractionQueuesOnlyForTheAdvanceOfATargetThatRunsEveryNthS
   for (const auto& p : osc.performed) queued_performed.push_back(p);
   // Priming queues at step 0 for the advance of step 0 (threshold 0 then: no
   // kick); afterwards the kicker runs at steps 2 and 5, for steps 3 and 6.
-  EXPECT_EQ(queued_performed, (std::vector<std::pair<std::uint64_t, std::uint64_t>>{{2, 3}, {5, 6}}));
+  EXPECT_EQ(queued_performed,
+            (std::vector<std::pair<std::uint64_t, std::uint64_t>>{{2, 3}, {5, 6}}));
 }
 
 TEST_F(WorldTest, AnOnDemandDerivedSetIsRecomputedOnlyWhenAReaderRuns) {
@@ -301,7 +331,8 @@ TEST_F(WorldTest, SameSceneAndInputsGiveBitIdenticalResults) {
   };
   const auto a = run(), b = run();
   ASSERT_EQ(a.size(), b.size());
-  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(std::memcmp(&a[i], &b[i], sizeof(double)), 0);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    EXPECT_EQ(std::memcmp(&a[i], &b[i], sizeof(double)), 0);
 }
 
 TEST_F(WorldTest, EventsArePublishedAfterTheStepWithStepAndTime) {
@@ -345,7 +376,8 @@ TEST_F(WorldTest, ScheduledInputsApplyBetweenStepsAtTheirTime) {
   World w(registry);
   const ObjectId a = add_oscillator(w, "a", 0.0);
   w.schedule(10 * w.dt(), a, registry.properties().id("v"), 2.0);
-  EXPECT_THROW(w.schedule(1.0, a, registry.properties().id("v"), Vec3{}), InputError);  // checked now
+  EXPECT_THROW(w.schedule(1.0, a, registry.properties().id("v"), Vec3{}),
+               InputError);  // checked now
   EXPECT_EQ(w.pending_inputs(), 1u);
   std::vector<Event> inputs;
   w.add_observer([&](const Event& e) {
@@ -353,7 +385,7 @@ TEST_F(WorldTest, ScheduledInputsApplyBetweenStepsAtTheirTime) {
   });
   w.run(10);
   EXPECT_EQ(std::get<double>(w.get(a, "x")), 0.0);  // at rest until the input
-  w.step();                                          // the step that starts at t = 10 dt
+  w.step();                                         // the step that starts at t = 10 dt
   EXPECT_GT(std::get<double>(w.get(a, "x")), 0.0);
   ASSERT_EQ(inputs.size(), 1u);
   EXPECT_EQ(inputs[0].step, 11u);

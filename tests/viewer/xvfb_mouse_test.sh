@@ -3,7 +3,7 @@
 # (xdotool), keyboard-free: a click on the palette's "steel bar", a click on
 # the board, a click on Save. It passes when the saved file holds the bar and
 # `alloy check` loads it. Waits are on the X server, the window and the file,
-# never on a fixed sleep; the whole test gives up after 90 s (a loaded CI machine; a passing run takes 7 to 26 s).
+# never on a fixed sleep; each attempt gives up after 45 s (a loaded machine's passing run takes 1 to 26 s).
 #
 #   xvfb_mouse_test.sh ALLOY_BINARY
 #
@@ -20,6 +20,23 @@ alloy=$1
 if ! command -v Xvfb >/dev/null 2>&1 || ! command -v xdotool >/dev/null 2>&1; then
   echo "SKIP: Xvfb or xdotool is not installed (apt-get install -y xvfb xdotool)"
   exit 77
+fi
+# Up to three attempts, each with its own X server and viewer. On the
+# development machine, loaded by several builds, about one run in ten failed
+# in one of two ways that did not repeat in the next run (session 19: the
+# window never appeared within 90 s, no window at all on the server; or five
+# placements in a row were not seen while the window was there) and that an
+# idle machine did not reproduce in 20 runs. A broken viewer fails every
+# attempt; each failed attempt's output is printed.
+if [ -z "${ALLOY_XVFB_ATTEMPT:-}" ]; then
+  for attempt in 1 2 3; do
+    out=$(ALLOY_XVFB_ATTEMPT=$attempt sh "$0" "$@" 2>&1)
+    rc=$?
+    printf '%s\n' "$out" | sed "s/^/[attempt $attempt] /"
+    [ $rc -eq 0 ] || [ $rc -eq 77 ] && exit $rc
+  done
+  echo "FAIL: three attempts failed"
+  exit 1
 fi
 dir=$(mktemp -d)
 xpid=
@@ -51,16 +68,22 @@ wait_for() {
   waiting_for=$1
   shift
   while ! "$@" >/dev/null 2>&1; do
-    [ $(($(date +%s) - start)) -ge 90 ] && fail "timed out waiting for $waiting_for"
+    [ $(($(date +%s) - start)) -ge 45 ] && fail "timed out waiting for $waiting_for"
     sleep 0.05
   done
 }
 
-# A free display number: the first with no lock file.
-n=90
-while [ -e "/tmp/.X$n-lock" ] && [ $n -lt 140 ]; do n=$((n + 1)); done
-Xvfb ":$n" -screen 0 1100x700x24 -nolisten tcp >"$dir/xvfb.log" 2>&1 &
+# A free display number, chosen by the X server itself (-displayfd: it
+# writes the number once it listens). Choosing "the first with no lock file"
+# here raced with another copy of this test started at the same moment (two
+# build folders' suites, session 19): both took :90, the second Xvfb failed,
+# both viewers opened on the first server, and when the first test ended it
+# took the second's display with it (a 90 s timeout waiting for the window).
+Xvfb -displayfd 3 -screen 0 1100x700x24 -nolisten tcp 3>"$dir/display" >"$dir/xvfb.log" 2>&1 &
 xpid=$!
+display_written() { [ -s "$dir/display" ]; }
+wait_for "the X server to choose a display" display_written
+n=$(tr -dc 0-9 <"$dir/display")
 export DISPLAY=":$n"
 wait_for "the X server on :$n" xdotool getdisplaygeometry
 

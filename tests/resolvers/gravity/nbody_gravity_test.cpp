@@ -400,6 +400,7 @@ TEST(NBodyGravity, DISABLED_StageProfile) {
   for (int i = 0; i < n; ++i)
     add_sphere(*s, {1.0 * (i % side), 1.0 * (i / side % side), 1.0 * (i / (side * side))}, 0.05,
                1e3);
+  s->set_timing(true);
   s->start();
   s->run(3);
   std::vector<double> before;

@@ -320,6 +320,32 @@ TEST_F(MagnetismTest, APartThatCannotBeSimulatedIsNamed) {
   }
 }
 
+// docs/security.md's open hole (session 18): `turns` and `coil_factor` had no
+// upper bound; a coil of 1e12 turns overflowed the energy books with no object
+// named. Beyond their bounds they are refused on the write, naming the property.
+TEST_F(MagnetismTest, TurnsAndCoilFactorBeyondTheirBoundsAreRefused) {
+  World w(registry);
+  const ObjectId coil = add_coil(w, "solenoid", {0, 0, 0}, 0, 500);
+  const std::pair<const char*, double> refused[] = {{prop::kTurns, 1e12},
+                                                    {prop::kTurns, 2 * kMaxTurns},
+                                                    {prop::kCoilFactor, 1e300},
+                                                    {prop::kCoilFactor, 2 * kMaxCoilFactor}};
+  for (const auto& [property, value] : refused) {
+    try {
+      w.set(coil, property, value);
+      ADD_FAILURE() << property << " = " << value << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + property + "' must lie between"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // The bounds themselves are values a scene may use.
+  w.set(coil, prop::kTurns, kMaxTurns);
+  w.set(coil, prop::kCoilFactor, kMaxCoilFactor);
+  EXPECT_EQ(std::get<double>(w.get(coil, prop::kTurns)), kMaxTurns);
+}
+
 TEST_F(MagnetismTest, BadSofteningSettingIsRefused) {
   World w(registry, softening(-1));
   add_permanent(w, "a", {0, 0, 0}, 0, 20);
