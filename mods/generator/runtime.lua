@@ -81,6 +81,15 @@ mod.interaction {
     local pos, vel = w:read("position"), w:read("velocity")
     local ori, spin = w:read("orientation"), w:read("angular_velocity")
     w.state.strings = w.state.strings or {}
+    -- The energy books (docs/energy.md). The forces queued at the last call
+    -- acted over the rigid body's advance since: their work is taken as the
+    -- rigid body takes it, along the weight's move, and along the drum's move
+    -- and turn for the force at the tangent (its moment about the drum's
+    -- centre). The string gives that work (the transfer "string") out of its
+    -- stretch (a store, k s^2 / 2); its damping took c rate^2 over the step (a
+    -- sink); what is left is the step's error in the string's own integration
+    -- (a sink of either sign, as the rigid body's "integration").
+    local given, stored, damped, integration = 0, 0, 0, 0
     for i in drum:each() do
       local d = drum[i]
       if d and pos:has(d) and pos:has(i) then
@@ -99,19 +108,42 @@ mod.interaction {
         while delta > math.pi do delta = delta - 2 * math.pi end
         while delta < -math.pi do delta = delta + 2 * math.pi end
         s.turned, s.last = s.turned + delta, angle
+        local work, lost = 0, 0
+        if s.fx then
+          local f = vec3(s.fx, s.fy, s.fz)  -- on the weight; the drum had -f at the tangent
+          work = f:dot(pos[i] - vec3(s.wx, s.wy, s.wz)) - f:dot(pos[d] - vec3(s.dx, s.dy, s.dz))
+                 - vec3(s.ax, s.ay, s.az):cross(f).z * delta
+          lost = s.lost
+          s.fx = nil
+        end
         local span = pos[i] - tangent
         local dist = span:length()
         local stretch = dist - (s.length + r * s.turned)
+        local energy = 0
         if stretch > 0 and dist > 0 then
           local u = span / dist
           local rate = vel[i]:dot(u) - r * spin[d].z
           local tension = stiffness[i] * stretch + damping[i] * rate
+          energy = 0.5 * stiffness[i] * stretch * stretch
           if tension > 0 then
-            w.target.add_force(i, u * -tension)
+            local f, arm = u * -tension, tangent - pos[d]
+            w.target.add_force(i, f)
             w.target.add_force_at(d, u * tension, tangent)
+            s.fx, s.fy, s.fz = f.x, f.y, f.z
+            s.wx, s.wy, s.wz = pos[i].x, pos[i].y, pos[i].z
+            s.dx, s.dy, s.dz = pos[d].x, pos[d].y, pos[d].z
+            s.ax, s.ay, s.az = arm.x, arm.y, arm.z
+            s.lost = damping[i] * rate * rate * w.dt
           end
         end
+        given, damped, stored = given + work, damped + lost, stored + energy
+        integration = integration + (s.energy or 0) - energy - work - lost
+        s.energy = energy
       end
     end
+    w:energy("store", "the string's stretch", stored)
+    w:energy("sink", "the string's damping", damped)
+    w:energy("sink", "the string's integration", integration)
+    w:energy("transfer", "string", -given)
   end,
 }
