@@ -418,6 +418,13 @@ class ElectricityResolver final : public Resolver {
   // write_outputs' scratch, per node and per conductance (kept between steps).
   std::vector<double> through_, g_current_;
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
+  // write_outputs' columns, filled in the order of output_slots_ (parts,
+  // wires, stale slots; made for the network build numbered output_build_)
+  // and written in one ColumnWriter call each; write_current_rates' likewise.
+  std::vector<std::uint32_t> output_slots_, rate_slots_;
+  std::uint64_t output_build_ = 0;
+  std::vector<double> out_current_, out_voltage_, rate_values_;
+  std::vector<std::uint8_t> out_powered_;
 
   // Per-solve results.
   std::vector<double> e_, potential_, branch_current_;
