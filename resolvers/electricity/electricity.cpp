@@ -612,7 +612,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Capacitor& c = capacitors_[j];
       e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
     }
-    books_.begin(coils_, capacitors_);
+    if (books_on_) books_.begin(coils_, capacitors_);
     const std::size_t k = coupled.size();
     Eigen::VectorXd before(k), after(k);
     if (k > 0) {
@@ -635,7 +635,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     if (solved_valid_ && solved_e_.size() == e_.size() &&
         std::memcmp(solved_e_.data(), e_.data(), e_.size() * sizeof(double)) == 0) {
       ++solves_skipped_;
-      books_.potential0 = potential_, books_.current0 = branch_current_;
+      if (books_on_) books_.potential0 = potential_, books_.current0 = branch_current_;
     } else {
       solved_valid_ = false;  // until the solve below succeeds
       std::swap(books_.potential0, potential_), std::swap(books_.current0, branch_current_);
@@ -668,7 +668,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       c.charge += h / 2 * (next + trap * c.current);
       c.current = next;
     }
-    book_substep(trap, trap > 0 ? h : h / 2);
+    if (books_on_) book_substep(trap, trap > 0 ? h : h / 2);
   };
   for (int step = 0; step < config_.substeps; ++step) {
     const double along = double(step + 1) / config_.substeps;
@@ -828,6 +828,15 @@ void ElectricityResolver::book_substep(double trap, double hs) {
 }
 
 void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out) {
+  if (!books_on_) {
+    // A ledger asks for the first time: the books start now, from the state
+    // between steps. A trapezoidal substep's EMF is the mean of the one in
+    // force at its start and its own, so the next one starts from the
+    // series EMF of the last solve, as when the books were kept all along.
+    books_on_ = true;
+    books_.emf0.resize(coils_.size());
+    for (std::size_t n = 0; n < coils_.size(); ++n) books_.emf0[n] = coils_[n].series_emf;
+  }
   if (h_ == 0) {
     // Not advanced yet, so nothing is built; but a scene (or a save) may
     // start with a charged capacitor or a coil carrying current, which the

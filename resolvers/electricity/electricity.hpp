@@ -202,6 +202,8 @@ class ElectricityResolver final : public Resolver {
   void restore_state(StateReader& in) override;
   /// Battery work, I^2 R heat, switching losses, the EMF's work
   /// (transfer "magnetism"), the coils' and capacitors' energy (docs/energy.md).
+  /// The flows are booked from the first call on (a ledger opened mid-run
+  /// sees those since it opened).
   void report_energy(const WorldView& view, EnergyReport& out) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
@@ -459,6 +461,10 @@ class ElectricityResolver final : public Resolver {
     void begin(const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
   };
   Books books_;
+  /// The books are kept only once a ledger asked (report_energy): they cost
+  /// a pass over every element a substep, and without `--energy` nobody
+  /// reads them. From then on every substep is booked.
+  bool books_on_ = false;
   void book_substep(double trap, double hs);
 };
 
