@@ -217,9 +217,9 @@ TEST_F(FrozenTest, AWriteOfManyValuesChecksAndCountsEachAsSetDoes) {
     drift.write_heading_bad = true;
     drift.poison_slot = b.index;
     drift.poison_step = w.step_count();
-    const std::uint64_t before = w.store().column(w.property("heading")).version();
+    const std::uint64_t before = w.store().column(w.properties().id("heading")).version();
     w.step();
-    versions[bulk] = w.store().column(w.property("heading")).version() - before;
+    versions[bulk] = w.store().column(w.properties().id("heading")).version() - before;
     refused[bulk] = events_of(w, "non_finite");
     EXPECT_TRUE(w.frozen(b));
     EXPECT_FALSE(w.frozen(a) || w.frozen(c));
