@@ -6,6 +6,7 @@
 // a derived set and an interaction that record the objects they see.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -124,6 +125,11 @@ class FrozenTest : public ::testing::Test {
     w.set(id, "heading", 0.0);
     return id;
   }
+  /// a moving along x, b along z, c along -z, a metre apart.
+  std::array<ObjectId, 3> add_abc(World& w) {
+    return {add(w, "a", {0, 0, 0}, {1, 0, 0}), add(w, "b", {0, 1, 0}, {0, 0, 1}),
+            add(w, "c", {0, 2, 0}, {0, 0, -1})};
+  }
   std::vector<Event> events_of(const World& w, const std::string& type) {
     std::vector<Event> out;
     for (const Event& e : w.events())
@@ -136,9 +142,7 @@ class FrozenTest : public ::testing::Test {
 
 TEST_F(FrozenTest, ANaNWriteIsRefusedNamedAndFreezesOnlyThatObject) {
   World w(registry);
-  const ObjectId a = add(w, "a", {0, 0, 0}, {1, 0, 0});
-  const ObjectId b = add(w, "b", {0, 1, 0}, {0, 0, 1});
-  const ObjectId c = add(w, "c", {0, 2, 0}, {0, 0, -1});
+  const auto [a, b, c] = add_abc(w);
   w.run(3);
   auto& drift = dynamic_cast<Drift&>(*w.stage("drift"));
   auto& seen = dynamic_cast<Seen&>(*w.stage("seen"));
@@ -207,9 +211,7 @@ TEST_F(FrozenTest, AWriteOfManyValuesChecksAndCountsEachAsSetDoes) {
   std::vector<Event> refused[2];
   for (int bulk = 0; bulk < 2; ++bulk) {
     World w(registry);
-    const ObjectId a = add(w, "a", {0, 0, 0}, {1, 0, 0});
-    const ObjectId b = add(w, "b", {0, 1, 0}, {0, 0, 1});
-    const ObjectId c = add(w, "c", {0, 2, 0}, {0, 0, -1});
+    const auto [a, b, c] = add_abc(w);
     w.run(2);
     auto& drift = dynamic_cast<Drift&>(*w.stage("drift"));
     drift.bulk = bulk != 0;
