@@ -612,7 +612,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       const Capacitor& c = capacitors_[j];
       e_[nb + nc + j] = -(c.charge / c.capacitance + trap * h / (2 * c.capacitance) * c.current);
     }
-    books_.begin(coils_, capacitors_);
+    if (books_on_) books_.begin(coils_, capacitors_);
     const std::size_t k = coupled.size();
     Eigen::VectorXd before(k), after(k);
     if (k > 0) {
@@ -635,7 +635,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     if (solved_valid_ && solved_e_.size() == e_.size() &&
         std::memcmp(solved_e_.data(), e_.data(), e_.size() * sizeof(double)) == 0) {
       ++solves_skipped_;
-      books_.potential0 = potential_, books_.current0 = branch_current_;
+      if (books_on_) books_.potential0 = potential_, books_.current0 = branch_current_;
     } else {
       solved_valid_ = false;  // until the solve below succeeds
       std::swap(books_.potential0, potential_), std::swap(books_.current0, branch_current_);
@@ -668,7 +668,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
       c.charge += h / 2 * (next + trap * c.current);
       c.current = next;
     }
-    book_substep(trap, trap > 0 ? h : h / 2);
+    if (books_on_) book_substep(trap, trap > 0 ? h : h / 2);
   };
   for (int step = 0; step < config_.substeps; ++step) {
     const double along = double(step + 1) / config_.substeps;
@@ -693,7 +693,7 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
   }
   write_outputs(access);
-  book_light(access, dt);
+  if (books_on_) book_light(access, dt);  // as the substeps' heat it is taken from
 }
 
 void ElectricityResolver::book_light(const WorldView& view, double dt) {
@@ -849,6 +849,15 @@ void ElectricityResolver::book_substep(double trap, double hs) {
 }
 
 void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out) {
+  if (!books_on_) {
+    // A ledger asks for the first time: the books start now, from the state
+    // between steps. A trapezoidal substep's EMF is the mean of the one in
+    // force at its start and its own, so the next one starts from the
+    // series EMF of the last solve, as when the books were kept all along.
+    books_on_ = true;
+    books_.emf0.resize(coils_.size());
+    for (std::size_t n = 0; n < coils_.size(); ++n) books_.emf0[n] = coils_[n].series_emf;
+  }
   if (h_ == 0) {
     // Not advanced yet, so nothing is built; but a scene (or a save) may
     // start with a charged capacitor or a coil carrying current, which the
@@ -998,7 +1007,12 @@ void ElectricityResolver::write_current_rates(ResolverAccess& access) {
   // of the advance (for the trapezoidal rule and backward Euler alike; 0 on
   // an opened coil, whose current is exactly 0, and on a coil without L).
   auto rate = current_rate_id_.writer<double>(access);
-  for (const Coil& c : coils_) rate.set(c.slot, c.inductance > 0 ? c.v_l / c.inductance : 0.0);
+  rate_slots_.resize(coils_.size()), rate_values_.resize(coils_.size());
+  for (std::size_t i = 0; i < coils_.size(); ++i) {
+    const Coil& c = coils_[i];
+    rate_slots_[i] = c.slot, rate_values_[i] = c.inductance > 0 ? c.v_l / c.inductance : 0.0;
+  }
+  rate.set(rate_slots_, rate_values_);
 }
 
 void ElectricityResolver::write_outputs(ResolverAccess& access) {
@@ -1028,10 +1042,22 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     if (reports[br.b]) through[br.b] += std::abs(branch_current_[k]) / 2;
   }
 
-  auto publish = [&](std::uint32_t slot, double i, double v) {
-    current.set(slot, i);
-    voltage.set(slot, v);
-    powered.set(slot, std::abs(i) > threshold ? 1 : 0);
+  // The three columns are filled here in the order of output_slots_ (the
+  // parts, the wires, the stale slots) and written in one call each.
+  const std::size_t np = parts_.size(), nw = wires_.size();
+  if (output_build_ != network_builds_) {
+    output_slots_.clear();
+    for (const Part& part : parts_) output_slots_.push_back(part.slot);
+    for (const Wire& w : wires_) output_slots_.push_back(w.slot);
+    output_slots_.insert(output_slots_.end(), stale_outputs_.begin(), stale_outputs_.end());
+    output_build_ = network_builds_;
+  }
+  out_current_.resize(output_slots_.size()), out_voltage_.resize(output_slots_.size());
+  out_powered_.resize(output_slots_.size());
+  auto publish = [&](std::size_t at, double i, double v) {
+    out_current_[at] = i;
+    out_voltage_[at] = v;
+    out_powered_[at] = std::abs(i) > threshold ? 1 : 0;
   };
   const PropertyStore& store = access.store();
   if (reported_cache_.size() != parts_.size()) {
@@ -1044,21 +1070,21 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     double i = 0;
     switch (part.kind) {
       case PartKind::Node:
-        publish(part.slot, through[part.node[0]], v0);
+        publish(idx, through[part.node[0]], v0);
         continue;
       case PartKind::Battery:
         i = branch_current_[std::size_t(part.element)];
-        publish(part.slot, i, v1 - v0);
+        publish(idx, i, v1 - v0);
         break;
       case PartKind::Coil:
       case PartKind::Capacitor:
         i = part.element < 0 ? 0.0 : branch_current_[std::size_t(part.element)];
-        publish(part.slot, i, v0 - v1);
+        publish(idx, i, v0 - v1);
         break;
       case PartKind::Switch:
       case PartKind::Resistor:
         i = part.element < 0 ? 0.0 : g_current[std::size_t(part.element)];
-        publish(part.slot, i, v0 - v1);
+        publish(idx, i, v0 - v1);
         break;
     }
     // Events when an element joins or leaves a closed loop.
@@ -1080,15 +1106,19 @@ void ElectricityResolver::write_outputs(ResolverAccess& access) {
     }
   }
   for (const Capacitor& c : capacitors_) charge.set(c.slot, c.charge);
-  for (const Wire& w : wires_) {
+  for (std::size_t wi = 0; wi < nw; ++wi) {
+    const Wire& w = wires_[wi];
     if (w.conductance < 0) {
-      publish(w.slot, 0.0, 0.0);
+      publish(np + wi, 0.0, 0.0);
       continue;
     }
     const Conductance& g = network_.conductances[std::size_t(w.conductance)];
-    publish(w.slot, g_current[std::size_t(w.conductance)], p[g.a] - p[g.b]);
+    publish(np + wi, g_current[std::size_t(w.conductance)], p[g.a] - p[g.b]);
   }
-  for (std::uint32_t s : stale_outputs_) publish(s, 0.0, 0.0);
+  for (std::size_t k = np + nw; k < output_slots_.size(); ++k) publish(k, 0.0, 0.0);
+  current.set(output_slots_, out_current_);
+  voltage.set(output_slots_, out_voltage_);
+  powered.set(output_slots_, out_powered_);
 }
 
 void register_electricity_resolver(PluginRegistry& registry) {

@@ -210,6 +210,8 @@ class ElectricityResolver final : public Resolver {
   void restore_state(StateReader& in) override;
   /// Battery work, I^2 R heat, switching losses, the EMF's work
   /// (transfer "magnetism"), the coils' and capacitors' energy (docs/energy.md).
+  /// The flows are booked from the first call on (a ledger opened mid-run
+  /// sees those since it opened).
   void report_energy(const WorldView& view, EnergyReport& out) override;
 
   // --- interaction functions: queued, performed in the next advance -------------
@@ -426,6 +428,13 @@ class ElectricityResolver final : public Resolver {
   // write_outputs' scratch, per node and per conductance (kept between steps).
   std::vector<double> through_, g_current_;
   std::vector<std::uint32_t> stale_outputs_;  // slots that carry outputs but are no longer parts
+  // write_outputs' columns, filled in the order of output_slots_ (parts,
+  // wires, stale slots; made for the network build numbered output_build_)
+  // and written in one ColumnWriter call each; write_current_rates' likewise.
+  std::vector<std::uint32_t> output_slots_, rate_slots_;
+  std::uint64_t output_build_ = 0;
+  std::vector<double> out_current_, out_voltage_, rate_values_;
+  std::vector<std::uint8_t> out_powered_;
 
   // Per-solve results.
   std::vector<double> e_, potential_, branch_current_;
@@ -460,6 +469,10 @@ class ElectricityResolver final : public Resolver {
     void begin(const std::vector<Coil>& coils, const std::vector<Capacitor>& capacitors);
   };
   Books books_;
+  /// The books are kept only once a ledger asked (report_energy): they cost
+  /// a pass over every element a substep, and without `--energy` nobody
+  /// reads them. From then on every substep is booked.
+  bool books_on_ = false;
   void book_substep(double trap, double hs);
   /// Moves the lamps' light out of this advance's heat (books_.light).
   void book_light(const WorldView& view, double dt);

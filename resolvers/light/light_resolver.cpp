@@ -97,7 +97,12 @@ void LightResolver::report_energy(const WorldView& view, EnergyReport& out) {
   // before the first), held until then. What was received: what the
   // advances since the last report radiated, plus the change of what waits.
   const double queued = queued_light(view, last_dt_ > 0 ? last_dt_ : view.dt());
-  if (!reported_) light_queued_ = queued, reported_ = true;  // the store opens at its level
+  if (!reported_) {
+    // The store opens at its level, and what was radiated before the ledger
+    // opened is not booked (electricity books the light it gives only from
+    // then on, as its heat).
+    light_queued_ = queued, light_radiated_ = 0, reported_ = true;
+  }
   out.transfer("light", light_radiated_ + queued - std::exchange(light_queued_, queued));
   out.store("light queued for the next step", queued);
   out.sink("light leaving the scene", std::exchange(light_radiated_, 0.0));

@@ -6,6 +6,7 @@
 // a derived set and an interaction that record the objects they see.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -39,8 +40,20 @@ class Drift : public Resolver {
     members = slots_of(x.members());
     scoped = a.scope() != nullptr;
     for (std::uint32_t s : x.members()) x.set(s, x[s] + v.value_or(s, {}) * dt);
-    for (std::uint32_t s : heading.members()) heading.set(s, heading[s] + dt);
-    if (poison_slot != ~0u && a.step() == poison_step) {
+    // With `write_heading_bad`, the poisoned heading is among the step's
+    // writes in slot order: one value at a time, or all in one call
+    // (ColumnWriter::set over spans).
+    std::vector<std::uint32_t> slots(heading.members().begin(), heading.members().end());
+    std::vector<double> values;
+    for (std::uint32_t s : slots)
+      values.push_back(write_heading_bad && s == poison_slot && a.step() == poison_step
+                           ? kInf
+                           : heading[s] + (s == still_slot ? 0.0 : dt));
+    if (bulk)
+      heading.set(slots, values);
+    else
+      for (std::size_t i = 0; i < slots.size(); ++i) heading.set(slots[i], values[i]);
+    if (poison_slot != ~0u && a.step() == poison_step && !write_heading_bad) {
       if (poison == "position") x.set(poison_slot, Vec3{1, kNaN, 0});
       if (poison == "heading") heading.set(poison_slot, kInf);
       if (poison == "turn") turn.set(poison_slot, Quat{kNaN, 0, 0, 0});
@@ -56,6 +69,9 @@ class Drift : public Resolver {
   std::uint32_t poison_slot = ~0u;
   std::uint64_t poison_step = 0;
   std::string poison = "position";
+  bool bulk = false;               // write `heading` with the span form of set()
+  bool write_heading_bad = false;  // the poison is among the headings' writes
+  std::uint32_t still_slot = ~0u;  // an object whose heading is written unchanged
 };
 
 /// A derived set: the objects it last saw carry a position.
@@ -109,6 +125,11 @@ class FrozenTest : public ::testing::Test {
     w.set(id, "heading", 0.0);
     return id;
   }
+  /// a moving along x, b along z, c along -z, a metre apart.
+  std::array<ObjectId, 3> add_abc(World& w) {
+    return {add(w, "a", {0, 0, 0}, {1, 0, 0}), add(w, "b", {0, 1, 0}, {0, 0, 1}),
+            add(w, "c", {0, 2, 0}, {0, 0, -1})};
+  }
   std::vector<Event> events_of(const World& w, const std::string& type) {
     std::vector<Event> out;
     for (const Event& e : w.events())
@@ -121,9 +142,7 @@ class FrozenTest : public ::testing::Test {
 
 TEST_F(FrozenTest, ANaNWriteIsRefusedNamedAndFreezesOnlyThatObject) {
   World w(registry);
-  const ObjectId a = add(w, "a", {0, 0, 0}, {1, 0, 0});
-  const ObjectId b = add(w, "b", {0, 1, 0}, {0, 0, 1});
-  const ObjectId c = add(w, "c", {0, 2, 0}, {0, 0, -1});
+  const auto [a, b, c] = add_abc(w);
   w.run(3);
   auto& drift = dynamic_cast<Drift&>(*w.stage("drift"));
   auto& seen = dynamic_cast<Seen&>(*w.stage("seen"));
@@ -180,6 +199,43 @@ TEST_F(FrozenTest, ANaNWriteIsRefusedNamedAndFreezesOnlyThatObject) {
   EXPECT_EQ(seen.members, drift.members);
   EXPECT_EQ(position(w, b), (b_frozen + Vec3{0, 0, 1} * w.dt()));
   EXPECT_EQ(*w.value<double>(b, "heading"), 5 * w.dt());
+}
+
+TEST_F(FrozenTest, AWriteOfManyValuesChecksAndCountsEachAsSetDoes) {
+  // Two worlds, one writing `heading` a value at a time, the other in one
+  // call: an infinity among the values is refused and freezes its object
+  // alone, the others are written, and the column's change counter moves
+  // by the same count (a value written unchanged does not move it).
+  std::vector<double> headings[2];
+  std::uint64_t versions[2] = {0, 0};
+  std::vector<Event> refused[2];
+  for (int bulk = 0; bulk < 2; ++bulk) {
+    World w(registry);
+    const auto [a, b, c] = add_abc(w);
+    w.run(2);
+    auto& drift = dynamic_cast<Drift&>(*w.stage("drift"));
+    drift.bulk = bulk != 0;
+    drift.still_slot = c.index;
+    drift.write_heading_bad = true;
+    drift.poison_slot = b.index;
+    drift.poison_step = w.step_count();
+    const std::uint64_t before = w.store().column(w.properties().id("heading")).version();
+    w.step();
+    versions[bulk] = w.store().column(w.properties().id("heading")).version() - before;
+    refused[bulk] = events_of(w, "non_finite");
+    EXPECT_TRUE(w.frozen(b));
+    EXPECT_FALSE(w.frozen(a) || w.frozen(c));
+    for (ObjectId id : {a, b, c}) headings[bulk].push_back(*w.value<double>(id, "heading"));
+  }
+  // a moved, b was refused (keeps 2 dt), c was written unchanged.
+  const double dt = WorldDef{}.dt;
+  EXPECT_EQ(headings[1], (std::vector<double>{dt + dt + dt, dt + dt, dt + dt}));
+  EXPECT_EQ(headings[0], headings[1]);
+  EXPECT_EQ(versions[1], 1u);
+  EXPECT_EQ(versions[0], versions[1]);
+  ASSERT_EQ(refused[1].size(), 1u);
+  EXPECT_EQ(refused[1][0].text, "heading");
+  EXPECT_EQ(refused[0].size(), refused[1].size());
 }
 
 TEST_F(FrozenTest, InfinityInANumberAndNaNInAQuaternionAreCaughtToo) {

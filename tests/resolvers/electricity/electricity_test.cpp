@@ -909,6 +909,45 @@ TEST_F(ElectricityTest, TheLargestValuesInRangeGiveFiniteCurrentsAndBooks) {
   EXPECT_TRUE(std::isfinite(books.total().sources));
 }
 
+TEST_F(ElectricityTest, ALedgerOpenedMidRunBooksFromItsOpeningAsOneKeptAllAlong) {
+  // The books are kept only once a ledger asks (they cost a pass over every
+  // element a substep). A ledger opened after 5 steps sees no flow from
+  // before it opened, and from then on the same joules, to the bit, as one
+  // kept from the first step: with an induced EMF that ramps every step,
+  // whose mean over a substep starts from the last solve's EMF.
+  auto run = [&](int open_at) {
+    World w(registry);
+    const ObjectId b = battery(w, "bat", 6.0, 0.5);
+    const ObjectId x = coil(w, "x", 0.05, 1.0);
+    wire(w, "w1", b, 1, x, 0, 0.01);
+    wire(w, "w2", x, 1, b, 0, 0.01);
+    EnergyLedger books;
+    std::vector<EnergyBalance> flows;
+    for (int k = 0; k < 12; ++k) {
+      if (k == open_at) {
+        books.record(w);
+        flows.push_back(books.last());
+      }
+      if (k > 0) resolver(w).set_induced_emf(x, 0.25 * k);
+      w.step();
+      if (k >= open_at) books.record(w), flows.push_back(books.last());
+    }
+    return flows;
+  };
+  const std::vector<EnergyBalance> all_along = run(0), late = run(5);
+  ASSERT_EQ(late.size(), 8u);
+  EXPECT_EQ(late[0].sources, 0.0);  // the opening record: no battery work from before
+  EXPECT_EQ(late[0].transfers, 0.0);
+  EXPECT_GT(all_along[5].sources, 0.0);
+  for (std::size_t r = 1; r < late.size(); ++r) {  // the records after steps 5 to 11
+    const EnergyBalance& a = all_along[5 + r];
+    EXPECT_EQ(late[r].sources, a.sources) << "record " << r;
+    EXPECT_EQ(late[r].sinks, a.sinks) << "record " << r;
+    EXPECT_EQ(late[r].transfers, a.transfers) << "record " << r;
+    EXPECT_EQ(late[r].stored, a.stored) << "record " << r;
+  }
+}
+
 TEST_F(ElectricityTest, ASolveThatOverflowsNamesTheCircuitsParts) {
   // An induced EMF is not a scene value (magnetism computes it): one of 1e308 V
   // in a 1-Ohm loop overflows the solve, and the error names the loop's parts.
