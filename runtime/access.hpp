@@ -130,11 +130,13 @@ class ColumnWriter {
     if (slots.size() != values.size())
       throw AccessError("ColumnWriter::set: " + std::to_string(slots.size()) + " slots but " +
                         std::to_string(values.size()) + " values");
-    // set() resizes nothing, so the arrays stay where they are; held in
-    // locals, they are not reloaded after every store.
+    // Held in locals, the arrays are not reloaded after every store; the
+    // slow path (set() on one pair, which may refuse and freeze the object)
+    // takes them afresh after it, so that nothing it does can leave them
+    // pointing at storage it moved.
     T* stored = c_->values_.data();
     const std::uint8_t* present = c_->present_.data();
-    const std::size_t size = c_->present_.size();
+    std::size_t size = c_->present_.size();
     std::uint64_t changed = 0;
     for (std::size_t i = 0; i < slots.size(); ++i) {
       const std::uint32_t slot = slots[i];
@@ -143,6 +145,7 @@ class ColumnWriter {
           !detail::finite_write(value)) [[unlikely]] {
         c_->version_ += std::exchange(changed, 0);  // in order with what set() moves
         set(slot, value);
+        stored = c_->values_.data(), present = c_->present_.data(), size = c_->present_.size();
         continue;
       }
       if (!(stored[slot] == value)) stored[slot] = value, ++changed;
