@@ -493,9 +493,9 @@ TEST(EnergyBooks, AnEngineSwapCarriesTheKineticStoreOver) {
 struct SceneBooks {
   EnergyBalance balance;
   double battery = 0, heat = 0, magnetism_mismatch = 0, coils_work = 0;
-  double iron_work = 0;       ///< what magnetic_forces' pairs with an induced share did, J
-  double hand_work = 0;       ///< what a mod's stage booked as given through "drive", J
-  double drive_mismatch = 0;  ///< the sum of the "drive" transfer's sides, J
+  double iron_work = 0;        ///< what magnetic_forces' pairs with an induced share did, J
+  double hand_work = 0;        ///< what a mod's stage booked as given through "drive", J
+  double drive_mismatch = 0;   ///< the sum of the "drive" transfer's sides, J
   double string_work = 0;      ///< what the rigid body booked as given to a string, J
   double string_mismatch = 0;  ///< the sum of the "string" transfer's sides, J
   /// What the rigid body's own books leave: its transfers received less its
