@@ -52,6 +52,7 @@ trap finish EXIT
 fail() {
   echo "FAIL: $*"
   [ -f "$dir/viewer.log" ] && sed 's/^/  viewer: /' "$dir/viewer.log"
+  [ -s "$dir/xvfb.log" ] && tail -n 20 "$dir/xvfb.log" | sed 's/^/  xvfb: /'
   # What the X server holds, for a failure that does not repeat (session 18:
   # one run of CI's ctest timed out waiting for the window, then 11 in a row
   # passed in 1.5 to 4.5 s): every window's name, and whether the viewer runs.
