@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <unordered_set>
 #include <utility>
 
 #include "resolvers/rigid_body/hinge_anchors.hpp"
@@ -232,6 +233,12 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
     b2Fixture* a;
     b2Fixture* b;
   };
+  struct PairHash {
+    std::size_t operator()(const std::pair<const b2Fixture*, const b2Fixture*>& p) const {
+      const std::hash<const void*> h;
+      return h(p.first) * 31 + h(p.second);
+    }
+  };
   std::vector<FixturePair> ended;  // EndContact in this advance
   std::vector<FixturePair> kept;   // pairs kept at the last advance
   /// The largest gap between the skins of a kept pair, Box2D units: a tenth
@@ -267,13 +274,14 @@ struct Box2DEngine::Impl : b2ContactListener, b2ContactFilter {
   /// appended to `keys`; remembers the kept ones for the next advance.
   void kept_contacts(std::vector<ContactKey>& keys) {
     std::vector<FixturePair> now;
-    auto seen = [&](const FixturePair& p) {
-      for (const FixturePair& q : now)
-        if ((q.a == p.a && q.b == p.b) || (q.a == p.b && q.b == p.a)) return true;
-      return false;
-    };
+    // Each pair once, whichever fixture comes first: a set, not a scan of
+    // `now` per pair (a heap that flies apart ends thousands of contacts in
+    // one advance).
+    std::unordered_set<std::pair<const b2Fixture*, const b2Fixture*>, PairHash> looked_at;
     auto consider = [&](const FixturePair& p) {
-      if (seen(p)) return;
+      const b2Fixture* lo = std::min<const b2Fixture*>(p.a, p.b);
+      const b2Fixture* hi = std::max<const b2Fixture*>(p.a, p.b);
+      if (!looked_at.insert({lo, hi}).second) return;
       b2Contact* c = contact_of(p.a, p.b);
       if (!c || !c->IsEnabled() || c->IsTouching()) return;
       const float r =
