@@ -459,15 +459,16 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
   if (same) {
     for (std::size_t i = 0; i < coils.size(); ++i)
       coils[i].current = coils_[i].current, coils[i].v_l = coils_[i].v_l,
-      coils[i].series_emf = coils_[i].series_emf;
+      coils[i].series_emf = coils_[i].series_emf, coils[i].emf_offset = coils_[i].emf_offset;
     for (std::size_t i = 0; i < capacitors.size(); ++i)
       capacitors[i].charge = capacitors_[i].charge, capacitors[i].current = capacitors_[i].current;
   } else {
     guard_ = true;
     battery_emf_.assign(batteries.size(), 0.0);
   }
-  // The commands in flight belong to the coil, not to its network: they
-  // outlive an opened loop, which is when book_substep needs them.
+  // The current the coil's pull was made from belongs to the coil, not to
+  // its network: it outlives an opened loop, which is when book_substep
+  // needs it.
   // By slot, in linear time (a network may have thousands of coils).
   if (!coils_.empty()) {
     std::uint32_t top = 0;
@@ -477,7 +478,7 @@ void ElectricityResolver::build_network(const WorldView& view, double h) {
     for (Coil& c : coils)
       if (c.slot <= top && old_of_slot[c.slot] >= 0) {
         const Coil& old = coils_[std::size_t(old_of_slot[c.slot])];
-        c.force_acting = old.force_acting, c.force_next = old.force_next;
+        c.force_current = old.force_current;
       }
   }
   batteries_ = std::move(batteries);
@@ -546,9 +547,31 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   // substep's end, so that the trapezoidal rule integrates a piecewise
   // linear EMF exactly: its integral is the flux's change over the step, to
   // second order (docs/electricity.md "Induction").
+  //
+  // With a step mean (electricity_from_magnetism's -dPhi/dt over the step,
+  // the flux's change along the motion), the ramp is offset by a constant
+  // over the advance so that the EMF's mean over the step is exactly that:
+  // the flux the circuit integrates is then the flux the parts' motion
+  // changes, step after step (docs/magnetism.md "The coupling's timing"),
+  // and the trapezoidal rule's mean EMF times its mean current is the
+  // work of the coil's pull along the motion. The offset steps at the
+  // advance's start: the inductor's voltage takes the step (the branch's
+  // voltage is continuous), in the history as in the books.
   take_induced_emfs(access);
   emf_start_.resize(nc);
-  for (std::size_t i = 0; i < nc; ++i) emf_start_[i] = coils_[i].series_emf;
+  for (std::size_t i = 0; i < nc; ++i) {
+    Coil& c = coils_[i];
+    emf_start_[i] = c.series_emf - c.emf_offset;
+    const double mean = induced_mean_[i];
+    double offset = std::isfinite(mean) ? mean - 0.5 * (emf_start_[i] + induced_emf_[i]) : 0.0;
+    if (!std::isfinite(offset)) offset = 0.0;
+    const double jump = offset - c.emf_offset;
+    c.emf_offset = offset;
+    if (jump == 0) continue;
+    if (branch_on_loop_[nb + i]) c.v_l += jump;
+    c.series_emf += jump;
+    if (books_.emf0.size() > i) books_.emf0[i] += jump;
+  }
   // Mutual inductance: coil i's companion gains sum_j (2 M_ij / h)(I_j' - I_j).
   // The known part goes into its source; the unknown currents are solved by
   // superposition: with T the coupled coils' currents per unit source in each
@@ -673,7 +696,8 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
   for (int step = 0; step < config_.substeps; ++step) {
     const double along = double(step + 1) / config_.substeps;
     for (std::size_t i = 0; i < nc; ++i)
-      coils_[i].series_emf = emf_start_[i] + (induced_emf_[i] - emf_start_[i]) * along;
+      coils_[i].series_emf =
+          emf_start_[i] + (induced_emf_[i] - emf_start_[i]) * along + coils_[i].emf_offset;
     if (guard_) {
       substep(0.0), substep(0.0);
       guard_ = false;
@@ -682,16 +706,9 @@ void ElectricityResolver::advance(ResolverAccess& access, double dt) {
     }
   }
   if (config_.rates) write_current_rates(access);
-  // The command magnetism_from_electricity will send from this advance's
-  // end: the current predicted 1.5 steps on along its rate (one step with
-  // induction_order 2) (with rates),
-  // else the current (docs/magnetism.md "The coupling's timing").
-  for (Coil& c : coils_) {
-    const double di = c.inductance > 0 ? c.v_l / c.inductance : 0.0;
-    const double lead = config_.induction_order == 2 ? 1.0 : 1.5;
-    const double command = config_.rates ? c.current + lead * access.dt() * di : c.current;
-    c.force_acting = std::exchange(c.force_next, std::isfinite(command) ? command : 0.0);
-  }
+  // The current magnetic_forces makes the coil's pull from, for the rigid
+  // body's step the next advance spans (coils_from_current).
+  for (Coil& c : coils_) c.force_current = c.current;
   write_outputs(access);
   if (books_on_) book_light(access, dt);  // as the substeps' heat it is taken from
 }
@@ -791,16 +808,19 @@ void ElectricityResolver::book_substep(double trap, double hs) {
     books_.heat += r * i * i * hs;
     const double emf = mean(books_.emf0.size() > n ? books_.emf0[n] : c.series_emf, c.series_emf);
     books_.emf_work += emf * i * hs;
-    // A coil whose loop is open passes no current, but its pole strength,
-    // commanded before the loop opened, still pushes the parts for the
-    // steps it outlives the current (the coupling's delay). The EMF of the
-    // motion, -dPhi/dt at that strength, is that work; the energy is the
-    // field's that the opening released, so it is booked as the EMF's work
-    // on the parts and taken from the spark (switching), not left as the
-    // coupling's mismatch (docs/magnetism.md "An opened loop").
-    if (!branch_on_loop_[nb + n] && c.force_acting != 0) {
-      books_.emf_work += emf * c.force_acting * hs;
-      books_.switching += emf * c.force_acting * hs;
+    // A coil whose loop opened at this advance's start passes no current,
+    // but the rigid body's kick at the step's start was made from the
+    // current before the opening, and its work along the mean velocity is
+    // half this step's (the circuit's books pair each kick's work with the
+    // two steps around it: docs/energy.md "Magnetism"). Over a trapezoidal
+    // step the current would have gone from that current to 0: the EMF's
+    // work on the parts with the mean of the two, taken from the field the
+    // opening released (switching), not left as the coupling's mismatch
+    // (docs/magnetism.md "An opened loop").
+    if (!branch_on_loop_[nb + n] && c.force_current != 0) {
+      const double pulled = 0.5 * c.force_current;
+      books_.emf_work += emf * pulled * hs;
+      books_.switching += emf * pulled * hs;
     }
     const double i0 = books_.coil_current0[n];
     books_.switching += v_l * i * hs - 0.5 * c.inductance * (c.current * c.current - i0 * i0);
@@ -921,8 +941,8 @@ void ElectricityResolver::report_energy(const WorldView& view, EnergyReport& out
   out.store("capacitors (q^2 / 2C)", charges);
 }
 
-void ElectricityResolver::set_induced_emf(ObjectId coil, double emf) {
-  induced_queue_.emplace_back(coil, emf);
+void ElectricityResolver::set_induced_emf(ObjectId coil, double emf, double step_mean) {
+  induced_queue_.push_back({coil, emf, step_mean});
 }
 
 void ElectricityResolver::set_mutual_inductance(ObjectId a, ObjectId b, double henries) {
@@ -970,14 +990,17 @@ double ElectricityResolver::induced_emf(ObjectId coil) const {
 
 void ElectricityResolver::take_induced_emfs(const WorldView& view) {
   induced_emf_.assign(coils_.size(), 0.0);
+  induced_mean_.assign(coils_.size(), std::numeric_limits<double>::quiet_NaN());
   if (induced_queue_.empty()) return;
   // Slot -> coil, for this advance's commands (coils are few; commands one per coil).
   const PropertyStore& store = view.store();
   std::vector<std::int32_t> coil_of_slot(store.slot_count(), -1);
   for (std::size_t i = 0; i < coils_.size(); ++i) coil_of_slot[coils_[i].slot] = std::int32_t(i);
-  for (const auto& [id, emf] : induced_queue_) {
-    if (!store.alive(id) || id.index >= coil_of_slot.size() || !std::isfinite(emf)) continue;
-    if (const std::int32_t i = coil_of_slot[id.index]; i >= 0) induced_emf_[std::size_t(i)] = emf;
+  for (const InducedCommand& cmd : induced_queue_) {
+    const ObjectId id = cmd.coil;
+    if (!store.alive(id) || id.index >= coil_of_slot.size() || !std::isfinite(cmd.emf)) continue;
+    if (const std::int32_t i = coil_of_slot[id.index]; i >= 0)
+      induced_emf_[std::size_t(i)] = cmd.emf, induced_mean_[std::size_t(i)] = cmd.step_mean;
   }
   induced_queue_.clear();
 }
@@ -1150,7 +1173,9 @@ void register_electricity_resolver(PluginRegistry& registry) {
 // --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
 
 namespace {
-constexpr std::uint32_t kStateVersion = 1;
+// Version 2 (session 20) adds each coil's emf_offset; a version 1 state
+// reads as offsets of 0 (the ramp alone, as that build integrated it).
+constexpr std::uint32_t kStateVersion = 2;
 // Saved as raw bytes: every byte a field.
 struct SavedContact {
   ObjectId a, b;
@@ -1187,7 +1212,7 @@ bool ElectricityResolver::save_state(StateWriter& out) const {
   out.put<std::uint64_t>(h.coils.size());
   for (const Coil& c : h.coils) {
     out.put<std::uint64_t>(c.slot);
-    out.put(c.current), out.put(c.v_l), out.put(c.series_emf);
+    out.put(c.current), out.put(c.v_l), out.put(c.series_emf), out.put(c.emf_offset);
   }
   out.put<std::uint64_t>(h.capacitors.size());
   for (const Capacitor& c : h.capacitors) {
@@ -1198,9 +1223,11 @@ bool ElectricityResolver::save_state(StateWriter& out) const {
 }
 
 void ElectricityResolver::restore_state(StateReader& in) {
-  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
+  const auto version = in.get<std::uint32_t>();
+  if (version != kStateVersion && version != 1)
     throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
-                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
+                     std::to_string(version) + ", this build reads 1 and " +
+                     std::to_string(kStateVersion));
   auto damaged = [&](const std::string& what) {
     throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
   };
@@ -1236,6 +1263,7 @@ void ElectricityResolver::restore_state(StateReader& in) {
     Coil c{};
     c.slot = std::uint32_t(in.get<std::uint64_t>());
     c.current = in.get<double>(), c.v_l = in.get<double>(), c.series_emf = in.get<double>();
+    c.emf_offset = version >= 2 ? in.get<double>() : 0.0;
     saved->coils.push_back(c);
   }
   const auto capacitors = in.get<std::uint64_t>();
@@ -1252,7 +1280,7 @@ void ElectricityResolver::restore_state(StateReader& in) {
   auto finite = [](double v) { return std::isfinite(v); };
   bool ok = std::all_of(saved->battery_emf.begin(), saved->battery_emf.end(), finite);
   for (const Coil& c : saved->coils)
-    ok = ok && finite(c.current) && finite(c.v_l) && finite(c.series_emf);
+    ok = ok && finite(c.current) && finite(c.v_l) && finite(c.series_emf) && finite(c.emf_offset);
   for (const Capacitor& c : saved->capacitors) ok = ok && finite(c.charge) && finite(c.current);
   if (!ok) damaged("a battery's EMF, a coil's or a capacitor's state is not a finite number");
   restored_ = std::move(saved);
@@ -1276,7 +1304,8 @@ void ElectricityResolver::apply_restored() {
   battery_emf_ = saved->battery_emf;
   for (std::size_t i = 0; i < coils_.size(); ++i)
     coils_[i].current = saved->coils[i].current, coils_[i].v_l = saved->coils[i].v_l,
-    coils_[i].series_emf = saved->coils[i].series_emf;
+    coils_[i].series_emf = saved->coils[i].series_emf,
+    coils_[i].emf_offset = saved->coils[i].emf_offset;
   for (std::size_t i = 0; i < capacitors_.size(); ++i)
     capacitors_[i].charge = saved->capacitors[i].charge,
     capacitors_[i].current = saved->capacitors[i].current;

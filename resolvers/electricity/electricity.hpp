@@ -57,6 +57,7 @@
 #include <tuple>
 #include <unordered_map>
 #include <utility>
+#include <limits>
 #include <vector>
 
 #include "resolvers/electricity/mna.hpp"
@@ -228,7 +229,12 @@ class ElectricityResolver final : public Resolver {
   /// advance wins; an advance with no command has none. A command for an
   /// object that is not (or no longer) a coil, or with a non-finite value,
   /// does nothing.
-  void set_induced_emf(ObjectId coil, double emf);
+  /// `step_mean`: the EMF's mean over the advance, V (-dPhi/dt over the
+  /// step, the flux's change along the parts' predicted motion): the ramp
+  /// to `emf` is then offset by a constant so that its mean is this. NaN
+  /// (the default): the ramp alone.
+  void set_induced_emf(ObjectId coil, double emf,
+                       double step_mean = std::numeric_limits<double>::quiet_NaN());
   /// The induced EMF of coil `coil` at the end of the last advance, V (0 if none).
   double induced_emf(ObjectId coil) const;
   /// A resistor whose resistance something else decides (a photocell, from
@@ -317,14 +323,17 @@ class ElectricityResolver final : public Resolver {
     /// 1/2 L I^2 (J) released this advance because the coil lost its last
     /// loop with current flowing (the spark at the opening contact).
     double released = 0;
-    /// The current magnetism_from_electricity commands for this coil from
-    /// the last advance's end (force_next) and from the one before
-    /// (force_acting), A. The coupling's delay holds the pole strength of
-    /// the older one over the rigid body's step that this advance spans, so
-    /// a coil whose loop has just opened still pushes the parts with it for
-    /// up to two steps; book_substep books that work. The books only: it
-    /// changes no current.
-    double force_acting = 0, force_next = 0;
+    /// The part of series_emf held constant over the last advance, V: the
+    /// induced EMF's mean over the step (set_induced_emf's `step_mean`) less
+    /// the ramp's mean. State (saved): the next advance's ramp starts from
+    /// series_emf less it.
+    double emf_offset = 0;
+    /// The coil's current at the last advance's end, A: magnetic_forces
+    /// makes the coil's pull from it (coils_from_current), and the rigid
+    /// body kicks the parts with that pull over the step this advance spans.
+    /// A coil whose loop opens at this advance's start still pulls over it;
+    /// book_substep books that work (the books only: it changes no current).
+    double force_current = 0;
   };
   struct Capacitor {
     std::uint32_t slot;
@@ -378,8 +387,13 @@ class ElectricityResolver final : public Resolver {
   // Induction: the commands of the next advance, and per coil the EMF added
   // to its branch source in the last one (a separate term, kept out of the
   // companion model's own source).
-  std::vector<std::pair<ObjectId, double>> induced_queue_;
-  std::vector<double> induced_emf_;  // per coil, V: the value at the advance's end
+  struct InducedCommand {
+    ObjectId coil;
+    double emf, step_mean;
+  };
+  std::vector<InducedCommand> induced_queue_;
+  std::vector<double> induced_emf_;   // per coil, V: the value at the advance's end
+  std::vector<double> induced_mean_;  // per coil, V: its mean over the advance (NaN: none)
   std::vector<double> emf_start_;    // per coil, V: the series EMF at the advance's start (scratch)
   // set_resistance: the commands of the next advance, and the values the
   // network was built with (slot -> Ohm), compared each advance.

@@ -28,9 +28,10 @@ ElectricityFromMagnetism::Motion ElectricityFromMagnetism::motion(ObjectId id, s
   // already (then `earlier`, and nothing is recorded again).
   const bool again = latest.id == id && latest.step == step;
   const Seen& before = again ? earlier : latest;
-  Motion m{v, w, {}, {}};
+  Motion m{v, w, {}, {}, false};
   const bool usable = before.id == id && before.step + 1 == step && dt > 0;
   const bool changed = usable && (v != before.velocity || w != before.spin);
+  m.changed = changed;
   // Two steps in a row in which the rigid body moved the part: its velocity
   // changes smoothly, and the difference is the acceleration of the last
   // step. A velocity that changes once in n steps (the rigid body every n-th
@@ -74,6 +75,23 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
       out.put(std::uint8_t(seen->changed)), out.put(std::uint8_t(seen->rated));
     }
   }
+  // Session 20: the predictions, field by field (an older save ends here).
+  for (const Prediction* p : {&prediction_, &earlier_prediction_}) {
+    out.put(p->step), out.put(std::uint8_t(p->made));
+    out.put(std::uint64_t(p->pole_position.size()));
+    for (std::size_t i = 0; i < p->pole_position.size(); ++i) {
+      out.put(p->pole_position[i].x), out.put(p->pole_position[i].y);
+      out.put(p->pole_position[i].z), out.put(p->pole_body[i]);
+    }
+    out.put(std::uint64_t(p->bodies.size()));
+    for (const ObjectId& id : p->bodies) out.put(id.index), out.put(id.generation);
+    out.put(std::uint64_t(p->coils.size()));
+    for (const Prediction::Coil& c : p->coils) {
+      out.put(c.id.index), out.put(c.id.generation);
+      out.put(c.centre.x), out.put(c.centre.y), out.put(c.centre.z);
+      out.put(c.axis.x), out.put(c.axis.y), out.put(c.axis.z);
+    }
+  }
   return true;
 }
 
@@ -106,6 +124,46 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
                        std::to_string(slot));
     if (latest_.size() <= slot) latest_.resize(slot + 1), earlier_.resize(slot + 1);
     latest_[slot] = pair[0], earlier_[slot] = pair[1];
+  }
+  prediction_ = earlier_prediction_ = Prediction{};
+  if (in.remaining() == 0) return;  // a save from before the predictions: none
+  auto damaged = [&](const std::string& what) {
+    throw InputError("the saved state of stage 'electricity_from_magnetism' is damaged: " + what);
+  };
+  // Each record is at least 12 bytes: a count beyond what is left is damage,
+  // not a reason to allocate.
+  auto count = [&](std::size_t record) {
+    const auto n = in.get<std::uint64_t>();
+    if (n > in.remaining() / record) damaged("a count of " + std::to_string(n));
+    return std::size_t(n);
+  };
+  for (Prediction* p : {&prediction_, &earlier_prediction_}) {
+    p->step = in.get<std::uint64_t>();
+    p->made = in.get<std::uint8_t>() != 0;
+    const std::size_t poles = count(28);
+    p->pole_position.resize(poles), p->pole_body.resize(poles);
+    for (std::size_t i = 0; i < poles; ++i) {
+      Vec3& x = p->pole_position[i];
+      x.x = in.get<double>(), x.y = in.get<double>(), x.z = in.get<double>();
+      p->pole_body[i] = in.get<std::uint32_t>();
+      if (!is_finite(x)) damaged("a predicted pole position is not a finite number");
+    }
+    p->bodies.resize(count(8));
+    for (ObjectId& id : p->bodies) {
+      id.index = in.get<decltype(id.index)>();
+      id.generation = in.get<decltype(id.generation)>();
+    }
+    p->coils.resize(count(56));
+    for (Prediction::Coil& c : p->coils) {
+      c.id.index = in.get<decltype(c.id.index)>();
+      c.id.generation = in.get<decltype(c.id.generation)>();
+      c.centre.x = in.get<double>(), c.centre.y = in.get<double>(), c.centre.z = in.get<double>();
+      c.axis.x = in.get<double>(), c.axis.y = in.get<double>(), c.axis.z = in.get<double>();
+      if (!is_finite(c.centre) || !is_finite(c.axis))
+        damaged("a predicted coil position is not a finite number");
+    }
+    for (std::uint32_t b : p->pole_body)
+      if (b >= p->bodies.size()) damaged("a predicted pole names a part out of range");
   }
 }
 
@@ -215,12 +273,19 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   pole_velocity_.assign(poles.size(), Vec3{});
   pole_velocity_end_.assign(poles.size(), Vec3{});
   moved_poles_.assign(poles.begin(), poles.end());
+  // A part that moves but whose velocity did not change since the last
+  // apply was not stepped (the rigid body every n-th step): it stands and
+  // then jumps, and a prediction of it per step would make the circuit's
+  // flux follow a path the part does not take. No prediction is then made
+  // or used (the step's flux change starts from where the parts are).
+  bool unseen_motion = false;
   for (const MagneticBody& b : bodies) {
     if (b.pole_count != 2 || !store.alive(b.id)) continue;
     const std::uint32_t slot = b.id.index;
     const Vec3 v = velocity.value_or(slot, Vec3{}), w = spin.value_or(slot, Vec3{});
     if (!is_finite(v) || !is_finite(w)) continue;
-    const Motion m = second ? motion(b.id, step, dt, v, w, record) : Motion{v, w, {}, {}};
+    const Motion m = second ? motion(b.id, step, dt, v, w, record) : Motion{v, w, {}, {}, false};
+    if (second && !m.changed && (v != Vec3{} || w != Vec3{})) unseen_motion = true;
     const Vec3 v_step = v + m.acceleration * dt, w_step = w + m.angular * dt;
     const Vec3 v_end = v + m.acceleration * (1.5 * dt), w_end = w + m.angular * (1.5 * dt);
     const Vec3 centre = (poles[b.first_pole].position + poles[b.first_pole + 1].position) * 0.5;
@@ -232,6 +297,32 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       pole_velocity_end_[i] =
           second ? v_end + cross(w_end, moved_poles_[i].position - centre_end) : pole_velocity_[i];
     }
+  }
+
+  // The prediction the last apply made for where the parts are now (a
+  // repeated apply starts from the one before, as the first did), if the
+  // parts and their poles are the ones it was made for.
+  const bool repeat = prediction_.made && prediction_.step == step;
+  const Prediction& from = repeat ? earlier_prediction_ : prediction_;
+  bool predicted = second && !unseen_motion && from.made && from.step + 1 == step &&
+                   from.pole_position.size() == poles.size() &&
+                   from.bodies.size() == bodies.size();
+  for (std::size_t i = 0; predicted && i < poles.size(); ++i)
+    predicted = from.pole_body[i] == poles[i].body;
+  for (std::size_t b = 0; predicted && b < bodies.size(); ++b)
+    predicted = from.bodies[b] == bodies[b].id;
+  if (predicted) {
+    predicted_poles_.assign(poles.begin(), poles.end());
+    for (std::size_t i = 0; i < poles.size(); ++i)
+      predicted_poles_[i].position = from.pole_position[i];
+  }
+  Prediction made;
+  const bool keep = second && !repeat && record && !unseen_motion;
+  if (keep) {
+    made.step = step, made.made = true;
+    for (const Pole& p : moved_poles_)
+      made.pole_position.push_back(p.position), made.pole_body.push_back(p.body);
+    for (const MagneticBody& b : bodies) made.bodies.push_back(b.id);
   }
 
   std::vector<CoilGeometry> geometry;  // the coils with a usable geometry, for the mutual part
@@ -255,6 +346,8 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     const ObjectId id = store.id_at(slot);
     if (const MagneticBody* own = forces_.find(id)) coil.body = std::uint32_t(own - bodies.data());
     FluxLinkage f, f_end;
+    bool usable = false;
+    Vec3 moved_centre = coil.centre, moved_axis = coil.axis;
     if (is_finite(coil.centre) && is_finite(coil.axis) && is_finite(coil.velocity) &&
         is_finite(coil.angular_velocity) && std::isfinite(coil.linkage)) {
       f = coil_flux(poles, pole_velocity_, forces_.softening(), coil);
@@ -266,7 +359,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       // force's work is booked along (docs/magnetism.md "The coupling's
       // timing").
       const Motion m = second ? motion(id, step, dt, coil.velocity, coil.angular_velocity, record)
-                              : Motion{coil.velocity, coil.angular_velocity, {}, {}};
+                              : Motion{coil.velocity, coil.angular_velocity, {}, {}, false};
       CoilGeometry moved = coil;
       moved.centre = coil.centre + (coil.velocity + m.acceleration * dt) * dt;
       moved.axis = coil.axis + cross(coil.angular_velocity + m.angular * dt, coil.axis) * dt;
@@ -274,6 +367,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       moved.velocity = coil.velocity + m.acceleration * (1.5 * dt);
       moved.angular_velocity = coil.angular_velocity + m.angular * (1.5 * dt);
       f_end = coil_flux(moved_poles_, pole_velocity_end_, forces_.softening(), moved);
+      usable = true, moved_centre = moved.centre, moved_axis = moved.axis;
       if (coil.linkage != 0) {
         geometry.push_back(coil), geometry_id.push_back(id);
         check_coupling(world, id, coil, inductance[slot]);
@@ -283,8 +377,32 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     if (!std::isfinite(f_end.rate)) f_end = f;
     coils_.push_back({id, f});
     // Faraday and Lenz: the EMF opposes the change of the flux that links it.
-    target_.set_induced_emf(id, -f_end.rate);
+    if (!second || !usable || !std::isfinite(f_end.flux) || !std::isfinite(f.flux)) {
+      target_.set_induced_emf(id, -f_end.rate);
+      continue;
+    }
+    // Order 2: over the coming step the flux changes from where the last
+    // apply predicted the parts would be now to where they are predicted
+    // at the step's end, at the pole strengths of now. Its mean rate is the
+    // EMF's mean over the step; summed over the steps the circuit
+    // integrates the flux along the predicted path with no gap, and each
+    // step's miss of the real motion is taken up in the next (a difference
+    // of two predictions' errors, not the error itself).
+    double start = f.flux;
+    if (predicted) {
+      const auto it = std::find_if(from.coils.begin(), from.coils.end(),
+                                   [&](const Prediction::Coil& c) { return c.id == id; });
+      if (it != from.coils.end()) {
+        CoilGeometry then = coil;
+        then.centre = it->centre, then.axis = it->axis;
+        const double phi = coil_flux(predicted_poles_, pole_velocity_, forces_.softening(), then).flux;
+        if (std::isfinite(phi)) start = phi;
+      }
+    }
+    target_.set_induced_emf(id, -f_end.rate, -(f_end.flux - start) / dt);
+    if (keep) made.coils.push_back({id, moved_centre, moved_axis});
   }
+  if (keep) earlier_prediction_ = std::move(prediction_), prediction_ = std::move(made);
 
   // A transformer: every pair of coils shares M (the same model as the flux
   // above, so M_ab = M_ba); the electricity resolver adds -M dI/dt to each.

@@ -99,6 +99,7 @@ class ElectricityFromMagnetism : public Interaction {
   struct Motion {
     Vec3 velocity, spin;         ///< now (the rigid body's, after its step)
     Vec3 acceleration, angular;  ///< estimated from the last step (0 without history)
+    bool changed = false;        ///< the velocity differs from the apply one step before
   };
   /// The motion of `slot` (its velocity `v`, spin `w` now) at step `step`:
   /// records it (once per step; a second apply in the same step, the
@@ -141,8 +142,30 @@ class ElectricityFromMagnetism : public Interaction {
   std::vector<Vec3> pole_velocity_;
   std::vector<Vec3> pole_velocity_end_;  // the poles' velocities one step on (scratch)
   std::vector<Pole> moved_poles_;        // the poles one step on (scratch)
+  std::vector<Pole> predicted_poles_;    // the poles where the last apply put them (scratch)
   // Per slot: the last apply's velocities and the ones of the apply before.
   std::vector<Seen> latest_, earlier_;
+  /// Where an apply (induction_order 2) moved the parts on to for the
+  /// coming step's end: the poles' positions and their parts, and each
+  /// coil's centre and axis. The next apply takes the step's flux change
+  /// from there, not from where the parts really are, so that the circuit's
+  /// integrated EMF follows the parts' predicted path without a gap between
+  /// steps (docs/magnetism.md "The coupling's timing"). The last apply's,
+  /// and the one before (a repeated apply, the priming after a restore,
+  /// starts from that one, as the first did). Saved with the stage.
+  struct Prediction {
+    std::uint64_t step = 0;  ///< WorldView::step() of the apply that made it
+    bool made = false;
+    std::vector<Vec3> pole_position;
+    std::vector<std::uint32_t> pole_body;
+    std::vector<ObjectId> bodies;
+    struct Coil {
+      ObjectId id;
+      Vec3 centre, axis;
+    };
+    std::vector<Coil> coils;
+  };
+  Prediction prediction_, earlier_prediction_;
   bool first_apply_ = true;  // no apply yet (nor a restored history)
   std::optional<MagnetColumns::Ids> ids_;
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};

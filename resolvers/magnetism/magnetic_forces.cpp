@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
+#include <tuple>
 
 #include "resolvers/common/direct_kernel.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
@@ -147,6 +149,17 @@ void MagneticForces::update(const WorldView& world) {
   // element by element, a third of this function's own time at 10,000 parts
   // (perf, session 18).
   const std::size_t n_members = c.magnet.members().size();
+  // A coil driven by a circuit is as strong as the circuit's current now:
+  // the force of this update is the rigid body's kick at this instant, and
+  // the current of this instant is the one the circuit's books pay the
+  // induced EMF with (docs/magnetism.md "The coupling's timing"). Without
+  // the setting, or with rates (the multi-rate hold) or a coil time
+  // constant (the paper's "rapidly but not instantly"), the magnetism
+  // resolver's pole strength, commanded a step before.
+  std::optional<ColumnView<double>> circuit_current;
+  if (coils_from_current_ && !rates_)
+    if (const auto id = world.properties().find(prop::kCurrent))
+      circuit_current = world.column<double>(*id);
   frames.reserve(n_members), fixed_strength.reserve(n_members), iron_of.reserve(n_members);
   bodies_.reserve(n_members), poles_.reserve(2 * n_members);
   for (std::uint32_t slot : c.magnet.members()) {
@@ -168,7 +181,11 @@ void MagneticForces::update(const WorldView& world) {
     const MagnetKind kind = c.kind(slot);
     sheet_body_.push_back(near_field_ && kind == MagnetKind::Permanent ? 1 : 0);
     if (kind != MagnetKind::SoftIron) {
-      const double q = c.pole_strength.value_or(slot, 0.0);
+      double q = c.pole_strength.value_or(slot, 0.0);
+      if (kind == MagnetKind::Electromagnet && circuit_current && circuit_current->has(slot) &&
+          !(c.coil_time_constant.value_or(slot, 0.0) > 0))
+        q = coil_factor(c, slot).value_or(0.0) * c.turns.value_or(slot, 0.0) *
+            (*circuit_current)[slot];
       if (q != 0 && std::isfinite(q)) fixed_strength.back() = q;
     }
     if (kind == MagnetKind::SoftIron ||
@@ -464,6 +481,55 @@ void MagneticForces::update(const WorldView& world) {
   }
 }
 
+double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8_t> kinds) const {
+  // The poles of the permanent magnets present at both reports, paired by
+  // their part (its id) and their order within it (north, then south).
+  auto key_less = [](const std::pair<ObjectId, std::uint32_t>& a,
+                     const std::pair<ObjectId, std::uint32_t>& b) {
+    return std::tie(a.first.index, a.first.generation, a.second) <
+           std::tie(b.first.index, b.first.generation, b.second);
+  };
+  std::vector<std::pair<std::pair<ObjectId, std::uint32_t>, std::size_t>> now;
+  for (std::size_t i = 0; i < poles_.size(); ++i) {
+    const std::uint32_t b = poles_[i].body;
+    if (kinds[b] != 1) continue;
+    now.push_back({{bodies_[b].id, std::uint32_t(i - bodies_[b].first_pole)}, i});
+  }
+  std::sort(now.begin(), now.end(),
+            [&](const auto& a, const auto& b) { return key_less(a.first, b.first); });
+  const double eps2 = softening_ * softening_;
+  // Positions then and now of the matched poles, their strengths then, and
+  // a part number each (pairs within one part do no work on it).
+  struct Matched {
+    Vec3 then, now;
+    double q;
+    std::uint32_t part;
+  };
+  std::vector<Matched> m;
+  for (std::size_t i = 0; i < reported_poles_.size(); ++i) {
+    const std::uint32_t b = reported_poles_[i].body;
+    if (b >= reported_kinds_.size() || reported_kinds_[b] != 1 || !reported_shares_[i].permanent)
+      continue;
+    const std::pair<ObjectId, std::uint32_t> k{reported_bodies_[b],
+                                               std::uint32_t(i - reported_first_pole_[b])};
+    const auto it = std::lower_bound(now.begin(), now.end(), k, [&](const auto& e, const auto& key) {
+      return key_less(e.first, key);
+    });
+    if (it == now.end() || key_less(k, it->first)) continue;
+    m.push_back({reported_poles_[i].position, poles_[it->second].position,
+                 reported_shares_[i].fixed, reported_bodies_[b].index});
+  }
+  double work = 0;  // the fall of the pairs' energy at the strengths then
+  for (std::size_t i = 0; i < m.size(); ++i)
+    for (std::size_t j = i + 1; j < m.size(); ++j) {
+      if (m[i].part == m[j].part) continue;
+      const Vec3 r0 = m[j].then - m[i].then, r1 = m[j].now - m[i].now;
+      work += kMu0Over4Pi * m[i].q * m[j].q *
+              (1 / std::sqrt(dot(r0, r0) + eps2) - 1 / std::sqrt(dot(r1, r1) + eps2));
+    }
+  return work;
+}
+
 void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
   // Each pole's strength in two shares: the fixed one (a permanent magnet's,
   // or a coil's own current's) and the induced one (soft iron, a coil's core
@@ -541,6 +607,14 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
   for (std::size_t i = 0; same && i < poles_.size(); ++i)
     same = reported_poles_[i].body == poles_[i].body;
   double perm_work = 0, iron_work = 0;
+  if (reported_ && !same) {
+    // A coil switched on or off since (its poles come and go with its
+    // current), or a part came or went: the permanent magnets' poles are
+    // matched by their part, so that their pairs' work is still booked
+    // against the store's change (it was left out, and the store's change
+    // showed as the coupling's mismatch at every commutation of the motor).
+    perm_work = permanent_work_across_a_change(kinds);
+  }
   if (same) {
     perm_work = energy(reported_shares_, reported_poles_, 1) - permanent;
     iron_work = energy(reported_shares_, reported_poles_, 2) - energy(reported_shares_, poles_, 2);
@@ -555,8 +629,9 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
   out.transfer("magnetism", -(perm_work + iron_work));
   reported_poles_.assign(poles_.begin(), poles_.end());
   reported_shares_ = std::move(shares);
-  reported_bodies_.clear();
-  for (const MagneticBody& b : bodies_) reported_bodies_.push_back(b.id);
+  reported_bodies_.clear(), reported_first_pole_.clear();
+  for (const MagneticBody& b : bodies_)
+    reported_bodies_.push_back(b.id), reported_first_pole_.push_back(b.first_pole);
   reported_kinds_ = std::move(kinds);
   reported_ = true;
 }

@@ -5,7 +5,8 @@
 // Contract:
 //   reads     magnet, pole_strength, pole_separation, susceptibility, core_diameter,
 //             saturation_pole, position, orientation, shape, size, radius, length;
-//             the magnetism resolver (whose electromagnets it sees through pole_strength)
+//             the magnetism resolver (whose electromagnets it sees through pole_strength);
+//             current, turns, coil_factor, coil_time_constant (coils_from_current)
 //   writes    only its own data below; recomputed only when an input changed
 //   settings  softening (m, default 0.005): the Plummer length eps of the pole force law
 //             method ("auto" | "direct" | "tree" | "fmm", default "auto"): how pole
@@ -38,6 +39,13 @@
 //             finite solenoid's for the permanent magnets near it (force and
 //             flux: solenoid_field.hpp, docs/magnetism.md "A coil's near
 //             field"); off, every coil is its pole pair
+//             coils_from_current (default true): a coil that a circuit drives (its
+//             `current` published, no coil_time_constant) is coil_factor x turns x
+//             current of this update, the current of the instant the rigid body
+//             kicks with the force; off, and with rates, the magnetism resolver's
+//             pole_strength, commanded a step before (the paper's path; it needs
+//             the current predicted a step on: docs/magnetism.md "The coupling's
+//             timing")
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -126,10 +134,19 @@ class MagneticForces : public DerivedSet {
   static constexpr const char* kName = "magnetic_forces";
   static constexpr double kDefaultSoftening = 0.005;
 
+  /// `coils_from_current`: a coil that a circuit drives takes its pole
+  /// strength from the circuit's `current` of this update, not from the
+  /// magnetism resolver's `pole_strength` (commanded a step earlier; the
+  /// setting of the same name, docs/magnetism.md "The coupling's timing").
   explicit MagneticForces(double softening = kDefaultSoftening,
                           SummationOptions summation = {.method = Summation::Auto},
-                          bool rates = false, bool near_field = false)
-      : softening_(softening), summation_(summation), rates_(rates), near_field_(near_field) {}
+                          bool rates = false, bool near_field = false,
+                          bool coils_from_current = true)
+      : softening_(softening),
+        summation_(summation),
+        rates_(rates),
+        near_field_(near_field),
+        coils_from_current_(coils_from_current) {}
 
   void update(const WorldView& world) override;
   /// Its forces matter only to the stages that read them (the rigid body's
@@ -191,6 +208,7 @@ class MagneticForces : public DerivedSet {
   SummationOptions summation_;
   bool rates_ = false;
   bool near_field_ = false;  // the near_field setting (solenoid_field.hpp)
+  bool coils_from_current_ = true;  // the coils_from_current setting (constructor)
   multipole::Tree tree_;     // its memory, kept between updates
   bool used_tree_ = false;
   Summation used_method_ = Summation::Direct;
@@ -225,6 +243,11 @@ class MagneticForces : public DerivedSet {
   std::vector<Pole> reported_poles_;
   std::vector<Share> reported_shares_;
   std::vector<ObjectId> reported_bodies_;
+  std::vector<std::uint32_t> reported_first_pole_;  // per body of the last report
+  /// The permanent magnets' pairs' work since the last report when the
+  /// poles changed (a coil switched, a part came or went): their poles
+  /// matched by part (`kinds`: this report's, per body; 1 = permanent).
+  double permanent_work_across_a_change(std::span<const std::uint8_t> kinds) const;
   std::vector<std::uint8_t> reported_kinds_;
   bool reported_ = false;
   std::optional<MagnetColumns::Ids> ids_;  // resolved at the first update

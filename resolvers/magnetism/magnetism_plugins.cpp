@@ -52,7 +52,9 @@ void register_magnetism_resolver(PluginRegistry& registry) {
                .reads =
                    with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
                                prop::kSusceptibility, prop::kSaturationPole, prop::kCoreDiameter,
-                               prop::kPosition, prop::kOrientation, prop::kPoleStrengthRate}),
+                               prop::kPosition, prop::kOrientation, prop::kPoleStrengthRate,
+                               prop::kCurrent, prop::kTurns, prop::kCoilFactor,
+                               prop::kCoilTimeConstant}),
                .needs = {prop::kMagnet},
                .resolvers = {MagnetismResolver::kName},
                .doc =
@@ -61,7 +63,8 @@ void register_magnetism_resolver(PluginRegistry& registry) {
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
             s.check_known(MagneticForces::kName, {"softening", "method", "theta", "tolerance",
-                                                  "reuse_tree", "order", "rates", "near_field"});
+                                                  "reuse_tree", "order", "rates", "near_field",
+                                                  "coils_from_current"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
@@ -97,7 +100,8 @@ void register_magnetism_resolver(PluginRegistry& registry) {
             sum.reuse = s.boolean("reuse_tree", false);
             sum.tolerance = tolerance;
             return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false),
-                                                    s.boolean("near_field", false));
+                                                    s.boolean("near_field", false),
+                                                    s.boolean("coils_from_current", true));
           },
   });
 

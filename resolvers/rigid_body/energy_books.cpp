@@ -11,6 +11,14 @@ std::uint32_t EnergyBooks::account(const std::string& stage) {
   if (name.empty()) name = "loads from outside the stages";
   for (std::size_t i = 0; i < work.size(); ++i)
     if (work[i].first == name) return std::uint32_t(i);
+  // The coils' loads are paid by the circuits' EMF over a trapezoidal step
+  // with its mean current, I-bar dPhi; the kick of semi-implicit Euler at
+  // t_n, with the current of that instant, gives the kinetic energy
+  // h F.(v + v')/2: summed over the steps, the kicks' work along the mean
+  // velocity is the circuits' work but for the first and the last half
+  // step (docs/energy.md "Magnetism"), where along the displacement it
+  // differs by half the sum of dI dPhi, first order in the step.
+  along_mean.push_back(name == "magnetism");
   work.emplace_back(name, 0.0);
   return std::uint32_t(work.size() - 1);
 }
@@ -18,8 +26,12 @@ std::uint32_t EnergyBooks::account(const std::string& stage) {
 double EnergyBooks::book_load(const Applied& a, double along_step, double h, Vec3 v1, Vec3 w1) {
   const Vec3 torque = a.torque + cross(a.arm, a.force);
   const double mean = 0.5 * h * (dot(a.force, v0[a.body] + v1) + dot(torque, w0[a.body] + w1));
-  work[a.source].second += along_step;
-  integration += along_step - mean;
+  if (along_mean[a.source]) {
+    work[a.source].second += mean;
+  } else {
+    work[a.source].second += along_step;
+    integration += along_step - mean;
+  }
   return mean;
 }
 

@@ -29,6 +29,10 @@ struct EnergyBooks {
   /// Sums since the last report, J.
   double drag = 0, restitution = 0, integration = 0, contacts = 0;
   std::vector<std::pair<std::string, double>> work;  // per transfer name
+  /// Per transfer: booked along the mean velocity (the `magnetism` loads,
+  /// paired with the circuits' trapezoidal EMF work) instead of along the
+  /// step's displacement (a potential's loads, paired with its change).
+  std::vector<bool> along_mean;
   /// A load of this substep: its body (the engine's index), force, torque,
   /// lever arm (from the body's centre of mass at the substep's start), its
   /// account (index into work), and where it acts, in the world at the
@@ -47,10 +51,20 @@ struct EnergyBooks {
   /// that the stage on the other side can report the same name.
   std::uint32_t account(const std::string& stage);
   /// Books a load's work over a substep of length h: `along_step` its work
-  /// along the step's displacement (the transfer), and along the mean of
-  /// the body's velocities v0, w0 (at the substep's start) and v1, w1 (its
-  /// end). Returns the second, for close_substep.
+  /// along the step's displacement (the transfer, but for the accounts
+  /// booked along the mean), and along the mean of the body's velocities
+  /// v0, w0 (at the substep's start) and v1, w1 (its end). Returns the
+  /// second, for close_substep.
   double book_load(const Applied& a, double along_step, double h, Vec3 v1, Vec3 w1);
+  /// Books a load's work along a move of its body with no velocity (a
+  /// restitution pass's move to the time of impact, a sweep's move back):
+  /// with the integrator's share, or nothing for an account booked along
+  /// the mean velocity (such a move gives no kinetic energy).
+  void book_move(const Applied& a, double moved) {
+    if (along_mean[a.source]) return;
+    work[a.source].second += moved;
+    integration += moved;
+  }
   /// Closes a substep: the loads' work along the mean velocity (book_load's
   /// sum) against the kinetic energy's change over the step (after drag and
   /// collisions to the end): what it did not receive is the contacts' and

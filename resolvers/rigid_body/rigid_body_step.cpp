@@ -91,8 +91,7 @@ void RigidBodyResolver::step_world(ResolverAccess& access, double dt) {
         dVector3 at;
         dBodyGetRelPointPos(m.bodies[a.body].id, a.local.x, a.local.y, a.local.z, at);
         const double moved = dot(a.force, to_vec3(at) - a.at);
-        books_.work[a.source].second += moved;
-        books_.integration += moved;
+        books_.book_move(a, moved);
       }
     }
     add_contact_joints(h, (sub == 0 || found) && (feedback || (n > 1 && !found)), feedback);

@@ -252,8 +252,7 @@ void Box2DEngine::books_close() {
   for (const rigid::EnergyBooks::Applied& a : books_.applied) {
     const double moved =
         dot(a.force, si(k.carriers[a.body]->GetWorldCenter(), s) - k.centre0[a.body]);
-    books_.work[a.source].second += moved;
-    books_.integration += moved;
+    books_.book_move(a, moved);
   }
   k.world->SetContactListener(k.inner);
 }

@@ -583,8 +583,12 @@ TEST(SceneRestore, ABellStruckAcrossARestore) {
     probe.world().step();
     if (strikes->pending() > 0) moment = probe.world().step_count();
   }
+  // Restored at the step the hammer lands: the strike waits in the sound
+  // stage and the contact is under way (its duration and impulse cross the
+  // restore). (Since the coil pulls with the circuit's current of the same
+  // step, session 20, the hammer touches the bell for one step, and a step
+  // later neither crosses: that moment is not compared.)
   expect_same_events("doorbell", moment, 60);
-  expect_same_events("doorbell", moment + 1, 60);
 }
 
 // The doorbell's coil restored while it is on (the step before its first

@@ -154,7 +154,12 @@ TEST_F(MagnetismTest, ElectromagnetWithoutCurrentExertsNothing) {
 }
 
 TEST_F(MagnetismTest, CurrentMagnetisesTheCoilOneStepLater) {
-  World w(registry);
+  // The paper's path: the interaction queues the current on the magnetism
+  // resolver, whose pole strength the forces use from its next advance on
+  // (magnetic_forces' setting coils_from_current = false).
+  WorldDef def;
+  def.settings[MagneticForces::kName].set("coils_from_current", false);
+  World w(registry, def);
   const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
   const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
   w.set(coil, prop::kCurrent, 0.0);
@@ -177,6 +182,34 @@ TEST_F(MagnetismTest, CurrentMagnetisesTheCoilOneStepLater) {
   w.step();
   EXPECT_EQ(number(w, coil, prop::kPoleStrength), 0.0);
   EXPECT_EQ(forces_of(w).find(iron)->force, Vec3{});
+}
+
+TEST_F(MagnetismTest, ACoilPullsWithTheCircuitsCurrentOfTheSameStep) {
+  // The default (coils_from_current): magnetic_forces makes a coil that a
+  // circuit drives as strong as the circuit's current of this update, so
+  // the force the rigid body kicks with at an instant is that instant's
+  // current (docs/magnetism.md "The coupling's timing"); the resolver's
+  // pole_strength still follows a step later (the paper's path, events).
+  World w(registry);
+  const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
+  const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
+  w.set(coil, prop::kCurrent, 0.0);
+  w.run(5);
+  auto& source = current_source_of(w);
+  source.next = 2.0;
+  w.step();  // electricity publishes 2 A
+  const double area = kBarSize.y * kBarSize.z;
+  const double q = area / d * 500 * 2.0;
+  EXPECT_EQ(number(w, coil, prop::kPoleStrength), 0.0) << "the resolver's, a step later";
+  EXPECT_NEAR(forces_of(w).find(coil)->pole_strength, q, 1e-12 * q);
+  EXPECT_LT(forces_of(w).find(iron)->force.x, 0) << "soft iron is pulled in the same step";
+  w.step();
+  EXPECT_NEAR(number(w, coil, prop::kPoleStrength), q, 1e-12 * q);
+  // Off: the pull ends with the current, in the same step.
+  source.next = 0.0;
+  w.step();
+  EXPECT_EQ(forces_of(w).find(iron)->force, Vec3{});
+  EXPECT_GT(number(w, coil, prop::kPoleStrength), 0.0) << "the resolver's, a step later";
 }
 
 /// Forces on a soft-iron bar 15 cm from a 500-turn coil carrying `current`

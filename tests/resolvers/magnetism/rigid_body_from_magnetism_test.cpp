@@ -61,10 +61,11 @@ TEST(RigidBodyFromMagnetism, SoftIronIsPulledTowardAnEnergisedCoilAndReleased) {
   w.run(24);
   EXPECT_EQ(bell.position(), start) << "no current, no pull";
 
-  // Switch on: electricity publishes 3 A in step n; magnetism sets the pole
-  // strength in n+1; the rigid body moves the striker in n+2.
+  // Switch on: electricity publishes 3 A in step n, and magnetic_forces
+  // makes the coil's pull from it at once (coils_from_current); the rigid
+  // body moves the striker in n+1 (the method's one step from the
+  // interaction to the resolver).
   bell.source->next = 3.0;
-  w.step();
   w.step();
   EXPECT_EQ(bell.velocity(), Vec3{}) << "the force is still on its way";
   EXPECT_LT(forces_of(w).find(bell.striker)->force.x, 0);
@@ -79,10 +80,12 @@ TEST(RigidBodyFromMagnetism, SoftIronIsPulledTowardAnEnergisedCoilAndReleased) {
   // The pull grows as the striker closes in (inverse-square-like).
   const double f_near = -forces_of(w).find(bell.striker)->force.x;
 
-  // Switch off: one step for magnetism, one for the force already queued.
+  // Switch off: the pull ends in the step the current does; the rigid body
+  // still applies the force queued before it, in the next.
   bell.source->next = 0;
-  w.run(3);
+  w.step();
   EXPECT_EQ(forces_of(w).find(bell.striker)->force, Vec3{});
+  w.step();
   const Vec3 v_off = bell.velocity();
   bell.sim.run_for(0.05);
   EXPECT_NEAR(bell.velocity().x, v_off.x, 1e-12) << "no more pull: it coasts";
