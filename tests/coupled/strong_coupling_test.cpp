@@ -68,11 +68,17 @@ TEST(StrongCoupling, AMagnetDroppedIntoAClosedCoilAtTheDefaultStepIsReportedOnce
   EXPECT_DOUBLE_EQ(strong[0]->value("dt"), 1.0 / 240);
   EXPECT_LT(strong[0]->value("dt_suggested"), 1.0 / 240);
   EXPECT_DOUBLE_EQ(strong[0]->value("mass"), 0.015);
-  // Reported when the magnet is first thrown back (0.096 s, measured gain
-  // 0.67; the largest, 0.79, where it is thrown back deepest): it rises
-  // above its release later (0.163 m at 0.57 s).
+  // Reported when the magnet nears the coil (before 0.1 s, gain at least
+  // the threshold). Before session 20 the magnet was then thrown back and
+  // rose above its release (0.163 m at 0.57 s); since the coil pulls with the
+  // circuit's current of the kick's instant, its highest after 0.05 s is
+  // 0.0645 m at 1/240 s, against 0.0676 m in runs at 1/960 and 1/3840 s of
+  // either coupling (0.0742 and 0.0676 m new, 0.0675 and 0.0676 m before):
+  // the trajectory is right to 5 %, but the books are not (docs/energy.md
+  // "Limits"), so the report stays.
   EXPECT_LT(strong[0]->time, 0.1);
-  EXPECT_GT(d.highest_after_start, 0.08);
+  EXPECT_GT(d.highest_after_start, 0.055);
+  EXPECT_LT(d.highest_after_start, 0.075) << "not thrown back above its release";
 }
 
 TEST(StrongCoupling, AtHalfTheSuggestedStepTheMagnetIsNotThrownBack) {

@@ -564,21 +564,24 @@ TEST(EnergyBooks, MotorsBooksCloseAndTheResidueShrinksWithTheStep) {
   // the dynamics are second order and so is the residue, but from a larger
   // start: 1.80, 0.80, 0.186 % at 1/120, 1/240, 1/480 s (0.053 % at 1/960 s,
   // session 16), a mismatch that grows steadily through the run (the kick's
-  // current against the step's mean, (dt/2) dI/dt dPhi a step). Bounds 1 %
-  // and 0.25 % (were 0.2 % and 0.1 %), and the halving must cut it 2.5x.
+  // current against the step's mean, (dt/2) dI/dt dPhi a step).
+  // Session 20 (docs/energy.md "Session 20"): the coils pull with the
+  // circuit's current of the kick's instant, the rigid body books their work
+  // along the mean velocity (paired with the circuit's trapezoid), the EMF's
+  // mean over a step is the flux's change along the predicted path, and the
+  // permanent magnets' pairs are booked across a coil's switching: 0.080 %
+  // at 1/240 s, 0.016 % at 1/480 s (0.80 and 0.19 % before), and the
+  // stages' own books close to rounding (they left 0.16 % of the energy
+  // moved, magnetic_forces skipping every step whose poles a coil's
+  // switching changed).
   const SceneBooks coarse = scene_books("mods/motor", 1.0 / 240, 10);
   const SceneBooks fine = scene_books("mods/motor", 1.0 / 480, 10);
   for (const SceneBooks* m : {&coarse, &fine}) {
     EXPECT_GT(m->battery, 0.1);
     EXPECT_GT(m->coils_work, 0.05);
-    EXPECT_LT(std::abs(m->balance.unexplained()), 3e-3 * m->balance.moved);
+    EXPECT_LT(std::abs(m->balance.unexplained()), 1e-6 * m->balance.moved);
+    EXPECT_LT(m->balance.fraction(), 1e-3) << "the issue's 0.1 %";
   }
-  // The motor scene names induction_order = 2 since session 17: its residue
-  // is then 0.80 % at 1/240 s and 0.19 % at 1/480 s (second order, but
-  // larger at the scene's step; session 16's close note). Bounds were 2e-3
-  // and 1e-3; the order-2 coupling's books are the order2 helper's to close.
-  EXPECT_LT(coarse.balance.fraction(), 1e-2);
-  EXPECT_LT(fine.balance.fraction(), 2.5e-3);
   EXPECT_LT(fine.balance.fraction(), 0.4 * coarse.balance.fraction());
 }
 
@@ -596,9 +599,13 @@ TEST(EnergyBooks, MotorsBooksOnBox2DCloseAsOnOde) {
     EXPECT_GT(m->coils_work, 0.1);
     EXPECT_LT(std::abs(m->rigid_own), 1e-9 * m->balance.moved);
   }
-  EXPECT_LT(std::abs(coarse.magnetism_mismatch), 0.06 * coarse.coils_work);
-  EXPECT_LT(std::abs(fine.magnetism_mismatch), 0.03 * fine.coils_work);
-  EXPECT_LT(std::abs(fine.magnetism_mismatch), 0.5 * std::abs(coarse.magnetism_mismatch));
+  // Session 20: 0.21 and 0.11 mJ at 1/240 and 1/480 s (0.031 and 0.016 %
+  // of the energy moved; 6.8 and 1.6 mJ before), at the level of the run's
+  // own variation, so no halving is asked.
+  for (const SceneBooks* m : {&coarse, &fine}) {
+    EXPECT_LT(std::abs(m->magnetism_mismatch), 3e-3 * m->coils_work);
+    EXPECT_LT(m->balance.fraction(), 1e-3);
+  }
 }
 
 TEST(EnergyBooks, GeneratorsBooksCloseWithTheHandsWorkBooked) {
@@ -612,8 +619,8 @@ TEST(EnergyBooks, GeneratorsBooksCloseWithTheHandsWorkBooked) {
   // was the hand's work (103 % of the energy moved at 1/240 s). Now the two
   // sides of "drive" agree to rounding (a planar part turns by exactly h w
   // in ODE's step), and the residue is the magnetism coupling's mismatch
-  // alone: 0.48 % of the energy moved at 1/240 s, 0.18 % at 1/480 s (the
-  // coupling's order-2 error, the implicit13 helper's to close).
+  // alone: 0.48 % of the energy moved at 1/240 s, 0.18 % at 1/480 s before
+  // session 20's coupling, 0.017 % and 0.0073 % since.
   const SceneBooks coarse = scene_books("mods/generator", 1.0 / 240, 10);
   const SceneBooks fine = scene_books("mods/generator", 1.0 / 480, 10);
   for (const SceneBooks* g : {&coarse, &fine}) {
@@ -624,8 +631,8 @@ TEST(EnergyBooks, GeneratorsBooksCloseWithTheHandsWorkBooked) {
     // What is left is the coupling's: the residue is minus its mismatch.
     EXPECT_NEAR(g->balance.residue(), -g->magnetism_mismatch, 1e-6 * g->balance.moved);
   }
-  EXPECT_LT(coarse.balance.fraction(), 0.006);
-  EXPECT_LT(fine.balance.fraction(), 0.0025);
+  EXPECT_LT(coarse.balance.fraction(), 1e-3) << "the issue's 0.1 %";
+  EXPECT_LT(fine.balance.fraction(), 1e-3);
   EXPECT_LT(fine.balance.fraction(), 0.5 * coarse.balance.fraction());
 }
 
@@ -646,11 +653,12 @@ TEST(EnergyBooks, TheWeightsStringBooksWhatItTakesAndGives) {
 }
 
 TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
-  // Every stage's own books close. The electromagnet's pole strength follows
-  // its current two steps late (electricity -> magnetism_from_electricity ->
-  // magnetism -> magnetic_forces -> rigid_body_from_magnetism), so it pulls
-  // the armature for up to two steps after the interrupter opened the
-  // circuit, when no current flows and no EMF pays for it. That pull is the
+  // Every stage's own books close. Before session 20 the electromagnet's
+  // pole strength followed its current two steps late (electricity ->
+  // magnetism_from_electricity -> magnetism -> magnetic_forces ->
+  // rigid_body_from_magnetism), so it pulled the armature for up to two
+  // steps after the interrupter opened the circuit, when no current flows
+  // and no EMF pays for it. That pull is the
   // field's: electricity books it as the EMF's work at the commanded
   // strength, out of the energy the opening released (switching;
   // docs/magnetism.md "An opened loop"). Residue at 1/240 s: 0.075 % of the
@@ -666,8 +674,10 @@ TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
   // poles on its faces and the coil 6 mm up, 0.136, 0.135 and 0.156 %.
   // Session 17, induction order 2 the default and the pack's resistance
   // 0.6 ohm (mods/doorbell/layout.lua): 0.340, 0.326 and 0.070 % at 1/120,
-  // 1/240 and 1/480 s. Bounds 0.4 % at 1/240 s (was 0.2 %) and, new, 0.1 %
-  // at 1/480 s, where order 1 never met it.
+  // 1/240 and 1/480 s. Session 20: the coil pulls with the circuit's current
+  // of the kick's instant, so its pull ends with the current, and the step
+  // its loop opens in books half the kick's work (its mean-velocity share)
+  // from the released field: 0.030 % and 0.0056 % at 1/240 and 1/480 s.
   const SceneBooks d = scene_books("mods/doorbell", 1.0 / 240, 10);
   const SceneBooks fine = scene_books("mods/doorbell", 1.0 / 480, 10);
   for (const SceneBooks* b : {&d, &fine}) {
@@ -675,11 +685,11 @@ TEST(EnergyBooks, DoorbellBooksCloseWithTheOpenedCoilsPullBooked) {
     EXPECT_LT(std::abs(b->balance.unexplained()), 1e-5 * b->balance.moved);
     EXPECT_NEAR(b->balance.residue(), -b->balance.transfers, 1e-5 * b->balance.moved);
     // The core's induced share pulls the armature: booked (0.042 J in
-    // session 16; with the cored coil's share left out of the books, 0).
-    EXPECT_GT(b->iron_work, 0.02);
+    // session 16, 0.016 and 0.013 J in session 20, whose pull ends with the
+    // current; with the cored coil's share left out of the books, 0).
+    EXPECT_GT(b->iron_work, 0.008);
+    EXPECT_LT(b->balance.fraction(), 1e-3) << "the issue's 0.1 %";
   }
-  EXPECT_LT(d.balance.fraction(), 4e-3);
-  EXPECT_LT(fine.balance.fraction(), 1e-3);
 }
 
 TEST(EnergyBooks, IronsPullComesOutOfItsStore) {

@@ -62,7 +62,14 @@ Steady crank(double torque, bool open = false, double seconds = 10, double windo
 
 // Turned at three torques, the lamp lights, and its power grows as the
 // square of the speed (a resistive load on an EMF proportional to the
-// speed): the log-log slope of power against speed is 2 within 10 %.
+// speed) while the coils' reactance is small against the loop's 814 ohm:
+// the log-log slope of power against speed is 2 within 10 % from 3.4 to 4.9
+// rad/s (2.08). Faster, it falls below 2 (1.70 from 4.9 to 6.6 rad/s, the
+// same at 1/240 and 1/960 s): the coils' L/R is 9.7 ms and the flat coils'
+// EMF is peaked (docs/motor.md, k(theta)), so its harmonics, at 4, 12, 20
+// times the speed, meet a reactance near the resistance. (Before session
+// 20's coupling the slopes read 1.94 and 1.90 at 1/240 s, with the rotor
+// 5.5 % slow at the highest torque: the step's error hid the inductance.)
 TEST(Generator, LampPowerGrowsAsTheSquareOfTheCrankSpeed) {
   const double torques[] = {0.015, 0.02, 0.025};
   Steady s[3];
@@ -80,7 +87,12 @@ TEST(Generator, LampPowerGrowsAsTheSquareOfTheCrankSpeed) {
     const double slope =
         std::log(s[k].lamp_power / s[k - 1].lamp_power) / std::log(s[k].speed / s[k - 1].speed);
     std::printf("log-log slope %.3f\n", slope);
-    EXPECT_NEAR(slope, 2.0, 0.2);
+    if (k == 1) {
+      EXPECT_NEAR(slope, 2.0, 0.2);
+    } else {
+      EXPECT_LT(slope, 1.9) << "the coils' reactance takes a share at speed";
+      EXPECT_GT(slope, 1.5);
+    }
   }
 }
 
