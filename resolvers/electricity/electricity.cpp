@@ -1173,8 +1173,7 @@ void register_electricity_resolver(PluginRegistry& registry) {
 // --- save and restore (Stage::save_state; docs/saves.md) ------------------------------
 
 namespace {
-// Version 2 (session 20) adds each coil's emf_offset; a version 1 state
-// reads as offsets of 0 (the ramp alone, as that build integrated it).
+// Version 2 (session 20): each coil's emf_offset.
 constexpr std::uint32_t kStateVersion = 2;
 // Saved as raw bytes: every byte a field.
 struct SavedContact {
@@ -1223,11 +1222,9 @@ bool ElectricityResolver::save_state(StateWriter& out) const {
 }
 
 void ElectricityResolver::restore_state(StateReader& in) {
-  const auto version = in.get<std::uint32_t>();
-  if (version != kStateVersion && version != 1)
+  if (const auto v = in.get<std::uint32_t>(); v != kStateVersion)
     throw InputError("the saved state of stage '" + in.stage() + "' is of version " +
-                     std::to_string(version) + ", this build reads 1 and " +
-                     std::to_string(kStateVersion));
+                     std::to_string(v) + ", this build reads " + std::to_string(kStateVersion));
   auto damaged = [&](const std::string& what) {
     throw InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
   };
@@ -1263,7 +1260,7 @@ void ElectricityResolver::restore_state(StateReader& in) {
     Coil c{};
     c.slot = std::uint32_t(in.get<std::uint64_t>());
     c.current = in.get<double>(), c.v_l = in.get<double>(), c.series_emf = in.get<double>();
-    c.emf_offset = version >= 2 ? in.get<double>() : 0.0;
+    c.emf_offset = in.get<double>();
     saved->coils.push_back(c);
   }
   const auto capacitors = in.get<std::uint64_t>();

@@ -75,7 +75,7 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
       out.put(std::uint8_t(seen->changed)), out.put(std::uint8_t(seen->rated));
     }
   }
-  // Session 20: the predictions, field by field (an older save ends here).
+  // The predictions (session 20), field by field.
   for (const Prediction* p : {&prediction_, &earlier_prediction_}) {
     out.put(p->step), out.put(std::uint8_t(p->made));
     out.put(std::uint64_t(p->pole_position.size()));
@@ -126,7 +126,6 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
     latest_[slot] = pair[0], earlier_[slot] = pair[1];
   }
   prediction_ = earlier_prediction_ = Prediction{};
-  if (in.remaining() == 0) return;  // a save from before the predictions: none
   auto damaged = [&](const std::string& what) {
     throw InputError("the saved state of stage 'electricity_from_magnetism' is damaged: " + what);
   };
