@@ -812,7 +812,7 @@ void ElectricityResolver::book_substep(double trap, double hs) {
     // but the rigid body's kick at the step's start was made from the
     // current before the opening, and its work along the mean velocity is
     // half this step's (the circuit's books pair each kick's work with the
-    // two steps around it: docs/energy.md "Magnetism"). Over a trapezoidal
+    // two steps around it: docs/energy.md "Session 20"). Over a trapezoidal
     // step the current would have gone from that current to 0: the EMF's
     // work on the parts with the mean of the two, taken from the field the
     // opening released (switching), not left as the coupling's mismatch

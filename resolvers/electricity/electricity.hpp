@@ -32,11 +32,13 @@
 //         switch or resistor, value "current"; a coil's circuit_opened also
 //         "energy", the J its collapsing field released into the gap) when the
 //         element joins / leaves a closed loop.
-// Induction  set_induced_emf(coil, volts), queued by electricity_from_magnetism
-//         (resolvers/magnetism/): -dPhi/dt in series with the coil, the
-//         value at the end of the next advance; the EMF ramps linearly to it
-//         over the advance's substeps from the value in force at the last
-//         substep (docs/electricity.md "Induction").
+// Induction  set_induced_emf(coil, volts[, step_mean]), queued by
+//         electricity_from_magnetism (resolvers/magnetism/): -dPhi/dt in series
+//         with the coil, the value at the end of the next advance; the EMF
+//         ramps linearly to it over the advance's substeps from the value in
+//         force at the last substep, offset by a constant so that its mean
+//         over the advance is step_mean when one is given (docs/electricity.md
+//         "Induction", "The coupling's order").
 // Rates   with the setting `rates = true` (the default), a coil also publishes
 //         `current_rate`, dI/dt at the end of the advance (A/s), so that
 //         magnetism_from_electricity can pass the current on with its rate
@@ -51,13 +53,13 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
-#include <limits>
 #include <vector>
 
 #include "resolvers/electricity/mna.hpp"
@@ -394,7 +396,7 @@ class ElectricityResolver final : public Resolver {
   std::vector<InducedCommand> induced_queue_;
   std::vector<double> induced_emf_;   // per coil, V: the value at the advance's end
   std::vector<double> induced_mean_;  // per coil, V: its mean over the advance (NaN: none)
-  std::vector<double> emf_start_;    // per coil, V: the series EMF at the advance's start (scratch)
+  std::vector<double> emf_start_;  // per coil, V: the series EMF at the advance's start (scratch)
   // set_resistance: the commands of the next advance, and the values the
   // network was built with (slot -> Ohm), compared each advance.
   std::vector<std::pair<ObjectId, double>> resistance_queue_;

@@ -129,8 +129,8 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
   auto damaged = [&](const std::string& what) {
     throw InputError("the saved state of stage 'electricity_from_magnetism' is damaged: " + what);
   };
-  // Each record is at least 12 bytes: a count beyond what is left is damage,
-  // not a reason to allocate.
+  // `record`: the bytes of one record; a count beyond what is left is
+  // damage, not a reason to allocate.
   auto count = [&](std::size_t record) {
     const auto n = in.get<std::uint64_t>();
     if (n > in.remaining() / record) damaged("a count of " + std::to_string(n));
@@ -304,8 +304,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   const bool repeat = prediction_.made && prediction_.step == step;
   const Prediction& from = repeat ? earlier_prediction_ : prediction_;
   bool predicted = second && !unseen_motion && from.made && from.step + 1 == step &&
-                   from.pole_position.size() == poles.size() &&
-                   from.bodies.size() == bodies.size();
+                   from.pole_position.size() == poles.size() && from.bodies.size() == bodies.size();
   for (std::size_t i = 0; predicted && i < poles.size(); ++i)
     predicted = from.pole_body[i] == poles[i].body;
   for (std::size_t b = 0; predicted && b < bodies.size(); ++b)
@@ -394,7 +393,8 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       if (it != from.coils.end()) {
         CoilGeometry then = coil;
         then.centre = it->centre, then.axis = it->axis;
-        const double phi = coil_flux(predicted_poles_, pole_velocity_, forces_.softening(), then).flux;
+        const double phi =
+            coil_flux(predicted_poles_, pole_velocity_, forces_.softening(), then).flux;
         if (std::isfinite(phi)) start = phi;
       }
     }

@@ -512,9 +512,9 @@ double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8
       continue;
     const std::pair<ObjectId, std::uint32_t> k{reported_bodies_[b],
                                                std::uint32_t(i - reported_first_pole_[b])};
-    const auto it = std::lower_bound(now.begin(), now.end(), k, [&](const auto& e, const auto& key) {
-      return key_less(e.first, key);
-    });
+    const auto it =
+        std::lower_bound(now.begin(), now.end(), k,
+                         [&](const auto& e, const auto& key) { return key_less(e.first, key); });
     if (it == now.end() || key_less(k, it->first)) continue;
     m.push_back({reported_poles_[i].position, poles_[it->second].position,
                  reported_shares_[i].fixed, reported_bodies_[b].index});

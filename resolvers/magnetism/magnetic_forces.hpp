@@ -207,9 +207,9 @@ class MagneticForces : public DerivedSet {
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
-  bool near_field_ = false;  // the near_field setting (solenoid_field.hpp)
+  bool near_field_ = false;         // the near_field setting (solenoid_field.hpp)
   bool coils_from_current_ = true;  // the coils_from_current setting (constructor)
-  multipole::Tree tree_;     // its memory, kept between updates
+  multipole::Tree tree_;            // its memory, kept between updates
   bool used_tree_ = false;
   Summation used_method_ = Summation::Direct;
   double last_check_error_ = 0;

@@ -49,12 +49,11 @@ void register_magnetism_resolver(PluginRegistry& registry) {
   registry.add({
       .info = {.name = MagneticForces::kName,
                .kind = StageKind::Derived,
-               .reads =
-                   with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
-                               prop::kSusceptibility, prop::kSaturationPole, prop::kCoreDiameter,
-                               prop::kPosition, prop::kOrientation, prop::kPoleStrengthRate,
-                               prop::kCurrent, prop::kTurns, prop::kCoilFactor,
-                               prop::kCoilTimeConstant}),
+               .reads = with_shape({prop::kMagnet, prop::kPoleStrength, prop::kPoleSeparation,
+                                    prop::kSusceptibility, prop::kSaturationPole,
+                                    prop::kCoreDiameter, prop::kPosition, prop::kOrientation,
+                                    prop::kPoleStrengthRate, prop::kCurrent, prop::kTurns,
+                                    prop::kCoilFactor, prop::kCoilTimeConstant}),
                .needs = {prop::kMagnet},
                .resolvers = {MagnetismResolver::kName},
                .doc =
@@ -62,9 +61,9 @@ void register_magnetism_resolver(PluginRegistry& registry) {
       .create =
           [](PluginContext& ctx) {
             const PluginSettings& s = ctx.settings();
-            s.check_known(MagneticForces::kName, {"softening", "method", "theta", "tolerance",
-                                                  "reuse_tree", "order", "rates", "near_field",
-                                                  "coils_from_current"});
+            s.check_known(MagneticForces::kName,
+                          {"softening", "method", "theta", "tolerance", "reuse_tree", "order",
+                           "rates", "near_field", "coils_from_current"});
             const double eps = s.number("softening", MagneticForces::kDefaultSoftening);
             if (!(eps >= 0) || !std::isfinite(eps))
               throw InputError(s.where, "magnetic_forces: 'softening' must be a length >= 0 (m)");
