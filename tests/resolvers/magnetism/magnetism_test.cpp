@@ -140,12 +140,22 @@ TEST_F(MagnetismTest, SofteningKeepsTouchingPolesFinite) {
   EXPECT_GT(peak, 0.5 * bound);
 }
 
-TEST_F(MagnetismTest, ElectromagnetWithoutCurrentExertsNothing) {
-  World w(registry);
+/// A 500-turn coil at the origin and a soft-iron bar 15 cm along x, the
+/// coil's current published as 0 and the world run `steps` steps.
+struct CoilAndIron {
+  ObjectId coil, iron;
+};
+CoilAndIron coil_and_iron(World& w, std::uint64_t steps) {
   const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
   const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
   w.set(coil, prop::kCurrent, 0.0);
-  w.run(3);
+  w.run(steps);
+  return {coil, iron};
+}
+
+TEST_F(MagnetismTest, ElectromagnetWithoutCurrentExertsNothing) {
+  World w(registry);
+  const auto [coil, iron] = coil_and_iron(w, 3);
   EXPECT_EQ(number(w, coil, prop::kPoleStrength), 0.0);
   EXPECT_EQ(forces_of(w).find(iron)->force, Vec3{});
   EXPECT_EQ(forces_of(w).find(iron)->pole_strength, 0.0);
@@ -160,10 +170,7 @@ TEST_F(MagnetismTest, CurrentMagnetisesTheCoilOneStepLater) {
   WorldDef def;
   def.settings[MagneticForces::kName].set("coils_from_current", false);
   World w(registry, def);
-  const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
-  const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
-  w.set(coil, prop::kCurrent, 0.0);
-  w.run(5);
+  const auto [coil, iron] = coil_and_iron(w, 5);
   auto& source = current_source_of(w);
   source.next = 2.0;
   w.step();  // electricity publishes 2 A; the interaction queues it
@@ -191,10 +198,7 @@ TEST_F(MagnetismTest, ACoilPullsWithTheCircuitsCurrentOfTheSameStep) {
   // current (docs/magnetism.md "The coupling's timing"); the resolver's
   // pole_strength still follows a step later (the paper's path, events).
   World w(registry);
-  const ObjectId coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
-  const ObjectId iron = add_iron(w, "iron", {0.15, 0, 0}, 0, 1000);
-  w.set(coil, prop::kCurrent, 0.0);
-  w.run(5);
+  const auto [coil, iron] = coil_and_iron(w, 5);
   auto& source = current_source_of(w);
   source.next = 2.0;
   w.step();  // electricity publishes 2 A
