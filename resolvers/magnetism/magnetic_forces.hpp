@@ -34,10 +34,11 @@
 //             resolver's rates, the electromagnets' pole_strength_rate moves
 //             their strengths on in the same evaluation, so the loads' rates
 //             also carry a coil's rising or falling current
-//             near_field (default false): an air-cored coil's near field as a
+//             near_field (default true): an air-cored coil's near field as a
 //             finite solenoid's for the permanent magnets near it (force and
 //             flux: solenoid_field.hpp, docs/magnetism.md "A coil's near
-//             field"); off, every coil is its pole pair
+//             field"); false makes every coil its pole pair (a magnet inside
+//             a coil then links flux of the wrong sign)
 //   events    "magnetic_induction_unconverged" when the soft-iron solve falls back
 //             to the uncoupled estimate (text says why; emitted once per episode)
 //
@@ -128,7 +129,7 @@ class MagneticForces : public DerivedSet {
 
   explicit MagneticForces(double softening = kDefaultSoftening,
                           SummationOptions summation = {.method = Summation::Auto},
-                          bool rates = false, bool near_field = false)
+                          bool rates = false, bool near_field = true)
       : softening_(softening), summation_(summation), rates_(rates), near_field_(near_field) {}
 
   void update(const WorldView& world) override;
@@ -190,8 +191,8 @@ class MagneticForces : public DerivedSet {
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
-  bool near_field_ = false;  // the near_field setting (solenoid_field.hpp)
-  multipole::Tree tree_;     // its memory, kept between updates
+  bool near_field_ = true;  // the near_field setting (solenoid_field.hpp)
+  multipole::Tree tree_;    // its memory, kept between updates
   bool used_tree_ = false;
   Summation used_method_ = Summation::Direct;
   double last_check_error_ = 0;
