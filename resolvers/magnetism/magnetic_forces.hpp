@@ -35,10 +35,11 @@
 //             resolver's rates, the electromagnets' pole_strength_rate moves
 //             their strengths on in the same evaluation, so the loads' rates
 //             also carry a coil's rising or falling current
-//             near_field (default false): an air-cored coil's near field as a
+//             near_field (default true): an air-cored coil's near field as a
 //             finite solenoid's for the permanent magnets near it (force and
 //             flux: solenoid_field.hpp, docs/magnetism.md "A coil's near
-//             field"); off, every coil is its pole pair
+//             field"); false makes every coil its pole pair (a magnet inside
+//             a coil then links flux of the wrong sign)
 //             coils_from_current (default true): a coil that a circuit drives (its
 //             `current` published, no coil_time_constant) is coil_factor x turns x
 //             current of this update, the current of the instant the rigid body
@@ -140,7 +141,7 @@ class MagneticForces : public DerivedSet {
   /// setting of the same name, docs/magnetism.md "The coupling's timing").
   explicit MagneticForces(double softening = kDefaultSoftening,
                           SummationOptions summation = {.method = Summation::Auto},
-                          bool rates = false, bool near_field = false,
+                          bool rates = false, bool near_field = true,
                           bool coils_from_current = true)
       : softening_(softening),
         summation_(summation),
@@ -207,7 +208,7 @@ class MagneticForces : public DerivedSet {
   double softening_;
   SummationOptions summation_;
   bool rates_ = false;
-  bool near_field_ = false;         // the near_field setting (solenoid_field.hpp)
+  bool near_field_ = true;          // the near_field setting (solenoid_field.hpp)
   bool coils_from_current_ = true;  // the coils_from_current setting (constructor)
   multipole::Tree tree_;            // its memory, kept between updates
   bool used_tree_ = false;

@@ -99,7 +99,7 @@ void register_magnetism_resolver(PluginRegistry& registry) {
             sum.reuse = s.boolean("reuse_tree", false);
             sum.tolerance = tolerance;
             return std::make_unique<MagneticForces>(eps, sum, s.boolean("rates", false),
-                                                    s.boolean("near_field", false),
+                                                    s.boolean("near_field", true),
                                                     s.boolean("coils_from_current", true));
           },
   });

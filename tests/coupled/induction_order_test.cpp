@@ -14,8 +14,6 @@
 #include <vector>
 
 #include "resolvers/magnetism/magnet_parts.hpp"
-#include "resolvers/magnetism/magnetic_forces.hpp"
-#include "resolvers/magnetism/pole_model.hpp"
 #include "tests/scenes/analytic_scenes.hpp"
 #include "tests/scenes/rigid_scenes.hpp"
 
@@ -24,39 +22,23 @@ namespace {
 
 namespace an = scenes::analytic;
 
-// The magnet and coil of the work-precision scene (tests/scenes/analytic_scenes.cpp).
-constexpr double kQ = 100, kMagnetPoles = 0.017;
-constexpr double kTurns = 500, kCoilFactor = 0.06, kCoilPoles = 0.04;
-// The oscillator: a 50 g magnet on a 20 N/m spring (w0 = 20 rad/s), a coil
-// of 160 Ohm and 10 mH (L/R = 62.5 us, short against the period).
+// The oscillator: a 50 g magnet on a 20 N/m spring (w0 = 20 rad/s), the
+// work-precision scene's magnet and air-cored coil (analytic_scenes.hpp) with
+// 8000 turns, of 160 Ohm and 10 mH (L/R = 62.5 us, short against the period).
+// The coil's near field is a current sheet's (magnetic_forces' default): its
+// flux gradient k = dPhi/dx on the axis is largest 2.27 cm before the coil's
+// centre, 6.02 Wb/m (0.376 Wb/m for 500 turns; the pole pair's 6.26 Wb/m at
+// 1.54 cm for 500 turns was its near-field artefact), so the decay rate,
+// about k^2 / (2 m R) = 2.26 1/s, is close to the pole pair's 2.45.
+constexpr double kTurns = 8000;
 constexpr double kMass = 0.05, kStiffness = 20, kCoilR = 160, kCoilL = 0.01;
-constexpr double kAmplitude = 0.0005;  // m: the coupling constant varies by < 0.1 % over it
-
-/// The coil's flux linkage (Wb) with the magnet's centre at x on the axis,
-/// north towards +x (flux_linkage.hpp's formula, written out again).
-double flux(double x) {
-  const double eps = magnetism::MagneticForces::kDefaultSoftening;
-  auto psi = [&](double at) {
-    auto one = [&](double p, double q) { return q / std::sqrt((at - p) * (at - p) + eps * eps); };
-    return one(x + kMagnetPoles / 2, kQ) + one(x - kMagnetPoles / 2, -kQ);
-  };
-  return kCoilFactor * kTurns * magnetism::kMu0Over4Pi *
-         (psi(-kCoilPoles / 2) - psi(kCoilPoles / 2));
-}
-
-double gradient(double x) {
-  const double h = 1e-7;
-  return (flux(x + h) - flux(x - h)) / (2 * h);
-}
+constexpr double kAmplitude = 0.0005;  // m: the coupling constant varies by < 0.06 % over it
 
 /// Where the coupling constant k = dPhi/dx is largest on the coil's axis
-/// (x < 0), and k there: its first derivative is 0, so k is constant to
-/// second order in the swing.
+/// (x < 0), and k there, from the sheet's closed form on the axis: its first
+/// derivative is 0, so k is constant to second order in the swing.
 std::pair<double, double> steepest() {
-  double best = 0, at = 0;
-  for (double x = -0.1; x < 0; x += 1e-5)
-    if (std::abs(gradient(x)) > std::abs(best)) best = gradient(x), at = x;
-  return {at, best};
+  return an::induction_steepest(kTurns);
 }
 
 /// The decay rate of the linear eddy-damped oscillator
@@ -96,8 +78,8 @@ void build(Oscillator& o, double centre) {
   w.set(o.coil, magnetism::prop::kMagnet,
         EnumValue{std::int32_t(magnetism::MagnetKind::Electromagnet)});
   w.set(o.coil, magnetism::prop::kTurns, kTurns);
-  w.set(o.coil, magnetism::prop::kCoilFactor, kCoilFactor);
-  w.set(o.coil, magnetism::prop::kPoleSeparation, kCoilPoles);
+  w.set(o.coil, magnetism::prop::kCoilFactor, an::kInductionCoilFactor);
+  w.set(o.coil, magnetism::prop::kPoleSeparation, an::kInductionCoilPoles);
   w.set(o.coil, "inductance", kCoilL);
   w.set(o.coil, "resistance", kCoilR);
   const ObjectId wire = w.create("wire");
@@ -113,8 +95,8 @@ void build(Oscillator& o, double centre) {
   w.set(o.magnet, "mass", kMass);
   w.set(o.magnet, magnetism::prop::kMagnet,
         EnumValue{std::int32_t(magnetism::MagnetKind::Permanent)});
-  w.set(o.magnet, magnetism::prop::kPoleStrength, kQ);
-  w.set(o.magnet, magnetism::prop::kPoleSeparation, kMagnetPoles);
+  w.set(o.magnet, magnetism::prop::kPoleStrength, an::kInductionQ);
+  w.set(o.magnet, magnetism::prop::kPoleSeparation, an::kInductionPoles);
   // A spring of rest length 0.1 m to a point of the board 0.1 m along +x:
   // F = s (centre - x) along x.
   const ObjectId spring = w.create("spring");
@@ -167,9 +149,11 @@ TEST(InductionOrder, AnEddyDampedOscillatorDecaysAtTheClosedFormRate) {
     const double error = std::abs(gamma / exact - 1);
     std::printf("dt 1/%d: decay rate %.6f 1/s, %.4f %% off the closed form\n", rate, gamma,
                 100 * error);
-    // Measured (session 16): 2.47, 0.52, 0.117 % at 1/240, 1/480 and
-    // 1/960 s, falling 4.8 and 4.4 times a halving. With the coupling of sessions
-    // 14-15: 3.87, 1.32, 0.566 % (first order; it fails this test).
+    // Measured (session 20, the sheet's k, 8000 turns): 2.58, 0.536,
+    // 0.123 % at 1/240, 1/480 and 1/960 s, falling 4.8 and 4.4 times a
+    // halving (session 16, the pole pair's k, 500 turns: 2.47, 0.52,
+    // 0.117 %). With the coupling of sessions 14-15: 3.87, 1.32, 0.566 %
+    // (first order; it fails this test).
     if (rate == 960) {
       EXPECT_LT(error, 0.002);
     }
@@ -183,8 +167,10 @@ TEST(InductionOrder, AnEddyDampedOscillatorDecaysAtTheClosedFormRate) {
 TEST(InductionOrder, TheFlownMagnetsCurrentConvergesAtSecondOrder) {
   // The work-precision scene (bench/work_precision.cpp --induction) at the
   // default 4 substeps: halving the step must divide the current's error
-  // by more than 3 (order > 1.58). It was 0.17, 0.12, 0.074 of the peak at
-  // 1/480, 1/960, 1/1920 s (order 0.5 to 0.7).
+  // by more than 3 (order > 1.58). Order 1 (sessions 14-16) gave 0.17,
+  // 0.12, 0.074 of the peak at 1/480, 1/960, 1/1920 s (order 0.5 to 0.7).
+  // With the coil as a current sheet (4000 turns, from 0.4 m; session 20):
+  // 0.0012, 0.00030, 0.000077 (order 2.0).
   double previous = INFINITY;
   for (int rate : {480, 960, 1920}) {
     const an::Result r = an::run_induction(1.0 / rate, {.induction_order = 2});

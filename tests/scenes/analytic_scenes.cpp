@@ -8,6 +8,7 @@
 #include <ctime>
 #include <map>
 #include <numbers>
+#include <tuple>
 
 #include "resolvers/magnetism/flux_linkage.hpp"
 #include "resolvers/magnetism/magnet_parts.hpp"
@@ -143,6 +144,7 @@ WorldDef world_def(double dt, const Method& m, bool gravity) {
   def.settings["electricity"].set("induction_order", std::int64_t(m.induction_order));
   if (!gravity) def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
   if (m.engine != "rigid_body") def.use["rigid_body"] = m.engine;
+  if (m.near_field >= 0) def.settings["magnetic_forces"].set("near_field", m.near_field != 0);
   return def;
 }
 
@@ -382,32 +384,69 @@ Result run_magnets(double dt, const Method& m, double seconds) {
 
 namespace {
 
-constexpr double kInductionQ = 100, kInductionPoles = 0.017, kInductionMass = 0.5;
-constexpr double kInductionV0 = 0.5, kInductionX0 = -0.2;
-constexpr double kCoilTurns = 500, kCoilFactor = 0.06, kCoilPoles = 0.04;
+constexpr double kInductionMass = 0.5, kInductionV0 = 0.5, kInductionX0 = -0.4;
 constexpr double kCoilL = 0.01, kCoilR = 3.0, kLoopWireR = 0.01;
 
-/// The coil's flux linkage (Wb) with the magnet's centre at x on the axis,
-/// north towards +x: the pole model's potential difference between the
-/// coil's poles (flux_linkage.hpp), with the default softening.
-double induction_flux(double x) {
-  const double eps = magnetism::MagneticForces::kDefaultSoftening;
-  auto psi = [&](double at) {
-    auto one = [&](double p, double q) { return q / std::sqrt((at - p) * (at - p) + eps * eps); };
-    return one(x + kInductionPoles / 2, kInductionQ) + one(x - kInductionPoles / 2, -kInductionQ);
-  };
-  return kCoilFactor * kCoilTurns * magnetism::kMu0Over4Pi *
-         (psi(-kCoilPoles / 2) - psi(kCoilPoles / 2));
-}
-
-double induction_gradient(double x) {
-  const double h = 1e-6;
-  return (induction_flux(x + h) - induction_flux(x - h)) / (2 * h);
+/// The near zone's window on the axis at z (the coil's frame): 1 within l/2
+/// + 2a of the centre, fading to 0 over 3 more radii with the quintic
+/// smoothstep's complement, as solenoid_field.cpp's near_window has it.
+double near_zone(double z, double a, double l) {
+  const double s = (std::abs(z) - (l / 2 + 2 * a)) / (3 * a);
+  if (s <= 0) return 1;
+  if (s >= 1) return 0;
+  return 1 - s * s * s * (10 - 15 * s + 6 * s * s);
 }
 
 }  // namespace
 
-Result run_induction(double dt, const Method& m, double seconds) {
+double induction_flux(double x, double turns, bool near_field) {
+  const double l = kInductionCoilPoles, eps = magnetism::MagneticForces::kDefaultSoftening;
+  const double a = std::sqrt(kInductionCoilFactor * l / kPi);
+  const double mu0 = 4 * kPi * magnetism::kMu0Over4Pi;
+  // Per unit pole at z on the axis: the pole pair's potential difference
+  // between the coil's ends, softened like the force law ...
+  auto pair = [&](double z) {
+    auto inverse = [&](double end) { return 1 / std::sqrt((end - z) * (end - z) + eps * eps); };
+    return kInductionCoilFactor * turns * magnetism::kMu0Over4Pi *
+           (inverse(-l / 2) - inverse(l / 2));
+  };
+  // ... and the sheet's: each turn's flux through its disk, q mu0 Omega /
+  // (4 pi), integrated over the winding, Omega(u) = 2 pi sign(u) (1 - |u| /
+  // sqrt(u^2 + a^2)) for a turn u beyond the pole along the axis.
+  auto g = [&](double u) { return std::abs(u) - std::sqrt(u * u + a * a); };
+  auto sheet = [&](double z) { return mu0 * turns / (2 * l) * (g(l / 2 - z) - g(l / 2 + z)); };
+  double phi = 0;
+  for (const auto& [z, q] : {std::pair{x + kInductionPoles / 2, kInductionQ},
+                             std::pair{x - kInductionPoles / 2, -kInductionQ}}) {
+    const double w = near_field ? near_zone(z, a, l) : 0.0;
+    phi += q * (pair(z) + w * (sheet(z) - pair(z)));
+  }
+  if (near_field) {  // the magnet's own flux through the turns its segment crosses
+    const double inside =
+        std::min(x + kInductionPoles / 2, l / 2) - std::max(x - kInductionPoles / 2, -l / 2);
+    phi += mu0 * turns / l * kInductionQ * std::max(inside, 0.0);
+  }
+  return phi;
+}
+
+double induction_gradient(double x, double turns, bool near_field) {
+  const double h = 1e-7;
+  return (induction_flux(x + h, turns, near_field) - induction_flux(x - h, turns, near_field)) /
+         (2 * h);
+}
+
+std::pair<double, double> induction_steepest(double turns, bool near_field) {
+  double best = 0, at = 0;
+  for (int i = 1; i <= 10000; ++i) {
+    const double x = -1e-5 * i;
+    const double g = induction_gradient(x, turns, near_field);
+    if (std::abs(g) > std::abs(best)) best = g, at = x;
+  }
+  return {at, best};
+}
+
+Result run_induction(double dt, const Method& m, double seconds, double turns,
+                     std::vector<double>* current_out) {
   Sim s(world_def(dt, m, /*gravity=*/false));
   World& w = *s;
   const PropertyRegistry& reg = w.properties();
@@ -416,9 +455,9 @@ Result run_induction(double dt, const Method& m, double seconds) {
   w.set(coil, "position", Vec3{0, 0, 0});
   w.set(coil, magnetism::prop::kMagnet,
         EnumValue{std::int32_t(magnetism::MagnetKind::Electromagnet)});
-  w.set(coil, magnetism::prop::kTurns, kCoilTurns);
-  w.set(coil, magnetism::prop::kCoilFactor, kCoilFactor);
-  w.set(coil, magnetism::prop::kPoleSeparation, kCoilPoles);
+  w.set(coil, magnetism::prop::kTurns, turns);
+  w.set(coil, magnetism::prop::kCoilFactor, kInductionCoilFactor);
+  w.set(coil, magnetism::prop::kPoleSeparation, kInductionCoilPoles);
   w.set(coil, "inductance", kCoilL);
   w.set(coil, "resistance", kCoilR);
   const ObjectId wire = w.create("wire");
@@ -440,14 +479,16 @@ Result run_induction(double dt, const Method& m, double seconds) {
 
   const std::uint64_t n = steps_for(seconds, dt);
   const double r_loop = kCoilR + kLoopWireR;
-  // The reference depends on dt and seconds only: kept between calls (the
-  // work-precision bench repeats a run many times for its timing).
+  // The reference depends on dt, seconds, the turns and the flux model
+  // only: kept between calls (the work-precision bench repeats a run many
+  // times for its timing). The sheet's unless the scene turns it off.
+  const bool near_field = m.near_field != 0;
   struct Reference {
     std::vector<double> current;
     double peak = 0, v_end = 0;
   };
-  static std::map<std::pair<double, double>, Reference> cache;
-  Reference& cached = cache[{dt, seconds}];
+  static std::map<std::tuple<double, double, double, bool>, Reference> cache;
+  Reference& cached = cache[{dt, seconds, turns, near_field}];
   std::vector<double>& ref = cached.current;
   double& peak = cached.peak;
   double& v_end = cached.v_end;
@@ -459,7 +500,7 @@ Result run_induction(double dt, const Method& m, double seconds) {
     const double h = dt / sub;
     std::array<double, 3> y{kInductionX0, kInductionV0, 0.0};
     auto f = [&](const std::array<double, 3>& z) {
-      const double g = induction_gradient(z[0]);
+      const double g = induction_gradient(z[0], turns, near_field);
       return std::array<double, 3>{z[1], z[2] * g / kInductionMass,
                                    (-g * z[1] - r_loop * z[2]) / kCoilL};
     };
@@ -482,6 +523,7 @@ Result run_induction(double dt, const Method& m, double seconds) {
   run_timed(w, n, r, [&](std::uint64_t i) {
     const double current = std::get<double>(w.get(coil, "current"));
     r.error = std::max(r.error, std::abs(current - ref[i]));
+    if (current_out) current_out->push_back(current);
   });
   r.error /= peak;
   r.measured = read<Vec3>(w, magnet, "velocity").x;

@@ -8,6 +8,7 @@ world {
     ["gravity.uniform"] = { g = { 0, -9.81, 0 } },
     rigid_body = { solver = "step" },
     electricity = { induction_order = 2 },  -- as mods/generator names it (session 17)
+    magnetic_forces = { near_field = false },  -- as mods/generator names it (session 20)
   },
 }
 require "generator.layout" ()

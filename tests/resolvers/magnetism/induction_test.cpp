@@ -42,7 +42,7 @@ struct InductionScene {
     WorldDef d;
     d.dt = dt;
     d.settings["gravity.uniform"].set("g", g);
-    d.settings["magnetic_forces"].set("near_field", true);  // the coil as a finite solenoid
+    // The coil as a finite solenoid: magnetic_forces' default (near_field).
     return d;
   }
   /// The coil at the origin with its axis along `coil_axis_angle` (about z).
