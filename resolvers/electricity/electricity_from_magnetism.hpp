@@ -133,6 +133,16 @@ class ElectricityFromMagnetism : public Interaction {
   const std::vector<StrongCoupling>& strong_couplings() const { return strong_; }
   /// The largest per-step gain of any closed coil and free part, this run.
   double largest_coupling_gain() const { return largest_gain_; }
+  /// A step's chord of the flux that misses the trapezoid of its rates by
+  /// more than half the larger and more than this share of the flux is a
+  /// jump of the flux model, not motion (docs/magnetism.md "The coupling's
+  /// timing", session 20): that step's EMF is the ramp of rates alone.
+  static constexpr double kFluxJump = 0.05;
+  /// ... and by more than this, Wb (below it the fluxes are rounding: a part
+  /// at rest, a coil far away; an EMF of 2.4e-10 V at 1/240 s).
+  static constexpr double kFluxJumpFloor = 1e-12;
+  /// Steps x coils whose flux jumped (the ramp alone was sent), this run.
+  std::uint64_t flux_jumps() const { return flux_jumps_; }
 
  private:
   electricity::ElectricityResolver& target_;
@@ -171,6 +181,7 @@ class ElectricityFromMagnetism : public Interaction {
   PropertyRef inductance_{"inductance"}, velocity_{"velocity"}, spin_{"angular_velocity"};
   PropertyRef mass_{"mass"}, static_{"static"}, pinned_{"pinned"}, resistance_{"resistance"};
   std::vector<StrongCoupling> strong_;
+  std::uint64_t flux_jumps_ = 0;
   double largest_gain_ = 0;
   /// Checks coil `coil` (geometry `g`, its own inductance `inductance`)
   /// against every free part with poles; emits the event for a new pair.
