@@ -74,7 +74,9 @@ local defaults = {
   -- cores"). A retune that runs with pulled cores is not found yet: session
   -- 17 searched the bias magnet, the coils' gap and their spacing; some
   -- variants run from the bundled start, none starts from every put-down
-  -- (docs/motor.md, "Iron cores", the table and why).
+  -- (docs/motor.md, "Iron cores", the table and why). Session 20's two-phase
+  -- motor (live_cores = true, below) runs with them pulled but misses the
+  -- DC model ("Session 20: live cores").
   core_pulled = false,
   -- The coils' core: "iron" (the scene's) or "air" (a coreless coil, as
   -- session 18's search and the generator use), and the core's or bore's
