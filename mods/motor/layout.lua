@@ -192,19 +192,19 @@ return function(options)
   -- north pole.
   kit.battery { name = "battery", at = { C[1] + o.battery_at[1], C[2] + o.battery_at[2] }, emf = o.emf,
                 internal_resistance = o.internal_resistance }
-  kit.wire { name = "lead", from = "battery", from_terminal = 1, to = "slider" }
-  for _, s in ipairs(spokes) do
-    kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and "upper_coil" or "lower_coil", to_terminal = 1 }
-  end
-  kit.wire { name = "upper_return", from = "upper_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
-  kit.wire { name = "lower_return", from = "lower_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
-  if o.commutators == 2 then
-    kit.wire { name = "lead_b", from = "battery", from_terminal = 1, to = "slider_b" }
-    for _, s in ipairs(segments) do
-      kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and "coil_b1" or "coil_b2", to_terminal = 1 }
+  -- One phase: the battery's + to its slider, each contact the slider
+  -- touches to the coil it feeds (north: the first), both coils back to -.
+  local function phase(lead, slider, contacts, coil_n, coil_s, return_n, return_s)
+    kit.wire { name = lead, from = "battery", from_terminal = 1, to = slider }
+    for _, s in ipairs(contacts) do
+      kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and coil_n or coil_s, to_terminal = 1 }
     end
-    kit.wire { name = "b1_return", from = "coil_b1", from_terminal = 0, to = "battery", to_terminal = 0 }
-    kit.wire { name = "b2_return", from = "coil_b2", from_terminal = 0, to = "battery", to_terminal = 0 }
+    kit.wire { name = return_n, from = coil_n, from_terminal = 0, to = "battery", to_terminal = 0 }
+    kit.wire { name = return_s, from = coil_s, from_terminal = 0, to = "battery", to_terminal = 0 }
+  end
+  phase("lead", "slider", spokes, "upper_coil", "lower_coil", "upper_return", "lower_return")
+  if o.commutators == 2 then
+    phase("lead_b", "slider_b", segments, "coil_b1", "coil_b2", "b1_return", "b2_return")
   end
 
   o.hinge, o.tip, o.inertia, o.coil_radius = hinge, tip, inertia, r_coil
