@@ -82,7 +82,7 @@ TEST(MotorLiveCores, BackEmfIsBothPhasesMeanTorqueConstantWithoutTheSwitchOnDrop
   // each switch-on (each coil's current is built from zero four times a
   // turn), 8 L i / 2 pi a unit of speed. With the coils' 8.8 H that is 0.08
   // V s on 0.52 (docs/motor.md); with a tenth of it, a few per cent: what is
-  // left must be <k>. At 1/960 s: 0.502 against 0.519 (-3.2 %).
+  // left must be <k>. At 1/960 s: 0.502 against 0.518 (-3.1 %).
   const TorqueConstant t = measure_torque_constant(1.0, std::string(kLive) + ", ");
   std::string tenth;
   for (const char* coil : {"upper_coil", "lower_coil", "coil_b1", "coil_b2"})
