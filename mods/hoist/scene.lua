@@ -19,4 +19,4 @@ world {
 
 local hoist = require "hoist.layout" ()
 
-at(hoist.slider_release, "slider", { pinned = false })
+for _, slider in ipairs(hoist.sliders) do at(hoist.slider_release, slider, { pinned = false }) end

@@ -21,5 +21,5 @@ world {
 
 local motor = require "motor.layout" ()
 
-at(motor.slider_release, "slider", { pinned = false })
+for _, slider in ipairs(motor.sliders) do at(motor.slider_release, slider, { pinned = false }) end
 at(5.0, "battery", { emf = 0 })

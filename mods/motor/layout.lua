@@ -74,7 +74,9 @@ local defaults = {
   -- cores"). A retune that runs with pulled cores is not found yet: session
   -- 17 searched the bias magnet, the coils' gap and their spacing; some
   -- variants run from the bundled start, none starts from every put-down
-  -- (docs/motor.md, "Iron cores", the table and why).
+  -- (docs/motor.md, "Iron cores", the table and why). Session 20's two-phase
+  -- motor (live_cores = true, below) runs with them pulled but misses the
+  -- DC model ("Session 20: live cores").
   core_pulled = false,
   -- The coils' core: "iron" (the scene's) or "air" (a coreless coil, as
   -- session 18's search and the generator use), and the core's or bore's
@@ -84,14 +86,46 @@ local defaults = {
   -- below the axle, north up; it pulls a south spoke to the bottom, which
   -- puts a north spoke under the slider, where the torque is largest.
   bias_distance = 0.12, bias_grade = "ferrite", bias_length = 0.03, bias_width = 0.01,
+  -- false: no bias magnet.
+  bias = true,
+  -- A second phase (commutators = 2): a second ring of contacts on the axle
+  -- (brass bars, commutator_z out of the spokes' plane, turned by
+  -- commutator_offset degrees from the spokes), its own sliding contact
+  -- there, and two more coils: coil_b1 at phase_b_angle, fed by the ring's
+  -- bars that follow a north spoke, and coil_b2 45 degrees clockwise of it,
+  -- fed by the others; both face the rotor with north, as the first pair.
+  commutators = 1, commutator_z = 0.05, commutator_depth = 0.004, commutator_offset = 22.5, phase_b_angle = 270,
+  -- The battery's centre from the axle, m.
+  battery_at = { -0.115, -0.125 },
   -- The rotor as it is put down, turned by this many degrees from where the
   -- bias magnet holds it (tests: it settles back before the slider lands).
   rotor_angle = 0,
+  -- true: session 20's two-phase motor with live cores (below, `live`).
+  live_cores = false,
+}
+
+-- live_cores = true: session 20's study of a motor whose coils keep the
+-- kit's live cores (docs/motor.md, "Session 20: live cores"). Two phases:
+-- the spokes' pair of coils as above and a second pair at 270 and 225
+-- degrees, fed through a second commutator ring 22.5 degrees (half a spoke
+-- pitch) on, so that the four cores' 45-degree detents cancel (two cores
+-- stand 22.5 degrees, mod 45, from the other two) and the drive never falls
+-- to nothing at a hand-over: no bias magnet. The coils farther out (16 mm)
+-- and longer (70 mm, 8400 turns of the same wire) so that the drive beats
+-- what is left of the cogging. These values replace the defaults above; any
+-- option given still wins. Not the bundled motor: it misses the DC model
+-- (the docs say by how much and why).
+local live = {
+  commutators = 2, core_pulled = true, bias = false, battery_at = { 0.17, -0.15 },
+  coil_gap = 0.016, coil_length = 0.07, turns = 8400,
 }
 
 return function(options)
   local o = {}
   for k, v in pairs(defaults) do o[k] = v end
+  if options and options.live_cores then
+    for k, v in pairs(live) do o[k] = v end
+  end
   for k, v in pairs(options or {}) do
     if defaults[k] == nil then error("motor: no option '" .. tostring(k) .. "'", 2) end
     o[k] = v
@@ -106,9 +140,14 @@ return function(options)
   -- The rotor (mods/motor/rotor.lua): spoke i at -90 + 45 i degrees (the
   -- bottom first, going anticlockwise), south out for even i: S1 N1 S2 N2
   -- S3 N3 S4 N4, on a hub pinned by an oiled bearing.
-  local spokes, inertia = require "motor.rotor" (o)
+  if o.commutators ~= 1 and o.commutators ~= 2 then
+    error("motor: 'commutators' must be 1 or 2, got " .. tostring(o.commutators), 2)
+  end
+  o.commutator_z = o.commutators == 2 and o.commutator_z or nil
+  local spokes, inertia, segments = require "motor.rotor" (o)
 
-  -- The sliding contact, raised and held until it is let go.
+  -- The sliding contact, raised and held until it is let go (and the second
+  -- phase's, the same, commutator_z out of the plane).
   local p = rad(o.contact_angle)
   local along = { math.cos(p - math.pi / 2), math.sin(p - math.pi / 2) }  -- the tangent, rising to the right
   local out = { math.cos(p), math.sin(p) }
@@ -118,15 +157,26 @@ return function(options)
   local lean = math.atan2(along[2], along[1]) + o.slider_lift
   local inset = 0.004
   local from_hinge = o.slider_length / 2 - inset
-  kit.bar { name = "slider", material = "brass", length = o.slider_length, width = o.slider_width,
-            at = { hinge[1] + from_hinge * math.cos(lean), hinge[2] + from_hinge * math.sin(lean) },
-            angle = lean, pinned = o.slider_release > 0,
-            props = { friction = o.slider_friction, restitution = 0 } }
-  kit.hinge { name = "slider_hinge", a = "slider", anchor = hinge }
+  local function slider(name, z)
+    -- (Out of the plane, z ~= 0, it is held there by its hinge, not by the
+    -- play area's plane, which runs through z = 0.)
+    kit.bar { name = name, material = "brass", length = o.slider_length, width = o.slider_width,
+              at = { hinge[1] + from_hinge * math.cos(lean), hinge[2] + from_hinge * math.sin(lean), z },
+              angle = lean, pinned = o.slider_release > 0,
+              props = { friction = o.slider_friction, restitution = 0, planar = z == 0 } }
+    kit.hinge { name = name .. "_hinge", a = name, anchor = { hinge[1], hinge[2], z } }
+  end
+  slider("slider", 0)
+  if o.commutators == 2 then slider("slider_b", o.commutator_z) end
 
   -- The two electromagnets, radial, inner faces towards the rotor.
   local r_coil = tip + o.coil_gap + o.coil_length / 2
-  for _, c in ipairs({ { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }) do
+  local coils = { { "upper_coil", o.coil_angle }, { "lower_coil", -o.coil_angle } }
+  if o.commutators == 2 then
+    coils[3] = { "coil_b1", o.phase_b_angle }
+    coils[4] = { "coil_b2", o.phase_b_angle - 45 }
+  end
+  for _, c in ipairs(coils) do
     kit.coil { name = c[1], at = at(r_coil, c[2]), angle = rad(c[2]), length = o.coil_length,
                diameter = o.coil_diameter, turns = o.turns,
                wire_diameter = o.wire_diameter, core = o.core, core_diameter = o.core_diameter or nil,
@@ -134,21 +184,31 @@ return function(options)
   end
 
   -- The bias magnet, standing below the axle, north up.
-  kit.magnet { name = "bias", at = at(o.bias_distance, -90), angle = math.pi / 2, length = o.bias_length,
-               width = o.bias_width, grade = o.bias_grade, north = "+x", pinned = true }
+  if o.bias then kit.magnet { name = "bias", at = at(o.bias_distance, -90), angle = math.pi / 2, length = o.bias_length,
+               width = o.bias_width, grade = o.bias_grade, north = "+x", pinned = true } end
 
   -- The battery, below and to the left, and the wires. A coil's current
   -- from its terminal 1 to 0 makes its -x end (the one facing the rotor) a
   -- north pole.
-  kit.battery { name = "battery", at = { C[1] - 0.115, C[2] - 0.125 }, emf = o.emf,
+  kit.battery { name = "battery", at = { C[1] + o.battery_at[1], C[2] + o.battery_at[2] }, emf = o.emf,
                 internal_resistance = o.internal_resistance }
-  kit.wire { name = "lead", from = "battery", from_terminal = 1, to = "slider" }
-  for _, s in ipairs(spokes) do
-    kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and "upper_coil" or "lower_coil", to_terminal = 1 }
+  -- One phase: the battery's + to its slider, each contact the slider
+  -- touches to the coil it feeds (north: the first), both coils back to -.
+  local function phase(lead, slider, contacts, coil_n, coil_s, return_n, return_s)
+    kit.wire { name = lead, from = "battery", from_terminal = 1, to = slider }
+    for _, s in ipairs(contacts) do
+      kit.wire { name = s.name .. "_wire", from = s.name, to = s.north and coil_n or coil_s, to_terminal = 1 }
+    end
+    kit.wire { name = return_n, from = coil_n, from_terminal = 0, to = "battery", to_terminal = 0 }
+    kit.wire { name = return_s, from = coil_s, from_terminal = 0, to = "battery", to_terminal = 0 }
   end
-  kit.wire { name = "upper_return", from = "upper_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
-  kit.wire { name = "lower_return", from = "lower_coil", from_terminal = 0, to = "battery", to_terminal = 0 }
+  phase("lead", "slider", spokes, "upper_coil", "lower_coil", "upper_return", "lower_return")
+  if o.commutators == 2 then
+    phase("lead_b", "slider_b", segments, "coil_b1", "coil_b2", "b1_return", "b2_return")
+  end
 
   o.hinge, o.tip, o.inertia, o.coil_radius = hinge, tip, inertia, r_coil
+  -- The sliding contacts a scene lets go at slider_release.
+  o.sliders = o.commutators == 2 and { "slider", "slider_b" } or { "slider" }
   return o
 end

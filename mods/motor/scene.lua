@@ -24,4 +24,4 @@ world {
 
 local motor = require "motor.layout" ()
 
-at(motor.slider_release, "slider", { pinned = false })
+for _, slider in ipairs(motor.sliders) do at(motor.slider_release, slider, { pinned = false }) end

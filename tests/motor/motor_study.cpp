@@ -13,6 +13,13 @@
 //                            and the coreless motor's DC fit and mean electrical
 //                            torque at three steps (docs/motor.md, "Session 19");
 //                            COIL_H: the coreless coils' inductance set to it
+//   motor_study --live-cores [LAYOUT [LUA]]
+//                            session 20's two-phase motor with live cores
+//                            (motor.layout's live_cores = true), or the
+//                            motor.layout options LAYOUT (Lua), LUA appended
+//                            to the scene (e.g. at(...) lines): speed against
+//                            the battery and the load at 1/240 and 1/960 s,
+//                            the DC fit, <k>, starts from put-downs
 //
 // The SVG is written here, by hand: four panels of points with bars, no
 // plotting package needed.
@@ -287,13 +294,122 @@ int torque_constant_study(const std::filesystem::path& out, double inductance) {
   return 0;
 }
 
+/// A motor.layout variant as a scene file (the scene's settings, every slider
+/// let go at slider_release), written to the temp folder; `layout` is Lua.
+std::filesystem::path variant_scene(const std::string& layout, const std::string& tag,
+                                    const std::string& extra = "") {
+  namespace fs = std::filesystem;
+  const fs::path f = fs::temp_directory_path() /
+                     ("alloy_motor_variant_" + std::to_string(::getpid()) + "_" + tag + ".lua");
+  std::ofstream(f) << "world { dt = 1 / 240, seconds = 10, settings = { [\"gravity.uniform\"] = "
+                      "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" }, "
+                      "electricity = { induction_order = 2 } } }\n"
+                      "local m = require \"motor.layout\" { "
+                   << layout
+                   << " }\nfor _, s in ipairs(m.sliders) do at(m.slider_release, s, { pinned = "
+                      "false }) end\n"
+                   << extra << "\n";
+  return f;
+}
+
+/// One steady point of a variant: mean speed and current from t0 to t1, and
+/// coil switch-ons per turn (8 with clean hand-overs of one commutator, 16
+/// with two).
+struct VariantPoint {
+  DcPoint dc;
+  double switches_per_turn = NAN;
+};
+
+VariantPoint variant_point(const std::filesystem::path& scene, double emf, double load, double dt,
+                           double t0 = 2.0, double t1 = 6.0) {
+  const RunResult r =
+      run_motor(scene.string(), {.dt = dt, .seconds = t1, .emf = emf, .friction = load});
+  VariantPoint p{{emf, load, mean_speed(r, t0, t1), mean_between(r, r.coil_current, t0, t1)}};
+  std::size_t on = 0;
+  for (const Record* e : r.of("electromagnet_on"))
+    if (e->time >= t0 && e->time < t1 && std::abs(e->value("current")) > 1e-3) ++on;
+  const double turns = (r.angle[r.at(t1)] - r.angle[r.at(t0)]) / (2 * std::numbers::pi);
+  if (turns > 0.5) p.switches_per_turn = double(on) / turns;
+  return p;
+}
+
+/// Session 20 (docs/motor.md, "Session 20: live cores"): a motor.layout
+/// variant (default: live_cores = true) measured as the tests measure the
+/// scene: speed against the battery and the load at the scene's step and at
+/// 1/960 s, the DC model fitted from the speeds (k, R against the loop's R as
+/// built, T0), (V - I R) / w against <k> from k(theta), and the start from
+/// rotors put down out of place.
+int variant_study(const std::string& layout, const std::string& extra) {
+  namespace fs = std::filesystem;
+  const fs::path scene = variant_scene(layout, "study", extra);
+  const double R = with_scene(
+      scene.string(), [](lua::LoadedScene& built) { return loop_resistance(*built.world); });
+  const std::string more = layout.empty() ? "" : layout + ", ";
+  const TorqueConstant t = measure_torque_constant(0.5, more);
+  std::cout << "layout { " << layout << " }: loop " << num(R) << " ohm; k(theta): <k> "
+            << num(t.mean) << " V s, from " << num(*std::min_element(t.k.begin(), t.k.end()))
+            << " to " << num(*std::max_element(t.k.begin(), t.k.end())) << ", var(k)/<k>^2 "
+            << num(t.dc_resistance_factor() - 1) << "\n";
+  for (double dt : {1.0 / 240, 1.0 / 960}) {
+    std::cout << "dt 1/" << num(1 / dt) << ":\n";
+    std::vector<DcPoint> fit_points;
+    for (const auto& [v, load] : {std::pair{4.5, 0.002},
+                                  {5.0, 0.002},
+                                  {6.0, 0.002},
+                                  {7.0, 0.002},
+                                  {7.5, 0.002},
+                                  {6.0, 0.003},
+                                  {6.0, 0.004},
+                                  {6.0, 0.005},
+                                  {6.0, 0.007}}) {
+      const VariantPoint p = variant_point(scene, v, load, dt);
+      const bool turns = p.dc.speed > 0.5;
+      // The test's five points, where the motor turns.
+      const bool test_point = (load == 0.002 && (v == 4.5 || v == 6.0 || v == 7.5)) ||
+                              (v == 6.0 && (load == 0.004 || load == 0.007));
+      if (turns && test_point) fit_points.push_back(p.dc);
+      std::cout << "  " << num(v) << " V, " << num(1e3 * load) << " mN m: " << num(p.dc.speed)
+                << " rad/s, " << num(1e3 * p.dc.current) << " mA, switch-ons a turn "
+                << num(p.switches_per_turn, 3);
+      if (turns) std::cout << ", (V - I R) / w " << num((v - p.dc.current * R) / p.dc.speed);
+      std::cout << (test_point ? " [fit]" : "") << "\n";
+    }
+    if (fit_points.size() >= 3) {
+      const DcFit f = fit_dc_model(fit_points);
+      double worst = 0;
+      for (const DcPoint& p : fit_points)
+        worst = std::max(worst, std::abs(p.speed - f.speed(p.emf, p.load)) / p.speed);
+      std::cout << "  DC fit (" << fit_points.size() << " points): k " << num(f.k) << " V s (<k> "
+                << num(t.mean) << "), R " << num(f.R) << " ohm (loop " << num(R) << ": "
+                << num(100 * (f.R / R - 1), 3) << " %), T0 " << num(1e3 * f.T0)
+                << " mN m; worst point " << num(100 * worst, 3) << " % off\n";
+    }
+  }
+  std::cout << "put down out of place (slider let go at 3 s; mean speed 5 s to 8 s):\n";
+  for (int degrees : {-40, -20, -10, 10, 20, 40}) {
+    const fs::path f = variant_scene(
+        more + "rotor_angle = " + std::to_string(degrees) + ", slider_release = 3", "put", extra);
+    const RunResult r = run_motor(f.string(), {.seconds = 8.0});
+    fs::remove(f);
+    std::cout << "  " << degrees << " deg: " << num(mean_speed(r, 5.0, 8.0)) << " rad/s\n";
+  }
+  fs::remove(scene);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   if ((argc == 3 || argc == 4) && std::string(argv[1]) == "--torque-constant")
     return torque_constant_study(argv[2], argc == 4 ? std::stod(argv[3]) : 0.0);
+  if (argc >= 2 && argc <= 4 && std::string(argv[1]) == "--live-cores")
+    return variant_study(argc >= 3 ? argv[2] : "live_cores = true", argc == 4 ? argv[3] : "");
   if (argc != 2) {
     std::cerr
         << "usage: motor_study OUT_DIR   (writes OUT_DIR/motor_tolerance.csv and .svg)\n"
-           "       motor_study --torque-constant OUT_DIR [COIL_H]   (k(theta), docs/motor.md)\n";
+           "       motor_study --torque-constant OUT_DIR [COIL_H]   (k(theta), docs/motor.md)\n"
+           "       motor_study --live-cores [LAYOUT [LUA]]   (session 20's two-phase motor, or "
+           "LAYOUT;\n"
+           "                                                  LUA: more of the scene, e.g. "
+           "at(...))\n";
     return 2;
   }
   const std::filesystem::path out = argv[1];

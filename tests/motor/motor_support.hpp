@@ -93,7 +93,11 @@ inline RunResult run_motor(const std::string& scene, const RunOptions& options =
   if (options.dt) world.set_dt(*options.dt);
   const ObjectId battery = world.find("battery"), bearing = world.find("bearing"),
                  axle = world.find("axle");
-  const ObjectId coils[2] = {world.find("upper_coil"), world.find("lower_coil")};
+  // The coils of both phases (the second, coil_b1 and coil_b2, when the
+  // layout has a second commutator: docs/motor.md, "Session 20").
+  std::vector<ObjectId> coils;
+  for (const char* name : {"upper_coil", "lower_coil", "coil_b1", "coil_b2"})
+    if (const ObjectId c = world.find(name); !c.is_null()) coils.push_back(c);
   if (options.emf) world.set(battery, "emf", *options.emf);
   if (options.emf_scale != 1)
     world.set(battery, "emf", get_number(world, "battery", "emf") * options.emf_scale);
@@ -262,11 +266,21 @@ inline const std::vector<DcPoint>& scene_dc_points() {
 }
 
 /// The loop's resistance as built: the coil, the battery's inside and the
-/// three wires of one circuit (lead, a spoke's wire, a return), ohm.
+/// three wires of one circuit (lead, a spoke's wire, a return), ohm. With two
+/// phases (a second commutator) one circuit of each is closed at a time, in
+/// parallel across the battery: V = k w + R_bat I + R_branch I / 2 for the
+/// total current I when the two branches carry alike, so the DC model's R is
+/// the battery's inside plus the two branches in parallel.
 inline double loop_resistance(World& w) {
-  return get_number(w, "upper_coil", "resistance") +
-         get_number(w, "battery", "internal_resistance") + get_number(w, "lead", "resistance") +
-         get_number(w, "spoke_N1_wire", "resistance") + get_number(w, "upper_return", "resistance");
+  const double a = get_number(w, "upper_coil", "resistance") + get_number(w, "lead", "resistance") +
+                   get_number(w, "spoke_N1_wire", "resistance") +
+                   get_number(w, "upper_return", "resistance");
+  const double battery = get_number(w, "battery", "internal_resistance");
+  if (w.find("coil_b1").is_null()) return a + battery;
+  const double b = get_number(w, "coil_b1", "resistance") + get_number(w, "lead_b", "resistance") +
+                   get_number(w, "segment_n1_wire", "resistance") +
+                   get_number(w, "b1_return", "resistance");
+  return battery + a * b / (a + b);
 }
 inline double loop_resistance() {
   return with_scene(source(kScene).string(),
@@ -302,6 +316,7 @@ constexpr double kBearingDrag = 9e-5;
 /// rotor moves by 1e-10 rad in it).
 struct CoilFluxes {
   double upper = 0, lower = 0;
+  double b1 = NAN, b2 = NAN;  ///< the second phase's coils (NAN: one phase)
 };
 
 /// `layout` is more of motor.layout's options, as Lua ("coil_gap = 0.002, ");
@@ -322,7 +337,14 @@ inline CoilFluxes coil_fluxes(double degrees, const std::string& layout = "") {
     const auto* upper = faraday.find(w.find("upper_coil"));
     const auto* lower = faraday.find(w.find("lower_coil"));
     if (!upper || !lower) return {NAN, NAN};
-    return {upper->linkage.flux, lower->linkage.flux};
+    CoilFluxes out{upper->linkage.flux, lower->linkage.flux};
+    if (!w.find("coil_b1").is_null()) {
+      const auto* b1 = faraday.find(w.find("coil_b1"));
+      const auto* b2 = faraday.find(w.find("coil_b2"));
+      if (!b1 || !b2) return {NAN, NAN};
+      out.b1 = b1->linkage.flux, out.b2 = b2->linkage.flux;
+    }
+    return out;
   });
   fs::remove(f);
   return out;
@@ -356,7 +378,17 @@ inline TorqueConstant measure_torque_constant(double step, const std::string& la
     const double mid = (double(j) + 0.5) * step;  // from -22.5
     const bool north = std::fmod(mid, 90.0) < 45.0;
     const double dphi = north ? phi[j + 1].upper - phi[j].upper : phi[j + 1].lower - phi[j].lower;
-    t.k.push_back(-dphi / h);
+    if (std::isnan(phi[j].b1)) {
+      t.k.push_back(-dphi / h);
+      continue;
+    }
+    // Two phases in parallel across the battery (loop_resistance): the DC
+    // model's k is the mean of the two circuits' k. The second ring's bars
+    // are turned by 22.5 degrees (motor.layout's commutator_offset), so its
+    // north bar, and coil_b1, is connected while (theta + 45) mod 90 < 45.
+    const bool b_north = std::fmod(mid + 22.5, 90.0) < 45.0;
+    const double dphi_b = b_north ? phi[j + 1].b1 - phi[j].b1 : phi[j + 1].b2 - phi[j].b2;
+    t.k.push_back(-(dphi + dphi_b) / (2 * h));
   }
   for (double k : t.k) t.mean += k, t.mean_square += k * k;
   t.mean /= double(n), t.mean_square /= double(n);
@@ -382,13 +414,14 @@ inline Lift run_lift(double mass, double emf) {
   static int n = 0;
   const fs::path f = fs::temp_directory_path() / ("alloy_hoist_" + std::to_string(::getpid()) +
                                                   "_" + std::to_string(n++) + ".lua");
-  std::ofstream(f) << "world { dt = 1 / 240, seconds = 8, settings = { [\"gravity.uniform\"] = "
-                      "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" }, "
-                      // as mods/hoist/scene.lua names it (session 17)
-                      "electricity = { induction_order = 2 } } }\n"
-                      "local h = require \"hoist.layout\" { load_mass = "
-                   << mass << ", emf = " << emf
-                   << " }\nat(h.slider_release, \"slider\", { pinned = false })\n";
+  std::ofstream(f)
+      << "world { dt = 1 / 240, seconds = 8, settings = { [\"gravity.uniform\"] = "
+         "{ g = { 0, -9.81, 0 } }, rigid_body = { solver = \"step\" }, "
+         // as mods/hoist/scene.lua names it (session 17)
+         "electricity = { induction_order = 2 } } }\n"
+         "local h = require \"hoist.layout\" { load_mass = "
+      << mass << ", emf = " << emf
+      << " }\nfor _, s in ipairs(h.sliders) do at(h.slider_release, s, { pinned = false }) end\n";
   PluginRegistry registry;
   register_native_plugins(registry);
   lua::LoadOptions load;

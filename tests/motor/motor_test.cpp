@@ -231,8 +231,10 @@ TEST_P(MotorPutDownOutOfPlace, SettlesOnTheBiasMagnetAndStarts) {
                                    std::to_string(degrees + 90) + ".lua");
   std::ofstream(f) << "world { dt = 1 / 240, seconds = 6, settings = { [\"gravity.uniform\"] = { g "
                       "= { 0, -9.81, 0 } } } }\n"
-                      "require \"motor.layout\" { rotor_angle = "
-                   << degrees << ", slider_release = 3 }\nat(3, \"slider\", { pinned = false })\n";
+                      "local m = require \"motor.layout\" { rotor_angle = "
+                   << degrees
+                   << ", slider_release = 3 }\n"
+                      "for _, s in ipairs(m.sliders) do at(3, s, { pinned = false }) end\n";
   const RunResult r = run_motor(f.string());
   fs::remove(f);
   // Settled by 3 s, within the friction band of where the bias holds it
