@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <numbers>
 #include <ostream>
@@ -150,8 +151,23 @@ void Viewer::init_sdl() {
   if (SDL_InitSubSystem(SDL_INIT_VIDEO | SDL_INIT_EVENTS) != 0)
     throw std::runtime_error(std::string("cannot open a window: ") + SDL_GetError() +
                              " (without a display, use --headless or --screenshot)");
-  Uint32 flags = SDL_WINDOW_RESIZABLE;
-  if (opt_.headless) flags |= SDL_WINDOW_HIDDEN;
+  // Without a display SDL does not fail: it falls back to its "offscreen"
+  // driver (EGL into memory), and the viewer would draw 60 frames a second
+  // into a window no one sees. Session 19's "no window in 45 s" under Xvfb
+  // was this: the X server was resetting (its last client had just left)
+  // when the viewer connected.
+  const std::string driver = SDL_GetCurrentVideoDriver() ? SDL_GetCurrentVideoDriver() : "";
+  if (!opt_.headless && (driver == "offscreen" || driver == "dummy") &&
+      !std::getenv("SDL_VIDEODRIVER")) {
+    const char* display = std::getenv("DISPLAY");
+    SDL_QuitSubSystem(SDL_INIT_VIDEO | SDL_INIT_EVENTS);
+    throw std::runtime_error(std::string("cannot open a window: no display answered (DISPLAY=") +
+                             (display ? display : "not set") + "; SDL fell back to its " + driver +
+                             " driver, whose window nobody sees); use --headless or --screenshot");
+  }
+  // Hidden until the panels stand still (Viewer::frame): a click on the
+  // window then lands where the panels are drawn.
+  const Uint32 flags = SDL_WINDOW_RESIZABLE | SDL_WINDOW_HIDDEN;
   window_ = SDL_CreateWindow("alloy view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED,
                              opt_.width, opt_.height, flags);
   if (!window_) throw std::runtime_error(std::string("cannot open a window: ") + SDL_GetError());
@@ -620,24 +636,16 @@ bool Viewer::frame() {
   // a quarter of a second at most while a message fades, else a second (the
   // scene file is still watched for changes). Measured under Xvfb on the
   // doorbell (tests/viewer/idle_cpu.sh): 6.2 % of a core with 250 ms waits.
+  // The event is left in the queue: the loop below decides what this frame
+  // takes. Not while the panels owe a click its release: that frame is due.
   if (!opt_.headless && paused_ && single_steps_ == 0 && !editor_.carrying() && !resizing_ &&
-      script_next_ >= script_.size() && rings_.empty() &&
-      SDL_WaitEventTimeout(&e, toasts_.empty() ? 1000 : 250))
-    handle(e);
+      !panels_owed_ && script_next_ >= script_.size() && rings_.empty())
+    SDL_WaitEventTimeout(nullptr, toasts_.empty() ? 1000 : 250);
   while (true) {
-    // A press over a panel where the panels have not yet seen the pointer
-    // waits for the next frame: Dear ImGui gives a click to a window only if
-    // the pointer hovered it in the frame before (a real X server delivers
-    // the move and the press together; without this the click is lost).
     SDL_PumpEvents();
     if (SDL_PeepEvents(&e, 1, SDL_PEEKEVENT, SDL_FIRSTEVENT, SDL_LASTEVENT) == 1 &&
-        e.type == SDL_MOUSEBUTTONDOWN) {
-      const float x = float(e.button.x), y = float(e.button.y);
-      if (imgui_ready_ && over_panel(x, y) && (x != panels_saw_x_ || y != panels_saw_y_)) {
-        mouse_x_ = x, mouse_y_ = y;
-        break;
-      }
-    }
+        waits_for_panels(e))
+      break;
     if (!SDL_PollEvent(&e)) break;
     handle(e);
   }
@@ -686,9 +694,49 @@ bool Viewer::frame() {
                               [&](const Ring& r) { return clock_ - r.born > 1.0; }),
                rings_.end());
   while (!toasts_.empty() && clock_ - toasts_.front().born > kToastSeconds) toasts_.pop_front();
+  const std::vector<Rect> panels_before = panels_;
   draw(false, nullptr);
   ++frames_;
+  // Shown once two frames in a row put the panels at the same places (the
+  // first frames size them), or after 10 frames whatever they do.
+  if (!shown_ && !opt_.headless && (panels_ == panels_before || frames_ >= 10)) {
+    SDL_ShowWindow(window_);
+    shown_ = true;
+  }
   return !quit_;
+}
+
+bool Viewer::waits_for_panels(const SDL_Event& e) {
+  // Dear ImGui 1.86 reads the mouse once a frame, as one position and the
+  // buttons held (Viewer::draw): a press and a release, then a move away,
+  // all in one frame reach it as a click where the pointer ended, and the
+  // button under the press never hears of it. A real X server hands over
+  // such bursts whole (xdotool's click, then the move to the board: session
+  // 19's lost placements), as does a hand when a frame is slow. So, as
+  // ImGui 1.87's input queue does it: after a button change the pointer
+  // stays where it was, and no further press is taken, until the panels
+  // have drawn a frame with the change (and one more for a click's release).
+  // Only for a change the panels take (Viewer::for_panels): clicks on the
+  // board go to the board's tools at once, several in a frame if they come so.
+  if (!imgui_ready_) return false;
+  float x = 0, y = 0;
+  if (e.type == SDL_MOUSEMOTION)
+    x = float(e.motion.x), y = float(e.motion.y);
+  else if (e.type == SDL_MOUSEBUTTONDOWN || e.type == SDL_MOUSEBUTTONUP)
+    x = float(e.button.x), y = float(e.button.y);
+  else
+    return false;
+  if (panels_owed_ && (e.type == SDL_MOUSEBUTTONDOWN || x != mouse_x_ || y != mouse_y_))
+    return true;
+  // A press over a panel where the panels have not yet seen the pointer:
+  // ImGui gives a click to a window only if the pointer hovered it in the
+  // frame before, so the pointer goes there this frame and the press waits.
+  if (e.type == SDL_MOUSEBUTTONDOWN && over_panel(x, y) &&
+      (x != panels_saw_x_ || y != panels_saw_y_)) {
+    mouse_x_ = x, mouse_y_ = y;
+    return true;
+  }
+  return false;
 }
 
 void Viewer::simulate(double frame_seconds) {
@@ -1006,6 +1054,11 @@ void Viewer::push_wheel(int notches) {
   SDL_PushEvent(&e);
 }
 
+bool Viewer::for_panels(float x, float y, bool popup) const {
+  return over_panel(x, y) || popup || popup_ != Popup::None ||
+         (imgui_ready_ && ImGui::GetIO().WantCaptureMouse);
+}
+
 bool Viewer::over_panel(float x, float y) const {
   for (const Rect& r : panels_)
     if (x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1) return true;
@@ -1044,6 +1097,7 @@ void Viewer::handle(const SDL_Event& e) {
       mouse_down_[b] = mouse_pressed_[b] = true;
       mouse_x_ = float(e.button.x);
       mouse_y_ = float(e.button.y);
+      if (for_panels(mouse_x_, mouse_y_, popup)) panels_owed_ = true;
       if (over_panel(mouse_x_, mouse_y_) || popup || popup_ != Popup::None) break;
       on_press(camera_.to_world(mouse_x_, mouse_y_), e.button.button, Uint16(SDL_GetModState()));
       break;
@@ -1055,6 +1109,7 @@ void Viewer::handle(const SDL_Event& e) {
       mouse_down_[b] = false;
       mouse_x_ = float(e.button.x);
       mouse_y_ = float(e.button.y);
+      if (for_panels(mouse_x_, mouse_y_, popup)) panels_owed_ = true;
       on_release(camera_.to_world(mouse_x_, mouse_y_), e.button.button);
       break;
     }
@@ -1597,8 +1652,14 @@ void Viewer::draw(bool capture, Image* image) {
   ImGuiIO& io = ImGui::GetIO();
   io.MousePos = mouse_x_ >= 0 ? ImVec2(mouse_x_, mouse_y_) : ImVec2(-FLT_MAX, -FLT_MAX);
   panels_saw_x_ = mouse_x_, panels_saw_y_ = mouse_y_;
+  const bool owed = panels_owed_;
+  panels_owed_ = false;
   for (int i = 0; i < 3; ++i) {
     io.MouseDown[i] = mouse_down_[i] || mouse_pressed_[i];
+    // A click on the panels, pressed and released since the last frame: this
+    // frame shows the press, the next the release, at the same place
+    // (Viewer::waits_for_panels).
+    if (owed && mouse_pressed_[i] && !mouse_down_[i]) panels_owed_ = true;
     mouse_pressed_[i] = false;
   }
   if (opt_.headless) io.DeltaTime = float(kHeadlessFrame);

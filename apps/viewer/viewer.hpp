@@ -274,6 +274,19 @@ class Viewer {
   float mouse_x_ = -1, mouse_y_ = -1;
   float panels_saw_x_ = -1, panels_saw_y_ = -1;  ///< the pointer as the panels last saw it
   bool mouse_down_[3] = {false, false, false}, mouse_pressed_[3] = {false, false, false};
+  /// A button change the panels take (for_panels) since they last drew, or
+  /// a click of theirs whose release they have not drawn yet: the pointer
+  /// stays put until they have.
+  bool panels_owed_ = false;
+  /// Whether `e` waits for the next frame, so that the panels see each
+  /// button change where it happened (Viewer::frame).
+  bool waits_for_panels(const SDL_Event& e);
+  /// Whether a button change at (x, y) is the panels' to take: over a panel,
+  /// with a popup open, or while Dear ImGui holds the mouse (a drag begun on
+  /// a panel).
+  bool for_panels(float x, float y, bool popup) const;
+  /// The window is mapped once the panels stand still (Viewer::frame).
+  bool shown_ = false;
   bool panning_ = false;
   Tool tool_ = Tool::Hand;
   int placing_ = -1;  // palette entry
@@ -292,6 +305,7 @@ class Viewer {
   bool open_context_ = false;
   struct Rect {
     float x0, y0, x1, y1;
+    bool operator==(const Rect&) const = default;
   };
   std::vector<Rect> panels_, next_panels_;
   std::string save_path_;

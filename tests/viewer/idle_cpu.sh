@@ -15,7 +15,9 @@ if ! command -v Xvfb >/dev/null 2>&1; then
 fi
 n=150
 while [ -e "/tmp/.X$n-lock" ] && [ $n -lt 199 ]; do n=$((n + 1)); done
-Xvfb ":$n" -screen 0 1100x700x24 -nolisten tcp >/dev/null 2>&1 &
+# -noreset: the server would reset when its last client leaves (the first
+# viewer, killed), and refuse the second viewer meanwhile (docs/kit.md).
+Xvfb ":$n" -screen 0 1100x700x24 -nolisten tcp -noreset >/dev/null 2>&1 &
 xpid=$!
 trap 'kill $xpid 2>/dev/null' EXIT
 export DISPLAY=":$n"

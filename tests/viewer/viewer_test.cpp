@@ -154,6 +154,41 @@ TEST(Viewer, APartDroppedInsideAnotherIsMovedOutAndNothingBreaks) {
   EXPECT_GT(ball.y, 0.0) << "on the floor, not in it";
 }
 
+// A quick hand, or xdotool under a real X server (xvfb_mouse_test.sh),
+// clicks a palette button and then the board before the viewer draws its
+// next frame: the move to the button, its press and release, the move to
+// the board and the press and release there all come in one frame. Dear
+// ImGui 1.86 reads the mouse once a frame, so the viewer hands the panels
+// each of their button changes in a frame of its own
+// (Viewer::waits_for_panels); the bar lands where the board was clicked.
+TEST(Viewer, APaletteClickAndABoardClickInOneFrameStillPlaceThePart) {
+  ViewerOptions o = test::headless({});  // a new board
+  o.width = 1100;
+  o.height = 700;
+  Viewer v(o);
+  v.set_paused(true);
+  for (int i = 0; i < 3; ++i) v.frame();  // the panels laid out
+  // The palette's "steel bar" at 1100 x 700 (docs/images/kit_new_board.png).
+  const float bx = 68, by = 456;
+  ASSERT_TRUE(v.over_panel(bx, by));
+  const Vec2 button = v.camera().to_world(bx, by), board{0.3, 0.8};
+  const ScreenPoint b = v.camera().to_screen(board);
+  ASSERT_FALSE(v.over_panel(b.x, b.y));
+  World& w = *v.world();
+  ASSERT_FALSE(w.find("steel_bar"));
+  v.push_mouse(SDL_MOUSEMOTION, button);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, button);
+  v.push_mouse(SDL_MOUSEBUTTONUP, button);
+  v.push_mouse(SDL_MOUSEMOTION, board);
+  v.push_mouse(SDL_MOUSEBUTTONDOWN, board);
+  v.push_mouse(SDL_MOUSEBUTTONUP, board);
+  for (int i = 0; i < 6; ++i) v.frame();
+  ASSERT_TRUE(bool(w.find("steel_bar"))) << "the click on the palette was lost";
+  const Vec2 at = test::position_of(w, "steel_bar");
+  EXPECT_NEAR(at.x, board.x, 0.01);
+  EXPECT_NEAR(at.y, board.y, 0.01);
+}
+
 TEST(Viewer, AWireToItselfIsRefusedAndAWireBetweenPartsIsMade) {
   Viewer v(test::headless(kDemo));
   v.set_paused(true);
