@@ -61,6 +61,27 @@ void run_books(World& w, EnergyLedger& ledger, std::uint64_t steps, const std::s
   }
 }
 
+/// A scene file (path from the source tree, mods/ on the module path),
+/// loaded with the native plugins, and its books over `seconds` at `dt`
+/// (0: the scene's step), recorded after every step.
+struct BookedScene {
+  PluginRegistry registry;
+  lua::LoadedScene loaded;
+  EnergyLedger books;
+  World& world() { return *loaded.world; }
+  explicit BookedScene(const char* scene) {
+    register_native_plugins(registry);
+    lua::LoadOptions load;
+    load.mod_paths.push_back(test::source("mods"));
+    loaded = lua::load_scene(test::source(scene), registry, load);
+  }
+  void run(double seconds, double dt = 0) {
+    if (dt > 0) world().set_dt(dt);
+    run_steps(std::uint64_t(std::llround(seconds / world().dt())));
+  }
+  void run_steps(std::uint64_t steps) { run_books(world(), books, steps); }
+};
+
 double total(const EnergyLedger& l, const char* stage, const char* name) {
   const EnergyAccount* a = l.find(stage, name);
   return a ? a->total : std::nan("");
@@ -178,15 +199,9 @@ TEST(EnergyBooks, ATransformerSwitchedOnAtTheStartClosesToRounding) {
   // substep's start values: half of that substep's battery work and wire
   // heat went unbooked while current flowed. Measured now: 1.6e-13 %.
   for (double dt : {1.0 / 240, 1.0 / 480}) {
-    PluginRegistry registry;
-    register_native_plugins(registry);
-    lua::LoadOptions load;
-    lua::LoadedScene loaded =
-        lua::load_scene(test::source("tests/energy/scenes/transformer.lua"), registry, load);
-    World& w = *loaded.world;
-    w.set_dt(dt);
-    EnergyLedger books;
-    run_books(w, books, std::uint64_t(std::llround(0.05 / dt)));
+    BookedScene scene("tests/energy/scenes/transformer.lua");
+    scene.run(0.05, dt);
+    const EnergyLedger& books = scene.books;
     const EnergyBalance b = books.total();
     std::printf(
         "transformer, 0.05 s at 1/%.0f s: battery %.6f J, shared field %+.2e J, residue "
@@ -506,16 +521,10 @@ struct SceneBooks {
 
 /// `engine`: the rigid body swapped in at the start (null: the scene's, ODE).
 SceneBooks scene_books(const char* scene, double dt, double seconds, const char* engine = nullptr) {
-  PluginRegistry registry;
-  register_native_plugins(registry);
-  lua::LoadOptions load;
-  load.mod_paths.push_back(test::source("mods"));
-  lua::LoadedScene loaded = lua::load_scene(test::source(scene), registry, load);
-  World& w = *loaded.world;
-  w.set_dt(dt);
-  if (engine) w.schedule_swap(0, "", "rigid_body", engine);
-  EnergyLedger books;
-  run_books(w, books, std::uint64_t(std::llround(seconds / dt)));
+  BookedScene booked(scene);
+  if (engine) booked.world().schedule_swap(0, "", "rigid_body", engine);
+  booked.run(seconds, dt);
+  const EnergyLedger& books = booked.books;
   SceneBooks out{.balance = books.total()};
   out.battery = total(books, "electricity", "battery work");
   out.heat = total(books, "electricity", "heat (I^2 R)");
@@ -621,20 +630,12 @@ TEST(EnergyBooks, AMagnetCrossingAnAirCoilsWindingMakesNoEnergy) {
   // of the rates alone (electricity_from_magnetism's flux jump): 1e-5 of
   // the energy moved and less.
   for (const double dt : {1.0 / 240, 1.0 / 480}) {
-    PluginRegistry registry;
-    register_native_plugins(registry);
-    lua::LoadOptions load;
-    load.mod_paths.push_back(test::source("mods"));
-    lua::LoadedScene loaded =
-        lua::load_scene(test::source("tests/energy/scenes/through_winding.lua"), registry, load);
-    World& w = *loaded.world;
-    w.set_dt(dt);
-    EnergyLedger books;
-    run_books(w, books, std::uint64_t(std::llround(0.25 / dt)));
-    const auto* faraday =
-        dynamic_cast<magnetism::ElectricityFromMagnetism*>(w.stage("electricity_from_magnetism"));
+    BookedScene scene("tests/energy/scenes/through_winding.lua");
+    scene.run(0.25, dt);
+    const auto* faraday = dynamic_cast<magnetism::ElectricityFromMagnetism*>(
+        scene.world().stage("electricity_from_magnetism"));
     ASSERT_NE(faraday, nullptr);
-    const EnergyBalance& b = books.total();
+    const EnergyBalance& b = scene.books.total();
     std::printf(
         "through the winding at 1/%.0f s: %llu flux jump(s), residue %.2e of %.4f J moved\n",
         1 / dt, (unsigned long long)faraday->flux_jumps(), b.fraction(), b.moved);
@@ -744,15 +745,9 @@ TEST(EnergyBooks, IronsPullComesOutOfItsStore) {
   // (m.B, a rigid moment's energy) the approach's source is as large as
   // its work, of the other sign.
   auto books_of = [](std::uint64_t steps) {
-    PluginRegistry registry;
-    register_native_plugins(registry);
-    lua::LoadOptions load;
-    load.mod_paths.push_back(test::source("mods"));
-    lua::LoadedScene loaded =
-        lua::load_scene(test::source("tests/energy/scenes/iron_swing.lua"), registry, load);
-    EnergyLedger books;
-    run_books(*loaded.world, books, steps);
-    return books;
+    BookedScene scene("tests/energy/scenes/iron_swing.lua");
+    scene.run_steps(steps);
+    return scene.books;
   };
   struct Figures {
     double given, store, beyond;
