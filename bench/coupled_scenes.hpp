@@ -53,6 +53,9 @@ struct Rates {
   /// rigid_body.box2d's Box2D steps per world step, with no max_substep
   /// bound (the substep study of alloy_bench_engines); 0: its defaults
   int box2d_substeps = 0;
+  /// electricity_from_collisions ahead = true: a touch predicted within half
+  /// a step is connected at the step before it is seen; false: the scene's
+  bool contacts_ahead = false;
 };
 
 /// The source tree (compiled in as ALLOY_SOURCE_DIR).
@@ -83,6 +86,7 @@ inline std::string rate_prelude(const Rates& r) {
   }
   if (!r.substep_contacts.empty())
     setting("rigid_body", "substep_contacts", "\"" + r.substep_contacts + "\"");
+  if (r.contacts_ahead) setting("electricity_from_collisions", "ahead", "true");
   if (!r.every.empty()) {
     s << "    w.every = w.every or {}\n";
     for (const auto& [stage, n] : r.every) s << "    w.every[\"" << stage << "\"] = " << n << "\n";
@@ -161,6 +165,7 @@ inline Rates with(Rates base, const Rates& over) {
   if (!over.substep_contacts.empty()) base.substep_contacts = over.substep_contacts;
   if (!over.engine.empty()) base.engine = over.engine;
   if (over.box2d_substeps > 0) base.box2d_substeps = over.box2d_substeps;
+  if (over.contacts_ahead) base.contacts_ahead = true;
   return base;
 }
 

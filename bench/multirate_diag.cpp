@@ -36,6 +36,10 @@ int main(int argc, char** argv) {
       over.load_rates = v != 0;
     else if (k == "crates")
       over.current_rates = v != 0;
+    else if (k == "engine")
+      over.engine = a.substr(eq + 1);
+    else if (k == "ahead")
+      over.contacts_ahead = v != 0;
     else if (k == "found")
       over.substep_contacts = v ? "found" : "kept";
     else if (k == "solver")

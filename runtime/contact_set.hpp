@@ -108,6 +108,13 @@ class ImpulseDemand {
   std::shared_ptr<std::size_t> count_;
 };
 
+/// Two parts that would touch a while on, were each to move on with its
+/// present velocity (ContactSet::touching_ahead).
+struct PredictedTouch {
+  ObjectId a, b;  ///< a < b
+  Vec3 point;     ///< the mean of the touch's points, world frame, at the predicted poses, m
+};
+
 /// Orders pairs by (a, b): the deterministic order of every contact list.
 constexpr bool pair_less(ObjectId a1, ObjectId b1, ObjectId a2, ObjectId b2) {
   return a1 < a2 || (a1 == a2 && b1 < b2);
@@ -158,6 +165,22 @@ class ContactSet : public DerivedSet {
   /// Declares that the caller reads the pairs' impulses: they are computed
   /// from the rigid body's next advance on while it is held.
   virtual ImpulseDemand demand_impulses() const = 0;
+  /// The pairs of `parts` (sorted by ObjectId) that would touch (whether
+  /// or not they touch now) if every one of them moved on for `seconds` with its
+  /// present velocity and angular velocity (published `velocity`,
+  /// `angular_velocity`), sorted by (a, b), under the set's own rules (joined
+  /// parts, two static parts and waiting parts never touch). Asked after the
+  /// set's update in the same step; the set's lists do not change. A contact
+  /// that a circuit reads is made between two steps: electricity_from_collisions
+  /// asks this to connect a touch that comes within half a step at the step
+  /// before it is seen (docs/electricity.md "Contacts between steps").
+  /// An engine that cannot tell returns nothing (the default).
+  virtual std::vector<PredictedTouch> touching_ahead(const WorldView& world,
+                                                     std::span<const ObjectId> parts,
+                                                     double seconds) const {
+    (void)world, (void)parts, (void)seconds;
+    return {};
+  }
   /// Whether the pairs of the last update carry the impulses the rigid body
   /// applied (some stage demanded them); if not, the impulse fields are 0.
   bool impulses_known() const { return impulses_known_; }

@@ -5,8 +5,8 @@
 namespace alloy::electricity {
 
 ElectricityFromCollisions::ElectricityFromCollisions(ElectricityResolver& target,
-                                                     const ContactSet& contacts)
-    : target_(target), contacts_(contacts) {}
+                                                     const ContactSet& contacts, bool ahead)
+    : target_(target), contacts_(contacts), ahead_(ahead) {}
 
 int ElectricityFromCollisions::terminal_at(Vec3 part_position, Quat part_orientation, Vec3 point) {
   const Quat inverse{part_orientation.w, -part_orientation.x, -part_orientation.y,
@@ -49,27 +49,66 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
     if (conducts(p.a) && conducts(p.b)) touching.push_back(&p);
   }
 
+  auto terminal_of = [&](ObjectId part, Vec3 point) {
+    if (!position.has(part.index)) return 0;
+    return terminal_at(position[part.index], orientation.value_or(part.index, Quat{}), point);
+  };
   auto terminal = [&](ObjectId part, const ContactPair& pair) {
     const auto points = contacts_.points(pair);
-    if (points.empty() || !position.has(part.index)) return 0;
+    if (points.empty()) return 0;
     Vec3 mean{};
     for (const auto& pt : points) mean += pt.position;
-    mean = mean / double(points.size());
-    return terminal_at(position[part.index], orientation.value_or(part.index, Quat{}), mean);
+    return terminal_of(part, mean / double(points.size()));
   };
+
+  // What should be connected over the next step, sorted by (a, b): the pairs
+  // touching now; with ahead_, also those predicted to touch within half a
+  // step (their terminals from the predicted points).
+  struct Want {
+    ObjectId a, b;
+    int terminal_a, terminal_b;
+  };
+  std::vector<Want> want;
+  want.reserve(touching.size());
+  if (!ahead_) {
+    for (const ContactPair* p : touching)
+      want.push_back({p->a, p->b, terminal(p->a, *p), terminal(p->b, *p)});
+  } else {
+    conductors_.clear();
+    for (const std::uint32_t slot : conductive.members())
+      if (conductive[slot] != 0 && position.has(slot))
+        conductors_.push_back(world.store().id_at(slot));
+    std::sort(conductors_.begin(), conductors_.end());
+    const auto soon = contacts_.touching_ahead(world, conductors_, 0.5 * world.dt());
+    std::size_t t = 0, f = 0;
+    while (t < touching.size() || f < soon.size()) {
+      const ContactPair* p = t < touching.size() ? touching[t] : nullptr;
+      const PredictedTouch* q = f < soon.size() ? &soon[f] : nullptr;
+      if (p && q && p->a == q->a && p->b == q->b) {
+        want.push_back({p->a, p->b, terminal(p->a, *p), terminal(p->b, *p)});
+        ++t, ++f;
+      } else if (p && (!q || pair_less(p->a, p->b, q->a, q->b))) {
+        want.push_back({p->a, p->b, terminal(p->a, *p), terminal(p->b, *p)});
+        ++t;
+      } else {
+        want.push_back({q->a, q->b, terminal_of(q->a, q->point), terminal_of(q->b, q->point)});
+        ++f;
+      }
+    }
+  }
 
   // Compare with what we connected before; both lists are sorted by (a, b).
   std::vector<std::pair<ObjectId, ObjectId>> now;
-  now.reserve(touching.size());
+  now.reserve(want.size());
   std::size_t k = 0;
-  for (const ContactPair* p : touching) {
-    const std::pair<ObjectId, ObjectId> key{p->a, p->b};
+  for (const Want& w : want) {
+    const std::pair<ObjectId, ObjectId> key{w.a, w.b};
     for (; k < connected_.size() && connected_[k] < key; ++k)
       target_.disconnect(connected_[k].first, connected_[k].second);
     if (k < connected_.size() && connected_[k] == key)
       ++k;  // still touching: nothing to say
     else
-      target_.connect(p->a, p->b, terminal(p->a, *p), terminal(p->b, *p));
+      target_.connect(w.a, w.b, w.terminal_a, w.terminal_b);
     now.push_back(key);
   }
   for (; k < connected_.size(); ++k) target_.disconnect(connected_[k].first, connected_[k].second);
@@ -85,9 +124,11 @@ void register_electricity_from_collisions(PluginRegistry& registry) {
                .target = kResolverName,
                .doc = "conductive parts that touch are connected; parted, disconnected"},
       .create = [](PluginContext& ctx) -> std::unique_ptr<Stage> {
-        ctx.settings().check_known(kFromCollisionsName, {});
-        return std::make_unique<ElectricityFromCollisions>(
-            ctx.target<ElectricityResolver>(), ctx.dependency<ContactSet>("collisions"));
+        const PluginSettings& s = ctx.settings();
+        s.check_known(kFromCollisionsName, {"ahead"});
+        return std::make_unique<ElectricityFromCollisions>(ctx.target<ElectricityResolver>(),
+                                                           ctx.dependency<ContactSet>("collisions"),
+                                                           s.boolean("ahead", false));
       },
   });
 }

@@ -21,6 +21,18 @@
 // of the pair's contact points, mapped into the part's frame). The terminal is
 // chosen when the contact is made and kept while it lasts. For a single-node
 // part the terminal does not matter.
+//
+// Contacts between steps (setting `ahead`, off by default; docs/electricity.md
+// "Contacts between steps"). A touch that happens inside a step is seen at the
+// step's end and connected for the step after: on average half a step late,
+// always late. With `ahead = true` the interaction also asks the contact set
+// which conductive parts would touch half a step on, were they to move on
+// with their present velocities (ContactSet::touching_ahead), and connects
+// those now: a make is then connected at the step boundary nearest to it,
+// half a step early as often as half a step late. A predicted touch that the
+// next update does not find (and does not predict again) is disconnected
+// there. Breaks are not predicted: a resting contact's predicted separation is
+// the size of its solver's penetration, too small to tell a break from rest.
 #pragma once
 
 #include <utility>
@@ -33,7 +45,10 @@ namespace alloy::electricity {
 
 class ElectricityFromCollisions final : public Interaction {
  public:
-  ElectricityFromCollisions(ElectricityResolver& target, const ContactSet& contacts);
+  /// ahead: connect now a touch predicted within half a step (setting
+  /// `ahead`, see the header).
+  ElectricityFromCollisions(ElectricityResolver& target, const ContactSet& contacts,
+                            bool ahead = false);
   void apply(const WorldView& world) override;
   /// The pairs connected before the last apply: a restore primes the
   /// interactions again, and this apply must then queue what the last one
@@ -48,6 +63,8 @@ class ElectricityFromCollisions final : public Interaction {
  private:
   ElectricityResolver& target_;
   const ContactSet& contacts_;
+  bool ahead_ = false;
+  std::vector<ObjectId> conductors_;  // scratch: the conductive placed parts (ahead_)
   std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
   std::vector<std::pair<ObjectId, ObjectId>> before_;     // connected_ before the last apply
   PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};

@@ -110,6 +110,11 @@ class CollisionSet final : public ContactSet {
   /// Declares that the caller reads the pairs' impulses (see the header):
   /// they are computed from the rigid body's next advance on while it is held.
   ImpulseDemand demand_impulses() const override;
+  /// Moves the parts' geoms to their predicted poses, tests each pair
+  /// (bounds, then collide_parts) and puts them back where they were.
+  std::vector<PredictedTouch> touching_ahead(const WorldView& world,
+                                             std::span<const ObjectId> parts,
+                                             double seconds) const override;
 
  private:
   struct Impl;

@@ -1663,6 +1663,65 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
   ++state_version_;
 }
 
+std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId> parts,
+                                                        double seconds) const {
+  std::vector<PredictedTouch> out;
+  if (!impl_ || !impl_->world) return out;
+  Impl& m = *impl_;
+  // Each asked part's fixtures, with its body's transform `seconds` on.
+  struct Shape {
+    ObjectId id;
+    b2Fixture* f;
+    b2Transform xf;
+  };
+  std::vector<Shape> shapes;
+  for (const ObjectId id : parts) {
+    if (id.index >= m.part_of_slot.size() || m.part_of_slot[id.index] < 0) continue;
+    const Impl::Part& part = m.parts[std::size_t(m.part_of_slot[id.index])];
+    if (part.id != id) continue;
+    b2Body* b = m.bodies[part.body].b;
+    if (!b) continue;
+    const b2Vec2 x = b->GetPosition() + float(seconds) * b->GetLinearVelocity();
+    const float angle = b->GetAngle() + float(seconds) * b->GetAngularVelocity();
+    for (b2Fixture* f = b->GetFixtureList(); f; f = f->GetNext())
+      if (&m.part_of(f) == &part) shapes.push_back({id, f, b2Transform(x, b2Rot(angle))});
+  }
+  auto joined = [](const b2Body* a, const b2Body* b) {
+    for (const b2JointEdge* e = a->GetJointList(); e; e = e->next)
+      if (e->other == b && !e->joint->GetCollideConnected()) return true;
+    return false;
+  };
+  for (std::size_t i = 0; i < shapes.size(); ++i)
+    for (std::size_t j = i + 1; j < shapes.size(); ++j) {
+      const Shape &p = shapes[i], &q = shapes[j];
+      b2Body *ba = p.f->GetBody(), *bb = q.f->GetBody();
+      if (p.id == q.id || ba == bb) continue;
+      if (ba->GetType() != b2_dynamicBody && bb->GetType() != b2_dynamicBody) continue;
+      if (!m.b2ContactFilter::ShouldCollide(p.f, q.f) || joined(ba, bb)) continue;
+      b2DistanceInput in;
+      in.proxyA.Set(p.f->GetShape(), 0), in.proxyB.Set(q.f->GetShape(), 0);
+      in.transformA = p.xf, in.transformB = q.xf, in.useRadii = true;
+      b2SimplexCache cache;
+      cache.count = 0;
+      b2DistanceOutput d;
+      b2Distance(&d, &cache, &in);
+      if (d.distance >= 10 * b2_epsilon) continue;
+      const b2Vec2 mid = 0.5f * (d.pointA + d.pointB);
+      const bool order = p.id < q.id;
+      out.push_back({order ? p.id : q.id, order ? q.id : p.id, {mid.x / m.s, mid.y / m.s, 0}});
+    }
+  std::sort(out.begin(), out.end(), [](const PredictedTouch& x, const PredictedTouch& y) {
+    return pair_less(x.a, x.b, y.a, y.b);
+  });
+  // A part of several fixtures may touch another with more than one: once.
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const PredictedTouch& x, const PredictedTouch& y) {
+                          return x.a == y.a && x.b == y.b;
+                        }),
+            out.end());
+  return out;
+}
+
 void Box2DEngine::pairs_into(std::vector<ContactPair>& pairs) const {
   const Impl& m = *impl_;
   for (const std::uint32_t k : m.contact_order) {

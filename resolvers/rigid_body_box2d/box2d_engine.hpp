@@ -141,6 +141,10 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   /// the same values whichever subset is asked. Valid from one advance to the
   /// next: while state_version() is what it was after the advance.
   void geometry_into(std::span<ContactPair> pairs, std::vector<ContactPoint>& points) const;
+  /// ContactSet::touching_ahead on Box2D's own shapes: each body moved on by
+  /// its velocities for `seconds`, each pair of the parts' fixtures that
+  /// Box2D would collide tested with its distance (radii included).
+  std::vector<PredictedTouch> touching_ahead(std::span<const ObjectId> parts, double seconds) const;
   /// The contact set that reads this engine's contacts (collisions.box2d):
   /// told before Box2D's world is destroyed, to make a deferred geometry
   /// first (a swap hands the retired set's pairs to the next engine's).
@@ -261,6 +265,13 @@ class Box2DContacts final : public ContactSet {
   /// through a contact opens for a step (adv15 F9).
   bool save_state(StateWriter& out) const override;
   void restore_state(StateReader& in) override;
+  std::vector<PredictedTouch> touching_ahead(const WorldView& world,
+                                             std::span<const ObjectId> parts,
+                                             double seconds) const override {
+    (void)world;
+    return geometry_available() ? engine_->touching_ahead(parts, seconds)
+                                : std::vector<PredictedTouch>{};
+  }
 
  private:
   void make_geometry(std::span<ContactPair> pairs,

@@ -318,6 +318,14 @@ TEST(SceneRestore, Motor) {
   expect_restores("motor", {1, 40, 121, 200, 311});
 }
 
+// With contacts predicted half a step ahead (electricity_from_collisions'
+// `ahead`): the priming apply after a restore asks the restored collisions
+// set the same question at the same poses. Restored across commutations
+// (step 58: a spoke predicted to touch, its connection queued for step 59).
+TEST(SceneRestore, MotorWithContactsAhead) {
+  expect_restores("../tests/coupled/scenes/motor_contacts_ahead.lua", {1, 40, 58, 121, 200, 311});
+}
+
 // Every bundled scene, with every kind of moment in one run: restored at the
 // first step; mid-contact (the first step from 20 on with a contact that
 // began within the last 10 steps, found by a probe run); just after a hot
