@@ -1673,6 +1673,7 @@ std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId
     ObjectId id;
     b2Fixture* f;
     b2Transform xf;
+    b2AABB box;  // at xf, skin included
   };
   std::vector<Shape> shapes;
   for (const ObjectId id : parts) {
@@ -1683,8 +1684,12 @@ std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId
     if (!b) continue;
     const b2Vec2 x = b->GetPosition() + float(seconds) * b->GetLinearVelocity();
     const float angle = b->GetAngle() + float(seconds) * b->GetAngularVelocity();
+    const b2Transform xf(x, b2Rot(angle));
     for (b2Fixture* f = b->GetFixtureList(); f; f = f->GetNext())
-      if (&m.part_of(f) == &part) shapes.push_back({id, f, b2Transform(x, b2Rot(angle))});
+      if (&m.part_of(f) == &part) {
+        Shape& e = shapes.emplace_back(Shape{id, f, xf, {}});
+        f->GetShape()->ComputeAABB(&e.box, xf, 0);
+      }
   }
   auto joined = [](const b2Body* a, const b2Body* b) {
     for (const b2JointEdge* e = a->GetJointList(); e; e = e->next)
@@ -1695,7 +1700,7 @@ std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId
     for (std::size_t j = i + 1; j < shapes.size(); ++j) {
       const Shape &p = shapes[i], &q = shapes[j];
       b2Body *ba = p.f->GetBody(), *bb = q.f->GetBody();
-      if (p.id == q.id || ba == bb) continue;
+      if (p.id == q.id || ba == bb || !b2TestOverlap(p.box, q.box)) continue;
       if (ba->GetType() != b2_dynamicBody && bb->GetType() != b2_dynamicBody) continue;
       if (!m.b2ContactFilter::ShouldCollide(p.f, q.f) || joined(ba, bb)) continue;
       b2DistanceInput in;
