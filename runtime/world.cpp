@@ -1466,6 +1466,33 @@ void World::order_stages() {
       timings.push_back(t);
     }
   profile_.stages = std::move(timings);
+  report_held_stages();
+}
+
+void World::report_held_stages() {
+  // A held input is a zero-order hold: for a position-dependent force (the
+  // magnetic loads held while the rigid body runs every step) it lags the
+  // motion and does work no field pays (the motor ran away at 1/240 s with
+  // magnetic_forces every 2nd step), and an induced EMF sent once in n
+  // advances is absent from the others (docs/performance.md, "Session 21").
+  auto report = [&](const Slot& held, const Slot& by, const char* what, const char* between) {
+    const std::string key = held.instance + ">" + by.instance;
+    if (!held_reported_.insert(key).second) return;
+    pending_.push_back(
+        Event{.type = "held_stage",
+              .source = "world",
+              .values = {{"every", double(held.every)}, {"reader_every", double(by.every)}},
+              .text = by.instance + " " + what + " " + held.instance + ", which runs every " +
+                      std::to_string(held.every) + " steps: " + between +
+                      "; a held force does work no field pays (docs/performance.md)"});
+  };
+  for (const auto& s : slots_) {
+    for (const Slot* in : s->inputs)
+      if (in->derived && in->every > s->every)
+        report(*in, *s, "reads", "in between it reads the output held, not recomputed");
+    if (s->interaction && s->target && s->every > s->target->every)
+      report(*s, *s->target, "is commanded by", "in between its advances get no commands from it");
+  }
 }
 
 // --- snapshots -------------------------------------------------------------------

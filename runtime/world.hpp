@@ -18,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -479,6 +480,12 @@ class World {
   void activate_needed();
   void instantiate(const PluginDef& def, int area);
   void order_stages();
+  /// A "held_stage" event, once per pair, for each stage that reads the
+  /// output of a derived set run less often than itself, and each interaction
+  /// run less often than the resolver it commands (`every`): what the reader
+  /// or the target gets in between is held, not recomputed.
+  void report_held_stages();
+  std::set<std::string> held_reported_;
   bool due(const Slot& s) const;
   /// Whether interaction `s`'s commands would be performed by its target's
   /// advance at `advance_step` (always, for a target that runs every step).
