@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include "resolvers/electricity/electricity_plugins.hpp"
@@ -19,6 +18,41 @@
 namespace alloy::electricity {
 namespace {
 
+ObjectId box(World& w, const std::string& name, Vec3 position, Vec3 size, double mass) {
+  const ObjectId b = w.create(name);
+  w.set(b, "shape", std::string("box"));
+  w.set(b, "size", size);
+  w.set(b, "position", position);
+  if (mass > 0)
+    w.set(b, "mass", mass);
+  else
+    w.set(b, "static", true);
+  return b;
+}
+ObjectId wire(World& w, const std::string& name, ObjectId from, int ft, ObjectId to, int tt) {
+  const ObjectId id = w.create(name);
+  w.set(id, "wire_from", from);
+  w.set(id, "wire_from_terminal", std::int64_t(ft));
+  w.set(id, "wire_to", to);
+  w.set(id, "wire_to_terminal", std::int64_t(tt));
+  return id;  // default resistance: 0.01 Ohm
+}
+
+/// The loop a touch between `contact` and `bar` closes: a 6 V battery (0.1 Ohm
+/// inside), its + to the contact, the bar through a 12 Ohm lamp back to its -.
+ObjectId lamp_loop(World& w, ObjectId contact, ObjectId bar) {
+  const ObjectId battery = w.create("battery");
+  w.set(battery, "emf", 6.0);
+  w.set(battery, "internal_resistance", 0.1);
+  const ObjectId lamp = w.create("lamp");
+  w.set(lamp, "conductive", true);
+  w.set(lamp, "resistance", 12.0);
+  wire(w, "w1", battery, 1, contact, 0);
+  wire(w, "w2", bar, 0, lamp, 0);
+  wire(w, "w3", lamp, 1, battery, 0);
+  return lamp;
+}
+
 class FromCollisionsTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -26,26 +60,6 @@ class FromCollisionsTest : public ::testing::Test {
     register_electricity_plugins(registry);  // idempotent if the native set already has it
   }
 
-  static ObjectId box(World& w, const std::string& name, Vec3 position, Vec3 size, double mass) {
-    const ObjectId b = w.create(name);
-    w.set(b, "shape", std::string("box"));
-    w.set(b, "size", size);
-    w.set(b, "position", position);
-    if (mass > 0)
-      w.set(b, "mass", mass);
-    else
-      w.set(b, "static", true);
-    return b;
-  }
-  static ObjectId wire(World& w, const std::string& name, ObjectId from, int ft, ObjectId to,
-                       int tt) {
-    const ObjectId id = w.create(name);
-    w.set(id, "wire_from", from);
-    w.set(id, "wire_from_terminal", std::int64_t(ft));
-    w.set(id, "wire_to", to);
-    w.set(id, "wire_to_terminal", std::int64_t(tt));
-    return id;  // default resistance: 0.01 Ohm
-  }
   static double num(const World& w, ObjectId id, const char* p) {
     return std::get<double>(w.get(id, p));
   }
@@ -65,15 +79,7 @@ TEST_F(FromCollisionsTest, ABarDroppedAcrossTheContactClosesTheCircuitOneStepLat
   const ObjectId bar = box(w, "bar", {0, 0.05, 0}, {0.3, 0.02, 0.02}, 0.05);
   w.set(contact, "conductive", true);
   w.set(bar, "conductive", true);
-  const ObjectId battery = w.create("battery");
-  w.set(battery, "emf", 6.0);
-  w.set(battery, "internal_resistance", 0.1);
-  const ObjectId lamp = w.create("lamp");
-  w.set(lamp, "conductive", true);
-  w.set(lamp, "resistance", 12.0);
-  wire(w, "w1", battery, 1, contact, 0);
-  wire(w, "w2", bar, 0, lamp, 0);
-  wire(w, "w3", lamp, 1, battery, 0);
+  const ObjectId lamp = lamp_loop(w, contact, bar);
 
   std::uint64_t began = 0, connected = 0;
   int connects = 0;
@@ -156,14 +162,8 @@ double current_when_dropped_at(PluginRegistry& registry, double x) {
   const ObjectId r = w.create("r");
   w.set(r, "conductive", true);
   w.set(r, "resistance", 1.0);
-  for (auto [name, from, ft, to, tt] :
-       {std::tuple{"w1", probe, 0, r, 0}, std::tuple{"w2", r, 1, battery, 0}}) {
-    const ObjectId id = w.create(name);
-    w.set(id, "wire_from", from);
-    w.set(id, "wire_from_terminal", std::int64_t(ft));
-    w.set(id, "wire_to", to);
-    w.set(id, "wire_to_terminal", std::int64_t(tt));
-  }
+  wire(w, "w1", probe, 0, r, 0);
+  wire(w, "w2", r, 1, battery, 0);
   w.run(120);  // 0.5 s: landed and resting
   auto& e = dynamic_cast<ElectricityResolver&>(*w.stage("electricity"));
   EXPECT_TRUE(e.connected(battery, probe));
@@ -193,15 +193,7 @@ TEST_F(FromCollisionsTest, ABatteryAddedToARunningWorldFindsThePartsAlreadyTouch
   w.set(bar, "conductive", true);
   w.run(60);  // resting on the contact; no electricity yet (nothing carries emf)
   ASSERT_FALSE(w.has_stage("electricity"));
-  const ObjectId battery = w.create("battery");
-  w.set(battery, "emf", 6.0);
-  w.set(battery, "internal_resistance", 0.1);
-  const ObjectId lamp = w.create("lamp");
-  w.set(lamp, "conductive", true);
-  w.set(lamp, "resistance", 12.0);
-  wire(w, "w1", battery, 1, contact, 0);
-  wire(w, "w2", bar, 0, lamp, 0);
-  wire(w, "w3", lamp, 1, battery, 0);
+  const ObjectId lamp = lamp_loop(w, contact, bar);
   w.step();  // the resolver and the interaction come to life; the interaction is primed at
              // creation (as at start), sees the touching pair, and the resolver connects it
              // in this same step's advance
@@ -228,33 +220,13 @@ Glide touch_onto_contact(PluginRegistry& registry, bool ahead, bool box2d, Place
   if (ahead) def.settings["electricity_from_collisions"].set("ahead", true);
   if (box2d) def.use = {{"rigid_body", "rigid_body.box2d"}, {"collisions", "collisions.box2d"}};
   World w(registry, def);
-  auto box = [&](const char* name, Vec3 at, Vec3 size, double mass) {
-    const ObjectId b = w.create(name);
-    w.set(b, "shape", std::string("box"));
-    w.set(b, "size", size);
-    w.set(b, "position", at);
+  auto part = [&](const char* name, Vec3 at, Vec3 size, double mass) {
+    const ObjectId b = box(w, name, at, size, mass);
     w.set(b, "conductive", true);
-    if (mass > 0)
-      w.set(b, "mass", mass);
-    else
-      w.set(b, "static", true);
     return b;
   };
-  const auto [contact, mover] = place(w, box);
-  const ObjectId battery = w.create("battery");
-  w.set(battery, "emf", 6.0);
-  const ObjectId lamp = w.create("lamp");
-  w.set(lamp, "conductive", true);
-  w.set(lamp, "resistance", 12.0);
-  for (auto [name, from, ft, to, tt] :
-       {std::tuple{"w1", battery, 1, contact, 0}, std::tuple{"w2", mover, 0, lamp, 0},
-        std::tuple{"w3", lamp, 1, battery, 0}}) {
-    const ObjectId id = w.create(name);
-    w.set(id, "wire_from", from);
-    w.set(id, "wire_from_terminal", std::int64_t(ft));
-    w.set(id, "wire_to", to);
-    w.set(id, "wire_to_terminal", std::int64_t(tt));
-  }
+  const auto [contact, mover] = place(w, part);
+  lamp_loop(w, contact, mover);
   Glide g;
   for (int n = 0; n < 30 && (g.began == 0 || g.connected == 0); ++n) {
     w.step();
@@ -271,10 +243,10 @@ Glide touch_onto_contact(PluginRegistry& registry, bool ahead, bool box2d, Place
 /// (10 + fraction) steps: the gap is v (10 + fraction) h.
 Glide glide_onto_contact(PluginRegistry& registry, double fraction, bool ahead, bool box2d) {
   const double h = 1.0 / 240, v = 0.5;
-  return touch_onto_contact(registry, ahead, box2d, [&](World& w, auto& box) {
+  return touch_onto_contact(registry, ahead, box2d, [&](World& w, auto& part) {
     const Vec3 size{0.3, 0.02, 0.02};
-    const ObjectId contact = box("contact", {0, 0, 0}, size, 0);
-    const ObjectId bar = box("bar", {0, 0.02 + v * (10 + fraction) * h, 0}, size, 0.05);
+    const ObjectId contact = part("contact", {0, 0, 0}, size, 0);
+    const ObjectId bar = part("bar", {0, 0.02 + v * (10 + fraction) * h, 0}, size, 0.05);
     w.set(bar, "velocity", Vec3{0, -v, 0});
     return std::pair{contact, bar};
   });
@@ -287,11 +259,11 @@ Glide glide_onto_contact(PluginRegistry& registry, double fraction, bool ahead, 
 /// theta = w (10 + fraction) h.
 Glide spin_onto_contact(PluginRegistry& registry, double fraction, bool ahead, bool box2d) {
   const double h = 1.0 / 240, spin = 2.0;
-  return touch_onto_contact(registry, ahead, box2d, [&](World& w, auto& box) {
+  return touch_onto_contact(registry, ahead, box2d, [&](World& w, auto& part) {
     const double theta = spin * (10 + fraction) * h;
     const double face = 0.15 * std::sin(theta) + 0.01 * std::cos(theta);
-    const ObjectId contact = box("contact", {0.14, face + 0.01, 0}, {0.04, 0.02, 0.02}, 0);
-    const ObjectId bar = box("bar", {0, 0, 0}, {0.3, 0.02, 0.02}, 0.05);
+    const ObjectId contact = part("contact", {0.14, face + 0.01, 0}, {0.04, 0.02, 0.02}, 0);
+    const ObjectId bar = part("bar", {0, 0, 0}, {0.3, 0.02, 0.02}, 0.05);
     w.set(bar, "angular_velocity", Vec3{0, 0, spin});
     return std::pair{contact, bar};
   });
