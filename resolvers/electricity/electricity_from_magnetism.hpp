@@ -25,6 +25,13 @@
 // EMF keeps the present velocity, as before) and the acceleration is within
 // half of the step before's (not a contact's impulse or a hand's push).
 //
+// Soft iron (induction order 2): the iron's moments change as the parts
+// move, and that change is in the EMF: the step's flux change adds the
+// flux of the iron's poles solved again at the poses predicted for the
+// step's start and end, at the currents of now, the coils' own share at
+// half (MagneticForces::emf_iron_poles; docs/magnetism.md "Induction
+// through soft iron"). The iron's inductance stays out of the circuit.
+//
 // Contract:
 //   reads    the magnetic_forces derived set (its poles), magnet, turns,
 //            coil_factor, pole_separation, inductance, position, orientation,

@@ -592,13 +592,13 @@ double MagneticForces::permanent_work_across_a_change(std::span<const Pole> pole
 }
 
 void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
-  // Each pole's strength in two shares: the fixed one (a permanent magnet's,
-  // or a coil's own current's) and the induced one (soft iron, a coil's core
-  // beyond its own current's share). Pairs are booked by share:
+  // Pairs are booked by share:
   //   permanent x permanent   here, a store: mu0/4pi q_i q_j / sqrt(r^2 + eps^2)
   //   coil's own x anything   by electricity: the EMF at held strengths
-  //   permanent x induced,
-  //   induced x induced       here, soft iron's (below)
+  //   the iron's share from the coils' currents x anything: by electricity,
+  //                           the EMF of the iron's moments' change
+  //   permanent x the magnets' own induced share,
+  //   that share x itself     here, soft iron's (below)
   // Direct, O(poles^2), and only while a ledger is kept.
   std::vector<std::uint8_t> kinds(bodies_.size(), 0);
   if (ids_) {
@@ -723,10 +723,9 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
         0.5 * (energy(reported_shares_, reported_poles_, 2) - energy(reported_shares_, book, 2) +
                energy(shares, reported_poles_, 2) - energy(shares, book, 2));
   }
-  // What the iron's forces did beyond the fall of its store: iron on iron
-  // where a coil magnetises it (no circuit pays for that in this model: the
-  // EMF is at held strengths), and the pole model's own error (the induced
-  // moment follows the mean field of the samples, the force the poles' line).
+  // What the iron's forces did beyond the fall of its store: the pole
+  // model's own error (the induced moment follows the mean field of the
+  // samples, the force the poles' line) and the step's.
   const double store_fall = same ? reported_iron_store_ - iron_store : 0.0;
   out.source("soft iron's work beyond its store", iron_work - store_fall);
   reported_iron_store_ = iron_store;

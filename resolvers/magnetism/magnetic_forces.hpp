@@ -153,18 +153,18 @@ class MagneticForces : public DerivedSet {
   /// Its forces matter only to the stages that read them (the rigid body's
   /// interaction): with the rigid body every n-th step, summed once in n.
   bool on_demand() const override { return true; }
-  /// The work the forces between parts that are not coils did on the parts
-  /// since the last report, at the pole strengths of the last report (the
-  /// strengths the forces of the step were computed with): transfer
-  /// "magnetism", given to the rigid body. Each pole's strength is split into
-  /// its fixed share (a magnet's, a coil's own current's) and its induced
-  /// share (soft iron's, a cored coil's core beyond its own current's). The
-  /// permanent magnets' pairs are minus the change of their interaction
-  /// energy (a store). Pairs with an induced share draw on soft iron's store,
-  /// its co-energy in the magnets' field (-1/2 m.B for linear iron); what the
-  /// store does not explain (iron on iron magnetised by a coil, the model's
-  /// own error) is a source (docs/energy.md). The work of a coil's own share
-  /// is the EMF's: electricity books it.
+  /// The work the forces between the permanent magnets and the moments
+  /// they alone induce in the iron did on the parts since the last report:
+  /// transfer "magnetism", given to the rigid body. The permanent magnets'
+  /// pairs (at their strengths) are minus the change of their interaction
+  /// energy (a store). The iron is solved again with every coil's current
+  /// off; its pairs with the magnets and with one another, at the mean of
+  /// the strengths of the two reports, draw on soft iron's store, their
+  /// co-energy in the magnets' field (-1/2 m.B for linear iron); what the
+  /// store does not explain (the model's own error) is a source
+  /// (docs/energy.md "Session 21"). A coil's own share, and the iron's share
+  /// from the coils' currents, are the EMF's (emf_iron_poles): electricity
+  /// books them.
   void report_energy(const WorldView& view, EnergyReport& out) override;
 
   /// Every magnetic part with a position, in slot order.
