@@ -350,12 +350,16 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     }
     forces_.emf_iron_poles(pose_end, iron_end_);
     // The poles' fixed shares, now and moved on (a coil's core and free
-    // iron are in the iron's poles).
+    // iron are in the iron's poles). A body's induced share is its north
+    // pole's; the south pole carries minus it (a core's share can oppose
+    // its coil's own).
     const auto induced = forces_.induced_shares();
     fixed_now_.assign(poles.begin(), poles.end());
     for (std::size_t i = 0; i < poles.size(); ++i) {
-      const double share = poles[i].body < induced.size() ? induced[poles[i].body] : 0.0;
-      const double fixed = poles[i].strength - std::copysign(share, poles[i].strength);
+      const std::uint32_t b = poles[i].body;
+      const double share = b < induced.size() ? induced[b] : 0.0;
+      const bool north = b < bodies.size() && i == bodies[b].first_pole;
+      const double fixed = poles[i].strength - (north ? share : -share);
       fixed_now_[i].strength = fixed, moved_poles_[i].strength = fixed;
     }
   }

@@ -329,7 +329,7 @@ TEST_F(SoftIronTest, TheEmfsIronPolesAreTheMeanOfTheIronWithAndWithoutTheCurrent
       for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
         Pole p = f.poles()[i];
         const double share = shares[std::size_t(&body - f.bodies().data())];
-        p.strength = std::copysign(share, p.strength);
+        p.strength = i == body.first_pole ? share : -share;  // north, then south
         if (share != 0) out.push_back(p);
       }
     return out;
