@@ -92,6 +92,16 @@ bool ElectricityFromMagnetism::save_state(StateWriter& out) const {
       out.put(c.axis.x), out.put(c.axis.y), out.put(c.axis.z);
     }
   }
+  // The parts' predicted poses (session 21, only where there is soft iron:
+  // the iron is solved again there), after both predictions so that a save
+  // without them restores as before.
+  if (!prediction_.poses.empty() || !earlier_prediction_.poses.empty())
+    for (const Prediction* p : {&prediction_, &earlier_prediction_}) {
+      out.put(std::uint64_t(p->poses.size()));
+      for (const MagneticForces::PartPose& pose : p->poses)
+        for (const Vec3& v : {pose.centre, pose.axes[0], pose.axes[1], pose.axes[2]})
+          out.put(v.x), out.put(v.y), out.put(v.z);
+    }
   return true;
 }
 
@@ -163,6 +173,17 @@ void ElectricityFromMagnetism::restore_state(StateReader& in) {
     }
     for (std::uint32_t b : p->pole_body)
       if (b >= p->bodies.size()) damaged("a predicted pole names a part out of range");
+  }
+  if (in.remaining() == 0) return;  // no soft iron, or a save from before session 21
+  for (Prediction* p : {&prediction_, &earlier_prediction_}) {
+    p->poses.resize(count(96));
+    for (MagneticForces::PartPose& pose : p->poses)
+      for (Vec3* v : {&pose.centre, &pose.axes[0], &pose.axes[1], &pose.axes[2]}) {
+        v->x = in.get<double>(), v->y = in.get<double>(), v->z = in.get<double>();
+        if (!is_finite(*v)) damaged("a predicted pose is not a finite number");
+      }
+    if (!p->poses.empty() && p->poses.size() != p->bodies.size())
+      damaged("the predicted poses do not match the parts");
   }
 }
 
@@ -298,6 +319,51 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     }
   }
 
+  // Soft iron (order 2): its induced moments change as the parts move, and
+  // the coils pay for the work that change lets the iron's forces do
+  // through the flux of the iron's poles, solved again at the predicted
+  // poses (MagneticForces::emf_iron_poles; docs/magnetism.md "Induction
+  // through soft iron"). The poles' fixed shares (magnets, coils' own
+  // currents) take the path above; the iron's flux is added at each end of
+  // the step.
+  const bool iron = second && forces_.has_iron();
+  std::vector<MagneticForces::PartPose> pose_now, pose_end;
+  if (iron) {
+    pose_now = forces_.poses();
+    pose_end = pose_now;
+    auto turned = [](const MagneticForces::PartPose& from, Vec3 v, Vec3 w, double t) {
+      MagneticForces::PartPose to = from;
+      to.centre = from.centre + v * t;
+      for (int i = 0; i < 3; ++i) {
+        const Vec3 a = from.axes[i] + cross(w, from.axes[i]) * t;
+        to.axes[i] = a / length(a);
+      }
+      return to;
+    };
+    for (std::size_t b = 0; b < bodies.size() && b < pose_now.size(); ++b) {
+      const ObjectId id = bodies[b].id;
+      if (!store.alive(id)) continue;
+      const Vec3 v = velocity.value_or(id.index, Vec3{}), w = spin.value_or(id.index, Vec3{});
+      if (!is_finite(v) || !is_finite(w) || (v == Vec3{} && w == Vec3{})) continue;
+      const Motion m = motion(id, step, dt, v, w, record);
+      pose_end[b] = turned(pose_now[b], v + m.acceleration * dt, w + m.angular * dt, dt);
+    }
+    forces_.emf_iron_poles(pose_end, iron_end_);
+    // The poles' fixed shares, now and moved on (a coil's core and free
+    // iron are in the iron's poles). A body's induced share is its north
+    // pole's; the south pole carries minus it (a core's share can oppose
+    // its coil's own).
+    const auto induced = forces_.induced_shares();
+    fixed_now_.assign(poles.begin(), poles.end());
+    for (std::size_t i = 0; i < poles.size(); ++i) {
+      const std::uint32_t b = poles[i].body;
+      const double share = b < induced.size() ? induced[b] : 0.0;
+      const bool north = b < bodies.size() && i == bodies[b].first_pole;
+      const double fixed = poles[i].strength - (north ? share : -share);
+      fixed_now_[i].strength = fixed, moved_poles_[i].strength = fixed;
+    }
+  }
+
   // The prediction the last apply made for where the parts are now (a
   // repeated apply starts from the one before, as the first did), if the
   // parts and their poles are the ones it was made for.
@@ -310,10 +376,18 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
   for (std::size_t b = 0; predicted && b < bodies.size(); ++b)
     predicted = from.bodies[b] == bodies[b].id;
   if (predicted) {
-    predicted_poles_.assign(poles.begin(), poles.end());
+    if (iron)
+      predicted_poles_ = fixed_now_;
+    else
+      predicted_poles_.assign(poles.begin(), poles.end());
     for (std::size_t i = 0; i < poles.size(); ++i)
       predicted_poles_[i].position = from.pole_position[i];
   }
+  // The iron's poles at the step's start: where the last apply predicted
+  // the parts now, or, without a prediction, where they are.
+  if (iron)
+    forces_.emf_iron_poles(predicted && from.poses.size() == bodies.size() ? from.poses : pose_now,
+                           iron_start_);
   Prediction made;
   const bool keep = second && !repeat && record && !unseen_motion;
   if (keep) {
@@ -321,6 +395,7 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     for (const Pole& p : moved_poles_)
       made.pole_position.push_back(p.position), made.pole_body.push_back(p.body);
     for (const MagneticBody& b : bodies) made.bodies.push_back(b.id);
+    if (iron) made.poses = pose_end;
   }
 
   std::vector<CoilGeometry> geometry;  // the coils with a usable geometry, for the mutual part
@@ -343,12 +418,14 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     coil.angular_velocity = spin.value_or(slot, Vec3{});
     const ObjectId id = store.id_at(slot);
     if (const MagneticBody* own = forces_.find(id)) coil.body = std::uint32_t(own - bodies.data());
-    FluxLinkage f, f_end;
+    FluxLinkage f, f_end, f_all;
     bool usable = false;
     Vec3 moved_centre = coil.centre, moved_axis = coil.axis;
+    double iron_end = 0;  // the iron's flux at the step's end
     if (is_finite(coil.centre) && is_finite(coil.axis) && is_finite(coil.velocity) &&
         is_finite(coil.angular_velocity) && std::isfinite(coil.linkage)) {
-      f = coil_flux(poles, pole_velocity_, forces_.softening(), coil);
+      f = f_all = coil_flux(poles, pole_velocity_, forces_.softening(), coil);
+      if (iron) f = coil_flux(fixed_now_, pole_velocity_, forces_.softening(), coil);
       // The same at the end of the coming step, every part moved on along
       // its present motion: electricity ramps the EMF over its substeps
       // from the last step's end value to this one, so the EMF it
@@ -366,14 +443,19 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
       moved.angular_velocity = coil.angular_velocity + m.angular * (1.5 * dt);
       f_end = coil_flux(moved_poles_, pole_velocity_end_, forces_.softening(), moved);
       usable = true, moved_centre = moved.centre, moved_axis = moved.axis;
+      if (iron) {
+        iron_end = coil_flux(iron_end_, {}, forces_.softening(), moved).flux;
+        if (!std::isfinite(iron_end)) iron_end = 0;
+      }
       if (coil.linkage != 0) {
         geometry.push_back(coil), geometry_id.push_back(id);
         check_coupling(world, id, coil, inductance[slot]);
       }
     }
     if (!std::isfinite(f.flux) || !std::isfinite(f.rate)) f = {};
+    if (!std::isfinite(f_all.flux) || !std::isfinite(f_all.rate)) f_all = {};
     if (!std::isfinite(f_end.rate)) f_end = f;
-    coils_.push_back({id, f});
+    coils_.push_back({id, f_all});
     // Faraday and Lenz: the EMF opposes the change of the flux that links it.
     if (!second || !usable || !std::isfinite(f_end.flux) || !std::isfinite(f.flux)) {
       target_.set_induced_emf(id, -f_end.rate);
@@ -387,11 +469,11 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     // step's miss of the real motion is taken up in the next (a difference
     // of two predictions' errors, not the error itself).
     double start = f.flux;
+    CoilGeometry then = coil;  // the coil at the step's start (as the last apply predicted it)
     if (predicted) {
       const auto it = std::find_if(from.coils.begin(), from.coils.end(),
                                    [&](const Prediction::Coil& c) { return c.id == id; });
       if (it != from.coils.end()) {
-        CoilGeometry then = coil;
         then.centre = it->centre, then.axis = it->axis;
         const double phi =
             coil_flux(predicted_poles_, pole_velocity_, forces_.softening(), then).flux;
@@ -409,13 +491,25 @@ void ElectricityFromMagnetism::apply(const WorldView& world) {
     // From where the parts are now, so that a miss of the last prediction
     // (a contact's impulse, a strong coupling's turn) is not taken for one.
     const double miss = std::abs(f_end.flux - f.flux - seen);
+    // The iron's flux from the step's start to its end (its poles are
+    // never a sheet's, so it has no jump), and its mean rate, which the
+    // ramp's end value takes: its offset makes the mean right, and the
+    // ramp's slope only shapes the EMF within the step (a forward
+    // difference of the iron's flux at the end changed the books by 2e-5 of
+    // the energy moved and cost two more solves).
+    double iron_chord = 0;
+    if (iron) {
+      const double iron_start = coil_flux(iron_start_, {}, forces_.softening(), then).flux;
+      if (std::isfinite(iron_start)) iron_chord = iron_end - iron_start;
+    }
+    const double iron_rate = iron_chord / dt;
     if (miss > 0.5 * std::max(std::abs(f_end.flux - f.flux), std::abs(seen)) &&
         miss > kFluxJump * (std::abs(f.flux) + std::abs(f_end.flux)) && miss > kFluxJumpFloor) {
       ++flux_jumps_;
-      target_.set_induced_emf(id, -f_end.rate);
+      target_.set_induced_emf(id, -(f_end.rate + iron_rate));
       continue;
     }
-    target_.set_induced_emf(id, -f_end.rate, -chord / dt);
+    target_.set_induced_emf(id, -(f_end.rate + iron_rate), -(chord + iron_chord) / dt);
     if (keep) made.coils.push_back({id, moved_centre, moved_axis});
   }
   if (keep) earlier_prediction_ = std::move(prediction_), prediction_ = std::move(made);

@@ -25,6 +25,13 @@
 // EMF keeps the present velocity, as before) and the acceleration is within
 // half of the step before's (not a contact's impulse or a hand's push).
 //
+// Soft iron (induction order 2): the iron's moments change as the parts
+// move, and that change is in the EMF: the step's flux change adds the
+// flux of the iron's poles solved again at the poses predicted for the
+// step's start and end, at the currents of now, the coils' own share at
+// half (MagneticForces::emf_iron_poles; docs/magnetism.md "Induction
+// through soft iron"). The iron's inductance stays out of the circuit.
+//
 // Contract:
 //   reads    the magnetic_forces derived set (its poles), magnet, turns,
 //            coil_factor, pole_separation, inductance, position, orientation,
@@ -153,6 +160,10 @@ class ElectricityFromMagnetism : public Interaction {
   std::vector<Vec3> pole_velocity_end_;  // the poles' velocities one step on (scratch)
   std::vector<Pole> moved_poles_;        // the poles one step on (scratch)
   std::vector<Pole> predicted_poles_;    // the poles where the last apply put them (scratch)
+  // With soft iron (scratch): the poles' fixed shares now, and the induced
+  // poles the EMF integrates at the step's predicted start and end
+  // (MagneticForces::emf_iron_poles).
+  std::vector<Pole> fixed_now_, iron_start_, iron_end_;
   // Per slot: the last apply's velocities and the ones of the apply before.
   std::vector<Seen> latest_, earlier_;
   /// Where an apply (induction_order 2) moved the parts on to for the
@@ -174,6 +185,9 @@ class ElectricityFromMagnetism : public Interaction {
       Vec3 centre, axis;
     };
     std::vector<Coil> coils;
+    /// Each body's predicted pose (only with soft iron: the iron is solved
+    /// again at the poses, MagneticForces::emf_iron_poles).
+    std::vector<MagneticForces::PartPose> poses;
   };
   Prediction prediction_, earlier_prediction_;
   bool first_apply_ = true;  // no apply yet (nor a restored history)

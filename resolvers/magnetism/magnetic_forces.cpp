@@ -97,6 +97,15 @@ const MagneticBody* MagneticForces::find(ObjectId id) const {
   return b.id == id ? &b : nullptr;
 }
 
+std::vector<MagneticForces::PartPose> MagneticForces::poses() const {
+  std::vector<PartPose> out(frames_.size());
+  for (std::size_t b = 0; b < frames_.size(); ++b) {
+    out[b].centre = frames_[b].centre;
+    for (int i = 0; i < 3; ++i) out[b].axes[i] = frames_[b].axes[i];
+  }
+  return out;
+}
+
 Vec3 MagneticForces::field(Vec3 point) const {
   Vec3 h;
   const std::uint32_t none = kNoBody;
@@ -122,6 +131,114 @@ bool MagneticForces::due_check() const {
   return !(double(moved) <= kAutoCheckMovedShare * double(parts));
 }
 
+std::vector<InducedPart> MagneticForces::induced_parts(const std::vector<Frame>& at) const {
+  std::vector<InducedPart> parts(models_.size());
+  for (std::uint32_t b = 0; b < iron_of_.size(); ++b) {
+    if (iron_of_[b] < 0) continue;
+    const SoftIronModel& m = models_[std::size_t(iron_of_[b])];
+    InducedPart& p = parts[std::size_t(iron_of_[b])];
+    p.centre = at[b].centre;
+    for (int i = 0; i < 3; ++i) p.axes[i] = at[b].axes[i];
+    p.susceptibility[0] = m.susceptibility.x, p.susceptibility[1] = m.susceptibility.y,
+    p.susceptibility[2] = m.susceptibility.z;
+    p.separation[0] = m.separation.x, p.separation[1] = m.separation.y,
+    p.separation[2] = m.separation.z;
+    p.volume = m.volume;
+    p.saturation = m.saturation;
+    p.body = b;
+  }
+  return parts;
+}
+
+std::vector<Pole> MagneticForces::fixed_poles(const std::vector<Frame>& at,
+                                              const std::vector<double>& q) const {
+  std::vector<Pole> out;
+  for (std::uint32_t b = 0; b < q.size(); ++b) {
+    if (q[b] == 0) continue;
+    const BarPoles p = bar_poles(at[b].centre, at[b].axes[0], at[b].separation);
+    out.push_back({p.north, q[b], b});
+    out.push_back({p.south, -q[b], b});
+  }
+  return out;
+}
+
+// Every body's one pole pair: a magnet's or a coil's along its x axis (a
+// coil's core adds its axial moment to it); free iron's along its moment,
+// spread over the part's chord in that direction, so that a sphere's poles
+// do not depend on how it is turned.
+std::vector<MagneticForces::PolePair> MagneticForces::pole_pairs(
+    const std::vector<Frame>& at, const std::vector<double>& q,
+    const std::vector<Vec3>& moment) const {
+  std::vector<PolePair> out(q.size());
+  for (std::uint32_t b = 0; b < q.size(); ++b) {
+    const Frame& f = at[b];
+    out[b] = {f.axes[0], f.separation, q[b]};
+    if (iron_of_[b] < 0) continue;
+    const SoftIronModel& m = models_[std::size_t(iron_of_[b])];
+    const Vec3 mb = moment[std::size_t(iron_of_[b])];
+    if (m.axial_only) {
+      out[b].strength += dot(mb, f.axes[0]) / f.separation;
+      continue;
+    }
+    const double size = length(mb);
+    if (!(size > 0) || !std::isfinite(size)) continue;
+    const Vec3 u = mb / size;
+    const double d = m.separation_along({dot(u, f.axes[0]), dot(u, f.axes[1]), dot(u, f.axes[2])});
+    out[b] = {u, d, size / d};
+  }
+  return out;
+}
+
+std::vector<double> MagneticForces::magnets_only(const std::vector<double>& q) const {
+  std::vector<double> out(q.size(), 0.0);
+  for (std::size_t b = 0; b < q.size(); ++b)
+    if (permanent_[b]) out[b] = q[b];
+  return out;
+}
+
+void MagneticForces::append_induced_poles(const std::vector<Frame>& at,
+                                          const std::vector<Vec3>& moment, double scale,
+                                          std::vector<Pole>& out) const {
+  const std::vector<double> none(at.size(), 0.0);
+  const std::vector<PolePair> pairs = pole_pairs(at, none, moment);
+  for (std::uint32_t b = 0; b < at.size(); ++b) {
+    if (iron_of_[b] < 0 || pairs[b].strength == 0 || !std::isfinite(pairs[b].strength)) continue;
+    const BarPoles p = bar_poles(at[b].centre, pairs[b].axis, pairs[b].separation);
+    out.push_back({p.north, scale * pairs[b].strength, b});
+    out.push_back({p.south, -scale * pairs[b].strength, b});
+  }
+}
+
+void MagneticForces::emf_iron_poles(std::span<const PartPose> poses, std::vector<Pole>& out) const {
+  out.clear();
+  if (models_.empty() || poses.size() != frames_.size()) return;
+  std::vector<Frame> at = frames_;
+  for (std::size_t b = 0; b < at.size(); ++b) {
+    at[b].centre = poses[b].centre;
+    for (int i = 0; i < 3; ++i) at[b].axes[i] = poses[b].axes[i];
+  }
+  const std::vector<InducedPart> parts = induced_parts(at);
+  const InductionResult with_currents =
+      solve_induction(fixed_poles(at, fixed_strength_), parts, softening_, summation_);
+  const std::vector<double> magnets = magnets_only(fixed_strength_);
+  if (magnets == fixed_strength_) {  // no coil carries a current: one solve
+    append_induced_poles(at, with_currents.moment, 1.0, out);
+    return;
+  }
+  // The mean of the moments with the coils' currents and without them, as
+  // two half-strength pairs (free iron's pair follows its moment, so the
+  // two need not lie on one line): the flux whose change along the motion,
+  // at the currents of now, makes the circuits pay for the work the iron's
+  // forces do beyond the fall of its store in the magnets' field
+  // (docs/magnetism.md "Induction through soft iron").
+  append_induced_poles(at, with_currents.moment, 0.5, out);
+  if (std::all_of(magnets.begin(), magnets.end(), [](double q) { return q == 0; }))
+    return;  // no magnet: the moments without the currents are 0
+  const InductionResult bare =
+      solve_induction(fixed_poles(at, magnets), parts, softening_, summation_);
+  append_induced_poles(at, bare.moment, 0.5, out);
+}
+
 void MagneticForces::update(const WorldView& world) {
   ++updates_;
   if (!ids_) ids_ = MagnetColumns::Ids::resolve(world);
@@ -136,15 +253,11 @@ void MagneticForces::update(const WorldView& world) {
   // 1. Gather the parts: their frames, the fixed poles of magnets and coils,
   //    and the soft iron (free parts and coils' cores) whose moment depends
   //    on the field.
-  struct Frame {
-    Vec3 centre;
-    Vec3 axes[3];       // the part's local x, y, z in the world
-    double separation;  // of its fixed poles (along x)
-  };
-  std::vector<Frame> frames;
-  std::vector<double> fixed_strength;  // per body: the magnet's or coil's own q
-  std::vector<std::int32_t> iron_of;   // per body: index in models / parts, or -1
-  std::vector<SoftIronModel> models;
+  std::vector<Frame>& frames = frames_;
+  std::vector<double>& fixed_strength = fixed_strength_;  // per body: the magnet's or coil's own q
+  std::vector<std::int32_t>& iron_of = iron_of_;  // per body: index in models / parts, or -1
+  std::vector<SoftIronModel>& models = models_;
+  frames.clear(), fixed_strength.clear(), iron_of.clear(), models.clear(), permanent_.clear();
   // Reserved: growing `frames` (104-byte records) by doubling copied them
   // element by element, a third of this function's own time at 10,000 parts
   // (perf, session 18).
@@ -179,6 +292,7 @@ void MagneticForces::update(const WorldView& world) {
     fixed_strength.push_back(0.0);
     iron_of.push_back(-1);
     const MagnetKind kind = c.kind(slot);
+    permanent_.push_back(kind == MagnetKind::Permanent ? 1 : 0);
     sheet_body_.push_back(near_field_ && kind == MagnetKind::Permanent ? 1 : 0);
     if (kind != MagnetKind::SoftIron) {
       double q = c.pole_strength.value_or(slot, 0.0);
@@ -197,65 +311,13 @@ void MagneticForces::update(const WorldView& world) {
       }
   }
   const auto n_bodies = std::uint32_t(bodies_.size());
-
-  // The induction solve's view of the iron at the given frames.
-  auto induced_parts = [&](const std::vector<Frame>& at) {
-    std::vector<InducedPart> parts(models.size());
-    for (std::uint32_t b = 0; b < n_bodies; ++b) {
-      if (iron_of[b] < 0) continue;
-      const SoftIronModel& m = models[std::size_t(iron_of[b])];
-      InducedPart& p = parts[std::size_t(iron_of[b])];
-      p.centre = at[b].centre;
-      for (int i = 0; i < 3; ++i) p.axes[i] = at[b].axes[i];
-      p.susceptibility[0] = m.susceptibility.x, p.susceptibility[1] = m.susceptibility.y,
-      p.susceptibility[2] = m.susceptibility.z;
-      p.separation[0] = m.separation.x, p.separation[1] = m.separation.y,
-      p.separation[2] = m.separation.z;
-      p.volume = m.volume;
-      p.saturation = m.saturation;
-      p.body = b;
-    }
-    return parts;
-  };
+  auto induced_parts = [&](const std::vector<Frame>& at) { return this->induced_parts(at); };
   auto fixed_poles = [&](const std::vector<Frame>& at, const std::vector<double>& q) {
-    std::vector<Pole> out;
-    for (std::uint32_t b = 0; b < n_bodies; ++b) {
-      if (q[b] == 0) continue;
-      const BarPoles p = bar_poles(at[b].centre, at[b].axes[0], at[b].separation);
-      out.push_back({p.north, q[b], b});
-      out.push_back({p.south, -q[b], b});
-    }
-    return out;
-  };
-  // Every body's one pole pair: a magnet's or a coil's along its x axis (a
-  // coil's core adds its axial moment to it); free iron's along its moment,
-  // spread over the part's chord in that direction, so that a sphere's poles
-  // do not depend on how it is turned.
-  struct PolePair {
-    Vec3 axis;
-    double separation = 0, strength = 0;
+    return this->fixed_poles(at, q);
   };
   auto pole_pairs = [&](const std::vector<Frame>& at, const std::vector<double>& q,
                         const std::vector<Vec3>& moment) {
-    std::vector<PolePair> out(n_bodies);
-    for (std::uint32_t b = 0; b < n_bodies; ++b) {
-      const Frame& f = at[b];
-      out[b] = {f.axes[0], f.separation, q[b]};
-      if (iron_of[b] < 0) continue;
-      const SoftIronModel& m = models[std::size_t(iron_of[b])];
-      const Vec3 mb = moment[std::size_t(iron_of[b])];
-      if (m.axial_only) {
-        out[b].strength += dot(mb, f.axes[0]) / f.separation;
-        continue;
-      }
-      const double size = length(mb);
-      if (!(size > 0) || !std::isfinite(size)) continue;
-      const Vec3 u = mb / size;
-      const double d =
-          m.separation_along({dot(u, f.axes[0]), dot(u, f.axes[1]), dot(u, f.axes[2])});
-      out[b] = {u, d, size / d};
-    }
-    return out;
+    return this->pole_pairs(at, q, moment);
   };
 
   // A free iron part's pole pair follows its induced moment, not the part, so
@@ -295,10 +357,10 @@ void MagneticForces::update(const WorldView& world) {
   induction_iterations_ = induced.iterations;
   induction_converged_ = induced.converged;
   const std::vector<PolePair> pairs = pole_pairs(frames, fixed_strength, induced.moment);
+  induced_moment_ = induced.moment;
 
   // 3. Every pole, grouped by part, north first.
   induced_share_.assign(n_bodies, 0.0);
-  induced_ratio_.assign(n_bodies, 0.0);
   for (std::uint32_t b = 0; b < n_bodies; ++b) {
     bodies_[b].pole_strength = pairs[b].strength;
     // What of the strength the field induced: all of a soft-iron part's; a
@@ -306,9 +368,6 @@ void MagneticForces::update(const WorldView& world) {
     // books keep it apart from the coil's own, which its circuit pays for).
     if (iron_of[b] >= 0) {
       induced_share_[b] = pairs[b].strength - fixed_strength[b];
-      const SoftIronModel& m = models[std::size_t(iron_of[b])];
-      const double size = length(induced.moment[std::size_t(iron_of[b])]);
-      induced_ratio_[b] = m.saturation > 0 && std::isfinite(size) ? size / m.saturation : 0.0;
     }
     bodies_[b].first_pole = std::uint32_t(poles_.size());
     if (pairs[b].strength == 0) continue;
@@ -481,7 +540,9 @@ void MagneticForces::update(const WorldView& world) {
   }
 }
 
-double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8_t> kinds) const {
+double MagneticForces::permanent_work_across_a_change(std::span<const Pole> poles,
+                                                      std::span<const std::uint32_t> first,
+                                                      std::span<const std::uint8_t> kinds) const {
   // The poles of the permanent magnets present at both reports, paired by
   // their part (its id) and their order within it (north, then south).
   auto key_less = [](const std::pair<ObjectId, std::uint32_t>& a,
@@ -490,10 +551,10 @@ double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8
            std::tie(b.first.index, b.first.generation, b.second);
   };
   std::vector<std::pair<std::pair<ObjectId, std::uint32_t>, std::size_t>> now;
-  for (std::size_t i = 0; i < poles_.size(); ++i) {
-    const std::uint32_t b = poles_[i].body;
+  for (std::size_t i = 0; i < poles.size(); ++i) {
+    const std::uint32_t b = poles[i].body;
     if (kinds[b] != 1) continue;
-    now.push_back({{bodies_[b].id, std::uint32_t(i - bodies_[b].first_pole)}, i});
+    now.push_back({{bodies_[b].id, std::uint32_t(i - first[b])}, i});
   }
   std::sort(now.begin(), now.end(),
             [&](const auto& a, const auto& b) { return key_less(a.first, b.first); });
@@ -516,8 +577,8 @@ double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8
         std::lower_bound(now.begin(), now.end(), k,
                          [&](const auto& e, const auto& key) { return key_less(e.first, key); });
     if (it == now.end() || key_less(k, it->first)) continue;
-    m.push_back({reported_poles_[i].position, poles_[it->second].position,
-                 reported_shares_[i].fixed, reported_bodies_[b].index});
+    m.push_back({reported_poles_[i].position, poles[it->second].position, reported_shares_[i].fixed,
+                 reported_bodies_[b].index});
   }
   double work = 0;  // the fall of the pairs' energy at the strengths then
   for (std::size_t i = 0; i < m.size(); ++i)
@@ -531,13 +592,13 @@ double MagneticForces::permanent_work_across_a_change(std::span<const std::uint8
 }
 
 void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
-  // Each pole's strength in two shares: the fixed one (a permanent magnet's,
-  // or a coil's own current's) and the induced one (soft iron, a coil's core
-  // beyond its own current's share). Pairs are booked by share:
+  // Pairs are booked by share:
   //   permanent x permanent   here, a store: mu0/4pi q_i q_j / sqrt(r^2 + eps^2)
   //   coil's own x anything   by electricity: the EMF at held strengths
-  //   permanent x induced,
-  //   induced x induced       here, soft iron's (below)
+  //   the iron's share from the coils' currents x anything: by electricity,
+  //                           the EMF of the iron's moments' change
+  //   permanent x the magnets' own induced share,
+  //   that share x itself     here, soft iron's (below)
   // Direct, O(poles^2), and only while a ledger is kept.
   std::vector<std::uint8_t> kinds(bodies_.size(), 0);
   if (ids_) {
@@ -550,11 +611,47 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
       kinds[b] = k == MagnetKind::Permanent ? 1 : k == MagnetKind::SoftIron ? 2 : 0;
     }
   }
-  std::vector<Share> shares(poles_.size());
-  for (std::size_t i = 0; i < poles_.size(); ++i) {
-    const Pole& p = poles_[i];
-    const double induced = std::copysign(induced_share_[p.body], p.strength);
-    shares[i] = {p.strength - induced, induced, kinds[p.body] == 1};
+  // The books' poles: the permanent magnets' and, for each iron part, the
+  // pair of the moment the magnets alone induce there (every coil's current
+  // off). The iron's share that the coils' currents add is the circuits':
+  // the EMF makes them pay for its work (emf_iron_poles; docs/energy.md
+  // "Session 21"), so its pairs are not booked here.
+  std::vector<Vec3> bare = induced_moment_;
+  if (!models_.empty()) {
+    const std::vector<double> magnets = magnets_only(fixed_strength_);
+    if (std::all_of(magnets.begin(), magnets.end(), [](double q) { return q == 0; }))
+      bare.assign(bare.size(), Vec3{});  // no magnet: nothing magnetised without the currents
+    else if (magnets != fixed_strength_)
+      bare = solve_induction(fixed_poles(frames_, magnets), induced_parts(frames_), softening_,
+                             summation_)
+                 .moment;
+  }
+  std::vector<Pole> book;
+  std::vector<Share> shares;
+  std::vector<std::uint32_t> first(bodies_.size(), 0);
+  std::vector<double> ratio(bodies_.size(), 0.0);
+  {
+    std::vector<Pole> iron;
+    append_induced_poles(frames_, bare, 1.0, iron);
+    std::size_t next_iron = 0;
+    for (std::uint32_t b = 0; b < bodies_.size(); ++b) {
+      first[b] = std::uint32_t(book.size());
+      if (permanent_[b])
+        for (std::uint32_t i = bodies_[b].first_pole;
+             i < bodies_[b].first_pole + bodies_[b].pole_count; ++i) {
+          book.push_back(poles_[i]);
+          shares.push_back({poles_[i].strength, 0.0, kinds[b] == 1});
+        }
+      for (; next_iron < iron.size() && iron[next_iron].body == b; ++next_iron) {
+        book.push_back(iron[next_iron]);
+        shares.push_back({0.0, iron[next_iron].strength, false});
+      }
+      if (iron_of_[b] >= 0) {
+        const SoftIronModel& m = models_[std::size_t(iron_of_[b])];
+        const double size = length(bare[std::size_t(iron_of_[b])]);
+        ratio[b] = m.saturation > 0 && std::isfinite(size) ? size / m.saturation : 0.0;
+      }
+    }
   }
   const double eps2 = softening_ * softening_;
   // The energy of the pairs of two parts in `which` (1: permanent x
@@ -579,7 +676,7 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
       }
     return u;
   };
-  const double permanent = energy(shares, poles_, 1);
+  const double permanent = energy(shares, book, 1);
   out.store("permanent magnets' interaction", permanent);
   // Soft iron's store: the co-energy of its induced moments in the permanent
   // magnets' field, U = sum_b rho_b E_b, E_b the interaction of b's induced
@@ -587,25 +684,25 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
   // rho = 1/2 for linear iron (U = -1/2 m . B: the force at held strengths
   // does -dU, since m follows H), less as it saturates (iron_coenergy_ratio).
   double iron_store = 0;
-  for (std::size_t i = 0; i < poles_.size(); ++i) {
+  for (std::size_t i = 0; i < book.size(); ++i) {
     if (shares[i].induced == 0) continue;
     double e = 0;
-    for (std::size_t j = 0; j < poles_.size(); ++j) {
-      if (!shares[j].permanent || poles_[j].body == poles_[i].body) continue;
-      const Vec3 r = poles_[j].position - poles_[i].position;
+    for (std::size_t j = 0; j < book.size(); ++j) {
+      if (!shares[j].permanent || book[j].body == book[i].body) continue;
+      const Vec3 r = book[j].position - book[i].position;
       e += shares[i].induced * shares[j].fixed / std::sqrt(dot(r, r) + eps2);
     }
-    iron_store += kMu0Over4Pi * e * iron_coenergy_ratio(induced_ratio_[poles_[i].body]);
+    iron_store += kMu0Over4Pi * e * iron_coenergy_ratio(ratio[book[i].body]);
   }
   out.store("soft iron's field (co-energy in the magnets' field)", iron_store);
   // The work along the motion since the last report, at the strengths of the
   // last report, when the parts and their poles are the same.
-  bool same = reported_ && reported_poles_.size() == poles_.size() &&
+  bool same = reported_ && reported_poles_.size() == book.size() &&
               reported_bodies_.size() == bodies_.size() && reported_kinds_ == kinds;
   for (std::size_t b = 0; same && b < bodies_.size(); ++b)
     same = reported_bodies_[b] == bodies_[b].id;
-  for (std::size_t i = 0; same && i < poles_.size(); ++i)
-    same = reported_poles_[i].body == poles_[i].body;
+  for (std::size_t i = 0; same && i < book.size(); ++i)
+    same = reported_poles_[i].body == book[i].body;
   double perm_work = 0, iron_work = 0;
   if (reported_ && !same) {
     // A coil switched on or off since (its poles come and go with its
@@ -613,25 +710,31 @@ void MagneticForces::report_energy(const WorldView& view, EnergyReport& out) {
     // matched by their part, so that their pairs' work is still booked
     // against the store's change (it was left out, and the store's change
     // showed as the coupling's mismatch at every commutation of the motor).
-    perm_work = permanent_work_across_a_change(kinds);
+    perm_work = permanent_work_across_a_change(book, first, kinds);
   }
   if (same) {
     perm_work = energy(reported_shares_, reported_poles_, 1) - permanent;
-    iron_work = energy(reported_shares_, reported_poles_, 2) - energy(reported_shares_, poles_, 2);
+    // The iron's strengths change along the motion: its pairs' work at the
+    // mean of the strengths at the two reports (the trapezoid), the partner
+    // of the rigid body's kick at each report booked along the mean velocity
+    // around it (docs/energy.md "Session 20"); at the strengths of the last
+    // report alone it was first order in the step.
+    iron_work =
+        0.5 * (energy(reported_shares_, reported_poles_, 2) - energy(reported_shares_, book, 2) +
+               energy(shares, reported_poles_, 2) - energy(shares, book, 2));
   }
-  // What the iron's forces did beyond the fall of its store: iron on iron
-  // where a coil magnetises it (no circuit pays for that in this model: the
-  // EMF is at held strengths), and the pole model's own error (the induced
-  // moment follows the mean field of the samples, the force the poles' line).
+  // What the iron's forces did beyond the fall of its store: the pole
+  // model's own error (the induced moment follows the mean field of the
+  // samples, the force the poles' line) and the step's.
   const double store_fall = same ? reported_iron_store_ - iron_store : 0.0;
   out.source("soft iron's work beyond its store", iron_work - store_fall);
   reported_iron_store_ = iron_store;
   out.transfer("magnetism", -(perm_work + iron_work));
-  reported_poles_.assign(poles_.begin(), poles_.end());
+  reported_poles_ = std::move(book);
   reported_shares_ = std::move(shares);
-  reported_bodies_.clear(), reported_first_pole_.clear();
-  for (const MagneticBody& b : bodies_)
-    reported_bodies_.push_back(b.id), reported_first_pole_.push_back(b.first_pole);
+  reported_bodies_.clear();
+  for (const MagneticBody& b : bodies_) reported_bodies_.push_back(b.id);
+  reported_first_pole_ = std::move(first);
   reported_kinds_ = std::move(kinds);
   reported_ = true;
 }

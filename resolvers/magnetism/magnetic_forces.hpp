@@ -153,18 +153,18 @@ class MagneticForces : public DerivedSet {
   /// Its forces matter only to the stages that read them (the rigid body's
   /// interaction): with the rigid body every n-th step, summed once in n.
   bool on_demand() const override { return true; }
-  /// The work the forces between parts that are not coils did on the parts
-  /// since the last report, at the pole strengths of the last report (the
-  /// strengths the forces of the step were computed with): transfer
-  /// "magnetism", given to the rigid body. Each pole's strength is split into
-  /// its fixed share (a magnet's, a coil's own current's) and its induced
-  /// share (soft iron's, a cored coil's core beyond its own current's). The
-  /// permanent magnets' pairs are minus the change of their interaction
-  /// energy (a store). Pairs with an induced share draw on soft iron's store,
-  /// its co-energy in the magnets' field (-1/2 m.B for linear iron); what the
-  /// store does not explain (iron on iron magnetised by a coil, the model's
-  /// own error) is a source (docs/energy.md). The work of a coil's own share
-  /// is the EMF's: electricity books it.
+  /// The work the forces between the permanent magnets and the moments
+  /// they alone induce in the iron did on the parts since the last report:
+  /// transfer "magnetism", given to the rigid body. The permanent magnets'
+  /// pairs (at their strengths) are minus the change of their interaction
+  /// energy (a store). The iron is solved again with every coil's current
+  /// off; its pairs with the magnets and with one another, at the mean of
+  /// the strengths of the two reports, draw on soft iron's store, their
+  /// co-energy in the magnets' field (-1/2 m.B for linear iron); what the
+  /// store does not explain (the model's own error) is a source
+  /// (docs/energy.md "Session 21"). A coil's own share, and the iron's share
+  /// from the coils' currents, are the EMF's (emf_iron_poles): electricity
+  /// books them.
   void report_energy(const WorldView& view, EnergyReport& out) override;
 
   /// Every magnetic part with a position, in slot order.
@@ -177,6 +177,33 @@ class MagneticForces : public DerivedSet {
   Vec3 field(Vec3 point) const;
 
   double softening() const { return softening_; }
+
+  /// A part's pose: its centre and its local x, y, z axes (unit) in the world.
+  struct PartPose {
+    Vec3 centre;
+    Vec3 axes[3];
+  };
+  /// Each body's pose at the last update (index of bodies()).
+  std::vector<PartPose> poses() const;
+  /// Whether some part has soft iron (a free part or a coil's live core).
+  bool has_iron() const { return !models_.empty(); }
+  /// Per body (index of bodies()): the share of its pole strength the field
+  /// induced, A*m (soft iron's whole strength, a cored coil's core beyond its
+  /// own current's); 0 for the rest. The rest of a pole's strength is fixed.
+  std::span<const double> induced_shares() const { return induced_share_; }
+  /// The induced poles whose flux a coil's EMF integrates, with every part at
+  /// `poses` (one per body, as poses()): the iron solved there with the fixed
+  /// strengths of the last update (the coils' currents of now) and solved
+  /// again with the coils' currents off, each pair at half its strength, so
+  /// that the flux through coil j is the mean of the two (exact for linear
+  /// iron: the integral over s in [0, 1] of the flux at the currents s I,
+  /// whose change at fixed currents is d/dx of the co-energy the currents add
+  /// to the iron's). With no coil carrying a current, the one solve at full
+  /// strength. Body indices as bodies(); empty without iron. A coil's own core
+  /// is in its own body, so coil_flux skips it (its response to the coil's
+  /// current is in coil_factor). docs/magnetism.md "Induction through soft
+  /// iron".
+  void emf_iron_poles(std::span<const PartPose> poses, std::vector<Pole>& out) const;
   /// Per body (index of bodies()): 1 where a coil's near field acts on its
   /// poles as a finite solenoid's (permanent magnets), else 0 (the pole pair's
   /// field only: coils, soft iron). solenoid_field.hpp.
@@ -203,6 +230,29 @@ class MagneticForces : public DerivedSet {
   std::uint64_t updates() const { return updates_; }
 
  private:
+  /// A body's frame at an update: its pose and the separation of its fixed poles.
+  struct Frame {
+    Vec3 centre;
+    Vec3 axes[3];       // the part's local x, y, z in the world
+    double separation;  // of its fixed poles (along x)
+  };
+  /// A body's one pole pair (its fixed share and its core's, or free iron's).
+  struct PolePair {
+    Vec3 axis;
+    double separation = 0, strength = 0;
+  };
+  /// The induction solve's view of the iron at the frames `at`.
+  std::vector<InducedPart> induced_parts(const std::vector<Frame>& at) const;
+  /// The fixed poles (strength q[b] along each body's x axis) at `at`.
+  std::vector<Pole> fixed_poles(const std::vector<Frame>& at, const std::vector<double>& q) const;
+  /// Every body's pole pair at `at`: fixed strengths q, induced moments `moment`.
+  std::vector<PolePair> pole_pairs(const std::vector<Frame>& at, const std::vector<double>& q,
+                                   const std::vector<Vec3>& moment) const;
+  /// The fixed strengths `q` with every coil's set to 0 (the magnets' alone).
+  std::vector<double> magnets_only(const std::vector<double>& q) const;
+  /// Appends the induced pole pairs of `moment` at `at`, times `scale`.
+  void append_induced_poles(const std::vector<Frame>& at, const std::vector<Vec3>& moment,
+                            double scale, std::vector<Pole>& out) const;
   /// Whether Auto's check is due at this update (kAutoCheckEvery).
   bool due_check() const;
   double softening_;
@@ -224,11 +274,18 @@ class MagneticForces : public DerivedSet {
   std::vector<Pole> poles_;
   std::vector<std::uint32_t> body_of_slot_;  // slot -> index in bodies_, or kNoBody
   std::vector<std::uint8_t> sheet_body_;     // per body: sheet_bodies()
+  // The last update's parts: frames, fixed strengths, iron models (iron_of_:
+  // per body, the index in models_ or -1), whether each is a permanent
+  // magnet, and the induced moments solved.
+  std::vector<Frame> frames_;
+  std::vector<double> fixed_strength_;
+  std::vector<std::int32_t> iron_of_;
+  std::vector<SoftIronModel> models_;
+  std::vector<std::uint8_t> permanent_;
+  std::vector<Vec3> induced_moment_;
   // Per body: the share of its pole strength the field induced (soft iron's
   // whole strength, a cored coil's core beyond its own current's share), A*m.
   std::vector<double> induced_share_;
-  // Per body with induced iron: |moment| / saturation moment (0 if none).
-  std::vector<double> induced_ratio_;
   double reported_iron_store_ = 0;
   int induction_iterations_ = 0;
   bool induction_converged_ = true;
@@ -248,7 +305,10 @@ class MagneticForces : public DerivedSet {
   /// The permanent magnets' pairs' work since the last report when the
   /// poles changed (a coil switched, a part came or went): their poles
   /// matched by part (`kinds`: this report's, per body; 1 = permanent).
-  double permanent_work_across_a_change(std::span<const std::uint8_t> kinds) const;
+  /// `poles`: this report's booked poles, `first`: each body's first in them.
+  double permanent_work_across_a_change(std::span<const Pole> poles,
+                                        std::span<const std::uint32_t> first,
+                                        std::span<const std::uint8_t> kinds) const;
   std::vector<std::uint8_t> reported_kinds_;
   bool reported_ = false;
   std::optional<MagnetColumns::Ids> ids_;  // resolved at the first update

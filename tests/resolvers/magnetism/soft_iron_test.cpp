@@ -8,10 +8,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <vector>
 
 #include "magnet_scene.hpp"
+#include "resolvers/magnetism/flux_linkage.hpp"
 
 namespace alloy::magnetism {
 namespace {
@@ -278,6 +280,88 @@ TEST_F(SoftIronTest, ACoilsIronCoreIsPulledByAMagnetWithNoCurrent) {
   EXPECT_LT(cored, -1e-3) << "the core is pulled toward the magnet";
   // With current along the magnet's field direction, the coil's own poles add.
   EXPECT_LT(pull(true, 0.5), pull(false, 0.5));
+}
+
+// The iron's poles a coil's EMF integrates (session 21, docs/magnetism.md
+// "Induction through soft iron"): with every part at given poses, the iron
+// solved there with the coils' currents and without them, each at half
+// strength. The references are the induced poles the set's own update
+// solves in worlds built with the parts at those places, with the current
+// and with none: the flux of the EMF's poles through a coil is the mean of
+// theirs.
+TEST_F(SoftIronTest, TheEmfsIronPolesAreTheMeanOfTheIronWithAndWithoutTheCurrents) {
+  const Vec3 bar_at{0.02, 0.09, 0}, moved_by{0.013, -0.021, 0};
+  const double turned = 0.4;  // rad about z, the bar's pose moved
+  struct Built {
+    std::unique_ptr<World> w;
+    ObjectId coil, bar;
+  };
+  auto build = [&](double current, Vec3 at, double angle) {
+    Built b{std::make_unique<World>(registry), {}, {}};
+    World& w = *b.w;
+    const ObjectId magnet =
+        add_bar(w, "magnet", MagnetKind::Permanent, {-0.12, 0, 0}, 0, {0.05, 0.01, 0.01});
+    w.set(magnet, prop::kPoleStrength, 112.3);
+    b.coil = add_coil(w, "coil", {0, 0, 0}, 0, 500);
+    w.set(b.coil, prop::kCurrent, current);
+    w.set(b.coil, prop::kCoilFactor, 0.1);         // an iron core's, not air's 4.7 mm
+    w.set(b.coil, prop::kSusceptibility, 5000.0);  // and live
+    w.set(b.coil, prop::kCoreDiameter, 0.012);
+    b.bar = add_iron(w, "bar", at, angle, 5000);
+    w.start();
+    current_source_of(w).next = current;
+    w.run(2);
+    return b;
+  };
+  // The flux of the iron's poles (the bar's and the core's: every body but
+  // the probe's own) through a probe coil beside them.
+  CoilGeometry probe;
+  probe.centre = {0.02, 0.15, 0}, probe.axis = {0, 1, 0}, probe.separation = 0.04;
+  probe.linkage = 0.01 * 300;
+  auto iron_flux = [&](std::span<const Pole> poles) {
+    return coil_flux(poles, {}, MagneticForces::kDefaultSoftening, probe).flux;
+  };
+  auto induced_of = [&](const Built& b) {
+    const MagneticForces& f = forces_of(*b.w);
+    std::vector<Pole> out;
+    const auto shares = f.induced_shares();
+    for (const MagneticBody& body : f.bodies())
+      for (std::uint32_t i = body.first_pole; i < body.first_pole + body.pole_count; ++i) {
+        Pole p = f.poles()[i];
+        const double share = shares[std::size_t(&body - f.bodies().data())];
+        p.strength = i == body.first_pole ? share : -share;  // north, then south
+        if (share != 0) out.push_back(p);
+      }
+    return out;
+  };
+  const Built on = build(2.0, bar_at, 0), off = build(0.0, bar_at, 0);
+  const Built on_moved = build(2.0, bar_at + moved_by, turned),
+              off_moved = build(0.0, bar_at + moved_by, turned);
+  const MagneticForces& forces = forces_of(*on.w);
+  std::vector<Pole> emf;
+  // At the parts' own poses.
+  forces.emf_iron_poles(forces.poses(), emf);
+  const double with = iron_flux(induced_of(on)), without = iron_flux(induced_of(off));
+  std::printf(
+      "the iron's flux through the probe: %.6e Wb with 2 A, %.6e Wb with none, EMF's %.6e\n", with,
+      without, iron_flux(emf));
+  ASSERT_GT(std::abs(with - without), 0.02 * std::abs(with)) << "the current magnetises the iron";
+  EXPECT_NEAR(iron_flux(emf), 0.5 * (with + without), 1e-9 * std::abs(with));
+  // The bar moved and turned: the iron solved again there.
+  std::vector<MagneticForces::PartPose> poses = forces.poses();
+  const std::size_t bar = std::size_t(forces.find(on.bar) - forces.bodies().data());
+  poses[bar].centre = poses[bar].centre + moved_by;
+  const Quat q = Quat::from_angle_z(turned);
+  for (int i = 0; i < 3; ++i) poses[bar].axes[i] = rotate(q, poses[bar].axes[i]);
+  forces.emf_iron_poles(poses, emf);
+  const double with_moved = iron_flux(induced_of(on_moved)),
+               without_moved = iron_flux(induced_of(off_moved));
+  ASSERT_GT(std::abs(with_moved - with), 0.1 * std::abs(with)) << "the move changes the flux";
+  EXPECT_NEAR(iron_flux(emf), 0.5 * (with_moved + without_moved), 1e-9 * std::abs(with_moved));
+  // With no current, one solve at full strength.
+  const MagneticForces& bare = forces_of(*off.w);
+  bare.emf_iron_poles(bare.poses(), emf);
+  EXPECT_NEAR(iron_flux(emf), without, 1e-12 * std::abs(without));
 }
 
 }  // namespace
