@@ -277,15 +277,32 @@ TEST(KitOnBox2D, DoorbellRingsSteadilyAtTheCoarseStep) {
   // and 1.28, with ODE's bell 16 steps at 1/240 s).
   EXPECT_NEAR(pc / o.period, 1, 0.05) << "ODE's period at the same step";
   EXPECT_NEAR((pc / pf) / (o.period / of.period), 1, 0.10) << "lengthened from 1/240 s as ODE's is";
-  // Steadily: nine in ten intervals within three steps of the mean period.
-  // The others are strikes missed (two periods) or doubled: a strike that
-  // begins and ends between the two Box2D steps of a world step is not in the
-  // contact set at its end, and the bell does not hear it (publishing such
-  // contacts steadied it, spread 1 step, but stalled the motor; docs/box2d.md,
-  // "Box2D's step and the world's").
-  int steady = 0;
-  for (long n : sc.steps) steady += std::abs(double(n) - c.period * 120) <= 3;
-  EXPECT_GE(steady, 0.85 * double(sc.steps.size()));
+  // Steadily, over 20 s: every interval between strikes heard is either the
+  // bell's own period (within three steps of the most common interval) or a
+  // whole number of them: strikes missed, a blow that begins and ends
+  // between the two Box2D steps of a world step is not in the contact set at
+  // its end and the bell does not hear it (publishing such contacts steadied
+  // it, spread 1 step, but stalled the motor; docs/box2d.md, "Box2D's step
+  // and the world's"). About one interval in five is such a miss: 38 of 181
+  // over 1-20 s before session 21's iron EMF, 37 of 180 after (docs/energy.md
+  // "Session 21"). A 5 s window's share swings with where the misses fall
+  // (the base build's later 4 s windows: 0.66 to 0.69 heard), so the count is
+  // over 20 s. Buzzing (intervals of a step or two) or a bell whose own
+  // period wanders fails the first check, more misses the second.
+  const KitRun long_run = run_kit("mods/doorbell", 20, {.start = kBox2D, .dt = 1.0 / 120});
+  const Steadiness sl = steadiness(long_run, 1, 20);
+  print_steadiness("on Box2D at 1/120 s, 1-20 s", sl);
+  std::size_t heard = 0, missed = 0;
+  for (long n : sl.steps) {
+    const long periods = std::lround(double(n) / double(sl.mode));
+    if (std::abs(n - sl.mode) <= 3)
+      ++heard;
+    else if (periods >= 2 && std::abs(n - periods * sl.mode) <= 3 * periods)
+      ++missed;
+  }
+  EXPECT_GE(sl.steps.size(), 150u) << "it rings for 20 s";
+  EXPECT_EQ(heard + missed, sl.steps.size()) << "every interval is a period or a strike missed";
+  EXPECT_LE(double(missed), 0.25 * double(sl.steps.size())) << "about one in five missed";
   // Two closings a cycle (the switch bar once, the interrupter each strike),
   // not one every few steps.
   EXPECT_LE(closings, std::size_t(3 * (coarse.strikes().size() + 1)));
