@@ -1,0 +1,17 @@
+-- adv21: Box2D at 1/60 s: a brass bar at 30 m/s hits a brass contact (touch
+-- inside step 5 at fraction 0.05). It bounces back (restitution), yet the
+-- contact set reports no contact and the circuit never closes, with or without
+-- ahead. ODE reports it (contact began at step 5, connected at 6).
+local kit = require "kit"
+local AHEAD = true
+local V = 30
+local GAP = (4 + 0.05) / 60 * V
+world { dt = 1/60, seconds = 0.2, use = { rigid_body = "rigid_body.box2d" },
+  settings = { ["gravity.uniform"] = { g = { 0, 0, 0 } },
+               electricity_from_collisions = { ahead = AHEAD } } }
+kit.battery { name = "bat", at = { 0, 0.5 } }
+kit.contact { name = "c", at = { 0.01, 0 } }
+kit.bar { name = "bar", material = "brass", at = { -GAP - 0.05, 0 }, length = 0.1, width = 0.01,
+          velocity = { V, 0 } }
+kit.wire { name = "w1", from = "bat", from_terminal = 1, to = "c" }
+kit.wire { name = "w0", from = "bat", from_terminal = 0, to = "bar" }

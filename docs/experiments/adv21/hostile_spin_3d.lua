@@ -1,0 +1,10 @@
+-- adv21 hostile: a conductive bar spinning at 1e5 rad/s about x and y (out of the plane)
+local kit = require "kit"
+world { dt = 1/240, seconds = 0.1,
+  settings = { ["gravity.uniform"] = { g = { 0, 0, 0 } },
+               electricity_from_collisions = { ahead = true } } }
+kit.battery { name = "bat", at = { 0, 0.5 } }
+kit.contact { name = "c", at = { 0.01, 0 } }
+object { name = "bar", shape = "box", size = { 0.1, 0.01, 0.01 }, mass = 0.1, conductive = true, position = { -0.06, 0, 0 }, angular_velocity = { 1e5, 1e5, 1e5 } }
+kit.wire { name = "w1", from = "bat", from_terminal = 1, to = "c" }
+kit.wire { name = "w0", from = "bat", from_terminal = 0, to = "bar", length = 0.5 }
