@@ -1,6 +1,9 @@
 #include "resolvers/electricity/electricity_from_collisions.hpp"
 
 #include <algorithm>
+#include <type_traits>
+
+#include "runtime/error.hpp"
 
 namespace alloy::electricity {
 
@@ -18,6 +21,14 @@ bool ElectricityFromCollisions::save_state(StateWriter& out) const {
   std::vector<ObjectId> ids;  // a, b of each pair
   for (const auto& [a, b] : before_) ids.push_back(a), ids.push_back(b);
   out.put_vector(ids);
+  if (ahead_) {  // the predicted pairs waiting for their report (none without ahead)
+    std::vector<ObjectId> waiting;
+    std::vector<std::int32_t> waited;
+    for (const auto& [pair, n] : waiting_before_)
+      waiting.push_back(pair.first), waiting.push_back(pair.second), waited.push_back(n);
+    out.put_vector(waiting);
+    out.put_vector(waited);
+  }
   return true;
 }
 
@@ -26,10 +37,22 @@ void ElectricityFromCollisions::restore_state(StateReader& in) {
   connected_.clear();
   for (std::size_t i = 0; i + 1 < ids.size(); i += 2) connected_.emplace_back(ids[i], ids[i + 1]);
   before_ = connected_;
+  waiting_.clear();
+  if (in.remaining() > 0) {  // saved with ahead on
+    const auto waiting = in.get_vector<ObjectId>();
+    const auto waited = in.get_vector<std::int32_t>();
+    if (waiting.size() != 2 * waited.size())
+      throw InputError("the saved state of stage '" + in.stage() +
+                       "' is damaged: its waiting pairs and their counts differ");
+    for (std::size_t i = 0; i < waited.size(); ++i)
+      waiting_.push_back({{waiting[2 * i], waiting[2 * i + 1]}, waited[i]});
+  }
+  waiting_before_ = waiting_;
 }
 
 void ElectricityFromCollisions::apply(const WorldView& world) {
   before_ = connected_;
+  waiting_before_ = waiting_;
   const auto conductive = conductive_.column<std::uint8_t>(world);
   const auto position = position_.column<Vec3>(world);
   const auto orientation = orientation_.column<Quat>(world);
@@ -80,6 +103,39 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
         conductors_.push_back(world.store().id_at(slot));
     std::sort(conductors_.begin(), conductors_.end());
     const auto soon = contacts_.touching_ahead(world, conductors_, 0.5 * world.dt());
+    // A predicted pair waits for the set to report it: a set that reports a
+    // step late (Box2D) would otherwise see it neither touching nor predicted
+    // (a part that bounced in that step) and open the circuit for a step
+    // between the prediction and the report (adv21). Held report_lag()
+    // updates past the prediction, then let go if still unreported.
+    const int lag = contacts_.report_lag();
+    auto touching_now = [&](const std::pair<ObjectId, ObjectId>& key) {
+      return std::binary_search(
+          touching.begin(), touching.end(), key, [](const auto& x, const auto& y) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(x)>, const ContactPair*>)
+              return pair_less(x->a, x->b, y.first, y.second);
+            else
+              return pair_less(x.first, x.second, y->a, y->b);
+          });
+    };
+    std::vector<std::pair<std::pair<ObjectId, ObjectId>, std::int32_t>> waiting;
+    for (const PredictedTouch& q : soon) waiting.push_back({{q.a, q.b}, 0});
+    std::vector<std::pair<ObjectId, ObjectId>> held;
+    for (const auto& [key, n] : waiting_) {
+      if (touching_now(key)) continue;
+      const bool again =
+          std::binary_search(soon.begin(), soon.end(), key, [](const auto& x, const auto& y) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(x)>, PredictedTouch>)
+              return pair_less(x.a, x.b, y.first, y.second);
+            else
+              return pair_less(x.first, x.second, y.a, y.b);
+          });
+      if (again || n >= lag) continue;
+      held.push_back(key);
+      waiting.push_back({key, n + 1});
+    }
+    std::sort(waiting.begin(), waiting.end());
+    waiting_ = std::move(waiting);
     std::size_t t = 0, f = 0;
     while (t < touching.size() || f < soon.size()) {
       const ContactPair* p = t < touching.size() ? touching[t] : nullptr;
@@ -95,6 +151,10 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
         ++f;
       }
     }
+    // Held pairs are connected already: their terminals are not sent again.
+    for (const auto& key : held) want.push_back({key.first, key.second, 0, 0});
+    std::sort(want.begin(), want.end(),
+              [](const Want& x, const Want& y) { return pair_less(x.a, x.b, y.a, y.b); });
   }
 
   // Compare with what we connected before; both lists are sorted by (a, b).

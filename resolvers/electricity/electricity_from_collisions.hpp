@@ -65,6 +65,10 @@ class ElectricityFromCollisions final : public Interaction {
   const ContactSet& contacts_;
   bool ahead_ = false;
   std::vector<ObjectId> conductors_;  // scratch: the conductive placed parts (ahead_)
+  /// Pairs connected by a prediction and not yet reported touching, with the
+  /// updates they have waited (ahead_; see apply), sorted; and as before the
+  /// last apply (saved, as before_ is).
+  std::vector<std::pair<std::pair<ObjectId, ObjectId>, std::int32_t>> waiting_, waiting_before_;
   std::vector<std::pair<ObjectId, ObjectId>> connected_;  // pairs we connected, sorted (a < b)
   std::vector<std::pair<ObjectId, ObjectId>> before_;     // connected_ before the last apply
   PropertyRef conductive_{prop::kConductive}, position_{"position"}, orientation_{"orientation"};

@@ -902,56 +902,60 @@ std::vector<PredictedTouch> CollisionSet::touching_ahead(const WorldView& world,
   if (m.geoms_dirty || !(seconds > 0) || parts.size() < 2) return out;
   const auto velocity = world.column<Vec3>(m.velocity);
   const auto spin = world.column<Vec3>(m.angular_velocity);
-  // The parts that can be tested, moved to where their velocities take them.
-  struct Moved {
+  // The parts that can be tested, each moving one moved to where its
+  // velocities take it, with its bounds there.
+  struct Candidate {
     std::uint32_t slot;
-    ObjectId id;
-    dReal bounds[6];
+    bool moves;
+    double lo[3], hi[3];
   };
-  std::vector<Moved> moved;
-  moved.reserve(parts.size());
+  std::vector<Candidate> boxes;
+  boxes.reserve(parts.size());
   auto set_pose = [&](const Impl::Geom& g, Vec3 x, Quat q) {
     dGeomSetPosition(g.geom, x.x, x.y, x.z);
     dQuaternion oq;
     to_ode(g.capsule ? normalized(q) * capsule_axis_rotation() : normalized(q), oq);
     dGeomSetQuaternion(g.geom, oq);
   };
+  bool any_moves = false;
   for (const ObjectId id : parts) {
     const std::uint32_t s = id.index;
     if (s >= m.geoms.size()) continue;
     const Impl::Geom& g = m.geoms[s];
     if (!g.geom || !g.placed || g.id != id || m.is_waiting(s) || !dGeomIsEnabled(g.geom)) continue;
-    Moved& e = moved.emplace_back(Moved{s, id, {}});
+    Candidate& c = boxes.emplace_back(Candidate{s, false, {}, {}});
     if (g.movable) {
       const Vec3 v = velocity.value_or(s, Vec3{}), w = spin.value_or(s, Vec3{});
       const double turn = length(w) * seconds;
       const Quat q = turn > 0 ? Quat::from_axis_angle(w / length(w), turn) * g.q : g.q;
-      if (is_finite(v) && is_finite(q)) set_pose(g, g.pos + v * seconds, q);
+      c.moves = (v != Vec3{} || turn > 0) && is_finite(v) && is_finite(q);
+      if (c.moves) set_pose(g, g.pos + v * seconds, q);
+      any_moves = any_moves || c.moves;
     }
-    dGeomGetAABB(g.geom, e.bounds);
   }
-  for (std::size_t i = 0; i < moved.size(); ++i)
-    for (std::size_t j = i + 1; j < moved.size(); ++j) {
-      std::uint32_t s1 = moved[i].slot, s2 = moved[j].slot;
-      const Impl::Geom &g1 = m.geoms[s1], &g2 = m.geoms[s2];
-      if (!g1.movable && !g2.movable) continue;
-      bool apart = false;
-      for (int k = 0; k < 3; ++k)
-        apart = apart || moved[i].bounds[2 * k] > moved[j].bounds[2 * k + 1] ||
-                moved[j].bounds[2 * k] > moved[i].bounds[2 * k + 1];
-      if (apart) continue;
-      if (s1 > s2) std::swap(s1, s2);
-      if (std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) continue;
-      const int n =
-          collide_parts(m.geoms[s1].geom, m.geoms[s2].geom, int(m.buffer.size()), m.buffer.data());
-      if (n <= 0) continue;
-      Vec3 mean{};
-      for (int k = 0; k < n; ++k) mean += to_vec3(m.buffer[std::size_t(k)].pos);
-      out.push_back({m.geoms[s1].id, m.geoms[s2].id, mean / double(n)});
-    }
+  if (!any_moves) return out;  // nothing moves: no pair can come to touch
+  for (Candidate& c : boxes) {
+    dReal b[6];
+    dGeomGetAABB(m.geoms[c.slot].geom, b);
+    for (int k = 0; k < 3; ++k) c.lo[k] = b[2 * k], c.hi[k] = b[2 * k + 1];
+  }
+  for_each_overlap(boxes, [&](std::size_t i, std::size_t j) {
+    if (!boxes[i].moves && !boxes[j].moves) return;  // neither can come to touch
+    std::uint32_t s1 = boxes[i].slot, s2 = boxes[j].slot;
+    if (s1 > s2) std::swap(s1, s2);
+    const Impl::Geom &g1 = m.geoms[s1], &g2 = m.geoms[s2];
+    if (!g1.movable && !g2.movable) return;
+    if (std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
+    if (find(g1.id, g2.id)) return;  // touching now
+    const int n = collide_parts(g1.geom, g2.geom, int(m.buffer.size()), m.buffer.data());
+    if (n <= 0) return;
+    Vec3 mean{};
+    for (int k = 0; k < n; ++k) mean += to_vec3(m.buffer[std::size_t(k)].pos);
+    out.push_back({g1.id, g2.id, mean / double(n)});
+  });
   // Back where they were, bit for bit (place() compares the cached poses).
-  for (const Moved& e : moved)
-    if (m.geoms[e.slot].movable) set_pose(m.geoms[e.slot], m.geoms[e.slot].pos, m.geoms[e.slot].q);
+  for (const Candidate& c : boxes)
+    if (c.moves) set_pose(m.geoms[c.slot], m.geoms[c.slot].pos, m.geoms[c.slot].q);
   std::sort(out.begin(), out.end(), [](const PredictedTouch& x, const PredictedTouch& y) {
     return pair_less(x.a, x.b, y.a, y.b);
   });

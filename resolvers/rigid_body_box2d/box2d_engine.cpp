@@ -1664,57 +1664,69 @@ void Box2DEngine::advance(ResolverAccess& access, double dt) {
 }
 
 std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId> parts,
-                                                        double seconds) const {
+                                                        double seconds,
+                                                        const ContactSet& now) const {
   std::vector<PredictedTouch> out;
   if (!impl_ || !impl_->world) return out;
   Impl& m = *impl_;
-  // Each asked part's fixtures, with its body's transform `seconds` on.
+  // Each asked part's fixtures, with its body's transform `seconds` on and
+  // the bounds there (skin included).
   struct Shape {
     ObjectId id;
     b2Fixture* f;
     b2Transform xf;
-    b2AABB box;  // at xf, skin included
+    bool moves;
+    double lo[3], hi[3];
   };
   std::vector<Shape> shapes;
+  bool any_moves = false;
   for (const ObjectId id : parts) {
     if (id.index >= m.part_of_slot.size() || m.part_of_slot[id.index] < 0) continue;
     const Impl::Part& part = m.parts[std::size_t(m.part_of_slot[id.index])];
     if (part.id != id) continue;
     b2Body* b = m.bodies[part.body].b;
     if (!b) continue;
-    const b2Vec2 x = b->GetPosition() + float(seconds) * b->GetLinearVelocity();
-    const float angle = b->GetAngle() + float(seconds) * b->GetAngularVelocity();
-    const b2Transform xf(x, b2Rot(angle));
+    const b2Vec2 v = b->GetLinearVelocity();
+    const float w = b->GetAngularVelocity();
+    const bool moves = b->GetType() == b2_dynamicBody && (v.x != 0 || v.y != 0 || w != 0);
+    any_moves = any_moves || moves;
+    const b2Transform xf(b->GetPosition() + float(seconds) * v,
+                         b2Rot(b->GetAngle() + float(seconds) * w));
     for (b2Fixture* f = b->GetFixtureList(); f; f = f->GetNext())
-      if (&m.part_of(f) == &part) {
-        Shape& e = shapes.emplace_back(Shape{id, f, xf, {}});
-        f->GetShape()->ComputeAABB(&e.box, xf, 0);
-      }
+      if (&m.part_of(f) == &part) shapes.push_back(Shape{id, f, xf, moves, {}, {}});
+  }
+  if (!any_moves) return out;  // nothing moves: no pair can come to touch
+  for (Shape& e : shapes) {
+    b2AABB box;
+    e.f->GetShape()->ComputeAABB(&box, e.xf, 0);
+    e.lo[0] = box.lowerBound.x, e.lo[1] = box.lowerBound.y, e.lo[2] = 0;
+    e.hi[0] = box.upperBound.x, e.hi[1] = box.upperBound.y, e.hi[2] = 0;
   }
   auto joined = [](const b2Body* a, const b2Body* b) {
     for (const b2JointEdge* e = a->GetJointList(); e; e = e->next)
       if (e->other == b && !e->joint->GetCollideConnected()) return true;
     return false;
   };
-  for (std::size_t i = 0; i < shapes.size(); ++i)
-    for (std::size_t j = i + 1; j < shapes.size(); ++j) {
-      const Shape &p = shapes[i], &q = shapes[j];
-      b2Body *ba = p.f->GetBody(), *bb = q.f->GetBody();
-      if (p.id == q.id || ba == bb || !b2TestOverlap(p.box, q.box)) continue;
-      if (ba->GetType() != b2_dynamicBody && bb->GetType() != b2_dynamicBody) continue;
-      if (!m.b2ContactFilter::ShouldCollide(p.f, q.f) || joined(ba, bb)) continue;
-      b2DistanceInput in;
-      in.proxyA.Set(p.f->GetShape(), 0), in.proxyB.Set(q.f->GetShape(), 0);
-      in.transformA = p.xf, in.transformB = q.xf, in.useRadii = true;
-      b2SimplexCache cache;
-      cache.count = 0;
-      b2DistanceOutput d;
-      b2Distance(&d, &cache, &in);
-      if (d.distance >= 10 * b2_epsilon) continue;
-      const b2Vec2 mid = 0.5f * (d.pointA + d.pointB);
-      const bool order = p.id < q.id;
-      out.push_back({order ? p.id : q.id, order ? q.id : p.id, {mid.x / m.s, mid.y / m.s, 0}});
-    }
+  for_each_overlap(shapes, [&](std::size_t i, std::size_t j) {
+    const Shape &p = shapes[i], &q = shapes[j];
+    if (!p.moves && !q.moves) return;  // neither can come to touch
+    b2Body *ba = p.f->GetBody(), *bb = q.f->GetBody();
+    if (p.id == q.id || ba == bb) return;
+    if (ba->GetType() != b2_dynamicBody && bb->GetType() != b2_dynamicBody) return;
+    if (!m.b2ContactFilter::ShouldCollide(p.f, q.f) || joined(ba, bb)) return;
+    if (now.find(p.id, q.id)) return;  // touching now
+    b2DistanceInput in;
+    in.proxyA.Set(p.f->GetShape(), 0), in.proxyB.Set(q.f->GetShape(), 0);
+    in.transformA = p.xf, in.transformB = q.xf, in.useRadii = true;
+    b2SimplexCache cache;
+    cache.count = 0;
+    b2DistanceOutput d;
+    b2Distance(&d, &cache, &in);
+    if (d.distance >= 10 * b2_epsilon) return;
+    const b2Vec2 mid = 0.5f * (d.pointA + d.pointB);
+    const bool order = p.id < q.id;
+    out.push_back({order ? p.id : q.id, order ? q.id : p.id, {mid.x / m.s, mid.y / m.s, 0}});
+  });
   std::sort(out.begin(), out.end(), [](const PredictedTouch& x, const PredictedTouch& y) {
     return pair_less(x.a, x.b, y.a, y.b);
   });

@@ -143,8 +143,11 @@ class Box2DEngine final : public rigid::RigidBodyEngine {
   void geometry_into(std::span<ContactPair> pairs, std::vector<ContactPoint>& points) const;
   /// ContactSet::touching_ahead on Box2D's own shapes: each body moved on by
   /// its velocities for `seconds`, each pair of the parts' fixtures that
-  /// Box2D would collide tested with its distance (radii included).
-  std::vector<PredictedTouch> touching_ahead(std::span<const ObjectId> parts, double seconds) const;
+  /// Box2D would collide, does not touch in `now` and one of which moves,
+  /// found by its predicted bounds and tested with its distance (radii
+  /// included). Needs only the bodies: a restored engine answers at once.
+  std::vector<PredictedTouch> touching_ahead(std::span<const ObjectId> parts, double seconds,
+                                             const ContactSet& now) const;
   /// The contact set that reads this engine's contacts (collisions.box2d):
   /// told before Box2D's world is destroyed, to make a deferred geometry
   /// first (a swap hands the retired set's pairs to the next engine's).
@@ -269,9 +272,11 @@ class Box2DContacts final : public ContactSet {
                                              std::span<const ObjectId> parts,
                                              double seconds) const override {
     (void)world;
-    return geometry_available() ? engine_->touching_ahead(parts, seconds)
-                                : std::vector<PredictedTouch>{};
+    return engine_ ? engine_->touching_ahead(parts, seconds, *this) : std::vector<PredictedTouch>{};
   }
+  /// Box2D finds its contacts at the start of its step: a touch is reported
+  /// an update after ODE's set would report it.
+  int report_lag() const override { return 1; }
 
  private:
   void make_geometry(std::span<ContactPair> pairs,
