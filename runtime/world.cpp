@@ -727,12 +727,23 @@ bool World::follows_area_provider(const PluginDef& def, int area) const {
   const auto& list = areas_[std::size_t(area)].def.plugins;
   if (listed(list, info.name)) return false;
   // A target named exactly (ODE's contact joints name ODE) follows only that
-  // engine; otherwise any provider of the target the area lists.
-  const bool exact = listed(info.exact, info.target);
-  for (const auto& name : list)
-    if (const PluginDef* d = plugins_.find(name);
-        d && (d->info.name == info.target || (!exact && d->info.provides == info.target)))
-      return true;
+  // engine; otherwise any provider of the target the area lists. The same for
+  // a derived set it reads: electricity_from_collisions and
+  // sound_from_collisions read `collisions`, which a Box2D area's
+  // collisions.box2d provides there; without an instance of their own in the
+  // area the global one read ODE's set, which leaves the area's parts out,
+  // and a circuit inside a Box2D area never closed, silently (adv21).
+  auto provided_here = [&](const std::string& what) {
+    const bool exact = listed(info.exact, what);
+    for (const auto& name : list)
+      if (const PluginDef* d = plugins_.find(name);
+          d && (d->info.name == what || (!exact && d->info.provides == what)))
+        return true;
+    return false;
+  };
+  if (provided_here(info.target)) return true;
+  for (const auto& d : info.derived)
+    if (provided_here(d)) return true;
   return false;
 }
 

@@ -406,5 +406,37 @@ TEST_F(FromCollisionsTest, OnBox2DAShortTouchIsConnectedOnce) {
   }
 }
 
+// A circuit inside an area run by Box2D: the area's collisions.box2d
+// provides `collisions` there, and the interaction follows it with an
+// instance of its own in the area, as interactions follow an area's
+// provider of their target (adv21 area_inside.lua: the global instance read
+// ODE's set, which leaves the area's parts out, and the circuit never
+// closed, silently). Glued to the global electricity resolver.
+TEST_F(FromCollisionsTest, ACircuitInsideABox2DAreaCloses) {
+  WorldDef def;
+  def.dt = 1.0 / 240;
+  def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
+  AreaDef right;
+  right.name = "right";
+  right.center = {1, 0, 0};
+  right.half_extents = {1, 1, 1};
+  right.plugins = {"rigid_body.box2d", "collisions.box2d", "rigid_body_from_gravity"};
+  def.areas.push_back(right);
+  World w(registry, def);
+  const ObjectId contact = box(w, "contact", {1, 0, 0}, {0.3, 0.02, 0.02}, 0);
+  const ObjectId bar = box(w, "bar", {1, 0.03, 0}, {0.3, 0.02, 0.02}, 0.05);
+  w.set(bar, "velocity", Vec3{0, -0.5, 0});
+  for (const ObjectId o : {contact, bar}) w.set(o, "conductive", true);
+  const ObjectId lamp = lamp_loop(w, contact, bar);
+  bool connected = false;
+  for (int k = 0; k < 30; ++k) {
+    w.step();
+    for (const Event& e : w.events()) connected = connected || e.type == "connected";
+  }
+  EXPECT_TRUE(w.has_stage("electricity_from_collisions@right"));
+  EXPECT_TRUE(connected);
+  EXPECT_NEAR(num(w, lamp, "current"), 6.0 / (0.1 + 12.0 + 1e-3 + 3 * 0.01), 1e-9);
+}
+
 }  // namespace
 }  // namespace alloy::electricity
