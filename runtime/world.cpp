@@ -54,6 +54,11 @@ double WorldView::dt() const {
   return world_.def_.dt;
 }
 
+int WorldView::every(std::string_view name) const {
+  const auto it = world_.def_.every.find(name);
+  return it == world_.def_.every.end() ? 1 : it->second;
+}
+
 void WorldView::emit(Event e) const {
   // step and time are stamped at publish: the step an event happened in, and
   // the simulated time at the end of that step, whichever phase emitted it.

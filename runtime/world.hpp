@@ -122,6 +122,10 @@ class WorldView {
   std::uint64_t step() const;
   double time() const;
   double dt() const;
+  /// The `every` the world's definition gives the stage or plugin `name` (1
+  /// if none): a stage that feeds a resolver run every n-th step knows how
+  /// long the advance its commands act over is (n * dt()).
+  int every(std::string_view name) const;
   /// Records an event for this step's publish phase.
   void emit(Event e) const;
 

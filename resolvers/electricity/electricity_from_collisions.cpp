@@ -102,7 +102,11 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
       if (conductive[slot] != 0 && position.has(slot))
         conductors_.push_back(world.store().id_at(slot));
     std::sort(conductors_.begin(), conductors_.end());
-    const auto soon = contacts_.touching_ahead(world, conductors_, 0.5 * world.dt());
+    // Half of the step the connection will act over: the world's, or the
+    // electricity's own when it runs every n-th step (this apply then feeds
+    // its next advance, n steps long).
+    const double span = world.dt() * world.every(kResolverName);
+    const auto soon = contacts_.touching_ahead(world, conductors_, 0.5 * span);
     // A predicted pair waits for the set to report it: a set that reports a
     // step late (Box2D) would otherwise see it neither touching nor predicted
     // (a part that bounced in that step) and open the circuit for a step

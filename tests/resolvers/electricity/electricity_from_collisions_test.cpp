@@ -217,9 +217,10 @@ struct Glide {
 /// continued in a fresh world restored from the save.
 template <class Place>
 Glide touch_onto_contact(PluginRegistry& registry, bool ahead, bool box2d, Place place,
-                         std::uint64_t restore_at = 0) {
+                         std::uint64_t restore_at = 0, int electricity_every = 1) {
   WorldDef def;
   def.dt = 1.0 / 240;
+  if (electricity_every > 1) def.every["electricity"] = electricity_every;
   def.settings["gravity.uniform"].set("g", Vec3{0, 0, 0});
   if (ahead) def.settings["electricity_from_collisions"].set("ahead", true);
   if (box2d) def.use = {{"rigid_body", "rigid_body.box2d"}, {"collisions", "collisions.box2d"}};
@@ -257,7 +258,7 @@ Glide touch_onto_contact(PluginRegistry& registry, bool ahead, bool box2d, Place
 /// A bar gliding at 0.5 m/s onto a fixed contact, its touch due at
 /// (10 + fraction) steps: the gap is v (10 + fraction) h.
 Glide glide_onto_contact(PluginRegistry& registry, double fraction, bool ahead, bool box2d,
-                         std::uint64_t restore_at = 0) {
+                         std::uint64_t restore_at = 0, int electricity_every = 1) {
   const double h = 1.0 / 240, v = 0.5;
   return touch_onto_contact(
       registry, ahead, box2d,
@@ -268,7 +269,7 @@ Glide glide_onto_contact(PluginRegistry& registry, double fraction, bool ahead, 
         w.set(bar, "velocity", Vec3{0, -v, 0});
         return std::pair{contact, bar};
       },
-      restore_at);
+      restore_at, electricity_every);
 }
 
 /// A bar 0.3 m long spinning in place at 2 rad/s (its centre at rest) whose
@@ -404,6 +405,37 @@ TEST_F(FromCollisionsTest, OnBox2DAShortTouchIsConnectedOnce) {
     EXPECT_EQ(g.connects, 1);
     EXPECT_EQ(g.disconnects, 1);
   }
+}
+
+// With the electricity every 4th step the connection acts over its next
+// advance, 4 steps long: the prediction looks half of that on (2 steps), so
+// the advance that carries the connection starts within two steps of the
+// touch, early as often as late. Without it the connection is always late,
+// by up to 4 steps; with a half world step only, touches 0.5 to 2 steps
+// after an advance's start were as late as without (adv21 every.py).
+TEST_F(FromCollisionsTest, AheadLooksHalfTheElectricitysOwnStepOn) {
+  double early = 0, late = 0;
+  for (int i = 0; i < 16; ++i) {
+    const double touch = 10 + 6.1 + 0.25 * i;  // steps 16.1 to 19.85: one advance's span
+    const Glide plain = glide_onto_contact(registry, touch - 10, false, false, 0, 4);
+    const Glide ahead = glide_onto_contact(registry, touch - 10, true, false, 0, 4);
+    SCOPED_TRACE(::testing::Message() << "touch at " << touch << " steps: connected "
+                                      << plain.connected << " / " << ahead.connected);
+    ASSERT_GT(plain.connected, 0u);
+    ASSERT_GT(ahead.connected, 0u);
+    // The advance that performs the connect spans the `connected` step's
+    // last 4 steps: it starts at connected - 1 in world steps (the step
+    // counted from 1 ends at its number).
+    const double lag_plain = double(plain.connected) - 1 - touch;
+    const double lag_ahead = double(ahead.connected) - 1 - touch;
+    EXPECT_GE(lag_plain, 0);
+    EXPECT_LE(lag_plain, 4);
+    EXPECT_GE(lag_ahead, -2);
+    EXPECT_LE(lag_ahead, 2);
+    early += lag_ahead<0, late += lag_ahead> 0;
+  }
+  EXPECT_EQ(early, 8);
+  EXPECT_EQ(late, 8);
 }
 
 // A circuit inside an area run by Box2D: the area's collisions.box2d
