@@ -1,6 +1,7 @@
 #include "resolvers/electricity/electricity_from_collisions.hpp"
 
 #include <algorithm>
+#include <string>
 #include <type_traits>
 
 #include "runtime/error.hpp"
@@ -41,11 +42,21 @@ void ElectricityFromCollisions::restore_state(StateReader& in) {
   if (in.remaining() > 0) {  // saved with ahead on
     const auto waiting = in.get_vector<ObjectId>();
     const auto waited = in.get_vector<std::int32_t>();
+    auto damaged = [&](const std::string& what) {
+      return InputError("the saved state of stage '" + in.stage() + "' is damaged: " + what);
+    };
     if (waiting.size() != 2 * waited.size())
-      throw InputError("the saved state of stage '" + in.stage() +
-                       "' is damaged: its waiting pairs and their counts differ");
-    for (std::size_t i = 0; i < waited.size(); ++i)
+      throw damaged("its waiting pairs and their counts differ");
+    for (std::size_t i = 0; i < waited.size(); ++i) {
+      // A count is the updates a pair has waited for its report: at most a
+      // contact set's report lag, never negative (a damaged one would hold a
+      // circuit closed through parts apart for as long as it says).
+      if (waited[i] < 0 || waited[i] > kMaxReportLag)
+        throw damaged("a waiting pair's count " + std::to_string(waited[i]) + " is not 0 to " +
+                      std::to_string(kMaxReportLag));
       waiting_.push_back({{waiting[2 * i], waiting[2 * i + 1]}, waited[i]});
+    }
+    std::sort(waiting_.begin(), waiting_.end());
   }
   waiting_before_ = waiting_;
 }
@@ -112,7 +123,7 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
     // (a part that bounced in that step) and open the circuit for a step
     // between the prediction and the report (adv21). Held report_lag()
     // updates past the prediction, then let go if still unreported.
-    const int lag = contacts_.report_lag();
+    const int lag = std::clamp(contacts_.report_lag(), 0, kMaxReportLag);
     auto touching_now = [&](const std::pair<ObjectId, ObjectId>& key) {
       return std::binary_search(
           touching.begin(), touching.end(), key, [](const auto& x, const auto& y) {

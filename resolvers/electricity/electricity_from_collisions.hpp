@@ -45,6 +45,9 @@ namespace alloy::electricity {
 
 class ElectricityFromCollisions final : public Interaction {
  public:
+  /// The most updates a predicted pair waits for its contact set's report
+  /// (ContactSet::report_lag, clamped to it; a saved count above it is damage).
+  static constexpr int kMaxReportLag = 4;
   /// ahead: connect now a touch predicted within half a step (setting
   /// `ahead`, see the header).
   ElectricityFromCollisions(ElectricityResolver& target, const ContactSet& contacts,

@@ -438,6 +438,44 @@ TEST_F(FromCollisionsTest, AheadLooksHalfTheElectricitysOwnStepOn) {
   EXPECT_EQ(late, 8);
 }
 
+// A save's waiting pairs are checked: a count outside 0 to the largest
+// report lag, or counts that do not match the pairs, is damage, named with
+// the stage (a hostile save could otherwise hold a circuit closed through
+// parts apart for as long as its count said).
+TEST_F(FromCollisionsTest, ADamagedSaveOfTheWaitingPairsIsRefusedByName) {
+  WorldDef def;
+  def.settings["electricity_from_collisions"].set("ahead", true);
+  World w(registry, def);
+  const ObjectId contact = box(w, "contact", {0, 0, 0}, {0.3, 0.02, 0.02}, 0);
+  const ObjectId bar = box(w, "bar", {0, 0.03, 0}, {0.3, 0.02, 0.02}, 0.05);
+  for (const ObjectId o : {contact, bar}) w.set(o, "conductive", true);
+  lamp_loop(w, contact, bar);
+  w.step();
+  auto& stage = *w.stage("electricity_from_collisions");
+  auto state = [&](std::vector<ObjectId> pairs, std::vector<std::int32_t> counts) {
+    StateWriter out;
+    out.put_vector(std::vector<ObjectId>{});
+    out.put_vector(pairs);
+    out.put_vector(counts);
+    return out.bytes();
+  };
+  auto restore = [&](const std::vector<std::byte>& bytes) {
+    StateReader in("electricity_from_collisions", bytes);
+    stage.restore_state(in);
+  };
+  EXPECT_NO_THROW(restore(state({contact, bar}, {1})));
+  for (const std::int32_t bad : {-1, ElectricityFromCollisions::kMaxReportLag + 1, 1 << 30}) {
+    try {
+      restore(state({contact, bar}, {bad}));
+      ADD_FAILURE() << "a count of " << bad << " was taken";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("electricity_from_collisions"), std::string::npos);
+      EXPECT_NE(std::string(e.what()).find("count"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(restore(state({contact, bar}, {0, 0})), InputError);
+}
+
 // A circuit inside an area run by Box2D: the area's collisions.box2d
 // provides `collisions` there, and the interaction follows it with an
 // instance of its own in the area, as interactions follow an area's
