@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <string>
-#include <type_traits>
 
 #include "runtime/error.hpp"
 
@@ -124,27 +123,16 @@ void ElectricityFromCollisions::apply(const WorldView& world) {
     // between the prediction and the report (adv21). Held report_lag()
     // updates past the prediction, then let go if still unreported.
     const int lag = std::clamp(contacts_.report_lag(), 0, kMaxReportLag);
-    auto touching_now = [&](const std::pair<ObjectId, ObjectId>& key) {
-      return std::binary_search(
-          touching.begin(), touching.end(), key, [](const auto& x, const auto& y) {
-            if constexpr (std::is_same_v<std::decay_t<decltype(x)>, const ContactPair*>)
-              return pair_less(x->a, x->b, y.first, y.second);
-            else
-              return pair_less(x.first, x.second, y->a, y->b);
-          });
-    };
-    std::vector<std::pair<std::pair<ObjectId, ObjectId>, std::int32_t>> waiting;
-    for (const PredictedTouch& q : soon) waiting.push_back({{q.a, q.b}, 0});
-    std::vector<std::pair<ObjectId, ObjectId>> held;
+    using Key = std::pair<ObjectId, ObjectId>;
+    std::vector<Key> touching_keys, soon_keys;
+    for (const ContactPair* p : touching) touching_keys.push_back({p->a, p->b});
+    for (const PredictedTouch& q : soon) soon_keys.push_back({q.a, q.b});
+    std::vector<std::pair<Key, std::int32_t>> waiting;
+    for (const Key& key : soon_keys) waiting.push_back({key, 0});
+    std::vector<Key> held;
     for (const auto& [key, n] : waiting_) {
-      if (touching_now(key)) continue;
-      const bool again =
-          std::binary_search(soon.begin(), soon.end(), key, [](const auto& x, const auto& y) {
-            if constexpr (std::is_same_v<std::decay_t<decltype(x)>, PredictedTouch>)
-              return pair_less(x.a, x.b, y.first, y.second);
-            else
-              return pair_less(x.first, x.second, y.a, y.b);
-          });
+      if (std::binary_search(touching_keys.begin(), touching_keys.end(), key)) continue;
+      const bool again = std::binary_search(soon_keys.begin(), soon_keys.end(), key);
       if (again || n >= lag) continue;
       held.push_back(key);
       waiting.push_back({key, n + 1});

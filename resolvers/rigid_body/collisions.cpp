@@ -944,7 +944,6 @@ std::vector<PredictedTouch> CollisionSet::touching_ahead(const WorldView& world,
     std::uint32_t s1 = boxes[i].slot, s2 = boxes[j].slot;
     if (s1 > s2) std::swap(s1, s2);
     const Impl::Geom &g1 = m.geoms[s1], &g2 = m.geoms[s2];
-    if (!g1.movable && !g2.movable) return;
     if (std::binary_search(m.joined.begin(), m.joined.end(), pair_key(s1, s2))) return;
     if (find(g1.id, g2.id)) return;  // touching now
     const int n = collide_parts(g1.geom, g2.geom, int(m.buffer.size()), m.buffer.data());

@@ -1712,7 +1712,6 @@ std::vector<PredictedTouch> Box2DEngine::touching_ahead(std::span<const ObjectId
     if (!p.moves && !q.moves) return;  // neither can come to touch
     b2Body *ba = p.f->GetBody(), *bb = q.f->GetBody();
     if (p.id == q.id || ba == bb) return;
-    if (ba->GetType() != b2_dynamicBody && bb->GetType() != b2_dynamicBody) return;
     if (!m.b2ContactFilter::ShouldCollide(p.f, q.f) || joined(ba, bb)) return;
     if (now.find(p.id, q.id)) return;  // touching now
     b2DistanceInput in;
